@@ -1,0 +1,68 @@
+//! Generates bindings to MuJoCo's C API with bindgen and links `libmujoco`.
+//!
+//! Debian's `libmujoco-dev` ships no pkg-config file, so the headers and the
+//! library are searched for in the usual places. Override with
+//! `MUJOCO_INCLUDE_DIR` (the folder that holds `mujoco/mujoco.h`) and
+//! `MUJOCO_LIB_DIR` (the folder that holds `libmujoco.so`).
+
+use std::env;
+use std::path::{Path, PathBuf};
+
+const INCLUDE_CANDIDATES: &[&str] = &["/usr/include", "/usr/local/include", "/opt/mujoco/include"];
+const LIB_CANDIDATES: &[&str] = &[
+    "/usr/lib/x86_64-linux-gnu",
+    "/usr/lib/aarch64-linux-gnu",
+    "/usr/lib",
+    "/usr/local/lib",
+    "/opt/mujoco/lib",
+];
+const SETUP_HINT: &str = "install it with `apt-get install libmujoco-dev libclang-dev` (or run `make setup`), \
+     or point MUJOCO_INCLUDE_DIR / MUJOCO_LIB_DIR at a MuJoCo 2.2.2 installation";
+
+fn find_dir(var: &str, candidates: &[&str], probe: &str) -> PathBuf {
+    println!("cargo:rerun-if-env-changed={var}");
+    if let Some(dir) = env::var_os(var) {
+        let dir = PathBuf::from(dir);
+        if dir.join(probe).exists() {
+            return dir;
+        }
+        panic!("{var}={} does not contain {probe}; {SETUP_HINT}", dir.display());
+    }
+    candidates
+        .iter()
+        .map(Path::new)
+        .find(|d| d.join(probe).exists())
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| panic!("MuJoCo not found: no {probe} under {candidates:?}; {SETUP_HINT}"))
+}
+
+fn main() {
+    let include_dir = find_dir("MUJOCO_INCLUDE_DIR", INCLUDE_CANDIDATES, "mujoco/mujoco.h");
+    let lib_dir = find_dir("MUJOCO_LIB_DIR", LIB_CANDIDATES, "libmujoco.so");
+
+    println!("cargo:rustc-link-search=native={}", lib_dir.display());
+    println!("cargo:rustc-link-lib=dylib=mujoco");
+    println!("cargo:include={}", include_dir.display());
+    println!("cargo:rerun-if-changed=wrapper.h");
+
+    let header = include_dir.join("mujoco/mujoco.h");
+    println!("cargo:rerun-if-changed={}", header.display());
+
+    let bindings = bindgen::Builder::default()
+        .header("wrapper.h")
+        .clang_arg(format!("-I{}", include_dir.display()))
+        .allowlist_function("mj.*")
+        .allowlist_type("mj.*")
+        .allowlist_var("mj.*")
+        .rustified_enum("mjt.*")
+        .derive_default(true)
+        .layout_tests(false)
+        .generate_comments(true)
+        .generate()
+        .unwrap_or_else(|e| panic!("bindgen failed on {}: {e}; libclang-dev is needed ({SETUP_HINT})", header.display()));
+
+    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("bindings.rs");
+    bindings
+        .write_to_file(&out)
+        .unwrap_or_else(|e| panic!("cannot write {}: {e}", out.display()));
+}

@@ -1,0 +1,431 @@
+//! The environments, with Gymnasium semantics: `reset(seed)` returns the first
+//! observation and an [`Info`]; `step(action)` returns a [`Step`] with the
+//! reward and separate `terminated` / `truncated` flags.
+//!
+//! Physics follow gymnasium-robotics' Fetch: 20 substeps of 0.002 s per
+//! action, mocap control of the gripper (position action × 0.05 added to the
+//! gripper position, orientation held at the quaternion (1, 0, 1, 0)), fingers
+//! held closed, 50 steps per episode. The rules are checked after every
+//! substep, so a brief red–blue touch is never missed.
+
+mod config;
+mod obs;
+pub mod registry;
+
+pub use config::{EnvConfig, EnvError};
+pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
+pub use registry::{ids, make, REGISTRY};
+
+use crate::mj::{Data, ObjType, Warning};
+use crate::rules::{ContactMatrix, Outcome, Rules, Touching};
+use crate::scene::{Scene, SceneObject, SceneSpec};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+/// Dimension of the action space: Box[-1, 1]^4 (dx, dy, dz, gripper; the
+/// gripper component is ignored because the fingers are blocked).
+pub const ACTION_DIM: usize = 4;
+/// Scale from an action component to a gripper displacement in metres.
+pub const ACTION_SCALE: f64 = 0.05;
+/// Quaternion added to the gripper's orientation each step (gymnasium-robotics'
+/// `rot_ctrl`): the mocap target is the current orientation plus (1, 0, 1, 0),
+/// which MuJoCo normalises, holding the gripper pointing down.
+pub const GRIPPER_ROT: [f64; 4] = [1.0, 0.0, 1.0, 0.0];
+/// Initial base joints (slide0, slide1, slide2) of the Fetch environments.
+pub const INITIAL_SLIDES: [f64; 3] = [0.405, 0.48, 0.0];
+/// Offset from the grip site to the mocap target at set-up (z gets the extra height).
+pub const GRIPPER_SETUP_OFFSET: [f64; 3] = [-0.498, 0.005, -0.431];
+/// Actions used to settle the robot at set-up.
+pub const SETTLE_ACTIONS: usize = 10;
+
+/// Auxiliary information of a step or reset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Info {
+    /// Every blue object touched a green one during this step.
+    pub is_success: bool,
+    /// A red object touched a blue one during this step.
+    pub is_failure: bool,
+    /// Curriculum level of the episode.
+    pub level: usize,
+    /// Whether the episode uses the challenge distribution.
+    pub challenge: bool,
+    /// Object pairs `(a, b)`, `a < b`, that touched at any substep of this
+    /// step (at reset: in the reset state). Indices into [`BlockEnv::objects`].
+    pub touching: Vec<(usize, usize)>,
+    /// MuJoCo reported numerical instability; the episode was truncated.
+    pub unstable: bool,
+    /// Steps taken in this episode.
+    pub elapsed_steps: usize,
+}
+
+/// The result of one step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// Observation after the step (finite: never NaN).
+    pub obs: Vec<f32>,
+    /// −1 per step, 0 on success, −(steps left, this one included) on failure.
+    pub reward: f32,
+    /// The episode ended under the rules (success or failure).
+    pub terminated: bool,
+    /// The episode was cut: time limit, or numerical instability.
+    pub truncated: bool,
+    /// Details.
+    pub info: Info,
+}
+
+/// A continuous box space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxSpace {
+    /// Lower bounds.
+    pub low: Vec<f32>,
+    /// Upper bounds.
+    pub high: Vec<f32>,
+}
+
+impl BoxSpace {
+    /// Number of dimensions.
+    pub fn dim(&self) -> usize {
+        self.low.len()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    NeedsReset,
+    Running,
+    Over,
+}
+
+/// A BlockPuzzle environment.
+pub struct BlockEnv {
+    config: EnvConfig,
+    scene: Scene,
+    data: Data,
+    initial: Data,
+    initial_grip: [f64; 3],
+    rules: Rules,
+    rng: ChaCha8Rng,
+    level: usize,
+    challenge: bool,
+    steps: usize,
+    phase: Phase,
+    touching: Touching,
+    step_touching: Touching,
+    obs: Vec<f32>,
+}
+
+impl BlockEnv {
+    /// Builds an environment and settles the robot as Fetch does.
+    ///
+    /// # Errors
+    /// [`EnvError`] for an invalid configuration, missing assets, or a model
+    /// MuJoCo refuses.
+    pub fn new(config: EnvConfig) -> Result<Self, EnvError> {
+        if config.max_episode_steps == 0 || config.n_substeps == 0 {
+            return Err(EnvError::Config("max_episode_steps and n_substeps must be positive".into()));
+        }
+        if !config.gripper_extra_height.is_finite() {
+            return Err(EnvError::Config("gripper_extra_height must be finite".into()));
+        }
+        let scene = Scene::build(&SceneSpec {
+            blocks: config.blocks.clone(),
+            gripper: config.gripper,
+            table: config.table,
+            collision_filter: config.collision_filter,
+        })?;
+        let rules = Rules::new(scene.colours()).map_err(crate::scene::SceneError::from)?;
+        let mut data = Data::new(scene.model.clone())?;
+
+        // Fetch set-up: base joints, weld at identity (done in Scene::build),
+        // gripper target above the table, settle.
+        for (k, &v) in INITIAL_SLIDES.iter().enumerate() {
+            data.qpos_mut()[scene.slide_qpos[k]] = v;
+        }
+        data.forward();
+        let grip = data.site_xpos()[scene.grip_site];
+        let mut target = [0.0; 3];
+        for k in 0..3 {
+            target[k] = grip[k] + GRIPPER_SETUP_OFFSET[k];
+        }
+        target[2] += config.gripper_extra_height;
+        data.mocap_pos_mut()[scene.mocap] = target;
+        data.mocap_quat_mut()[scene.mocap] = GRIPPER_ROT;
+        for _ in 0..SETTLE_ACTIONS * config.n_substeps {
+            data.step();
+        }
+        data.forward();
+        let initial_grip = data.site_xpos()[scene.grip_site];
+        let initial = data.try_clone()?;
+
+        let n = scene.objects.len();
+        let obs = vec![0.0; obs_dim(config.blocks.len())];
+        Ok(Self {
+            config,
+            scene,
+            data,
+            initial,
+            initial_grip,
+            rules,
+            rng: ChaCha8Rng::from_entropy(),
+            level: 0,
+            challenge: false,
+            steps: 0,
+            phase: Phase::NeedsReset,
+            touching: Touching::new(n),
+            step_touching: Touching::new(n),
+            obs,
+        })
+    }
+
+    /// Registry id (or custom name).
+    pub fn id(&self) -> &str {
+        &self.config.id
+    }
+    /// The configuration.
+    pub fn config(&self) -> &EnvConfig {
+        &self.config
+    }
+    /// Box[-1, 1]^4.
+    pub fn action_space(&self) -> BoxSpace {
+        BoxSpace { low: vec![-1.0; ACTION_DIM], high: vec![1.0; ACTION_DIM] }
+    }
+    /// Unbounded box of [`obs_dim`] dimensions.
+    pub fn observation_space(&self) -> BoxSpace {
+        let n = obs_dim(self.config.blocks.len());
+        BoxSpace { low: vec![f32::NEG_INFINITY; n], high: vec![f32::INFINITY; n] }
+    }
+    /// Rule objects: gripper, table, blocks.
+    pub fn objects(&self) -> &[SceneObject] {
+        &self.scene.objects
+    }
+    /// The compiled scene (model and ids).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Current simulation state.
+    pub fn data(&self) -> &Data {
+        &self.data
+    }
+    /// Mutable simulation state, for experts (tests inject instabilities with it).
+    /// Changes take effect at the next step.
+    pub fn data_mut(&mut self) -> &mut Data {
+        &mut self.data
+    }
+    /// The authors' contact-state matrix of the current episode.
+    pub fn contact_matrix(&self) -> &ContactMatrix {
+        self.rules.matrix()
+    }
+    /// The rules outcome so far.
+    pub fn outcome(&self) -> Option<Outcome> {
+        self.rules.outcome()
+    }
+    /// Grip site position after set-up (the centre of the curriculum discs).
+    pub fn initial_gripper_position(&self) -> [f64; 3] {
+        self.initial_grip
+    }
+    /// Current grip site position.
+    pub fn gripper_position(&self) -> [f64; 3] {
+        self.data.site_xpos()[self.scene.grip_site]
+    }
+    /// Current block centres, in block order.
+    pub fn block_positions(&self) -> Vec<[f64; 3]> {
+        self.scene.blocks.iter().map(|b| self.data.site_xpos()[b.site]).collect()
+    }
+    /// Current block orientations (w, x, y, z).
+    pub fn block_quats(&self) -> Vec<[f64; 4]> {
+        self.scene.blocks.iter().map(|b| self.data.xquat()[b.body]).collect()
+    }
+    /// Steps taken in the current episode.
+    pub fn elapsed_steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Highest curriculum level.
+    pub fn max_level(&self) -> usize {
+        self.config.layout.max_level()
+    }
+    /// Current curriculum level.
+    pub fn level(&self) -> usize {
+        self.level
+    }
+    /// Sets the curriculum level used from the next reset on.
+    ///
+    /// # Errors
+    /// [`EnvError::LevelOutOfRange`] beyond [`BlockEnv::max_level`].
+    pub fn set_level(&mut self, level: usize) -> Result<(), EnvError> {
+        if level > self.max_level() {
+            return Err(EnvError::LevelOutOfRange { id: self.config.id.clone(), level, max: self.max_level() });
+        }
+        self.level = level;
+        Ok(())
+    }
+    /// Whether episodes use the challenge distribution.
+    pub fn challenge(&self) -> bool {
+        self.challenge
+    }
+    /// Switches the challenge distribution on or off from the next reset on.
+    ///
+    /// # Errors
+    /// [`EnvError::NoChallenge`] for environments without a challenge mode.
+    pub fn set_challenge(&mut self, on: bool) -> Result<(), EnvError> {
+        if on && !self.config.layout.has_challenge() {
+            return Err(EnvError::NoChallenge { id: self.config.id.clone() });
+        }
+        self.challenge = on;
+        Ok(())
+    }
+
+    /// Starts an episode. With `Some(seed)` the environment's generator is
+    /// re-seeded, so the same seed gives a bit-identical episode for the same
+    /// actions; with `None` it continues its stream (seeded from the OS at
+    /// construction).
+    ///
+    /// # Errors
+    /// [`EnvError::Placement`] if no layout is found, [`EnvError::InitialViolation`]
+    /// if red touches blue in the reset state.
+    pub fn reset(&mut self, seed: Option<u64>) -> Result<(Vec<f32>, Info), EnvError> {
+        if let Some(s) = seed {
+            self.rng = ChaCha8Rng::seed_from_u64(s);
+        }
+        self.phase = Phase::NeedsReset;
+        self.data.copy_from(&self.initial)?;
+        let origin = [self.initial_grip[0], self.initial_grip[1]];
+        let positions =
+            self.config.layout.sample(self.level, self.challenge, origin, self.scene.blocks.len(), &mut self.rng)?;
+        for (b, p) in self.scene.blocks.iter().zip(&positions) {
+            let q = self.data.qpos_mut();
+            q[b.qpos] = p[0];
+            q[b.qpos + 1] = p[1];
+            self.data.qvel_mut()[b.dof..b.dof + 6].fill(0.0);
+        }
+        self.data.forward();
+        self.rules.reset();
+        self.scan_contacts();
+        if let Some((r, b)) = self.rules.violation(&self.touching) {
+            return Err(EnvError::InitialViolation {
+                red: self.scene.objects[r].name.clone(),
+                blue: self.scene.objects[b].name.clone(),
+            });
+        }
+        self.steps = 0;
+        self.phase = Phase::Running;
+        obs::write(&self.scene, &self.data, self.dt(), &mut self.obs);
+        let info = self.info(false, false, self.touching.pairs());
+        Ok((self.obs.clone(), info))
+    }
+
+    /// Applies one action for `n_substeps` physics substeps.
+    ///
+    /// Components are clipped to [-1, 1]; the fourth is ignored (blocked gripper).
+    ///
+    /// # Errors
+    /// [`EnvError::BadAction`] for a wrong length or a non-finite value,
+    /// [`EnvError::NotReset`] / [`EnvError::EpisodeOver`] when no episode runs.
+    pub fn step(&mut self, action: &[f32]) -> Result<Step, EnvError> {
+        if action.len() != ACTION_DIM {
+            return Err(EnvError::BadAction {
+                reason: format!("expected {ACTION_DIM} components, got {}", action.len()),
+            });
+        }
+        if let Some(i) = action.iter().position(|a| !a.is_finite()) {
+            return Err(EnvError::BadAction { reason: format!("component {i} is {}", action[i]) });
+        }
+        match self.phase {
+            Phase::NeedsReset => return Err(EnvError::NotReset),
+            Phase::Over => return Err(EnvError::EpisodeOver),
+            Phase::Running => {}
+        }
+
+        let bad_before = self.data.warning_count(Warning::BadQacc);
+        self.apply_action(action);
+        self.step_touching.clear();
+        for _ in 0..self.config.n_substeps {
+            self.data.step();
+            self.observe_substep();
+        }
+        // Blocked gripper: fingers back to closed, then recompute the state.
+        for &a in &self.scene.finger_qpos {
+            self.data.qpos_mut()[a] = 0.0;
+        }
+        self.data.forward();
+        self.observe_substep();
+        self.steps += 1;
+
+        let unstable = self.data.warning_count(Warning::BadQacc) > bad_before
+            || !self.data.qpos().iter().chain(self.data.qvel()).all(|v| v.is_finite());
+        let outcome = if unstable { None } else { self.rules.outcome() };
+        let (is_success, is_failure) = (outcome == Some(Outcome::Success), outcome == Some(Outcome::Failure));
+        let terminated = outcome.is_some();
+        let truncated = !terminated && (unstable || self.steps >= self.config.max_episode_steps);
+        let reward = match outcome {
+            Some(Outcome::Success) => 0.0,
+            Some(Outcome::Failure) => -((self.config.max_episode_steps + 1).saturating_sub(self.steps) as f32),
+            None => -1.0,
+        };
+        if !unstable {
+            obs::write(&self.scene, &self.data, self.dt(), &mut self.obs);
+        } // else: keep the last finite observation; NaN never reaches the agent
+        if terminated || truncated {
+            self.phase = Phase::Over;
+        }
+        let info = Info { unstable, ..self.info(is_success, is_failure, self.step_touching.pairs()) };
+        Ok(Step { obs: self.obs.clone(), reward, terminated, truncated, info })
+    }
+
+    fn dt(&self) -> f64 {
+        self.config.n_substeps as f64 * self.scene.model.timestep()
+    }
+
+    fn info(&self, is_success: bool, is_failure: bool, touching: Vec<(usize, usize)>) -> Info {
+        Info {
+            is_success,
+            is_failure,
+            level: self.level,
+            challenge: self.challenge,
+            touching,
+            unstable: false,
+            elapsed_steps: self.steps,
+        }
+    }
+
+    /// gymnasium-robotics' `mocap_set_action`: the mocap jumps to the welded
+    /// gripper's pose, then moves by the action.
+    fn apply_action(&mut self, action: &[f32]) {
+        let body = self.scene.gripper_body;
+        let (pos, quat) = (self.data.xpos()[body], self.data.xquat()[body]);
+        let m = self.scene.mocap;
+        let mp = &mut self.data.mocap_pos_mut()[m];
+        for k in 0..3 {
+            mp[k] = pos[k] + f64::from(action[k].clamp(-1.0, 1.0)) * ACTION_SCALE;
+        }
+        let mq = &mut self.data.mocap_quat_mut()[m];
+        for k in 0..4 {
+            mq[k] = quat[k] + GRIPPER_ROT[k];
+        }
+    }
+
+    fn scan_contacts(&mut self) {
+        self.touching.clear();
+        for c in self.data.contacts() {
+            let (a, b) = (self.scene.geom_object[c.geom1()], self.scene.geom_object[c.geom2()]);
+            if a >= 0 && b >= 0 {
+                self.touching.insert(a as usize, b as usize);
+            }
+        }
+    }
+
+    fn observe_substep(&mut self) {
+        self.scan_contacts();
+        self.step_touching.union_with(&self.touching);
+        self.rules.observe(&self.touching);
+    }
+
+    /// Id of a model object by name (convenience for tools and tests).
+    ///
+    /// # Errors
+    /// [`EnvError::Mujoco`] if the model has no such object.
+    pub fn model_id(&self, kind: ObjType, name: &str) -> Result<usize, EnvError> {
+        Ok(self.scene.model.id(kind, name)?)
+    }
+}

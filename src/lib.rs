@@ -1,0 +1,16 @@
+//! BlockPuzzle: a physical-reasoning benchmark for robot learning.
+//!
+//! Objects are coloured red (constraint), blue (manipulated), green (goal) or
+//! grey (neutral); an episode fails when red touches blue and succeeds when
+//! every blue object touches a green one. The environments put coloured blocks
+//! in front of the OpenAI Fetch robot in MuJoCo.
+
+pub mod mj;
+pub mod rules;
+pub mod scene;
+pub mod curriculum;
+pub mod env;
+pub mod math;
+
+pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
+pub use rules::Colour;

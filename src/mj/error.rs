@@ -1,0 +1,33 @@
+//! Errors of the MuJoCo wrapper.
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Everything that can go wrong in the safe MuJoCo wrapper.
+#[derive(Debug, Error)]
+pub enum MjError {
+    /// `mj_loadXML` refused a model; `message` is MuJoCo's own text.
+    #[error("MuJoCo could not load {path}: {message}")]
+    Load { path: PathBuf, message: String },
+    /// The model file is not there.
+    #[error("model file {path} does not exist")]
+    MissingFile { path: PathBuf },
+    /// A name that the model does not define.
+    #[error("the model has no {kind} named {name:?}")]
+    UnknownName { kind: &'static str, name: String },
+    /// A name with an interior NUL byte or too long for MuJoCo.
+    #[error("invalid name or path {name:?}: {reason}")]
+    InvalidName { name: String, reason: &'static str },
+    /// MuJoCo's virtual file system refused a file.
+    #[error("MuJoCo's virtual file system refused {name:?}: {reason}")]
+    Vfs { name: String, reason: &'static str },
+    /// MuJoCo could not allocate an `mjData`.
+    #[error("MuJoCo could not allocate mjData for the model")]
+    Alloc,
+    /// Two states of different models were mixed.
+    #[error("the two mjData belong to different models")]
+    ModelMismatch,
+    /// An index outside a model array.
+    #[error("{kind} index {index} out of range (model has {count})")]
+    OutOfRange { kind: &'static str, index: usize, count: usize },
+}

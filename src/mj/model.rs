@@ -1,0 +1,274 @@
+//! The owning `Model` type: a compiled MuJoCo model (`mjModel`).
+
+use super::{MjError, ObjType, Vfs};
+use mujoco_sys as sys;
+use std::ffi::{CStr, CString};
+use std::path::Path;
+use std::ptr::NonNull;
+
+/// Number of reals MuJoCo keeps per equality constraint (`mjNEQDATA`).
+pub const NEQDATA: usize = sys::mjNEQDATA as usize;
+
+/// A compiled MuJoCo model. Freed with `mj_deleteModel` on drop.
+pub struct Model {
+    ptr: NonNull<sys::mjModel>,
+}
+
+// SAFETY: an mjModel is a self-contained heap block; MuJoCo only reads it
+// during simulation, and every mutation here goes through `&mut self`, so
+// sharing `&Model` across threads and moving it between threads is sound.
+unsafe impl Send for Model {}
+// SAFETY: see `Send`: shared references only read.
+unsafe impl Sync for Model {}
+
+const ERROR_BUF: usize = 1000;
+
+impl Model {
+    /// Loads an MJCF file from disk; includes and mesh files resolve relative
+    /// to the folder of `path`.
+    ///
+    /// # Errors
+    /// [`MjError::MissingFile`] if the file is absent, [`MjError::Load`] with
+    /// MuJoCo's message if it fails to parse or compile.
+    pub fn from_xml_file(path: &Path) -> Result<Self, MjError> {
+        if !path.exists() {
+            return Err(MjError::MissingFile { path: path.to_owned() });
+        }
+        Self::load(path, None)
+    }
+
+    /// Compiles MJCF held in memory. The text is registered in a virtual file
+    /// system under `virtual_path` and loaded from there, so `<include>`,
+    /// `meshdir` and `texturedir` resolve relative to `virtual_path`'s folder
+    /// on disk (MuJoCo 2.2.2 has no working absolute include paths).
+    ///
+    /// # Errors
+    /// [`MjError::Load`] with MuJoCo's message if the XML does not compile,
+    /// [`MjError::Vfs`]/[`MjError::InvalidName`] for an unusable `virtual_path`.
+    pub fn from_xml_string(xml: &str, virtual_path: &Path) -> Result<Self, MjError> {
+        let name = path_str(virtual_path)?;
+        let mut vfs = Vfs::new();
+        vfs.add(name, xml.as_bytes())?;
+        Self::load(virtual_path, Some(&vfs))
+    }
+
+    fn load(path: &Path, vfs: Option<&Vfs>) -> Result<Self, MjError> {
+        let c_path = CString::new(path_str(path)?).map_err(|_| MjError::InvalidName {
+            name: path.display().to_string(),
+            reason: "contains a NUL byte",
+        })?;
+        let mut err = vec![0 as std::os::raw::c_char; ERROR_BUF];
+        let vfs_ptr = vfs.map_or(std::ptr::null(), Vfs::as_ptr);
+        // SAFETY: `c_path` is NUL-terminated, `vfs_ptr` is null or a live
+        // mjVFS, and `err` has exactly ERROR_BUF writable bytes, which is the
+        // size we pass; MuJoCo NUL-terminates what it writes.
+        let raw = unsafe { sys::mj_loadXML(c_path.as_ptr(), vfs_ptr, err.as_mut_ptr(), ERROR_BUF as i32) };
+        match NonNull::new(raw) {
+            Some(ptr) => Ok(Self { ptr }),
+            None => {
+                // SAFETY: `err` is NUL-terminated: it was zeroed and MuJoCo
+                // writes at most ERROR_BUF-1 characters plus a NUL.
+                let message = unsafe { CStr::from_ptr(err.as_ptr()) }.to_string_lossy().trim().to_owned();
+                Err(MjError::Load { path: path.to_owned(), message })
+            }
+        }
+    }
+
+    pub(crate) fn as_ptr(&self) -> *const sys::mjModel {
+        self.ptr.as_ptr()
+    }
+
+    fn raw(&self) -> &sys::mjModel {
+        // SAFETY: `ptr` is a live mjModel owned by `self` for its lifetime.
+        unsafe { self.ptr.as_ref() }
+    }
+
+    fn raw_mut(&mut self) -> &mut sys::mjModel {
+        // SAFETY: as in `raw`, and `&mut self` guarantees exclusive access.
+        unsafe { self.ptr.as_mut() }
+    }
+
+    /// Number of generalised coordinates.
+    pub fn nq(&self) -> usize {
+        self.raw().nq as usize
+    }
+    /// Number of degrees of freedom.
+    pub fn nv(&self) -> usize {
+        self.raw().nv as usize
+    }
+    /// Number of bodies (the world body included).
+    pub fn nbody(&self) -> usize {
+        self.raw().nbody as usize
+    }
+    /// Number of geoms.
+    pub fn ngeom(&self) -> usize {
+        self.raw().ngeom as usize
+    }
+    /// Number of sites.
+    pub fn nsite(&self) -> usize {
+        self.raw().nsite as usize
+    }
+    /// Number of joints.
+    pub fn njnt(&self) -> usize {
+        self.raw().njnt as usize
+    }
+    /// Number of mocap bodies.
+    pub fn nmocap(&self) -> usize {
+        self.raw().nmocap as usize
+    }
+    /// Number of equality constraints.
+    pub fn neq(&self) -> usize {
+        self.raw().neq as usize
+    }
+    /// Number of excluded body pairs (`<contact><exclude>`).
+    pub fn nexclude(&self) -> usize {
+        self.raw().nexclude as usize
+    }
+    /// Number of materials.
+    pub fn nmat(&self) -> usize {
+        self.raw().nmat as usize
+    }
+
+    /// The simulation timestep in seconds.
+    pub fn timestep(&self) -> f64 {
+        self.raw().opt.timestep
+    }
+
+    /// The id of the object of `kind` called `name`.
+    ///
+    /// # Errors
+    /// [`MjError::UnknownName`] if the model has no such object.
+    pub fn id(&self, kind: ObjType, name: &str) -> Result<usize, MjError> {
+        let c_name = CString::new(name).map_err(|_| MjError::InvalidName {
+            name: name.to_owned(),
+            reason: "contains a NUL byte",
+        })?;
+        // SAFETY: the model is live and `c_name` is NUL-terminated.
+        let id = unsafe { sys::mj_name2id(self.as_ptr(), kind.raw(), c_name.as_ptr()) };
+        usize::try_from(id).map_err(|_| MjError::UnknownName { kind: kind.label(), name: name.to_owned() })
+    }
+
+    /// The name of object `id` of `kind`, or `None` if it is unnamed or out of range.
+    pub fn name(&self, kind: ObjType, id: usize) -> Option<String> {
+        let id = i32::try_from(id).ok()?;
+        // SAFETY: the model is live; mj_id2name checks the id range itself
+        // and returns NULL for out-of-range or unnamed objects.
+        let p = unsafe { sys::mj_id2name(self.as_ptr(), kind.raw(), id) };
+        if p.is_null() {
+            return None;
+        }
+        // SAFETY: a non-null result points into the model's NUL-terminated names buffer.
+        Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+    }
+
+    /// Body id of each geom (`geom_bodyid`).
+    pub fn geom_bodyid(&self) -> &[i32] {
+        self.ints(self.raw().geom_bodyid, self.ngeom())
+    }
+    /// Parent body of each body (`body_parentid`).
+    pub fn body_parentid(&self) -> &[i32] {
+        self.ints(self.raw().body_parentid, self.nbody())
+    }
+    /// Mocap index of each body, -1 for ordinary bodies (`body_mocapid`).
+    pub fn body_mocapid(&self) -> &[i32] {
+        self.ints(self.raw().body_mocapid, self.nbody())
+    }
+    /// Address of each joint's first coordinate in qpos (`jnt_qposadr`).
+    pub fn jnt_qposadr(&self) -> &[i32] {
+        self.ints(self.raw().jnt_qposadr, self.njnt())
+    }
+    /// Address of each joint's first degree of freedom in qvel (`jnt_dofadr`).
+    pub fn jnt_dofadr(&self) -> &[i32] {
+        self.ints(self.raw().jnt_dofadr, self.njnt())
+    }
+    /// Type of each equality constraint (`eq_type`, an `mjtEq` value).
+    pub fn eq_type(&self) -> &[i32] {
+        self.ints(self.raw().eq_type, self.neq())
+    }
+    /// First object of each equality constraint (`eq_obj1id`).
+    pub fn eq_obj1id(&self) -> &[i32] {
+        self.ints(self.raw().eq_obj1id, self.neq())
+    }
+    /// Second object of each equality constraint (`eq_obj2id`).
+    pub fn eq_obj2id(&self) -> &[i32] {
+        self.ints(self.raw().eq_obj2id, self.neq())
+    }
+    /// Material of each geom, -1 for none (`geom_matid`).
+    pub fn geom_matid(&self) -> &[i32] {
+        self.ints(self.raw().geom_matid, self.ngeom())
+    }
+
+    /// Numeric data of each equality constraint (`eq_data`, `mjNEQDATA` reals each).
+    pub fn eq_data(&self) -> &[[f64; NEQDATA]] {
+        let n = self.neq();
+        if n == 0 {
+            return &[];
+        }
+        // SAFETY: eq_data holds neq*mjNEQDATA contiguous f64 owned by the
+        // model; [f64; NEQDATA] has the same layout as NEQDATA f64s.
+        unsafe { std::slice::from_raw_parts(self.raw().eq_data as *const [f64; NEQDATA], n) }
+    }
+
+    /// Mutable `eq_data`, e.g. to reset a weld's relative pose.
+    pub fn eq_data_mut(&mut self) -> &mut [[f64; NEQDATA]] {
+        let n = self.neq();
+        if n == 0 {
+            return &mut [];
+        }
+        let p = self.raw_mut().eq_data as *mut [f64; NEQDATA];
+        // SAFETY: as in `eq_data`; `&mut self` gives exclusive access.
+        unsafe { std::slice::from_raw_parts_mut(p, n) }
+    }
+
+    /// Changes the material of geom `geom` (affects rendering only).
+    ///
+    /// # Errors
+    /// [`MjError::OutOfRange`] for a bad geom or material index.
+    pub fn set_geom_material(&mut self, geom: usize, material: usize) -> Result<(), MjError> {
+        let (ngeom, nmat) = (self.ngeom(), self.nmat());
+        if geom >= ngeom {
+            return Err(MjError::OutOfRange { kind: "geom", index: geom, count: ngeom });
+        }
+        if material >= nmat {
+            return Err(MjError::OutOfRange { kind: "material", index: material, count: nmat });
+        }
+        let p = self.raw_mut().geom_matid;
+        // SAFETY: geom_matid has ngeom entries and `geom < ngeom` was checked.
+        unsafe { *p.add(geom) = material as i32 };
+        Ok(())
+    }
+
+    fn ints(&self, p: *const i32, n: usize) -> &[i32] {
+        if n == 0 || p.is_null() {
+            return &[];
+        }
+        // SAFETY: every caller passes a model array pointer together with the
+        // model count that MuJoCo sized it with; the model outlives `&self`.
+        unsafe { std::slice::from_raw_parts(p, n) }
+    }
+}
+
+impl Drop for Model {
+    fn drop(&mut self) {
+        // SAFETY: `ptr` came from mj_loadXML and is freed exactly once here.
+        unsafe { sys::mj_deleteModel(self.ptr.as_ptr()) };
+    }
+}
+
+impl std::fmt::Debug for Model {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Model")
+            .field("nq", &self.nq())
+            .field("nv", &self.nv())
+            .field("nbody", &self.nbody())
+            .field("ngeom", &self.ngeom())
+            .finish()
+    }
+}
+
+fn path_str(path: &Path) -> Result<&str, MjError> {
+    path.to_str().ok_or_else(|| MjError::InvalidName {
+        name: path.display().to_string(),
+        reason: "not valid UTF-8",
+    })
+}

@@ -1,0 +1,222 @@
+//! Scene building: a [`SceneSpec`] (coloured blocks, gripper and table
+//! colours) becomes a compiled MuJoCo model of the Fetch robot at a table,
+//! plus the ids the environment needs and the geom → object map of the rules.
+
+mod assets;
+mod filter;
+pub mod xml;
+
+pub use assets::{check_assets, models_dir, FETCH_ASSETS, MODELS_DIR_VAR};
+pub use filter::EXCLUDED_BODY_PAIRS;
+
+use crate::mj::{MjError, Model, ObjType};
+use crate::rules::{Colour, RuleError, Rules};
+use std::path::PathBuf;
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Errors while building a scene.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// A file of the scene is missing: usually the Fetch assets were never fetched.
+    #[error("missing scene file {missing}: the Fetch robot assets are fetched by `make setup` (scripts/setup.sh), or set BLOCKPUZZLE_MODELS_DIR to a folder that has them")]
+    MissingAssets { missing: PathBuf },
+    /// The scene template could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    /// The scene template lacks a placeholder.
+    #[error("scene template models/scene.xml lacks the placeholder {placeholder}")]
+    Template { placeholder: &'static str },
+    /// MuJoCo refused the model, or a name the scene relies on is missing.
+    #[error(transparent)]
+    Mujoco(#[from] MjError),
+    /// The colours do not make a valid task.
+    #[error("invalid task colours: {0}")]
+    Rules(#[from] RuleError),
+}
+
+/// What a scene contains.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSpec {
+    /// Colour of each block, in scene (and observation) order.
+    pub blocks: Vec<Colour>,
+    /// Colour of the gripper (both fingers and the gripper link).
+    pub gripper: Colour,
+    /// Colour of the table.
+    pub table: Colour,
+    /// Exclude robot collision pairs that cannot touch in this workspace
+    /// ([`EXCLUDED_BODY_PAIRS`]); trajectories are bit-identical either way.
+    pub collision_filter: bool,
+}
+
+/// A rule object of the scene (gripper, table or block).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SceneObject {
+    /// "gripper", "table", "block0", ...
+    pub name: String,
+    /// Its colour.
+    pub colour: Colour,
+}
+
+/// Ids of one block in the compiled model.
+#[derive(Debug, Clone, Copy)]
+pub struct BlockIds {
+    /// Body id.
+    pub body: usize,
+    /// Centre site id.
+    pub site: usize,
+    /// Address of its free joint in qpos (7 values).
+    pub qpos: usize,
+    /// Address of its free joint in qvel (6 values).
+    pub dof: usize,
+}
+
+/// Index of the gripper among the rule objects.
+pub const GRIPPER_OBJECT: usize = 0;
+/// Index of the table among the rule objects.
+pub const TABLE_OBJECT: usize = 1;
+/// Index of the first block among the rule objects.
+pub const FIRST_BLOCK_OBJECT: usize = 2;
+
+/// A compiled scene.
+#[derive(Debug)]
+pub struct Scene {
+    /// The compiled model (shared by every state of this scene).
+    pub model: Arc<Model>,
+    /// The spec it was built from.
+    pub spec: SceneSpec,
+    /// `robot0:grip` site.
+    pub grip_site: usize,
+    /// `robot0:gripper_link` body (welded to the mocap).
+    pub gripper_body: usize,
+    /// Index of `robot0:mocap` among mocap bodies.
+    pub mocap: usize,
+    /// qpos addresses of the right and left finger joints.
+    pub finger_qpos: [usize; 2],
+    /// qvel addresses of the right and left finger joints.
+    pub finger_dof: [usize; 2],
+    /// qpos addresses of `robot0:slide0..2`.
+    pub slide_qpos: [usize; 3],
+    /// The blocks in spec order.
+    pub blocks: Vec<BlockIds>,
+    /// Rule objects: gripper, table, then the blocks.
+    pub objects: Vec<SceneObject>,
+    /// Rule object of each geom, or -1.
+    pub geom_object: Vec<i16>,
+}
+
+const GRIPPER_BODIES: [&str; 3] =
+    ["robot0:gripper_link", "robot0:r_gripper_finger_link", "robot0:l_gripper_finger_link"];
+
+fn joint_adr(model: &Model, name: &str) -> Result<(usize, usize), MjError> {
+    let j = model.id(ObjType::Joint, name)?;
+    Ok((model.jnt_qposadr()[j] as usize, model.jnt_dofadr()[j] as usize))
+}
+
+impl Scene {
+    /// Builds the scene from the template in [`models_dir`].
+    ///
+    /// # Errors
+    /// [`SceneError`] for missing assets, an invalid task, or a model MuJoCo refuses.
+    pub fn build(spec: &SceneSpec) -> Result<Scene, SceneError> {
+        crate::mj::install_handlers();
+        let colours: Vec<Colour> =
+            [spec.gripper, spec.table].into_iter().chain(spec.blocks.iter().copied()).collect();
+        Rules::new(colours.clone())?;
+        let dir = models_dir();
+        check_assets(&dir)?;
+        let template_path = dir.join(xml::TEMPLATE_FILE);
+        let template = std::fs::read_to_string(&template_path)
+            .map_err(|source| SceneError::Io { path: template_path.clone(), source })?;
+        let excludes: &[(&str, &str)] = if spec.collision_filter { EXCLUDED_BODY_PAIRS } else { &[] };
+        let text = xml::render(&template, spec, excludes)?;
+        let mut model = Model::from_xml_string(&text, &xml::virtual_path(&dir))?;
+
+        // gymnasium-robotics' reset_mocap_welds: the weld's anchor and relative
+        // pose become the identity, so the gripper is pulled onto the mocap.
+        let welds: Vec<usize> =
+            model.eq_type().iter().enumerate().filter(|(_, &t)| t == crate::mj::EQ_WELD).map(|(i, _)| i).collect();
+        for i in welds {
+            model.eq_data_mut()[i][..7].copy_from_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+        }
+
+        // Colour the gripper's geoms when it takes part in the task.
+        let gripper_bodies: Vec<usize> =
+            GRIPPER_BODIES.iter().map(|n| model.id(ObjType::Body, n)).collect::<Result<_, _>>()?;
+        if spec.gripper != Colour::Grey {
+            let mat = model.id(ObjType::Material, xml::material(spec.gripper))?;
+            let geoms: Vec<usize> = (0..model.ngeom())
+                .filter(|&g| gripper_bodies.contains(&(model.geom_bodyid()[g] as usize)))
+                .collect();
+            for g in geoms {
+                model.set_geom_material(g, mat)?;
+            }
+        }
+
+        let grip_site = model.id(ObjType::Site, "robot0:grip")?;
+        let gripper_body = gripper_bodies[0];
+        let mocap_body = model.id(ObjType::Body, "robot0:mocap")?;
+        let mocap = usize::try_from(model.body_mocapid()[mocap_body])
+            .map_err(|_| MjError::UnknownName { kind: "mocap body", name: "robot0:mocap".into() })?;
+        let (rq, rd) = joint_adr(&model, "robot0:r_gripper_finger_joint")?;
+        let (lq, ld) = joint_adr(&model, "robot0:l_gripper_finger_joint")?;
+        let mut slide_qpos = [0; 3];
+        for (i, s) in slide_qpos.iter_mut().enumerate() {
+            *s = joint_adr(&model, &format!("robot0:slide{i}"))?.0;
+        }
+        let table_body = model.id(ObjType::Body, "table0")?;
+
+        let mut blocks = Vec::with_capacity(spec.blocks.len());
+        for i in 0..spec.blocks.len() {
+            let name = xml::block_name(i);
+            let (qpos, dof) = joint_adr(&model, &format!("{name}:joint"))?;
+            blocks.push(BlockIds {
+                body: model.id(ObjType::Body, &name)?,
+                site: model.id(ObjType::Site, &name)?,
+                qpos,
+                dof,
+            });
+        }
+
+        let mut objects = vec![
+            SceneObject { name: "gripper".into(), colour: spec.gripper },
+            SceneObject { name: "table".into(), colour: spec.table },
+        ];
+        objects.extend(
+            spec.blocks.iter().enumerate().map(|(i, &colour)| SceneObject { name: xml::block_name(i), colour }),
+        );
+        let geom_object = model
+            .geom_bodyid()
+            .iter()
+            .map(|&b| {
+                let b = b as usize;
+                if gripper_bodies.contains(&b) {
+                    GRIPPER_OBJECT as i16
+                } else if b == table_body {
+                    TABLE_OBJECT as i16
+                } else {
+                    blocks.iter().position(|k| k.body == b).map_or(-1, |i| (FIRST_BLOCK_OBJECT + i) as i16)
+                }
+            })
+            .collect();
+
+        Ok(Scene {
+            model: Arc::new(model),
+            spec: spec.clone(),
+            grip_site,
+            gripper_body,
+            mocap,
+            finger_qpos: [rq, lq],
+            finger_dof: [rd, ld],
+            slide_qpos,
+            blocks,
+            objects,
+            geom_object,
+        })
+    }
+
+    /// Colours of the rule objects, in object order.
+    pub fn colours(&self) -> Vec<Colour> {
+        self.objects.iter().map(|o| o.colour).collect()
+    }
+}

@@ -1,0 +1,86 @@
+//! Turns a [`SceneSpec`] into MJCF text from the template `models/scene.xml`.
+
+use super::{SceneError, SceneSpec};
+use crate::rules::Colour;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// File name of the scene template inside the models folder.
+pub const TEMPLATE_FILE: &str = "scene.xml";
+
+/// Half size of a block (5 cm cubes).
+pub const BLOCK_HALF: f64 = 0.025;
+/// Height of the table top.
+pub const TABLE_TOP_Z: f64 = 0.4;
+/// Table centre (x, y) and half extents (x, y).
+pub const TABLE_CENTER: [f64; 2] = [1.3, 0.75];
+/// Half extents of the table top.
+pub const TABLE_HALF: [f64; 2] = [0.25, 0.35];
+
+/// Material name for a colour.
+pub fn material(c: Colour) -> &'static str {
+    match c {
+        Colour::Red => "bp_red",
+        Colour::Blue => "bp_blue",
+        Colour::Green => "bp_green",
+        Colour::Grey => "bp_grey",
+    }
+}
+
+/// Name of block `i`'s body, geom, site and (with `:joint`) joint.
+pub fn block_name(i: usize) -> String {
+    format!("block{i}")
+}
+
+/// Where block `i` rests before the first reset places it: a row along the
+/// far edge of the table, clear of the arm's settling motion.
+fn parking_spot(i: usize) -> [f64; 2] {
+    [1.1 + 0.08 * (i % 5) as f64, 1.05 - 0.08 * (i / 5) as f64]
+}
+
+/// Renders the template with the blocks, table colour and contact exclusions.
+///
+/// # Errors
+/// [`SceneError::Template`] if the template lacks a placeholder.
+pub fn render(template: &str, spec: &SceneSpec, excludes: &[(&str, &str)]) -> Result<String, SceneError> {
+    let mut blocks = String::new();
+    for (i, colour) in spec.blocks.iter().enumerate() {
+        let name = block_name(i);
+        let [x, y] = parking_spot(i);
+        let z = TABLE_TOP_Z + BLOCK_HALF;
+        let h = BLOCK_HALF;
+        let mat = material(*colour);
+        // The block is a free body like gymnasium-robotics' object0.
+        let _ = writeln!(
+            blocks,
+            r#"        <body name="{name}" pos="{x} {y} {z}">
+            <joint name="{name}:joint" type="free" damping="0.01"/>
+            <geom name="{name}" type="box" size="{h} {h} {h}" condim="3" mass="2" material="{mat}"/>
+            <site name="{name}" pos="0 0 0" size="0.02 0.02 0.02" rgba="1 0 0 0" type="sphere"/>
+        </body>"#
+        );
+    }
+    let mut contact = String::new();
+    if !excludes.is_empty() {
+        contact.push_str("    <contact>\n");
+        for (a, b) in excludes {
+            let _ = writeln!(contact, r#"        <exclude body1="{a}" body2="{b}"/>"#);
+        }
+        contact.push_str("    </contact>\n");
+    }
+    let table = if spec.table == Colour::Grey { "bp_table" } else { material(spec.table) };
+    let mut out = template.to_owned();
+    for (key, value) in [("{{BLOCKS}}", blocks.as_str()), ("{{CONTACT_EXCLUDES}}", &contact), ("{{TABLE_MATERIAL}}", table)] {
+        if !out.contains(key) {
+            return Err(SceneError::Template { placeholder: key });
+        }
+        out = out.replace(key, value);
+    }
+    Ok(out)
+}
+
+/// The name under which the generated XML is registered in MuJoCo's virtual
+/// file system: inside the models folder, so relative includes resolve.
+pub fn virtual_path(models_dir: &Path) -> std::path::PathBuf {
+    models_dir.join("blockpuzzle_generated.xml")
+}
