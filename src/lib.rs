@@ -14,3 +14,7 @@ pub mod math;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
+pub mod policy;
+pub mod rollout;
+pub mod bench;
+pub mod cli;

@@ -113,6 +113,7 @@ pub struct BlockEnv {
     touching: Touching,
     step_touching: Touching,
     obs: Vec<f32>,
+    physics: std::time::Duration,
 }
 
 impl BlockEnv {
@@ -175,6 +176,7 @@ impl BlockEnv {
             touching: Touching::new(n),
             step_touching: Touching::new(n),
             obs,
+            physics: std::time::Duration::ZERO,
         })
     }
 
@@ -235,6 +237,11 @@ impl BlockEnv {
     /// Current block orientations (w, x, y, z).
     pub fn block_quats(&self) -> Vec<[f64; 4]> {
         self.scene.blocks.iter().map(|b| self.data.xquat()[b.body]).collect()
+    }
+    /// Wall time spent inside `mj_step` since construction (for benchmarks:
+    /// everything else in `step` is environment overhead).
+    pub fn physics_seconds(&self) -> f64 {
+        self.physics.as_secs_f64()
     }
     /// Steps taken in the current episode.
     pub fn elapsed_steps(&self) -> usize {
@@ -341,7 +348,9 @@ impl BlockEnv {
         self.apply_action(action);
         self.step_touching.clear();
         for _ in 0..self.config.n_substeps {
+            let t = std::time::Instant::now();
             self.data.step();
+            self.physics += t.elapsed();
             self.observe_substep();
         }
         // Blocked gripper: fingers back to closed, then recompute the state.

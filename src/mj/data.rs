@@ -198,6 +198,10 @@ impl Data {
     pub fn xquat(&self) -> &[[f64; 4]] {
         self.vecs(self.raw().xquat, self.model.nbody())
     }
+    /// Geom positions in world coordinates (`geom_xpos`).
+    pub fn geom_xpos(&self) -> &[[f64; 3]] {
+        self.vecs(self.raw().geom_xpos, self.model.ngeom())
+    }
     /// Site positions in world coordinates (`site_xpos`).
     pub fn site_xpos(&self) -> &[[f64; 3]] {
         self.vecs(self.raw().site_xpos, self.model.nsite())

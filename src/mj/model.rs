@@ -198,6 +198,29 @@ impl Model {
         self.ints(self.raw().geom_matid, self.ngeom())
     }
 
+    /// Bounding-sphere radius of each geom (`geom_rbound`).
+    pub fn geom_rbound(&self) -> &[f64] {
+        let n = self.ngeom();
+        if n == 0 {
+            return &[];
+        }
+        // SAFETY: geom_rbound holds ngeom reals owned by the model.
+        unsafe { std::slice::from_raw_parts(self.raw().geom_rbound, n) }
+    }
+
+    /// Contact type bits of each geom (`geom_contype`).
+    pub fn geom_contype(&self) -> &[i32] {
+        self.ints(self.raw().geom_contype, self.ngeom())
+    }
+    /// Contact affinity bits of each geom (`geom_conaffinity`).
+    pub fn geom_conaffinity(&self) -> &[i32] {
+        self.ints(self.raw().geom_conaffinity, self.ngeom())
+    }
+    /// Weld group of each body (`body_weldid`).
+    pub fn body_weldid(&self) -> &[i32] {
+        self.ints(self.raw().body_weldid, self.nbody())
+    }
+
     /// Numeric data of each equality constraint (`eq_data`, `mjNEQDATA` reals each).
     pub fn eq_data(&self) -> &[[f64; NEQDATA]] {
         let n = self.neq();

@@ -1,0 +1,230 @@
+//! Rolling out a policy and recording headless trajectory dumps (JSON Lines:
+//! one episode per line).
+
+use crate::env::{BlockEnv, EnvError};
+use crate::policy::Policy;
+use crate::rules::Colour;
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// Errors of a rollout.
+#[derive(Debug, Error)]
+pub enum RolloutError {
+    /// The environment refused something.
+    #[error(transparent)]
+    Env(#[from] EnvError),
+    /// The output file could not be written.
+    #[error("cannot write trajectory dump {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    /// JSON encoding failed.
+    #[error("cannot encode trajectory: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+/// An object of the episode and its colour.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectRecord {
+    /// "gripper", "table", "block0", ...
+    pub name: String,
+    /// Its colour.
+    pub colour: Colour,
+}
+
+/// Pose of a block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlockPose {
+    /// Centre (x, y, z).
+    pub pos: [f64; 3],
+    /// Orientation (w, x, y, z).
+    pub quat: [f64; 4],
+}
+
+/// State after a reset or a step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateRecord {
+    /// Full generalised positions: enough to replay and render the state.
+    pub qpos: Vec<f64>,
+    /// Grip site position.
+    pub gripper: [f64; 3],
+    /// Every block's pose.
+    pub blocks: Vec<BlockPose>,
+}
+
+/// One step of an episode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    /// The action taken.
+    pub action: [f32; 4],
+    /// State after the action.
+    #[serde(flatten)]
+    pub state: StateRecord,
+    /// Object pairs that touched during the step (indices into `objects`).
+    pub touching: Vec<(usize, usize)>,
+    /// Reward of the step.
+    pub reward: f32,
+    /// Terminated under the rules.
+    pub terminated: bool,
+    /// Truncated (time limit or instability).
+    pub truncated: bool,
+    /// Success during this step.
+    pub is_success: bool,
+    /// Failure during this step.
+    pub is_failure: bool,
+    /// Numerical instability.
+    pub unstable: bool,
+}
+
+/// One recorded episode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeRecord {
+    /// Environment id.
+    pub env_id: String,
+    /// Seed passed to `reset`.
+    pub seed: u64,
+    /// Curriculum level.
+    pub level: usize,
+    /// Challenge distribution.
+    pub challenge: bool,
+    /// Rule objects and colours.
+    pub objects: Vec<ObjectRecord>,
+    /// State after reset.
+    pub initial: StateRecord,
+    /// The steps.
+    pub steps: Vec<StepRecord>,
+    /// The episode succeeded.
+    pub success: bool,
+    /// The episode failed.
+    pub failure: bool,
+    /// Sum of rewards.
+    pub episode_return: f32,
+}
+
+fn state(env: &BlockEnv) -> StateRecord {
+    StateRecord {
+        qpos: env.data().qpos().to_vec(),
+        gripper: env.gripper_position(),
+        blocks: env
+            .block_positions()
+            .into_iter()
+            .zip(env.block_quats())
+            .map(|(pos, quat)| BlockPose { pos, quat })
+            .collect(),
+    }
+}
+
+/// Runs one episode of `policy` from `reset(Some(seed))`.
+///
+/// # Errors
+/// Whatever the environment reports (placement, invalid scene).
+pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Result<EpisodeRecord, RolloutError> {
+    let (mut obs, _) = env.reset(Some(seed))?;
+    policy.reset();
+    let mut rec = EpisodeRecord {
+        env_id: env.id().to_owned(),
+        seed,
+        level: env.level(),
+        challenge: env.challenge(),
+        objects: env.objects().iter().map(|o| ObjectRecord { name: o.name.clone(), colour: o.colour }).collect(),
+        initial: state(env),
+        steps: Vec::new(),
+        success: false,
+        failure: false,
+        episode_return: 0.0,
+    };
+    loop {
+        let action = policy.act(&obs);
+        let s = env.step(&action)?;
+        rec.episode_return += s.reward;
+        rec.success |= s.info.is_success;
+        rec.failure |= s.info.is_failure;
+        rec.steps.push(StepRecord {
+            action,
+            state: state(env),
+            touching: s.info.touching.clone(),
+            reward: s.reward,
+            terminated: s.terminated,
+            truncated: s.truncated,
+            is_success: s.info.is_success,
+            is_failure: s.info.is_failure,
+            unstable: s.info.unstable,
+        });
+        obs = s.obs;
+        if s.terminated || s.truncated {
+            return Ok(rec);
+        }
+    }
+}
+
+/// A JSON Lines file written atomically: episodes go to a temporary file
+/// next to `path`, renamed onto `path` by [`DumpWriter::finish`]. If the
+/// writer is dropped unfinished (an error), the temporary file is removed
+/// and nothing is left at `path`.
+pub struct DumpWriter {
+    path: PathBuf,
+    tmp: PathBuf,
+    file: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl DumpWriter {
+    /// Opens the temporary file (so an unwritable destination fails before any work).
+    ///
+    /// # Errors
+    /// [`RolloutError::Io`] if the folder does not exist or is not writable.
+    pub fn create(path: &Path) -> Result<Self, RolloutError> {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "dump".into());
+        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let io = |source| RolloutError::Io { path: path.to_owned(), source };
+        if path.is_dir() {
+            return Err(io(std::io::Error::new(std::io::ErrorKind::Other, "it is a directory")));
+        }
+        let file = std::fs::File::create(&tmp).map_err(io)?;
+        Ok(Self { path: path.to_owned(), tmp, file: Some(std::io::BufWriter::new(file)) })
+    }
+
+    /// Appends one episode as a line.
+    ///
+    /// # Errors
+    /// [`RolloutError::Io`] / [`RolloutError::Json`].
+    pub fn write(&mut self, ep: &EpisodeRecord) -> Result<(), RolloutError> {
+        let path = self.path.clone();
+        let f = self.file.as_mut().ok_or_else(|| RolloutError::Io {
+            path: path.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::Other, "writer already finished"),
+        })?;
+        serde_json::to_writer(&mut *f, ep)?;
+        f.write_all(b"\n").map_err(|source| RolloutError::Io { path, source })
+    }
+
+    /// Flushes and moves the file into place.
+    ///
+    /// # Errors
+    /// [`RolloutError::Io`].
+    pub fn finish(mut self) -> Result<(), RolloutError> {
+        let io = |source| RolloutError::Io { path: self.path.clone(), source };
+        if let Some(f) = self.file.take() {
+            let file = f.into_inner().map_err(|e| io(e.into_error()))?;
+            file.sync_all().map_err(io)?;
+        }
+        std::fs::rename(&self.tmp, &self.path).map_err(io)
+    }
+}
+
+impl Drop for DumpWriter {
+    fn drop(&mut self) {
+        if self.file.is_some() {
+            self.file = None;
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Reads a trajectory dump.
+///
+/// # Errors
+/// [`RolloutError::Io`] or [`RolloutError::Json`] naming the bad line.
+pub fn read_dump(path: &Path) -> Result<Vec<EpisodeRecord>, RolloutError> {
+    let text = std::fs::read_to_string(path).map_err(|source| RolloutError::Io { path: path.to_owned(), source })?;
+    text.lines().filter(|l| !l.trim().is_empty()).map(|l| Ok(serde_json::from_str(l)?)).collect()
+}
