@@ -29,6 +29,12 @@ pub struct EnvConfig {
     pub gripper_extra_height: f64,
     /// Exclude robot collision pairs that never touch (faster, same physics).
     pub collision_filter: bool,
+    /// After the substeps, recompute the state with a full `mj_forward`
+    /// (gymnasium-robotics' step callback) instead of only the kinematics,
+    /// velocities and contacts the observation and the rules read. Both give
+    /// bit-identical trajectories (tested); the full pass is slower.
+    #[serde(default)]
+    pub full_forward: bool,
 }
 
 impl EnvConfig {
@@ -44,6 +50,7 @@ impl EnvConfig {
             n_substeps: 20,
             gripper_extra_height: 0.2,
             collision_filter: true,
+            full_forward: false,
         }
     }
 }

@@ -344,7 +344,7 @@ impl BlockEnv {
             Phase::Running => {}
         }
 
-        let bad_before = self.data.warning_count(Warning::BadQacc);
+        let bad_before = self.bad_number_warnings();
         self.apply_action(action);
         self.step_touching.clear();
         for _ in 0..self.config.n_substeps {
@@ -357,11 +357,17 @@ impl BlockEnv {
         for &a in &self.scene.finger_qpos {
             self.data.qpos_mut()[a] = 0.0;
         }
-        self.data.forward();
+        if self.config.full_forward {
+            self.data.forward();
+        } else {
+            // Everything the next mj_step needs it recomputes itself from
+            // qpos/qvel, so only what the observation and rules read is due.
+            self.data.kinematics(true);
+        }
         self.observe_substep();
         self.steps += 1;
 
-        let unstable = self.data.warning_count(Warning::BadQacc) > bad_before
+        let unstable = self.bad_number_warnings() > bad_before
             || !self.data.qpos().iter().chain(self.data.qvel()).all(|v| v.is_finite());
         let outcome = if unstable { None } else { self.rules.outcome() };
         let (is_success, is_failure) = (outcome == Some(Outcome::Success), outcome == Some(Outcome::Failure));
@@ -380,6 +386,14 @@ impl BlockEnv {
         }
         let info = Info { unstable, ..self.info(is_success, is_failure, self.step_touching.pairs()) };
         Ok(Step { obs: self.obs.clone(), reward, terminated, truncated, info })
+    }
+
+    /// MuJoCo's counters of bad numbers (it resets the state when it raises them).
+    fn bad_number_warnings(&self) -> i64 {
+        [Warning::BadQpos, Warning::BadQvel, Warning::BadQacc]
+            .into_iter()
+            .map(|w| i64::from(self.data.warning_count(w)))
+            .sum()
     }
 
     fn dt(&self) -> f64 {

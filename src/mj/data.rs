@@ -108,6 +108,26 @@ impl Data {
         unsafe { sys::mj_forward(self.m(), self.ptr.as_ptr()) };
     }
 
+    /// Position-dependent quantities only: forward kinematics, centres of
+    /// mass, and velocities of the bodies (`mj_kinematics`, `mj_comPos`,
+    /// `mj_comVel`), followed by collision detection (`mj_collision`) when
+    /// `contacts` is set. Positions, orientations, `mj_objectVelocity` and
+    /// (with `contacts`) the contact list are then up to date; forces and
+    /// accelerations are not.
+    pub fn kinematics(&mut self, contacts: bool) {
+        let (m, d) = (self.m(), self.ptr.as_ptr());
+        // SAFETY: as in `step`; these are the first stages of mj_forward,
+        // called in the order mj_forward calls them.
+        unsafe {
+            sys::mj_kinematics(m, d);
+            sys::mj_comPos(m, d);
+            if contacts {
+                sys::mj_collision(m, d);
+            }
+            sys::mj_comVel(m, d);
+        }
+    }
+
     /// Resets to the model's reference configuration (`mj_resetData`).
     pub fn reset(&mut self) {
         // SAFETY: as in `step`.
