@@ -1,0 +1,129 @@
+//! The `blockpuzzle` binary end to end, bad input included.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn bp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().expect("run blockpuzzle")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+#[test]
+fn envs_lists_one_line_per_id() {
+    let o = bp(&["envs"]);
+    assert!(o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    assert_eq!(out.lines().count(), 3, "{out}");
+    assert!(out.contains("BlocksTouch-v0") && out.contains("BlocksChoose-v0") && out.contains("GripperTouch-v0"));
+}
+
+#[test]
+fn rollout_writes_a_replayable_dump() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("touch.jsonl");
+    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--policy", "scripted", "--episodes", "3", "--seed", "5", "--level", "0", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("success 1.000"), "{}", text(&o));
+    let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
+    assert_eq!(eps.len(), 3);
+    let ep = &eps[1];
+    assert_eq!((ep.env_id.as_str(), ep.seed, ep.level), ("BlocksTouch-v0", 6, 0));
+    assert_eq!(ep.objects.len(), 4);
+    assert!(ep.success && ep.steps.last().unwrap().terminated);
+    assert_eq!(ep.steps[0].state.qpos.len(), 29);
+    // the dump replays: qpos of a step reproduces its block positions
+    let mut env = blockpuzzle::make("BlocksTouch-v0").unwrap();
+    env.reset(Some(0)).unwrap();
+    let step = &ep.steps[2];
+    env.data_mut().qpos_mut().copy_from_slice(&step.state.qpos);
+    env.data_mut().forward();
+    let blocks = env.block_positions();
+    for (b, rec) in blocks.iter().zip(&step.state.blocks) {
+        assert_eq!(b, &rec.pos);
+    }
+    // the same command writes the same file
+    let out2 = dir.path().join("again.jsonl");
+    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--policy", "scripted", "--episodes", "3", "--seed", "5", "--level", "0", "--out", out2.to_str().unwrap()]);
+    assert!(o.status.success());
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&out2).unwrap());
+}
+
+#[test]
+fn unknown_env_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.jsonl");
+    let o = bp(&["rollout", "--env", "Nope-v1", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(t.contains("unknown environment id") && t.contains("BlocksTouch-v0"), "{t}");
+    assert!(!t.contains("panicked"), "{t}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn level_beyond_max_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.jsonl");
+    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--level", "9", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("beyond the maximum level 5"), "{}", text(&o));
+    assert!(!out.exists());
+    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--challenge", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("no challenge mode"), "{}", text(&o));
+}
+
+#[test]
+fn unwritable_out_leaves_nothing_behind() {
+    let o = bp(&["rollout", "--env", "GripperTouch-v0", "--episodes", "1", "--out", "/nonexistent-dir/x.jsonl"]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("cannot write trajectory dump /nonexistent-dir/x.jsonl"), "{}", text(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let o = bp(&["rollout", "--env", "GripperTouch-v0", "--episodes", "1", "--out", dir.path().to_str().unwrap()]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no temporary file left");
+}
+
+fn with_models_dir(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
+        .args(args)
+        .env("BLOCKPUZZLE_MODELS_DIR", dir)
+        .output()
+        .expect("run blockpuzzle")
+}
+
+#[test]
+fn missing_assets_name_the_setup_command() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/scene.xml"), dir.path().join("scene.xml")).unwrap();
+    let o = with_models_dir(dir.path(), &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(t.contains("make setup") && t.contains("gymnasium_robotics"), "{t}");
+    assert!(!t.contains("panicked"), "{t}");
+}
+
+#[test]
+fn corrupt_scene_xml_reports_mujocos_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    std::os::unix::fs::symlink(models.join("gymnasium_robotics"), dir.path().join("gymnasium_robotics")).unwrap();
+    let template = std::fs::read_to_string(models.join("scene.xml")).unwrap();
+    std::fs::write(dir.path().join("scene.xml"), template.replace("</worldbody>", "<body><geom type=\"box\" size=\"x\"/></body></worldbody>")).unwrap();
+    let o = with_models_dir(dir.path(), &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(t.contains("MuJoCo could not load") && t.contains("blockpuzzle_generated.xml"), "{t}");
+    assert!(!dir.path().join("x.jsonl").exists());
+}
+
+#[test]
+fn bench_prints_json() {
+    let o = bp(&["bench", "--env", "GripperTouch-v0", "--steps", "200", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["env_steps_per_s"].as_f64().unwrap() > 0.0);
+    assert!(v["mj_steps_per_s"].as_f64().unwrap() > v["env_steps_per_s"].as_f64().unwrap());
+}
