@@ -1,15 +1,15 @@
 use blockpuzzle::env::make;
 use blockpuzzle::mj::ObjType;
-use std::collections::BTreeMap;
 use rand::{Rng, SeedableRng};
+use std::collections::BTreeMap;
 fn main() {
     let mut env = make(&std::env::args().nth(1).unwrap_or("BlocksChoose-v0".into())).unwrap();
     let m = env.scene().model.clone();
     let bname = |b: usize| m.name(ObjType::Body, b).unwrap_or(format!("body{b}"));
     let gb = m.geom_bodyid().to_vec();
     let ng = m.ngeom();
-    let mut contacts: BTreeMap<(String,String), usize> = BTreeMap::new();
-    let mut spheres: BTreeMap<(String,String), usize> = BTreeMap::new();
+    let mut contacts: BTreeMap<(String, String), usize> = BTreeMap::new();
+    let mut spheres: BTreeMap<(String, String), usize> = BTreeMap::new();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
     let mut nsub = 0;
     for ep in 0..40 {
@@ -23,21 +23,38 @@ fn main() {
                 let (a, b) = (bname(gb[c.geom1()] as usize), bname(gb[c.geom2()] as usize));
                 *contacts.entry((a.clone().min(b.clone()), a.max(b))).or_default() += 1;
             }
-            let xp = d.geom_xpos(); let rb = m.geom_rbound(); let ct = m.geom_contype(); let ca = m.geom_conaffinity();
-            for i in 0..ng { for j in i+1..ng {
-                if gb[i]==gb[j] { continue; }
-                if (ct[i] & ca[j]) == 0 && (ct[j] & ca[i]) == 0 { continue; }
-                let dd: f64 = (0..3).map(|k| (xp[i][k]-xp[j][k]).powi(2)).sum::<f64>().sqrt();
-                if rb[i] > 0.0 && rb[j] > 0.0 && dd < rb[i]+rb[j] + 0.002 {
-                    let (a, b) = (bname(gb[i] as usize), bname(gb[j] as usize));
-                    *spheres.entry((a.clone().min(b.clone()), a.max(b))).or_default() += 1;
+            let xp = d.geom_xpos();
+            let rb = m.geom_rbound();
+            let ct = m.geom_contype();
+            let ca = m.geom_conaffinity();
+            for i in 0..ng {
+                for j in i + 1..ng {
+                    if gb[i] == gb[j] {
+                        continue;
+                    }
+                    if (ct[i] & ca[j]) == 0 && (ct[j] & ca[i]) == 0 {
+                        continue;
+                    }
+                    let dd: f64 = (0..3).map(|k| (xp[i][k] - xp[j][k]).powi(2)).sum::<f64>().sqrt();
+                    if rb[i] > 0.0 && rb[j] > 0.0 && dd < rb[i] + rb[j] + 0.002 {
+                        let (a, b) = (bname(gb[i] as usize), bname(gb[j] as usize));
+                        *spheres.entry((a.clone().min(b.clone()), a.max(b))).or_default() += 1;
+                    }
                 }
-            }}
-            if s.terminated || s.truncated { break; }
+            }
+            if s.terminated || s.truncated {
+                break;
+            }
         }
     }
-    println!("steps {nsub}\nCONTACTS:"); for (k,v) in &contacts { println!("  {k:?} {v}"); }
-    println!("SPHERE OVERLAPS:"); for (k,v) in &spheres { println!("  {k:?} {v} {}", if contacts.contains_key(k) {"(contact)"} else {""}); }
+    println!("steps {nsub}\nCONTACTS:");
+    for (k, v) in &contacts {
+        println!("  {k:?} {v}");
+    }
+    println!("SPHERE OVERLAPS:");
+    for (k, v) in &spheres {
+        println!("  {k:?} {v} {}", if contacts.contains_key(k) { "(contact)" } else { "" });
+    }
     let parents = m.body_parentid();
     println!("parents: {:?}", (0..m.nbody()).map(|b| (bname(b), bname(parents[b] as usize))).collect::<Vec<_>>());
 }

@@ -7,8 +7,11 @@ fn run(mut env: BlockEnv) -> f64 {
     let mut n = 0;
     while n < 4000 {
         let a: Vec<f32> = (0..4).map(|_| rng.gen_range(-1.0..1.0)).collect();
-        let s = env.step(&a).unwrap(); n += 1;
-        if s.terminated || s.truncated { env.reset(None).unwrap(); }
+        let s = env.step(&a).unwrap();
+        n += 1;
+        if s.terminated || s.truncated {
+            env.reset(None).unwrap();
+        }
     }
     n as f64 / t.elapsed().as_secs_f64()
 }

@@ -9,13 +9,8 @@ use std::env;
 use std::path::{Path, PathBuf};
 
 const INCLUDE_CANDIDATES: &[&str] = &["/usr/include", "/usr/local/include", "/opt/mujoco/include"];
-const LIB_CANDIDATES: &[&str] = &[
-    "/usr/lib/x86_64-linux-gnu",
-    "/usr/lib/aarch64-linux-gnu",
-    "/usr/lib",
-    "/usr/local/lib",
-    "/opt/mujoco/lib",
-];
+const LIB_CANDIDATES: &[&str] =
+    &["/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib", "/usr/local/lib", "/opt/mujoco/lib"];
 const SETUP_HINT: &str = "install it with `apt-get install libmujoco-dev libclang-dev` (or run `make setup`), \
      or point MUJOCO_INCLUDE_DIR / MUJOCO_LIB_DIR at a MuJoCo 2.2.2 installation";
 
@@ -59,10 +54,10 @@ fn main() {
         .layout_tests(false)
         .generate_comments(true)
         .generate()
-        .unwrap_or_else(|e| panic!("bindgen failed on {}: {e}; libclang-dev is needed ({SETUP_HINT})", header.display()));
+        .unwrap_or_else(|e| {
+            panic!("bindgen failed on {}: {e}; libclang-dev is needed ({SETUP_HINT})", header.display())
+        });
 
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("bindings.rs");
-    bindings
-        .write_to_file(&out)
-        .unwrap_or_else(|e| panic!("cannot write {}: {e}", out.display()));
+    bindings.write_to_file(&out).unwrap_or_else(|e| panic!("cannot write {}: {e}", out.display()));
 }

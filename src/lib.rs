@@ -5,16 +5,16 @@
 //! every blue object touches a green one. The environments put coloured blocks
 //! in front of the OpenAI Fetch robot in MuJoCo.
 
-pub mod mj;
-pub mod rules;
-pub mod scene;
 pub mod curriculum;
 pub mod env;
 pub mod math;
+pub mod mj;
+pub mod rules;
+pub mod scene;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
-pub mod policy;
-pub mod rollout;
 pub mod bench;
 pub mod cli;
+pub mod policy;
+pub mod rollout;

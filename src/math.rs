@@ -17,16 +17,21 @@ pub fn mat2euler(m: &[f64; 9]) -> [f64; 3] {
 mod tests {
     use super::*;
 
-    /// Row-major matrix of R = Rz(c)·Ry(b)·Rx(a).
-    fn rot(a: f64, b: f64, c: f64) -> [f64; 9] {
-        let (sa, ca) = a.sin_cos();
-        let (sb, cb) = b.sin_cos();
-        let (sc, cc) = c.sin_cos();
-        [
-            cb * cc, sa * sb * cc - ca * sc, ca * sb * cc + sa * sc,
-            cb * sc, sa * sb * sc + ca * cc, ca * sb * sc - sa * cc,
-            -sb, sa * cb, ca * cb,
-        ]
+    /// gymnasium-robotics' `euler2mat` for angles `[x, y, z]` (row-major).
+    fn euler2mat(e: [f64; 3]) -> [f64; 9] {
+        let (ai, aj, ak) = (-e[2], -e[1], -e[0]);
+        let (si, ci) = ai.sin_cos();
+        let (sj, cj) = aj.sin_cos();
+        let (sk, ck) = ak.sin_cos();
+        let (cc, cs, sc, ss) = (ci * ck, ci * sk, si * ck, si * sk);
+        [cj * ci, cj * si, -sj, sj * cs - sc, sj * ss + cc, cj * sk, sj * cc + ss, sj * sc - cs, cj * ck]
+    }
+
+    #[test]
+    fn yaw_about_z_reads_as_z_angle() {
+        let (s, c) = 0.4f64.sin_cos();
+        let e = mat2euler(&[c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0]);
+        assert!(e[0].abs() < 1e-15 && e[1].abs() < 1e-15 && (e[2] - 0.4).abs() < 1e-15, "{e:?}");
     }
 
     #[test]
@@ -36,10 +41,8 @@ mod tests {
 
     #[test]
     fn round_trips_rotations() {
-        // gymnasium-robotics' mat2euler inverts euler2mat, i.e. R = Rz·Ry·Rx for
-        // angles (x, y, z) with its sign conventions.
         for &(a, b, c) in &[(0.3, -0.2, 1.1), (-1.0, 0.5, -2.5), (0.0, 0.0, 0.7)] {
-            let e = mat2euler(&rot(a, b, c));
+            let e = mat2euler(&euler2mat([a, b, c]));
             for (got, want) in e.iter().zip([a, b, c]) {
                 assert!((got - want).abs() < 1e-12, "{e:?} vs {:?}", (a, b, c));
             }

@@ -104,13 +104,15 @@ impl ScriptedPolicy {
         let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
             return [0.0; ACTION_DIM];
         };
-        let greys: Vec<[f64; 3]> = blocks.iter().filter(|b| b.colour != Colour::Blue && b.colour != Colour::Green).map(|b| b.pos).collect();
+        let greys: Vec<[f64; 3]> =
+            blocks.iter().filter(|b| b.colour != Colour::Blue && b.colour != Colour::Green).map(|b| b.pos).collect();
         // Push whichever block has the clearer path (grey blocks in the way
         // would be shoved into the target instead).
         let clearance = |mover: [f64; 3], target: [f64; 3]| {
             greys.iter().map(|&g| seg_dist(g, mover, target)).fold(f64::INFINITY, f64::min)
         };
-        let (mover, target) = if clearance(green, blue) > clearance(blue, green) + 0.02 { (green, blue) } else { (blue, green) };
+        let (mover, target) =
+            if clearance(green, blue) > clearance(blue, green) + 0.02 { (green, blue) } else { (blue, green) };
         let d = {
             let (dx, dy) = (target[0] - mover[0], target[1] - mover[1]);
             let n = dx.hypot(dy).max(1e-9);
@@ -146,7 +148,9 @@ impl Policy for ScriptedPolicy {
         let blocks = read_blocks(obs);
         if self.reach {
             return match blocks.iter().find(|b| b.colour == Colour::Green) {
-                Some(g) if xy_dist(grip, g.pos) > 0.01 => toward(grip, [g.pos[0], g.pos[1], grip[2].max(g.pos[2] + 0.05)]),
+                Some(g) if xy_dist(grip, g.pos) > 0.01 => {
+                    toward(grip, [g.pos[0], g.pos[1], grip[2].max(g.pos[2] + 0.05)])
+                }
                 Some(g) => toward(grip, [g.pos[0], g.pos[1], g.pos[2]]),
                 None => [0.0; ACTION_DIM],
             };

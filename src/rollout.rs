@@ -177,7 +177,7 @@ impl DumpWriter {
         let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
         let io = |source| RolloutError::Io { path: path.to_owned(), source };
         if path.is_dir() {
-            return Err(io(std::io::Error::new(std::io::ErrorKind::Other, "it is a directory")));
+            return Err(io(std::io::Error::other("it is a directory")));
         }
         let file = std::fs::File::create(&tmp).map_err(io)?;
         Ok(Self { path: path.to_owned(), tmp, file: Some(std::io::BufWriter::new(file)) })
@@ -191,7 +191,7 @@ impl DumpWriter {
         let path = self.path.clone();
         let f = self.file.as_mut().ok_or_else(|| RolloutError::Io {
             path: path.clone(),
-            source: std::io::Error::new(std::io::ErrorKind::Other, "writer already finished"),
+            source: std::io::Error::other("writer already finished"),
         })?;
         serde_json::to_writer(&mut *f, ep)?;
         f.write_all(b"\n").map_err(|source| RolloutError::Io { path, source })
@@ -202,12 +202,16 @@ impl DumpWriter {
     /// # Errors
     /// [`RolloutError::Io`].
     pub fn finish(mut self) -> Result<(), RolloutError> {
-        let io = |source| RolloutError::Io { path: self.path.clone(), source };
-        if let Some(f) = self.file.take() {
-            let file = f.into_inner().map_err(|e| io(e.into_error()))?;
-            file.sync_all().map_err(io)?;
-        }
-        std::fs::rename(&self.tmp, &self.path).map_err(io)
+        let path = self.path.clone();
+        let io = |source| RolloutError::Io { path: path.clone(), source };
+        let Some(f) = self.file.as_mut() else {
+            return Err(io(std::io::Error::other("writer already finished")));
+        };
+        f.flush().map_err(io)?;
+        f.get_ref().sync_all().map_err(io)?;
+        std::fs::rename(&self.tmp, &self.path).map_err(io)?;
+        self.file = None; // in place: nothing for Drop to clean up
+        Ok(())
     }
 }
 

@@ -24,7 +24,21 @@ fn envs_lists_one_line_per_id() {
 fn rollout_writes_a_replayable_dump() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("touch.jsonl");
-    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--policy", "scripted", "--episodes", "3", "--seed", "5", "--level", "0", "--out", out.to_str().unwrap()]);
+    let o = bp(&[
+        "rollout",
+        "--env",
+        "BlocksTouch-v0",
+        "--policy",
+        "scripted",
+        "--episodes",
+        "3",
+        "--seed",
+        "5",
+        "--level",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("success 1.000"), "{}", text(&o));
     let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
@@ -46,7 +60,21 @@ fn rollout_writes_a_replayable_dump() {
     }
     // the same command writes the same file
     let out2 = dir.path().join("again.jsonl");
-    let o = bp(&["rollout", "--env", "BlocksTouch-v0", "--policy", "scripted", "--episodes", "3", "--seed", "5", "--level", "0", "--out", out2.to_str().unwrap()]);
+    let o = bp(&[
+        "rollout",
+        "--env",
+        "BlocksTouch-v0",
+        "--policy",
+        "scripted",
+        "--episodes",
+        "3",
+        "--seed",
+        "5",
+        "--level",
+        "0",
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
     assert!(o.status.success());
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&out2).unwrap());
 }
@@ -97,8 +125,12 @@ fn with_models_dir(dir: &Path, args: &[&str]) -> Output {
 #[test]
 fn missing_assets_name_the_setup_command() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/scene.xml"), dir.path().join("scene.xml")).unwrap();
-    let o = with_models_dir(dir.path(), &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()]);
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/scene.xml"), dir.path().join("scene.xml"))
+        .unwrap();
+    let o = with_models_dir(
+        dir.path(),
+        &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()],
+    );
     assert!(!o.status.success());
     let t = text(&o);
     assert!(t.contains("make setup") && t.contains("gymnasium_robotics"), "{t}");
@@ -111,8 +143,15 @@ fn corrupt_scene_xml_reports_mujocos_message() {
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
     std::os::unix::fs::symlink(models.join("gymnasium_robotics"), dir.path().join("gymnasium_robotics")).unwrap();
     let template = std::fs::read_to_string(models.join("scene.xml")).unwrap();
-    std::fs::write(dir.path().join("scene.xml"), template.replace("</worldbody>", "<body><geom type=\"box\" size=\"x\"/></body></worldbody>")).unwrap();
-    let o = with_models_dir(dir.path(), &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()]);
+    std::fs::write(
+        dir.path().join("scene.xml"),
+        template.replace("</worldbody>", "<body><geom type=\"box\" size=\"x\"/></body></worldbody>"),
+    )
+    .unwrap();
+    let o = with_models_dir(
+        dir.path(),
+        &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()],
+    );
     assert!(!o.status.success());
     let t = text(&o);
     assert!(t.contains("MuJoCo could not load") && t.contains("blockpuzzle_generated.xml"), "{t}");

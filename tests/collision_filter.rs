@@ -20,7 +20,9 @@ fn pair(id: &str) -> (BlockEnv, BlockEnv) {
 
 #[test]
 fn filtered_and_unfiltered_trajectories_are_bit_identical() {
-    for (id, level, challenge) in [("BlocksChoose-v0", 10, false), ("BlocksChoose-v0", 10, true), ("BlocksTouch-v0", 5, false)] {
+    for (id, level, challenge) in
+        [("BlocksChoose-v0", 10, false), ("BlocksChoose-v0", 10, true), ("BlocksTouch-v0", 5, false)]
+    {
         let (mut on, mut off) = pair(id);
         for e in [&mut on, &mut off] {
             e.set_level(level).unwrap();

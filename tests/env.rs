@@ -10,7 +10,9 @@ use common::trajectory;
 #[test]
 fn registry_lists_and_builds_every_id() {
     assert_eq!(ids(), vec!["BlocksTouch-v0", "BlocksChoose-v0", "GripperTouch-v0"]);
-    for (id, dim, nq, max_level) in [("BlocksTouch-v0", 48, 29, 5), ("BlocksChoose-v0", 67, 36, 10), ("GripperTouch-v0", 29, 22, 0)] {
+    for (id, dim, nq, max_level) in
+        [("BlocksTouch-v0", 48, 29, 5), ("BlocksChoose-v0", 67, 36, 10), ("GripperTouch-v0", 29, 22, 0)]
+    {
         let mut env = make(id).unwrap();
         let (obs, info) = env.reset(Some(0)).unwrap();
         assert_eq!(obs.len(), dim, "{id}");
@@ -53,7 +55,10 @@ fn observation_layout_matches_the_state() {
         assert!((b[2] - 0.425).abs() < 0.002, "block rests on the table: z = {}", b[2]);
     }
     // the gripper starts 0.2 m higher than FetchPush's and at Fetch's x, y
-    assert!((grip[0] - 1.342).abs() < 0.01 && (grip[1] - 0.749).abs() < 0.01 && (grip[2] - 0.535).abs() < 0.01, "{grip:?}");
+    assert!(
+        (grip[0] - 1.342).abs() < 0.01 && (grip[1] - 0.749).abs() < 0.01 && (grip[2] - 0.535).abs() < 0.01,
+        "{grip:?}"
+    );
 }
 
 #[test]

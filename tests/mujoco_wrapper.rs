@@ -45,12 +45,17 @@ fn name_lookups_return_results() {
 
 #[test]
 fn bad_xml_carries_mujocos_message() {
-    let err = Model::from_xml_string("<mujoco><worldbody><body><geom type=\"sphere\"", Path::new("/tmp/bad.xml")).unwrap_err();
+    let err = Model::from_xml_string("<mujoco><worldbody><body><geom type=\"sphere\"", Path::new("/tmp/bad.xml"))
+        .unwrap_err();
     match &err {
         MjError::Load { message, .. } => assert!(!message.is_empty(), "{err}"),
         other => panic!("{other:?}"),
     }
-    let err = Model::from_xml_string("<mujoco><worldbody><geom type=\"nosuchtype\"/></worldbody></mujoco>", Path::new("/tmp/bad.xml")).unwrap_err();
+    let err = Model::from_xml_string(
+        "<mujoco><worldbody><geom type=\"nosuchtype\"/></worldbody></mujoco>",
+        Path::new("/tmp/bad.xml"),
+    )
+    .unwrap_err();
     assert!(err.to_string().to_lowercase().contains("type") || err.to_string().contains("invalid"), "{err}");
     let err = Model::from_xml_file(Path::new("/nonexistent/model.xml")).unwrap_err();
     assert!(matches!(err, MjError::MissingFile { .. }), "{err}");

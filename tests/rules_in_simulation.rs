@@ -31,10 +31,16 @@ fn blue_placed_touching_green_succeeds_on_the_first_step() {
 fn red_touching_blue_at_reset_is_rejected() {
     let mut e = env(vec![Blue, Green, Red], vec![A, FAR, A_TOUCH]);
     match e.reset(Some(0)) {
-        Err(EnvError::InitialViolation { red, blue }) => assert_eq!((red.as_str(), blue.as_str()), ("block2", "block0")),
+        Err(EnvError::InitialViolation { red, blue }) => {
+            assert_eq!((red.as_str(), blue.as_str()), ("block2", "block0"))
+        }
         other => panic!("{other:?}"),
     }
-    let mut red_table = BlockEnv::new(EnvConfig { table: Red, ..EnvConfig::custom("t", vec![Blue, Green], Layout::Fixed(vec![A, FAR])) }).unwrap();
+    let mut red_table = BlockEnv::new(EnvConfig {
+        table: Red,
+        ..EnvConfig::custom("t", vec![Blue, Green], Layout::Fixed(vec![A, FAR]))
+    })
+    .unwrap();
     let err = red_table.reset(Some(0)).unwrap_err();
     assert!(err.to_string().contains("table") && err.to_string().contains("block0"), "{err}");
 }

@@ -86,7 +86,9 @@ pub enum EnvError {
     #[error("{id} has no challenge mode (only BlocksChoose-v0 has one)")]
     NoChallenge { id: String },
     /// The reset state already breaks a rule.
-    #[error("invalid scene: at reset the red object {red:?} already touches the blue object {blue:?}; move them apart")]
+    #[error(
+        "invalid scene: at reset the red object {red:?} already touches the blue object {blue:?}; move them apart"
+    )]
     InitialViolation { red: String, blue: String },
     /// An invalid setting.
     #[error("invalid environment setting: {0}")]

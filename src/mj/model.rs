@@ -53,10 +53,8 @@ impl Model {
     }
 
     fn load(path: &Path, vfs: Option<&Vfs>) -> Result<Self, MjError> {
-        let c_path = CString::new(path_str(path)?).map_err(|_| MjError::InvalidName {
-            name: path.display().to_string(),
-            reason: "contains a NUL byte",
-        })?;
+        let c_path = CString::new(path_str(path)?)
+            .map_err(|_| MjError::InvalidName { name: path.display().to_string(), reason: "contains a NUL byte" })?;
         let mut err = vec![0 as std::os::raw::c_char; ERROR_BUF];
         let vfs_ptr = vfs.map_or(std::ptr::null(), Vfs::as_ptr);
         // SAFETY: `c_path` is NUL-terminated, `vfs_ptr` is null or a live
@@ -139,10 +137,8 @@ impl Model {
     /// # Errors
     /// [`MjError::UnknownName`] if the model has no such object.
     pub fn id(&self, kind: ObjType, name: &str) -> Result<usize, MjError> {
-        let c_name = CString::new(name).map_err(|_| MjError::InvalidName {
-            name: name.to_owned(),
-            reason: "contains a NUL byte",
-        })?;
+        let c_name = CString::new(name)
+            .map_err(|_| MjError::InvalidName { name: name.to_owned(), reason: "contains a NUL byte" })?;
         // SAFETY: the model is live and `c_name` is NUL-terminated.
         let id = unsafe { sys::mj_name2id(self.as_ptr(), kind.raw(), c_name.as_ptr()) };
         usize::try_from(id).map_err(|_| MjError::UnknownName { kind: kind.label(), name: name.to_owned() })
@@ -290,8 +286,5 @@ impl std::fmt::Debug for Model {
 }
 
 fn path_str(path: &Path) -> Result<&str, MjError> {
-    path.to_str().ok_or_else(|| MjError::InvalidName {
-        name: path.display().to_string(),
-        reason: "not valid UTF-8",
-    })
+    path.to_str().ok_or_else(|| MjError::InvalidName { name: path.display().to_string(), reason: "not valid UTF-8" })
 }

@@ -32,10 +32,8 @@ impl Vfs {
     /// [`MjError::Vfs`] when the name is too long, already present, the VFS is
     /// full, or the contents are too large; [`MjError::InvalidName`] for a NUL byte.
     pub fn add(&mut self, name: &str, contents: &[u8]) -> Result<(), MjError> {
-        let c_name = CString::new(name).map_err(|_| MjError::InvalidName {
-            name: name.to_owned(),
-            reason: "contains a NUL byte",
-        })?;
+        let c_name = CString::new(name)
+            .map_err(|_| MjError::InvalidName { name: name.to_owned(), reason: "contains a NUL byte" })?;
         if name.len() >= sys::mjMAXVFSNAME as usize {
             return Err(MjError::Vfs { name: name.to_owned(), reason: "name too long" });
         }

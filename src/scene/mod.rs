@@ -120,8 +120,7 @@ impl Scene {
     /// [`SceneError`] for missing assets, an invalid task, or a model MuJoCo refuses.
     pub fn build(spec: &SceneSpec) -> Result<Scene, SceneError> {
         crate::mj::install_handlers();
-        let colours: Vec<Colour> =
-            [spec.gripper, spec.table].into_iter().chain(spec.blocks.iter().copied()).collect();
+        let colours: Vec<Colour> = [spec.gripper, spec.table].into_iter().chain(spec.blocks.iter().copied()).collect();
         Rules::new(colours.clone())?;
         let dir = models_dir();
         check_assets(&dir)?;
@@ -145,9 +144,8 @@ impl Scene {
             GRIPPER_BODIES.iter().map(|n| model.id(ObjType::Body, n)).collect::<Result<_, _>>()?;
         if spec.gripper != Colour::Grey {
             let mat = model.id(ObjType::Material, xml::material(spec.gripper))?;
-            let geoms: Vec<usize> = (0..model.ngeom())
-                .filter(|&g| gripper_bodies.contains(&(model.geom_bodyid()[g] as usize)))
-                .collect();
+            let geoms: Vec<usize> =
+                (0..model.ngeom()).filter(|&g| gripper_bodies.contains(&(model.geom_bodyid()[g] as usize))).collect();
             for g in geoms {
                 model.set_geom_material(g, mat)?;
             }

@@ -70,7 +70,9 @@ pub fn render(template: &str, spec: &SceneSpec, excludes: &[(&str, &str)]) -> Re
     }
     let table = if spec.table == Colour::Grey { "bp_table" } else { material(spec.table) };
     let mut out = template.to_owned();
-    for (key, value) in [("{{BLOCKS}}", blocks.as_str()), ("{{CONTACT_EXCLUDES}}", &contact), ("{{TABLE_MATERIAL}}", table)] {
+    for (key, value) in
+        [("{{BLOCKS}}", blocks.as_str()), ("{{CONTACT_EXCLUDES}}", &contact), ("{{TABLE_MATERIAL}}", table)]
+    {
         if !out.contains(key) {
             return Err(SceneError::Template { placeholder: key });
         }
