@@ -2,7 +2,7 @@
 //! calls per second on the same trajectories, and the environment's overhead
 //! (the share of a step spent outside `mj_step`).
 
-use crate::env::{make, EnvError};
+use crate::env::{registry, BlockEnv, EnvError};
 use crate::policy::{Policy, RandomPolicy};
 use serde::Serialize;
 use std::time::Instant;
@@ -18,6 +18,8 @@ pub struct BenchReport {
     pub steps: usize,
     /// Wall-clock seconds of the whole run.
     pub seconds: f64,
+    /// Whether the robot collision filter was on.
+    pub collision_filter: bool,
     /// Aggregate environment steps per second (all threads).
     pub env_steps_per_s: f64,
     /// Aggregate `mj_step` calls per second, counting only time inside `mj_step`.
@@ -33,8 +35,10 @@ struct ThreadResult {
     substeps: usize,
 }
 
-fn one_thread(id: &str, steps: usize, seed: u64) -> Result<ThreadResult, EnvError> {
-    let mut env = make(id)?;
+fn one_thread(id: &str, steps: usize, seed: u64, collision_filter: bool) -> Result<ThreadResult, EnvError> {
+    let mut config = registry::config(id)?;
+    config.collision_filter = collision_filter;
+    let mut env = BlockEnv::new(config)?;
     let mut policy = RandomPolicy::new(seed);
     let mut obs = env.reset(Some(seed))?.0;
     // Warm-up outside the timing.
@@ -56,15 +60,17 @@ fn one_thread(id: &str, steps: usize, seed: u64) -> Result<ThreadResult, EnvErro
 }
 
 /// Steps `threads` independent environments of `id` in parallel, `steps`
-/// random-action steps each (resets included in the timing).
+/// random-action steps each (resets included in the timing), with or
+/// without the robot collision filter.
 ///
 /// # Errors
 /// [`EnvError`] if an environment cannot be built or stepped.
-pub fn run(id: &str, steps: usize, threads: usize) -> Result<BenchReport, EnvError> {
+pub fn run(id: &str, steps: usize, threads: usize, collision_filter: bool) -> Result<BenchReport, EnvError> {
     let threads = threads.max(1);
     let t = Instant::now();
     let results: Vec<Result<ThreadResult, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads).map(|k| s.spawn(move || one_thread(id, steps, k as u64))).collect();
+        let handles: Vec<_> =
+            (0..threads).map(|k| s.spawn(move || one_thread(id, steps, k as u64, collision_filter))).collect();
         handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked".into()))))
@@ -80,6 +86,7 @@ pub fn run(id: &str, steps: usize, threads: usize) -> Result<BenchReport, EnvErr
         threads,
         steps,
         seconds,
+        collision_filter,
         env_steps_per_s: (steps * threads) as f64 / seconds,
         mj_steps_per_s: substeps as f64 / total_phys * threads as f64,
         overhead_fraction: 1.0 - total_phys / total_env,

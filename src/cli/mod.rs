@@ -73,6 +73,9 @@ struct BenchArgs {
     /// Print one JSON line instead of text.
     #[arg(long)]
     json: bool,
+    /// Turn the robot collision filter off (to measure what it saves).
+    #[arg(long)]
+    no_collision_filter: bool,
 }
 
 /// Runs the command line.
@@ -97,13 +100,16 @@ pub fn main() -> Result<()> {
         }
         Command::Rollout(a) => rollout(a),
         Command::Bench(a) => {
-            let r = crate::bench::run(&a.env, a.steps, a.threads)?;
+            let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
             if a.json {
                 println!("{}", serde_json::to_string(&r)?);
             } else {
                 println!(
-                    "{}: {} thread(s) x {} steps in {:.2} s\n  env steps/s   {:>10.0}\n  mj_step/s     {:>10.0}\n  env overhead  {:>9.2}% of a step",
-                    r.env, r.threads, r.steps, r.seconds, r.env_steps_per_s, r.mj_steps_per_s, 100.0 * r.overhead_fraction
+                    "{}{}: {} thread(s) x {} steps in {:.2} s\n  env steps/s   {:>10.0}\n  mj_step/s     {:>10.0}\n  env overhead  {:>9.2}% of a step",
+                    r.env,
+                    if r.collision_filter { "" } else { " (no collision filter)" },
+                    r.threads,
+                    r.steps, r.seconds, r.env_steps_per_s, r.mj_steps_per_s, 100.0 * r.overhead_fraction
                 );
             }
             Ok(())
