@@ -144,6 +144,9 @@ impl ScriptedPolicy {
 
 impl Policy for ScriptedPolicy {
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        if obs.len() < ROBOT_OBS {
+            return [0.0; ACTION_DIM]; // not a BlockPuzzle observation: stand still
+        }
         let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
         let blocks = read_blocks(obs);
         if self.reach {
