@@ -15,6 +15,7 @@
 #                      gymnasium-robotics 1.4.2.
 #
 # Usage: bench/fetchpush.sh [STEPS]     (SEED=... overrides the seed, default 0)
+# Run it on an otherwise idle machine: anything else using a core skews the 2-way numbers.
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
