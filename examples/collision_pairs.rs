@@ -1,9 +1,15 @@
-use blockpuzzle::env::make;
+//! Which body pairs touch, and which only have overlapping bounding spheres
+//! (so MuJoCo runs a narrow-phase test on them for nothing), over random
+//! rollouts. The collision filter in src/scene/filter.rs was chosen from this.
+//! Usage: cargo run --release --example collision_pairs [ENV_ID]
 use blockpuzzle::mj::ObjType;
 use rand::{Rng, SeedableRng};
 use std::collections::BTreeMap;
 fn main() {
-    let mut env = make(&std::env::args().nth(1).unwrap_or("BlocksChoose-v0".into())).unwrap();
+    let id = std::env::args().nth(1).unwrap_or("BlocksChoose-v0".into());
+    let mut config = blockpuzzle::env::registry::config(&id).unwrap();
+    config.collision_filter = false; // see every pair
+    let mut env = blockpuzzle::BlockEnv::new(config).unwrap();
     let m = env.scene().model.clone();
     let bname = |b: usize| m.name(ObjType::Body, b).unwrap_or(format!("body{b}"));
     let gb = m.geom_bodyid().to_vec();

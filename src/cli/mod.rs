@@ -24,6 +24,13 @@ enum Command {
     Rollout(RolloutArgs),
     /// Measure environment steps/s and raw mj_step/s.
     Bench(BenchArgs),
+    /// Print the generated MuJoCo XML of an environment's scene (save it in
+    /// models/ to load it in other MuJoCo tools).
+    Scene {
+        /// Environment id.
+        #[arg(long)]
+        env: String,
+    },
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -99,6 +106,17 @@ pub fn main() -> Result<()> {
             Ok(())
         }
         Command::Rollout(a) => rollout(a),
+        Command::Scene { env } => {
+            let c = registry::config(&env)?;
+            let spec = crate::scene::SceneSpec {
+                blocks: c.blocks,
+                gripper: c.gripper,
+                table: c.table,
+                collision_filter: c.collision_filter,
+            };
+            print!("{}", crate::scene::mjcf(&spec)?);
+            Ok(())
+        }
         Command::Bench(a) => {
             let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
             if a.json {

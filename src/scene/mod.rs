@@ -113,6 +113,22 @@ fn joint_adr(model: &Model, name: &str) -> Result<(usize, usize), MjError> {
     Ok((model.jnt_qposadr()[j] as usize, model.jnt_dofadr()[j] as usize))
 }
 
+/// The MJCF text of a scene: the template in [`models_dir`] with the blocks,
+/// table colour and collision exclusions filled in. Its includes are relative
+/// to the models folder, so a copy saved there loads in any MuJoCo.
+///
+/// # Errors
+/// [`SceneError`] for missing assets or an unreadable template.
+pub fn mjcf(spec: &SceneSpec) -> Result<String, SceneError> {
+    let dir = models_dir();
+    check_assets(&dir)?;
+    let template_path = dir.join(xml::TEMPLATE_FILE);
+    let template =
+        std::fs::read_to_string(&template_path).map_err(|source| SceneError::Io { path: template_path, source })?;
+    let excludes: &[(&str, &str)] = if spec.collision_filter { EXCLUDED_BODY_PAIRS } else { &[] };
+    xml::render(&template, spec, excludes)
+}
+
 impl Scene {
     /// Builds the scene from the template in [`models_dir`].
     ///
@@ -121,14 +137,9 @@ impl Scene {
     pub fn build(spec: &SceneSpec) -> Result<Scene, SceneError> {
         crate::mj::install_handlers();
         let colours: Vec<Colour> = [spec.gripper, spec.table].into_iter().chain(spec.blocks.iter().copied()).collect();
-        Rules::new(colours.clone())?;
+        Rules::new(colours)?;
         let dir = models_dir();
-        check_assets(&dir)?;
-        let template_path = dir.join(xml::TEMPLATE_FILE);
-        let template = std::fs::read_to_string(&template_path)
-            .map_err(|source| SceneError::Io { path: template_path.clone(), source })?;
-        let excludes: &[(&str, &str)] = if spec.collision_filter { EXCLUDED_BODY_PAIRS } else { &[] };
-        let text = xml::render(&template, spec, excludes)?;
+        let text = mjcf(spec)?;
         let mut model = Model::from_xml_string(&text, &xml::virtual_path(&dir))?;
 
         // gymnasium-robotics' reset_mocap_welds: the weld's anchor and relative
