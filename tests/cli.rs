@@ -20,25 +20,18 @@ fn envs_lists_one_line_per_id() {
     assert!(out.contains("BlocksTouch-v0") && out.contains("BlocksChoose-v0") && out.contains("GripperTouch-v0"));
 }
 
+/// Three scripted BlocksTouch-v0 episodes at level 0 from seed 5.
+fn scripted_rollout(out: &Path) -> Output {
+    let out = out.to_str().unwrap();
+    let args = "rollout --env BlocksTouch-v0 --policy scripted --episodes 3 --seed 5 --level 0 --out";
+    bp(&args.split(' ').chain([out]).collect::<Vec<_>>())
+}
+
 #[test]
 fn rollout_writes_a_replayable_dump() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("touch.jsonl");
-    let o = bp(&[
-        "rollout",
-        "--env",
-        "BlocksTouch-v0",
-        "--policy",
-        "scripted",
-        "--episodes",
-        "3",
-        "--seed",
-        "5",
-        "--level",
-        "0",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = scripted_rollout(&out);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("success 1.000"), "{}", text(&o));
     let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
@@ -60,21 +53,7 @@ fn rollout_writes_a_replayable_dump() {
     }
     // the same command writes the same file
     let out2 = dir.path().join("again.jsonl");
-    let o = bp(&[
-        "rollout",
-        "--env",
-        "BlocksTouch-v0",
-        "--policy",
-        "scripted",
-        "--episodes",
-        "3",
-        "--seed",
-        "5",
-        "--level",
-        "0",
-        "--out",
-        out2.to_str().unwrap(),
-    ]);
+    let o = scripted_rollout(&out2);
     assert!(o.status.success());
     assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&out2).unwrap());
 }
@@ -114,9 +93,11 @@ fn unwritable_out_leaves_nothing_behind() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no temporary file left");
 }
 
-fn with_models_dir(dir: &Path, args: &[&str]) -> Output {
+/// `rollout --env BlocksTouch-v0 --out DIR/x.jsonl` with `BLOCKPUZZLE_MODELS_DIR=DIR`.
+fn rollout_with_models_dir(dir: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(args)
+        .args(["rollout", "--env", "BlocksTouch-v0", "--out"])
+        .arg(dir.join("x.jsonl"))
         .env("BLOCKPUZZLE_MODELS_DIR", dir)
         .output()
         .expect("run blockpuzzle")
@@ -127,10 +108,7 @@ fn missing_assets_name_the_setup_command() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("models/scene.xml"), dir.path().join("scene.xml"))
         .unwrap();
-    let o = with_models_dir(
-        dir.path(),
-        &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()],
-    );
+    let o = rollout_with_models_dir(dir.path());
     assert!(!o.status.success());
     let t = text(&o);
     assert!(t.contains("make setup") && t.contains("gymnasium_robotics"), "{t}");
@@ -148,10 +126,7 @@ fn corrupt_scene_xml_reports_mujocos_message() {
         template.replace("</worldbody>", "<body><geom type=\"box\" size=\"x\"/></body></worldbody>"),
     )
     .unwrap();
-    let o = with_models_dir(
-        dir.path(),
-        &["rollout", "--env", "BlocksTouch-v0", "--out", dir.path().join("x.jsonl").to_str().unwrap()],
-    );
+    let o = rollout_with_models_dir(dir.path());
     assert!(!o.status.success());
     let t = text(&o);
     assert!(t.contains("MuJoCo could not load") && t.contains("blockpuzzle_generated.xml"), "{t}");
