@@ -104,12 +104,13 @@ impl ScriptedPolicy {
         let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
             return [0.0; ACTION_DIM];
         };
-        let greys: Vec<[f64; 3]> =
+        // Every other block (grey or red) is an obstacle.
+        let obstacles: Vec<[f64; 3]> =
             blocks.iter().filter(|b| b.colour != Colour::Blue && b.colour != Colour::Green).map(|b| b.pos).collect();
-        // Push whichever block has the clearer path (grey blocks in the way
+        // Push whichever block has the clearer path (an obstacle in the way
         // would be shoved into the target instead).
         let clearance = |mover: [f64; 3], target: [f64; 3]| {
-            greys.iter().map(|&g| seg_dist(g, mover, target)).fold(f64::INFINITY, f64::min)
+            obstacles.iter().map(|&g| seg_dist(g, mover, target)).fold(f64::INFINITY, f64::min)
         };
         let (mover, target) =
             if clearance(green, blue) > clearance(blue, green) + 0.02 { (green, blue) } else { (blue, green) };

@@ -75,16 +75,34 @@ unsafe extern "C" fn quiet_warning(msg: *const std::os::raw::c_char) {
     }
 }
 
-/// Routes MuJoCo's warning messages away from its default handler, which
-/// prints to stdout and appends to `MUJOCO_LOG.TXT` in the working folder.
-/// Warnings are still counted in [`Data::warning_count`]; set
-/// `BLOCKPUZZLE_MUJOCO_WARNINGS=1` to print them to stderr. Idempotent.
+unsafe extern "C" fn fatal_error(msg: *const std::os::raw::c_char) {
+    let text = if msg.is_null() {
+        "(no message)".into()
+    } else {
+        // SAFETY: MuJoCo passes a NUL-terminated message.
+        unsafe { CStr::from_ptr(msg) }.to_string_lossy()
+    };
+    // MuJoCo cannot continue after an error and a panic must not unwind
+    // through its C frames, so end the process as MuJoCo itself would.
+    eprintln!("MuJoCo fatal error: {text}");
+    std::process::exit(2);
+}
+
+/// Routes MuJoCo's messages away from its default handlers, which print to
+/// stdout and append to `MUJOCO_LOG.TXT` in the working folder. Warnings are
+/// still counted in [`Data::warning_count`]; set `BLOCKPUZZLE_MUJOCO_WARNINGS=1`
+/// to print them to stderr. Fatal errors are printed to stderr and end the
+/// process (exit code 2). Idempotent.
 pub fn install_handlers() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
-        // SAFETY: mju_user_warning is a global function pointer that MuJoCo
-        // reads when it warns; it is written once, before any simulation in
-        // this process uses it (Once), with a function of the right type.
-        unsafe { sys::mju_user_warning = Some(quiet_warning) };
+        // SAFETY: mju_user_warning / mju_user_error are global function
+        // pointers that MuJoCo reads when it warns or fails; they are written
+        // once, before any simulation in this process uses them (Once), with
+        // functions of the right type.
+        unsafe {
+            sys::mju_user_warning = Some(quiet_warning);
+            sys::mju_user_error = Some(fatal_error);
+        }
     });
 }
