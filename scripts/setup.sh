@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Idempotent set-up for blockpuzzle on Debian (run as root, or with sudo available).
 #
-# 1. System packages (apt-get): libmujoco-dev (MuJoCo 2.2.2), libclang-dev (bindgen),
-#    python3-pip is only needed if pip is missing.
+# 1. System packages (apt-get, no recommends): libmujoco-dev (MuJoCo 2.2.2), libclang-dev
+#    (bindgen), libtorch-dev (libtorch 1.13.1 for tch) and libopenblas0-openmp; the BLAS and
+#    LAPACK alternatives are pinned to the OpenMP OpenBLAS (the reference BLAS trains ~15x
+#    slower, and the pthread OpenBLAS fights libtorch's OpenMP threads).
 # 2. The Fetch robot assets from the PyPI wheel gymnasium-robotics==1.4.2: downloaded with
 #    `python3 -m pip download --no-deps`, checked against a pinned sha256, and only the Fetch
 #    files (robot.xml, shared.xml, stls/fetch/*.stl, textures/*) unpacked into the git-ignored
@@ -16,7 +18,7 @@ WHEEL_NAME="gymnasium_robotics-1.4.2-py3-none-any.whl"
 WHEEL_SHA256="a1743530431cb377e6b3b956d284bc96436fc68bac1648ef205054c178e7dc4b"
 ASSETS_DIR="$ROOT/models/gymnasium_robotics"
 CACHE_DIR="${BLOCKPUZZLE_CACHE:-$HOME/.cache/blockpuzzle}"
-APT_PACKAGES=(libmujoco-dev libclang-dev)
+APT_PACKAGES=(libmujoco-dev libclang-dev libtorch-dev libopenblas0-openmp)
 
 log() { printf '[setup] %s\n' "$*"; }
 
@@ -38,6 +40,22 @@ if [ "${#missing[@]}" -gt 0 ]; then
 else
     log "system packages present: ${APT_PACKAGES[*]}"
 fi
+
+# BLAS/LAPACK used by libtorch: the OpenMP variant of OpenBLAS.
+MA="$(dpkg-architecture -qDEB_HOST_MULTIARCH 2>/dev/null || echo x86_64-linux-gnu)"
+for lib in libblas.so.3 liblapack.so.3 libopenblas.so.0; do
+    want="/usr/lib/$MA/openblas-openmp/$lib"
+    if [ ! -e "$want" ]; then
+        log "missing $want: reinstall libopenblas0-openmp"; exit 1
+    fi
+    if [ "$(readlink -f "/usr/lib/$MA/$lib")" != "$(readlink -f "$want")" ]; then
+        log "selecting the OpenMP OpenBLAS for $lib"
+        $SUDO update-alternatives --set "$lib-$MA" "$want" >/dev/null
+    fi
+    if [ "$(readlink -f "/usr/lib/$MA/$lib")" != "$(readlink -f "$want")" ]; then
+        log "$lib does not resolve to the OpenMP OpenBLAS; run: update-alternatives --set $lib-$MA $want"; exit 1
+    fi
+done
 
 if [ -f "$ASSETS_DIR/.sha256" ] && [ "$(cat "$ASSETS_DIR/.sha256")" = "$WHEEL_SHA256" ] \
     && [ -f "$ASSETS_DIR/fetch/robot.xml" ]; then

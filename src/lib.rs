@@ -14,6 +14,7 @@ pub mod scene;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
+pub mod agents;
 pub mod bench;
 pub mod cli;
 pub mod policy;

@@ -1,0 +1,357 @@
+//! DDPG as in OpenAI baselines' HER code with the hyperparameters of
+//! Plappert et al. 2018 (without hindsight relabelling: BlockPuzzle rewards
+//! are not goal-conditioned).
+//!
+//! * actor π(s) = tanh(MLP(s̄)), critic Q(s̄, a), s̄ the normalised observation;
+//! * critic target y = clip(r + γ (1 − terminated) Q'(s̄', π'(s̄')), −1/(1−γ), 0):
+//!   `terminated` masks the bootstrap, truncation at the time limit does not;
+//! * actor loss −Q(s̄, π(s̄)) + λ‖π(s̄)‖², λ = 1 (action L2 penalty);
+//! * both gradients from the same parameters, then one Adam step each;
+//! * targets follow with polyak averaging after each cycle's batches;
+//! * exploration: with probability 0.3 a uniform random action, otherwise
+//!   π(s) + N(0, 0.2²), clipped to [−1, 1].
+
+use super::mlp::TanhMlp;
+use super::nets::{grads, Adam, Net};
+use super::normalizer::Normalizer;
+use super::replay::Batch;
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+use tch::Tensor;
+
+/// DDPG hyperparameters (defaults: the paper's, i.e. Plappert et al. 2018).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+pub struct DdpgConfig {
+    /// Hidden layers of actor and critic.
+    #[arg(long, default_value_t = 3)]
+    pub layers: usize,
+    /// Units per hidden layer.
+    #[arg(long, default_value_t = 256)]
+    pub hidden: usize,
+    /// Actor learning rate (Adam).
+    #[arg(long, default_value_t = 1e-3)]
+    pub lr_actor: f64,
+    /// Critic learning rate (Adam).
+    #[arg(long, default_value_t = 1e-3)]
+    pub lr_critic: f64,
+    /// Discount; the default 0.98 is 1 − 1/T for T = 50 steps.
+    #[arg(long, default_value_t = 0.98)]
+    pub gamma: f64,
+    /// Target networks keep this share of themselves at each update.
+    #[arg(long, default_value_t = 0.95)]
+    pub polyak: f64,
+    /// Weight of the L2 penalty on the actor's (pre-scaling) actions.
+    #[arg(long, default_value_t = 1.0)]
+    pub action_l2: f64,
+    /// Probability of a uniform random action while exploring.
+    #[arg(long, default_value_t = 0.3)]
+    pub random_eps: f64,
+    /// Standard deviation of the Gaussian exploration noise.
+    #[arg(long, default_value_t = 0.2)]
+    pub noise_eps: f64,
+    /// Floor of the normaliser's standard deviation.
+    #[arg(long, default_value_t = 0.01)]
+    pub norm_eps: f64,
+    /// Normalised observations are clipped to ±this.
+    #[arg(long, default_value_t = 5.0)]
+    pub norm_clip: f32,
+}
+
+impl Default for DdpgConfig {
+    fn default() -> Self {
+        Self {
+            layers: 3,
+            hidden: 256,
+            lr_actor: 1e-3,
+            lr_critic: 1e-3,
+            gamma: 0.98,
+            polyak: 0.95,
+            action_l2: 1.0,
+            random_eps: 0.3,
+            noise_eps: 0.2,
+            norm_eps: 0.01,
+            norm_clip: 5.0,
+        }
+    }
+}
+
+/// Losses and statistics of one update.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct UpdateStats {
+    /// Critic mean squared TD error.
+    pub critic_loss: f64,
+    /// Actor loss (−Q + L2 penalty).
+    pub actor_loss: f64,
+    /// Mean Q(s, a) over the batch.
+    pub mean_q: f64,
+}
+
+/// The DDPG learner.
+pub struct Ddpg {
+    /// Hyperparameters.
+    pub config: DdpgConfig,
+    /// Observation normaliser.
+    pub norm: Normalizer,
+    /// Actor π.
+    pub actor: Net,
+    /// Critic Q.
+    pub critic: Net,
+    /// Target actor π'.
+    pub actor_target: Net,
+    /// Target critic Q'.
+    pub critic_target: Net,
+    /// Actor optimiser.
+    pub actor_opt: Adam,
+    /// Critic optimiser.
+    pub critic_opt: Adam,
+    obs_dim: usize,
+    act_dim: usize,
+    last_targets: Vec<f32>,
+}
+
+fn sizes(input: usize, hidden: usize, layers: usize, output: usize) -> Vec<usize> {
+    std::iter::once(input).chain(std::iter::repeat(hidden).take(layers)).chain(std::iter::once(output)).collect()
+}
+
+impl Ddpg {
+    /// A fresh learner; `rng` fixes the initial weights.
+    pub fn new(obs_dim: usize, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
+        let actor = Net::new(&sizes(obs_dim, config.hidden, config.layers, act_dim), true, rng);
+        let critic = Net::new(&sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng);
+        let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
+        let actor_opt = Adam::new(&actor.params, config.lr_actor);
+        let critic_opt = Adam::new(&critic.params, config.lr_critic);
+        let norm = Normalizer::new(obs_dim, config.norm_eps, config.norm_clip);
+        Self {
+            config,
+            norm,
+            actor,
+            critic,
+            actor_target,
+            critic_target,
+            actor_opt,
+            critic_opt,
+            obs_dim,
+            act_dim,
+            last_targets: Vec::new(),
+        }
+    }
+
+    /// Observation size.
+    pub fn obs_dim(&self) -> usize {
+        self.obs_dim
+    }
+
+    /// Action size.
+    pub fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
+    /// The normalised observations as a `[n, obs_dim]` tensor.
+    fn obs_tensor(&self, rows: &[f32]) -> Tensor {
+        let mut x = rows.to_vec();
+        self.norm.normalize_in_place(&mut x);
+        Tensor::of_slice(&x).view([-1, self.obs_dim as i64])
+    }
+
+    fn q(net: &Net, obs: &Tensor, act: &Tensor) -> Tensor {
+        net.forward(&Tensor::cat(&[obs, act], 1))
+    }
+
+    /// One gradient step of actor and critic on `batch`.
+    pub fn update(&mut self, batch: &Batch) -> UpdateStats {
+        let n = batch.len() as i64;
+        let obs = self.obs_tensor(&batch.obs);
+        let next_obs = self.obs_tensor(&batch.next_obs);
+        let act = Tensor::of_slice(&batch.act).view([n, self.act_dim as i64]);
+        let rew = Tensor::of_slice(&batch.rew).view([n, 1]);
+        let not_done = 1.0 - Tensor::of_slice(&batch.done).view([n, 1]);
+        let clip_return = 1.0 / (1.0 - self.config.gamma);
+
+        let target = tch::no_grad(|| {
+            let next_q = Self::q(&self.critic_target, &next_obs, &self.actor_target.forward(&next_obs));
+            let y: Tensor = rew + not_done * next_q * self.config.gamma;
+            y.clamp(-clip_return, 0.0)
+        });
+        self.last_targets = super::nets::tensor_to_vec(&target);
+        let q = Self::q(&self.critic, &obs, &act);
+        let critic_loss = (&q - &target).square().mean(tch::Kind::Float);
+
+        let pi = self.actor.forward(&obs);
+        let actor_loss = -Self::q(&self.critic, &obs, &pi).mean(tch::Kind::Float)
+            + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
+
+        // Gradients of both losses at the current parameters, then the steps.
+        self.critic.zero_grad();
+        critic_loss.backward();
+        let critic_grads = grads(&self.critic.params);
+        self.actor.zero_grad();
+        actor_loss.backward();
+        let actor_grads = grads(&self.actor.params);
+        self.critic.zero_grad();
+        self.critic_opt.step(&mut self.critic.params, &critic_grads);
+        self.actor_opt.step(&mut self.actor.params, &actor_grads);
+
+        UpdateStats {
+            critic_loss: critic_loss.double_value(&[]),
+            actor_loss: actor_loss.double_value(&[]),
+            mean_q: q.mean(tch::Kind::Float).double_value(&[]),
+        }
+    }
+
+    /// The critic targets y of the last update, one per transition.
+    pub fn last_targets(&self) -> &[f32] {
+        &self.last_targets
+    }
+
+    /// Polyak-averages the target networks towards the learned ones.
+    pub fn update_targets(&mut self) {
+        let p = self.config.polyak;
+        self.actor_target.polyak_from(&self.actor, p);
+        self.critic_target.polyak_from(&self.critic, p);
+    }
+
+    /// A self-contained policy for rollouts (weights and normaliser frozen).
+    pub fn policy(&self) -> DdpgPolicy {
+        DdpgPolicy { net: self.actor.to_plain(), norm: self.norm.clone() }
+    }
+}
+
+/// A frozen DDPG actor for rollouts: plain Rust, `Send + Sync`, cheap to clone.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DdpgPolicy {
+    /// The actor.
+    pub net: TanhMlp,
+    /// The observation normaliser it was trained with.
+    pub norm: Normalizer,
+}
+
+impl DdpgPolicy {
+    /// The deterministic action π(s).
+    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
+        let mut x = obs.to_vec();
+        self.norm.normalize_in_place(&mut x);
+        self.net.forward(&x)
+    }
+
+    /// The exploration action: uniform with probability `random_eps`, else
+    /// π(s) + N(0, noise_eps²), clipped to [−1, 1].
+    pub fn explore(&self, obs: &[f32], random_eps: f64, noise_eps: f64, rng: &mut impl Rng) -> Vec<f32> {
+        let a = self.act(obs);
+        if rng.gen_bool(random_eps.clamp(0.0, 1.0)) {
+            return a.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
+        }
+        a.iter()
+            .map(|&x| {
+                let z: f64 = StandardNormal.sample(rng);
+                (x + (noise_eps * z) as f32).clamp(-1.0, 1.0)
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn batch(n: usize, obs_dim: usize, rng: &mut ChaCha8Rng) -> Batch {
+        let mut b = Batch::default();
+        for i in 0..n {
+            b.obs.extend((0..obs_dim).map(|_| rng.gen_range(-1.0..1.0)));
+            b.act.extend((0..4).map(|_| rng.gen_range(-1.0..1.0)));
+            b.rew.push(if i % 5 == 0 { 0.0 } else { -1.0 });
+            b.next_obs.extend((0..obs_dim).map(|_| rng.gen_range(-1.0..1.0)));
+            b.done.push(if i % 5 == 0 { 1.0 } else { 0.0 });
+            b.extra.push(0.0);
+        }
+        b
+    }
+
+    fn small() -> DdpgConfig {
+        DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() }
+    }
+
+    #[test]
+    fn updates_change_weights_and_lower_the_critic_loss() {
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let b = batch(256, 6, &mut rng);
+        agent.norm.update(&b.obs);
+        let before = agent.actor.to_vecs();
+        let critic_before = agent.critic.to_vecs();
+        let first = agent.update(&b);
+        assert_ne!(agent.actor.to_vecs(), before, "actor weights changed");
+        assert_ne!(agent.critic.to_vecs(), critic_before, "critic weights changed");
+        let mut last = first;
+        for _ in 0..50 {
+            last = agent.update(&b);
+        }
+        assert!(last.critic_loss < first.critic_loss * 0.5, "{first:?} -> {last:?}");
+    }
+
+    #[test]
+    fn terminal_transitions_do_not_bootstrap_and_targets_are_clipped() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let mut b = batch(10, 6, &mut rng);
+        b.rew = vec![-60.0, 0.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0, -1.0, -1.0];
+        b.done = vec![1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        agent.update(&b);
+        let y = agent.last_targets();
+        assert_eq!(y[0], -50.0, "clipped at -1/(1-gamma)");
+        assert_eq!(y[1], 0.0, "terminal: the reward alone");
+        assert_eq!(y[2], -1.0);
+        assert!(y[3..].iter().all(|&v| v <= 0.0 && v >= -50.0));
+        assert!(y[3..].iter().any(|&v| v != -1.0), "non-terminal targets bootstrap");
+    }
+
+    #[test]
+    fn polyak_moves_targets_towards_the_learned_nets() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let b = batch(64, 6, &mut rng);
+        agent.update(&b);
+        let (t0, a) = (agent.actor_target.to_vecs(), agent.actor.to_vecs());
+        agent.update_targets();
+        let t1 = agent.actor_target.to_vecs();
+        let (x0, x, x1) = (t0[0][0], a[0][0], t1[0][0]);
+        assert!((x1 - (0.95 * x0 + 0.05 * x)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn plain_rust_policy_matches_the_tensor_actor() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut agent = Ddpg::new(6, 4, DdpgConfig::default(), &mut rng);
+        let b = batch(32, 6, &mut rng);
+        agent.norm.update(&b.obs);
+        let policy = agent.policy();
+        let obs = &b.obs[..6];
+        let want = tch::no_grad(|| super::super::nets::tensor_to_vec(&agent.actor.forward(&agent.obs_tensor(obs))));
+        let got = policy.act(obs);
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-5, "{got:?} vs {want:?}");
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        for _ in 0..100 {
+            let a = policy.explore(obs, 0.3, 0.2, &mut rng);
+            assert!(a.len() == 4 && a.iter().all(|x| (-1.0..=1.0).contains(x)));
+        }
+    }
+
+    #[test]
+    fn first_adam_step_moves_each_weight_by_the_learning_rate() {
+        let p = vec![Tensor::of_slice(&[1.0f32, -2.0, 3.0])];
+        let mut params = p;
+        let mut adam = Adam::new(&params, 0.01);
+        let g = vec![Tensor::of_slice(&[0.5f32, -4.0, 1e-3])];
+        adam.step(&mut params, &g);
+        let v = super::super::nets::tensor_to_vec(&params[0]);
+        // m̂/√v̂ = sign(g) at the first step (up to eps)
+        for (got, want) in v.iter().zip([0.99f32, -1.99, 2.99]) {
+            assert!((got - want).abs() < 1e-4, "{v:?}");
+        }
+    }
+}

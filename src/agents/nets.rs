@@ -1,0 +1,211 @@
+//! Networks as explicit parameter tensors (so that the optimiser state, the
+//! target-network averaging, checkpoints and the plain-Rust rollout copy are
+//! all simple loops over a list of tensors), plus an Adam optimiser whose
+//! state can be saved and restored exactly.
+
+use super::mlp::{Dense, TanhMlp};
+use rand::Rng;
+use tch::{Kind, Tensor};
+
+/// A fully connected network: ReLU hidden layers, linear or tanh output.
+pub struct Net {
+    /// Weight `[out, in]` and bias `[out]` of each layer, input first.
+    pub params: Vec<Tensor>,
+    sizes: Vec<usize>,
+    tanh_out: bool,
+}
+
+impl Net {
+    /// Glorot-uniform weights and zero biases (TensorFlow's dense-layer
+    /// defaults, as in OpenAI baselines), drawn from `rng` so that a seed
+    /// fixes the initial network.
+    pub fn new(sizes: &[usize], tanh_out: bool, rng: &mut impl Rng) -> Self {
+        let mut params = Vec::new();
+        for w in sizes.windows(2) {
+            let (n_in, n_out) = (w[0], w[1]);
+            let a = (6.0 / (n_in + n_out) as f64).sqrt() as f32;
+            let data: Vec<f32> = (0..n_in * n_out).map(|_| rng.gen_range(-a..a)).collect();
+            params.push(Tensor::of_slice(&data).view([n_out as i64, n_in as i64]).set_requires_grad(true));
+            params.push(Tensor::zeros(&[n_out as i64], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true));
+        }
+        Self { params, sizes: sizes.to_vec(), tanh_out }
+    }
+
+    /// Layer sizes, input first.
+    pub fn sizes(&self) -> &[usize] {
+        &self.sizes
+    }
+
+    /// Output for a batch `[n, in]`.
+    pub fn forward(&self, x: &Tensor) -> Tensor {
+        let n_layers = self.params.len() / 2;
+        let mut h = x.shallow_clone();
+        for l in 0..n_layers {
+            h = h.matmul(&self.params[2 * l].tr()) + &self.params[2 * l + 1];
+            if l + 1 < n_layers {
+                h = h.relu();
+            } else if self.tanh_out {
+                h = h.tanh();
+            }
+        }
+        h
+    }
+
+    /// A copy with the same parameter values that tracks no gradients.
+    pub fn detached_copy(&self) -> Net {
+        Net {
+            params: self.params.iter().map(|p| p.detach().copy()).collect(),
+            sizes: self.sizes.clone(),
+            tanh_out: self.tanh_out,
+        }
+    }
+
+    /// `self = polyak · self + (1 − polyak) · source` (target-network update).
+    pub fn polyak_from(&mut self, source: &Net, polyak: f64) {
+        tch::no_grad(|| {
+            for (t, s) in self.params.iter_mut().zip(&source.params) {
+                let mixed = &*t * polyak + s * (1.0 - polyak);
+                t.copy_(&mixed);
+            }
+        });
+    }
+
+    /// Parameter values as flat vectors (checkpoints).
+    pub fn to_vecs(&self) -> Vec<Vec<f32>> {
+        self.params.iter().map(tensor_to_vec).collect()
+    }
+
+    /// Overwrites the parameter values; shapes must match.
+    ///
+    /// # Errors
+    /// A message naming the first parameter whose size differs.
+    pub fn load_vecs(&mut self, vecs: &[Vec<f32>]) -> Result<(), String> {
+        if vecs.len() != self.params.len() {
+            return Err(format!("expected {} parameter tensors, found {}", self.params.len(), vecs.len()));
+        }
+        for (i, (p, v)) in self.params.iter_mut().zip(vecs).enumerate() {
+            if p.numel() != v.len() {
+                return Err(format!("parameter {i} has {} values, expected {}", v.len(), p.numel()));
+            }
+            let src = Tensor::of_slice(v).view(p.size().as_slice());
+            tch::no_grad(|| p.copy_(&src));
+        }
+        Ok(())
+    }
+
+    /// A plain-Rust copy for fast single-observation rollouts.
+    pub fn to_plain(&self) -> TanhMlp {
+        let layers = self
+            .sizes
+            .windows(2)
+            .enumerate()
+            .map(|(l, w)| Dense {
+                w: tensor_to_vec(&self.params[2 * l]),
+                b: tensor_to_vec(&self.params[2 * l + 1]),
+                n_in: w[0],
+            })
+            .collect();
+        TanhMlp { layers, tanh_out: self.tanh_out }
+    }
+
+    /// Sets every parameter's gradient to zero.
+    pub fn zero_grad(&mut self) {
+        for p in &mut self.params {
+            let mut g = p.grad();
+            if g.defined() {
+                let _ = g.zero_();
+            }
+        }
+    }
+}
+
+/// A tensor's values as a flat `Vec<f32>`.
+pub fn tensor_to_vec(t: &Tensor) -> Vec<f32> {
+    let flat = t.detach().to_kind(Kind::Float).contiguous().view(-1);
+    Vec::<f32>::from(&flat)
+}
+
+/// Adam (Kingma & Ba) with bias correction, as OpenAI baselines' MpiAdam:
+/// β1 = 0.9, β2 = 0.999, ε = 1e-8. Its moments are plain tensors, so the
+/// state can be checkpointed and restored exactly.
+pub struct Adam {
+    /// Learning rate.
+    pub lr: f64,
+    /// Steps taken.
+    pub t: u64,
+    m: Vec<Tensor>,
+    v: Vec<Tensor>,
+}
+
+const BETA1: f64 = 0.9;
+const BETA2: f64 = 0.999;
+const EPS: f64 = 1e-8;
+
+impl Adam {
+    /// Zero moments for `params`.
+    pub fn new(params: &[Tensor], lr: f64) -> Self {
+        Self {
+            lr,
+            t: 0,
+            m: params.iter().map(Tensor::zeros_like).collect(),
+            v: params.iter().map(Tensor::zeros_like).collect(),
+        }
+    }
+
+    /// One update of `params` with the gradients `grads` (same order).
+    pub fn step(&mut self, params: &mut [Tensor], grads: &[Tensor]) {
+        self.t += 1;
+        let t = self.t as i32;
+        let step = self.lr * (1.0 - BETA2.powi(t)).sqrt() / (1.0 - BETA1.powi(t));
+        tch::no_grad(|| {
+            for ((p, g), (m, v)) in params.iter_mut().zip(grads).zip(self.m.iter_mut().zip(self.v.iter_mut())) {
+                let new_m = &*m * BETA1 + g * (1.0 - BETA1);
+                let new_v = &*v * BETA2 + g.square() * (1.0 - BETA2);
+                m.copy_(&new_m);
+                v.copy_(&new_v);
+                let update = &new_m / (new_v.sqrt() + EPS) * step;
+                let _ = p.f_sub_(&update);
+            }
+        });
+    }
+
+    /// Moments as flat vectors: all first moments, then all second moments.
+    pub fn to_vecs(&self) -> Vec<Vec<f32>> {
+        self.m.iter().chain(&self.v).map(tensor_to_vec).collect()
+    }
+
+    /// Restores moments saved by [`Adam::to_vecs`] and the step count.
+    ///
+    /// # Errors
+    /// A message if the number or sizes of the moments differ.
+    pub fn load_vecs(&mut self, vecs: &[Vec<f32>], t: u64) -> Result<(), String> {
+        let n = self.m.len();
+        if vecs.len() != 2 * n {
+            return Err(format!("expected {} optimiser moments, found {}", 2 * n, vecs.len()));
+        }
+        for (i, (dst, src)) in self.m.iter_mut().chain(self.v.iter_mut()).zip(vecs).enumerate() {
+            if dst.numel() != src.len() {
+                return Err(format!("optimiser moment {i} has {} values, expected {}", src.len(), dst.numel()));
+            }
+            let s = Tensor::of_slice(src).view(dst.size().as_slice());
+            tch::no_grad(|| dst.copy_(&s));
+        }
+        self.t = t;
+        Ok(())
+    }
+}
+
+/// The current gradients of `params` (zeros where none was computed).
+pub fn grads(params: &[Tensor]) -> Vec<Tensor> {
+    params
+        .iter()
+        .map(|p| {
+            let g = p.grad();
+            if g.defined() {
+                g.detach().copy()
+            } else {
+                Tensor::zeros_like(p)
+            }
+        })
+        .collect()
+}
