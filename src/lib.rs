@@ -19,3 +19,4 @@ pub mod bench;
 pub mod cli;
 pub mod policy;
 pub mod rollout;
+pub mod train;

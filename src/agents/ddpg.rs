@@ -304,7 +304,7 @@ mod tests {
         assert_eq!(y[0], -50.0, "clipped at -1/(1-gamma)");
         assert_eq!(y[1], 0.0, "terminal: the reward alone");
         assert_eq!(y[2], -1.0);
-        assert!(y[3..].iter().all(|&v| v <= 0.0 && v >= -50.0));
+        assert!(y[3..].iter().all(|v| (-50.0..=0.0).contains(v)));
         assert!(y[3..].iter().any(|&v| v != -1.0), "non-terminal targets bootstrap");
     }
 

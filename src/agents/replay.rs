@@ -110,21 +110,36 @@ impl ReplayBuffer {
         b
     }
 
-    /// Everything stored, oldest first (for checkpoints).
-    pub fn to_ordered(&self) -> Batch {
-        let mut b = Batch::default();
-        let start = if self.len < self.capacity { 0 } else { self.next };
-        let (o, a) = (self.obs_dim, self.act_dim);
-        for k in 0..self.len {
-            let i = (start + k) % self.len.max(1);
-            b.obs.extend_from_slice(&self.data.obs[i * o..(i + 1) * o]);
-            b.act.extend_from_slice(&self.data.act[i * a..(i + 1) * a]);
-            b.rew.push(self.data.rew[i]);
-            b.next_obs.extend_from_slice(&self.data.next_obs[i * o..(i + 1) * o]);
-            b.done.push(self.data.done[i]);
-            b.extra.push(self.data.extra[i]);
+    /// The stored arrays in storage order and the next write position (for
+    /// checkpoints: [`ReplayBuffer::from_parts`] restores the exact buffer).
+    pub fn parts(&self) -> (&Batch, usize) {
+        (&self.data, self.next)
+    }
+
+    /// Rebuilds a buffer from [`ReplayBuffer::parts`].
+    ///
+    /// # Errors
+    /// A message if the arrays do not fit the sizes.
+    pub fn from_parts(
+        obs_dim: usize,
+        act_dim: usize,
+        capacity: usize,
+        data: Batch,
+        next: usize,
+    ) -> Result<Self, String> {
+        let n = data.rew.len();
+        let ok = n <= capacity.max(1)
+            && next < capacity.max(1)
+            && data.obs.len() == n * obs_dim
+            && data.next_obs.len() == n * obs_dim
+            && data.act.len() == n * act_dim
+            && data.done.len() == n
+            && data.extra.len() == n
+            && (n == capacity.max(1) || next == n);
+        if !ok {
+            return Err(format!("replay arrays do not fit {n} transitions of {obs_dim}+{act_dim} values"));
         }
-        b
+        Ok(Self { obs_dim, act_dim, capacity: capacity.max(1), data, next, len: n })
     }
 }
 
@@ -140,13 +155,19 @@ mod tests {
     }
 
     #[test]
-    fn ring_overwrites_oldest_and_keeps_order() {
+    fn ring_overwrites_oldest_and_round_trips_through_parts() {
         let mut buf = ReplayBuffer::new(2, 1, 3);
         for k in 0..5 {
             push(&mut buf, k);
         }
         assert_eq!(buf.len(), 3);
-        assert_eq!(buf.to_ordered().rew, vec![2.0, 3.0, 4.0]);
+        let (data, next) = buf.parts();
+        assert_eq!((data.rew.clone(), next), (vec![3.0, 4.0, 2.0], 2));
+        let mut copy = ReplayBuffer::from_parts(2, 1, 3, data.clone(), next).unwrap();
+        push(&mut buf, 5);
+        push(&mut copy, 5);
+        assert_eq!(buf.parts().0, copy.parts().0);
+        assert!(ReplayBuffer::from_parts(2, 1, 3, Batch { rew: vec![1.0], ..Batch::default() }, 1).is_err());
     }
 
     #[test]

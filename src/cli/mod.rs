@@ -2,7 +2,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::env::{registry, BlockEnv};
 use crate::policy::{Policy, RandomPolicy, ScriptedPolicy};
@@ -24,6 +24,10 @@ enum Command {
     Rollout(RolloutArgs),
     /// Measure environment steps/s and raw mj_step/s.
     Bench(BenchArgs),
+    /// Train an agent (DDPG with the paper's curriculum).
+    Train(TrainArgs),
+    /// Evaluate a trained policy: success rate with a 95% confidence interval.
+    Eval(EvalArgs),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -34,11 +38,49 @@ enum Command {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum PolicyKind {
-    /// Uniform random actions.
-    Random,
-    /// The hand-written pushing controller.
-    Scripted,
+enum Algo {
+    /// Deep deterministic policy gradient (OpenAI baselines' HER DDPG, no HER).
+    Ddpg,
+}
+
+#[derive(Debug, clap::Args)]
+struct TrainArgs {
+    /// Algorithm.
+    #[arg(long, value_enum, default_value = "ddpg")]
+    algo: Algo,
+    /// Run directory (config.json, progress.csv, checkpoints); default runs/ENV-ALGO-sSEED.
+    #[arg(long)]
+    run_dir: Option<PathBuf>,
+    /// Continue the run in --run-dir from its last checkpoint.
+    #[arg(long)]
+    resume: bool,
+    #[command(flatten)]
+    config: crate::train::TrainConfig,
+}
+
+#[derive(Debug, clap::Args)]
+struct EvalArgs {
+    /// A policy file or a run directory (uses best_policy.json, else policy.json).
+    #[arg(long)]
+    checkpoint: PathBuf,
+    /// Environment id (default: the one the policy was trained on).
+    #[arg(long)]
+    env: Option<String>,
+    /// Use the challenge distribution (BlocksChoose-v0).
+    #[arg(long)]
+    challenge: bool,
+    /// Curriculum level (default: the maximum).
+    #[arg(long)]
+    level: Option<usize>,
+    /// Episodes.
+    #[arg(long, default_value_t = 100)]
+    episodes: usize,
+    /// Seed of the first episode (episode k uses seed + k).
+    #[arg(long, default_value_t = 1_000_000)]
+    seed: u64,
+    /// Where to write the JSON result (default: next to the policy).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -46,9 +88,9 @@ struct RolloutArgs {
     /// Environment id (see `blockpuzzle envs`).
     #[arg(long)]
     env: String,
-    /// Which policy acts.
-    #[arg(long, value_enum, default_value = "scripted")]
-    policy: PolicyKind,
+    /// Which policy acts: `random`, `scripted`, or a trained policy (file or run directory).
+    #[arg(long, default_value = "scripted")]
+    policy: String,
     /// Number of episodes.
     #[arg(long, default_value_t = 10)]
     episodes: usize,
@@ -106,6 +148,8 @@ pub fn main() -> Result<()> {
             Ok(())
         }
         Command::Rollout(a) => rollout(a),
+        Command::Train(a) => train(a),
+        Command::Eval(a) => eval(a),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             let spec = crate::scene::SceneSpec {
@@ -146,9 +190,10 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         bail!("--episodes must be at least 1");
     }
     let mut writer = DumpWriter::create(&a.out)?;
-    let mut policy: Box<dyn Policy> = match a.policy {
-        PolicyKind::Random => Box::new(RandomPolicy::new(a.seed)),
-        PolicyKind::Scripted => Box::new(ScriptedPolicy::for_env(env.config())),
+    let mut policy: Box<dyn Policy> = match a.policy.as_str() {
+        "random" => Box::new(RandomPolicy::new(a.seed)),
+        "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
+        path => Box::new(trained_policy(Path::new(path), &env)?),
     };
     let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
     for k in 0..a.episodes {
@@ -162,7 +207,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     writer.finish()?;
     let n = a.episodes as f64;
     println!(
-        "{} {:?} policy, level {}{}: success {:.3} ({}/{}), failure {:.3}, mean length {:.1}; wrote {}",
+        "{} {} policy, level {}{}: success {:.3} ({}/{}), failure {:.3}, mean length {:.1}; wrote {}",
         a.env,
         a.policy,
         level,
@@ -173,6 +218,129 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         failures as f64 / n,
         steps as f64 / n,
         a.out.display()
+    );
+    Ok(())
+}
+
+/// A trained policy as a [`Policy`], checked against the environment.
+struct Trained(crate::agents::ddpg::DdpgPolicy);
+
+impl Policy for Trained {
+    fn act(&mut self, obs: &[f32]) -> [f32; crate::env::ACTION_DIM] {
+        let a = self.0.act(obs);
+        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+    }
+}
+
+fn trained_policy(path: &Path, env: &BlockEnv) -> Result<Trained> {
+    let saved = crate::train::load_policy(path)?;
+    let dim = env.observation_space().dim();
+    if saved.policy.norm.dim() != dim {
+        bail!(
+            "policy {} expects {}-dimensional observations ({}), {} has {dim}",
+            path.display(),
+            saved.policy.norm.dim(),
+            saved.env_id,
+            env.id()
+        );
+    }
+    Ok(Trained(saved.policy))
+}
+
+fn train(a: TrainArgs) -> Result<()> {
+    let Algo::Ddpg = a.algo;
+    let c = &a.config;
+    let run_dir = a.run_dir.clone().unwrap_or_else(|| PathBuf::from(format!("runs/{}-ddpg-s{}", c.env, c.seed)));
+    let bar = indicatif::ProgressBar::new(c.epochs as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut last: Option<crate::train::EpochRow> = None;
+    let mut on_epoch = |row: &crate::train::EpochRow, _: &crate::train::TrainConfig| {
+        let (steps, updates, secs) = match &last {
+            Some(p) => (row.env_steps - p.env_steps, row.updates - p.updates, row.wall_seconds - p.wall_seconds),
+            None => (row.env_steps, row.updates, row.wall_seconds),
+        };
+        bar.set_position(row.epoch as u64 + 1);
+        bar.set_message(format!(
+            "level {} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
+            row.level,
+            row.train_success,
+            row.test_success,
+            row.finals_success,
+            steps as f64 / secs.max(1e-9),
+            updates as f64 / secs.max(1e-9)
+        ));
+        last = Some(row.clone());
+    };
+    let rows = crate::train::train(c, &run_dir, a.resume, &mut on_epoch)?;
+    bar.finish();
+    if let Some(r) = rows.last() {
+        println!(
+            "{}: {} epochs, level {}, finals success {:.3}, {} env steps, {:.0} s; run directory {}",
+            c.env,
+            r.epoch + 1,
+            r.level,
+            r.finals_success,
+            r.env_steps,
+            r.wall_seconds,
+            run_dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Wilson score interval for a binomial proportion at 95%.
+pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (z, nf) = (1.959_963_984_540_054, n as f64);
+    let p = successes as f64 / nf;
+    let denom = 1.0 + z * z / nf;
+    let centre = (p + z * z / (2.0 * nf)) / denom;
+    let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
+    ((centre - half).max(0.0), (centre + half).min(1.0))
+}
+
+fn eval(a: EvalArgs) -> Result<()> {
+    let saved = crate::train::load_policy(&a.checkpoint)?;
+    let id = a.env.clone().unwrap_or_else(|| saved.env_id.clone());
+    let mut env = registry::make(&id)?;
+    if a.challenge {
+        env.set_challenge(true)?;
+    }
+    env.set_level(a.level.unwrap_or(env.max_level()))?;
+    if a.episodes == 0 {
+        bail!("--episodes must be at least 1");
+    }
+    let mut policy = trained_policy(&a.checkpoint, &env)?;
+    let mut wins = 0;
+    for k in 0..a.episodes {
+        let ep = run_episode(&mut env, &mut policy, a.seed.wrapping_add(k as u64))?;
+        wins += ep.success as usize;
+    }
+    let (lo, hi) = wilson95(wins, a.episodes);
+    let rate = wins as f64 / a.episodes as f64;
+    let result = serde_json::json!({
+        "env": id, "challenge": a.challenge, "level": env.level(), "episodes": a.episodes, "seed": a.seed,
+        "successes": wins, "success_rate": rate, "ci95": [lo, hi], "policy": a.checkpoint, "policy_epoch": saved.epoch,
+    });
+    let out = a.out.clone().unwrap_or_else(|| {
+        let dir = if a.checkpoint.is_dir() {
+            a.checkpoint.clone()
+        } else {
+            a.checkpoint.parent().map(Path::to_path_buf).unwrap_or_default()
+        };
+        dir.join(format!("eval-{id}{}.json", if a.challenge { "-challenge" } else { "" }))
+    });
+    crate::train::write_json_atomic(&out, &result)?;
+    println!(
+        "{id}{}: success {rate:.3} (95% CI {lo:.3}-{hi:.3}, {wins}/{}) -> {}",
+        if a.challenge { " challenge" } else { "" },
+        a.episodes,
+        out.display()
     );
     Ok(())
 }

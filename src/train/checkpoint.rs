@@ -1,0 +1,216 @@
+//! Training checkpoints: one binary file holding a JSON header (run state,
+//! hyperparameters, normaliser) and a payload of little-endian f32 arrays
+//! (networks, optimiser moments, replay buffer), guarded by a CRC-32.
+//! Written to a temporary file and renamed, so a crash never leaves a
+//! half-written checkpoint.
+
+use crate::agents::ddpg::{Ddpg, DdpgConfig};
+use crate::agents::normalizer::Normalizer;
+use crate::agents::replay::{Batch, ReplayBuffer};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+const MAGIC: &[u8; 8] = b"BPCKPT01";
+
+/// Checkpoint errors: each names the file and what to do.
+#[derive(Debug, Error)]
+pub enum CheckpointError {
+    /// Reading or writing failed.
+    #[error("checkpoint {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    /// Not a checkpoint, truncated, or its checksum does not match.
+    #[error("checkpoint {path} is corrupt ({reason}); delete it or restore it from a backup, and start a new run without --resume")]
+    Corrupt { path: PathBuf, reason: String },
+    /// A valid checkpoint of another environment or shape.
+    #[error("checkpoint {path} does not fit this run: {reason}")]
+    Mismatch { path: PathBuf, reason: String },
+}
+
+/// Everything about the run that is not an array.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunState {
+    /// Environment id.
+    pub env_id: String,
+    /// Observation size.
+    pub obs_dim: usize,
+    /// Action size.
+    pub act_dim: usize,
+    /// Epochs completed.
+    pub epoch: usize,
+    /// Curriculum level for the next epoch.
+    pub level: usize,
+    /// Environment steps so far (all workers).
+    pub env_steps: u64,
+    /// Gradient updates so far.
+    pub updates: u64,
+    /// Episodes collected per worker so far (seeds the next ones).
+    pub episodes_per_worker: u64,
+    /// Wall-clock seconds of training so far.
+    pub wall_seconds: f64,
+    /// Best finals success so far.
+    pub best_finals: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Header {
+    state: RunState,
+    ddpg: DdpgConfig,
+    normalizer: Normalizer,
+    actor_adam_t: u64,
+    critic_adam_t: u64,
+    replay_capacity: usize,
+    replay_next: usize,
+    blobs: Vec<(String, usize)>,
+    payload_crc32: u32,
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> CheckpointError + '_ {
+    move |source| CheckpointError::Io { path: path.to_owned(), source }
+}
+
+/// Saves the learner, the replay buffer and the run state to `path` atomically.
+///
+/// # Errors
+/// [`CheckpointError::Io`].
+pub fn save(path: &Path, state: &RunState, agent: &Ddpg, replay: &ReplayBuffer) -> Result<(), CheckpointError> {
+    let mut blobs: Vec<(String, Vec<f32>)> = Vec::new();
+    let mut add = |prefix: &str, vecs: Vec<Vec<f32>>| {
+        for (i, v) in vecs.into_iter().enumerate() {
+            blobs.push((format!("{prefix}.{i}"), v));
+        }
+    };
+    add("actor", agent.actor.to_vecs());
+    add("critic", agent.critic.to_vecs());
+    add("actor_target", agent.actor_target.to_vecs());
+    add("critic_target", agent.critic_target.to_vecs());
+    add("actor_adam", agent.actor_opt.to_vecs());
+    add("critic_adam", agent.critic_opt.to_vecs());
+    let (r, replay_next) = replay.parts();
+    add(
+        "replay",
+        vec![r.obs.clone(), r.act.clone(), r.rew.clone(), r.next_obs.clone(), r.done.clone(), r.extra.clone()],
+    );
+
+    let mut payload = Vec::with_capacity(blobs.iter().map(|b| 4 * b.1.len()).sum());
+    for (_, v) in &blobs {
+        for x in v {
+            payload.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    let header = Header {
+        state: state.clone(),
+        ddpg: agent.config.clone(),
+        normalizer: agent.norm.clone(),
+        actor_adam_t: agent.actor_opt.t,
+        critic_adam_t: agent.critic_opt.t,
+        replay_capacity: replay.capacity(),
+        replay_next,
+        blobs: blobs.iter().map(|(n, v)| (n.clone(), v.len())).collect(),
+        payload_crc32: crc32fast::hash(&payload),
+    };
+    let json = serde_json::to_vec(&header).map_err(|e| io(path)(std::io::Error::other(e)))?;
+
+    let tmp = path.with_extension("tmp");
+    let result = (|| {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        f.write_all(MAGIC)?;
+        f.write_all(&(json.len() as u64).to_le_bytes())?;
+        f.write_all(&json)?;
+        f.write_all(&payload)?;
+        let f = f.into_inner().map_err(|e| e.into_error())?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io(path))
+}
+
+/// What [`load`] returns.
+pub struct Loaded {
+    /// The run state.
+    pub state: RunState,
+    /// The learner, exactly as saved.
+    pub agent: Ddpg,
+    /// The replay buffer, exactly as saved.
+    pub replay: ReplayBuffer,
+}
+
+/// Loads a checkpoint and checks it against the expected environment and sizes.
+///
+/// # Errors
+/// [`CheckpointError::Corrupt`] for a damaged file, [`CheckpointError::Mismatch`]
+/// for another environment or other dimensions.
+pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result<Loaded, CheckpointError> {
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
+    if bytes.len() < 16 || &bytes[..8] != MAGIC {
+        return Err(corrupt("not a blockpuzzle checkpoint"));
+    }
+    let hlen = u64::from_le_bytes(bytes[8..16].try_into().map_err(|_| corrupt("truncated"))?) as usize;
+    let body = bytes.get(16..).ok_or_else(|| corrupt("truncated"))?;
+    if hlen > body.len() {
+        return Err(corrupt("truncated header"));
+    }
+    let header: Header = serde_json::from_slice(&body[..hlen]).map_err(|e| corrupt(&format!("bad header: {e}")))?;
+    let payload = &body[hlen..];
+    let expected: usize = header.blobs.iter().map(|b| 4 * b.1).sum();
+    if payload.len() != expected {
+        return Err(corrupt(&format!("payload has {} bytes, expected {expected}", payload.len())));
+    }
+    if crc32fast::hash(payload) != header.payload_crc32 {
+        return Err(corrupt("checksum mismatch"));
+    }
+    let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
+    let s = &header.state;
+    if s.env_id != env_id {
+        return Err(mismatch(format!("it was trained on {}, this run is {env_id}", s.env_id)));
+    }
+    if (s.obs_dim, s.act_dim) != (obs_dim, act_dim) {
+        return Err(mismatch(format!(
+            "observation/action sizes {}/{} differ from this environment's {obs_dim}/{act_dim}",
+            s.obs_dim, s.act_dim
+        )));
+    }
+
+    let mut blobs = std::collections::HashMap::new();
+    let mut off = 0;
+    for (name, len) in &header.blobs {
+        let v: Vec<f32> =
+            payload[off..off + 4 * len].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        off += 4 * len;
+        blobs.insert(name.clone(), v);
+    }
+    let take =
+        |prefix: &str| -> Vec<Vec<f32>> { (0..).map_while(|i| blobs.get(&format!("{prefix}.{i}")).cloned()).collect() };
+
+    // Network shapes come from the saved hyperparameters; the seed does not
+    // matter because every value is overwritten.
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
+    let mut agent = Ddpg::new(obs_dim, act_dim, header.ddpg.clone(), &mut rng);
+    let fill = |r: Result<(), String>| r.map_err(|e| mismatch(e));
+    fill(agent.actor.load_vecs(&take("actor")))?;
+    fill(agent.critic.load_vecs(&take("critic")))?;
+    fill(agent.actor_target.load_vecs(&take("actor_target")))?;
+    fill(agent.critic_target.load_vecs(&take("critic_target")))?;
+    fill(agent.actor_opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
+    fill(agent.critic_opt.load_vecs(&take("critic_adam"), header.critic_adam_t))?;
+    if header.normalizer.dim() != obs_dim {
+        return Err(mismatch("normaliser size differs".into()));
+    }
+    agent.norm = header.normalizer;
+
+    let r = take("replay");
+    if r.len() != 6 {
+        return Err(corrupt("replay buffer missing"));
+    }
+    let mut r = r.into_iter();
+    let mut next = || r.next().unwrap_or_default();
+    let data = Batch { obs: next(), act: next(), rew: next(), next_obs: next(), done: next(), extra: next() };
+    let replay = ReplayBuffer::from_parts(obs_dim, act_dim, header.replay_capacity, data, header.replay_next)
+        .map_err(|e| corrupt(&e))?;
+    Ok(Loaded { state: header.state, agent, replay })
+}
