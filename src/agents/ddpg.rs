@@ -178,18 +178,19 @@ impl Ddpg {
         let q = Self::q(&self.critic, &obs, &act);
         let critic_loss = (&q - &target).square().mean(tch::Kind::Float);
 
+        // The actor's loss goes through the critic with its parameters
+        // detached: gradients reach the actor only, and both losses see the
+        // same (pre-update) parameters, as in baselines.
         let pi = self.actor.forward(&obs);
-        let actor_loss = -Self::q(&self.critic, &obs, &pi).mean(tch::Kind::Float)
+        let frozen_critic = self.critic.detached_view();
+        let actor_loss = -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
             + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
 
-        // Gradients of both losses at the current parameters, then the steps.
         self.critic.zero_grad();
-        critic_loss.backward();
-        let critic_grads = grads(&self.critic.params);
         self.actor.zero_grad();
+        critic_loss.backward();
         actor_loss.backward();
-        let actor_grads = grads(&self.actor.params);
-        self.critic.zero_grad();
+        let (critic_grads, actor_grads) = (grads(&self.critic.params), grads(&self.actor.params));
         self.critic_opt.step(&mut self.critic.params, &critic_grads);
         self.actor_opt.step(&mut self.actor.params, &actor_grads);
 

@@ -60,6 +60,16 @@ impl Net {
         }
     }
 
+    /// The same parameters without gradient tracking (shared storage: valid
+    /// until the parameters are next changed).
+    pub fn detached_view(&self) -> Net {
+        Net {
+            params: self.params.iter().map(Tensor::detach).collect(),
+            sizes: self.sizes.clone(),
+            tanh_out: self.tanh_out,
+        }
+    }
+
     /// `self = polyak · self + (1 − polyak) · source` (target-network update).
     pub fn polyak_from(&mut self, source: &Net, polyak: f64) {
         tch::no_grad(|| {
@@ -202,7 +212,7 @@ pub fn grads(params: &[Tensor]) -> Vec<Tensor> {
         .map(|p| {
             let g = p.grad();
             if g.defined() {
-                g.detach().copy()
+                g
             } else {
                 Tensor::zeros_like(p)
             }

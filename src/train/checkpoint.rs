@@ -191,7 +191,7 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
     // matter because every value is overwritten.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
     let mut agent = Ddpg::new(obs_dim, act_dim, header.ddpg.clone(), &mut rng);
-    let fill = |r: Result<(), String>| r.map_err(|e| mismatch(e));
+    let fill = |r: Result<(), String>| r.map_err(&mismatch);
     fill(agent.actor.load_vecs(&take("actor")))?;
     fill(agent.critic.load_vecs(&take("critic")))?;
     fill(agent.actor_target.load_vecs(&take("actor_target")))?;

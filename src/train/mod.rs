@@ -360,9 +360,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
                     g = ep.rew[t] + gamma * g;
                     ret[t] = g;
                 }
-                for t in 0..n {
+                for (t, ret_t) in ret.iter().enumerate() {
                     let done = ep.terminated && t + 1 == n;
-                    replay.push(&ep.obs[t], &ep.act[t], ep.rew[t], &ep.obs[t + 1], done, ret[t]);
+                    replay.push(&ep.obs[t], &ep.act[t], ep.rew[t], &ep.obs[t + 1], done, *ret_t);
                 }
                 state.env_steps += n as u64;
                 agent.norm.update(&ep.obs.concat());

@@ -1,0 +1,28 @@
+//! DDPG updates per second on random data (3×256 nets, BlocksTouch sizes).
+//! Usage: cargo run --release --example update_rate [BATCH] [THREADS]
+use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::agents::replay::ReplayBuffer;
+use rand::{Rng, SeedableRng};
+fn main() {
+    let batch: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(256);
+    let threads: i32 = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(2);
+    tch::set_num_threads(threads);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+    let mut agent = Ddpg::new(48, 4, DdpgConfig::default(), &mut rng);
+    let mut buf = ReplayBuffer::new(48, 4, 100_000);
+    for _ in 0..20_000 {
+        let o: Vec<f32> = (0..48).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        let a: Vec<f32> = (0..4).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        buf.push(&o, &a, -1.0, &o, rng.gen_bool(0.05), 0.0);
+    }
+    agent.norm.update(&buf.sample(5000, &mut rng).obs);
+    for _ in 0..20 {
+        agent.update(&buf.sample(batch, &mut rng));
+    }
+    let n = 300;
+    let t = std::time::Instant::now();
+    for _ in 0..n {
+        agent.update(&buf.sample(batch, &mut rng));
+    }
+    println!("batch {batch}, {threads} threads: {:.1} updates/s", n as f64 / t.elapsed().as_secs_f64());
+}
