@@ -34,7 +34,7 @@ fn short_run_writes_every_run_directory_file() {
     let dir = tempfile::tempdir().unwrap();
     let rows = train(&tiny("BlocksTouch-v0", 2), dir.path(), false, &mut quiet).unwrap();
     assert_eq!(rows.len(), 2);
-    for f in ["config.json", "progress.csv", "checkpoint.bin", "policy.json", "best_policy.json"] {
+    for f in ["config.json", "progress.csv", "checkpoint.bin", "policy.json", "best_policy.json", "success.png"] {
         assert!(dir.path().join(f).exists(), "{f} missing");
     }
     let progress = read_progress(&dir.path().join("progress.csv")).unwrap();

@@ -28,6 +28,12 @@ enum Command {
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
+    /// Redraw a run's success curves (success.png) from its progress.csv.
+    Plot {
+        /// Run directory.
+        #[arg(long)]
+        run_dir: PathBuf,
+    },
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -150,6 +156,18 @@ pub fn main() -> Result<()> {
         Command::Rollout(a) => rollout(a),
         Command::Train(a) => train(a),
         Command::Eval(a) => eval(a),
+        Command::Plot { run_dir } => {
+            let run = crate::train::RunDir { dir: run_dir };
+            let config: crate::train::TrainConfig = serde_json::from_str(
+                &std::fs::read_to_string(run.config()).with_context(|| format!("cannot read {}", run.config().display()))?,
+            )
+            .with_context(|| format!("{} is not a training config", run.config().display()))?;
+            let rows = crate::train::read_progress(&run.progress())?;
+            let max_level = registry::config(&config.env)?.layout.max_level();
+            crate::train::plot::success_curves(&run.plot(), &format!("DDPG on {}", config.env), &rows, max_level)?;
+            println!("wrote {}", run.plot().display());
+            Ok(())
+        }
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             let spec = crate::scene::SceneSpec {

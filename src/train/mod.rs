@@ -11,10 +11,11 @@
 //!
 //! The run directory holds `config.json`, `progress.csv` (one row per epoch),
 //! `checkpoint.bin` (everything, written atomically every epoch),
-//! `policy.json` (latest actor + normaliser) and `best_policy.json` (best
-//! finals success).
+//! `policy.json` (latest actor + normaliser), `best_policy.json` (best
+//! finals success) and `success.png` (the success curves).
 
 pub mod checkpoint;
+pub mod plot;
 
 use crate::agents::ddpg::{Ddpg, DdpgConfig, DdpgPolicy, UpdateStats};
 use crate::agents::replay::ReplayBuffer;
@@ -205,6 +206,10 @@ impl RunDir {
     /// `policy.json`.
     pub fn policy(&self) -> PathBuf {
         self.dir.join("policy.json")
+    }
+    /// `success.png`.
+    pub fn plot(&self) -> PathBuf {
+        self.dir.join("success.png")
     }
     /// `best_policy.json`.
     pub fn best_policy(&self) -> PathBuf {
@@ -433,6 +438,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         // crash before it repeats at most this epoch).
         rows.push(row.clone());
         write_progress(&run.progress(), &rows)?;
+        plot::success_curves(&run.plot(), &format!("DDPG on {}", config.env), &rows, max_level)?;
         let saved =
             SavedPolicy { env_id: config.env.clone(), epoch: state.epoch, finals_success: row.finals_success, policy };
         write_json_atomic(&run.policy(), &saved)?;
