@@ -159,7 +159,8 @@ pub fn main() -> Result<()> {
         Command::Plot { run_dir } => {
             let run = crate::train::RunDir { dir: run_dir };
             let config: crate::train::TrainConfig = serde_json::from_str(
-                &std::fs::read_to_string(run.config()).with_context(|| format!("cannot read {}", run.config().display()))?,
+                &std::fs::read_to_string(run.config())
+                    .with_context(|| format!("cannot read {}", run.config().display()))?,
             )
             .with_context(|| format!("{} is not a training config", run.config().display()))?;
             let rows = crate::train::read_progress(&run.progress())?;

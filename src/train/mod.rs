@@ -126,7 +126,8 @@ fn stream_seed(seed: u64, parts: &[u64]) -> u64 {
 
 /// Plays one episode with `policy` (exploring when `explore` is Some((random_eps, noise_eps))).
 fn play(env: &mut BlockEnv, policy: &DdpgPolicy, seed: u64, explore: Option<(f64, f64)>) -> Result<Episode, EnvError> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // The layout comes from `seed`; the exploration noise from a stream derived from it.
+    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
     let (mut obs, _) = env.reset(Some(seed))?;
     let mut ep = Episode { obs: vec![], act: vec![], rew: vec![], terminated: false, success: false };
     loop {

@@ -53,7 +53,10 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
     for (i, (name, colour, f)) in series.into_iter().enumerate() {
         let scale = if i == 3 { 1.0 / max_level.max(1) as f64 } else { 1.0 };
         chart
-            .draw_series(LineSeries::new(rows.iter().map(|r| (r.epoch as f64 + 1.0, f(r) * scale)), colour.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                rows.iter().map(|r| (r.epoch as f64 + 1.0, f(r) * scale)),
+                colour.stroke_width(2),
+            ))
             .map_err(draw)?
             .label(name)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
