@@ -25,6 +25,9 @@ fn register_font() -> Result<()> {
     result
 }
 
+/// A curve: legend, colour, value of a row.
+type Series = (&'static str, RGBColor, fn(&EpochRow) -> f64);
+
 /// Train, test and finals success against the epoch, plus the curriculum level
 /// (scaled to [0, 1] by the maximum level), written to `path`.
 ///
@@ -44,7 +47,7 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
         .build_cartesian_2d(0f64..epochs as f64, 0f64..1.02f64)
         .map_err(draw)?;
     chart.configure_mesh().x_desc("epoch").y_desc("success rate").draw().map_err(draw)?;
-    let series: [(&str, RGBColor, fn(&EpochRow) -> f64); 4] = [
+    let series: [Series; 4] = [
         ("train", RGBColor(120, 120, 120), |r| r.train_success),
         ("test (current level)", RGBColor(30, 90, 200), |r| r.test_success),
         ("finals (max level)", RGBColor(200, 40, 40), |r| r.finals_success),
