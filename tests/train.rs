@@ -26,7 +26,15 @@ fn quiet(_: &EpochRow, _: &TrainConfig) {}
 
 /// Rows without the wall-clock columns.
 fn comparable(rows: &[EpochRow]) -> Vec<EpochRow> {
-    rows.iter().map(|r| EpochRow { wall_seconds: 0.0, env_seconds: 0.0, update_seconds: 0.0, ..r.clone() }).collect()
+    rows.iter()
+        .map(|r| EpochRow {
+            wall_seconds: 0.0,
+            env_seconds: 0.0,
+            update_seconds: 0.0,
+            cpu_utilisation: 0.0,
+            ..r.clone()
+        })
+        .collect()
 }
 
 #[test]

@@ -100,6 +100,24 @@ pub struct EpochRow {
     pub env_seconds: f64,
     #[serde(rename = "time/update_seconds")]
     pub update_seconds: f64,
+    /// CPU time of the process over the epoch / (wall time × cores).
+    #[serde(rename = "time/cpu_utilisation", default)]
+    pub cpu_utilisation: f64,
+}
+
+/// User + system CPU seconds of this process so far.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes one rusage struct into the zeroed value we
+    // pass; RUSAGE_SELF is always valid.
+    let usage = unsafe {
+        let mut u: libc::rusage = std::mem::zeroed();
+        if libc::getrusage(libc::RUSAGE_SELF, &mut u) != 0 {
+            return 0.0;
+        }
+        u
+    };
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(usage.ru_utime) + secs(usage.ru_stime)
 }
 
 /// A finished episode's transitions and outcome.
@@ -335,6 +353,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     while state.epoch < config.epochs {
         let epoch = state.epoch;
         let started = Instant::now();
+        let cpu_started = cpu_seconds();
         for env in &mut envs {
             env.set_level(state.level.min(max_level))?;
         }
@@ -414,7 +433,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
                 stats.iter().map(f).sum::<f64>() / stats.len() as f64
             }
         };
-        state.wall_seconds += started.elapsed().as_secs_f64();
+        let epoch_wall = started.elapsed().as_secs_f64();
+        state.wall_seconds += epoch_wall;
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
         let row = EpochRow {
             epoch,
             level: state.level,
@@ -429,6 +450,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             wall_seconds: state.wall_seconds,
             env_seconds,
             update_seconds,
+            cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         };
         if row.test_success >= config.success_threshold && state.level < max_level {
             state.level += 1;

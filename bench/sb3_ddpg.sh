@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# Measure stable-baselines3 DDPG throughput on gymnasium-robotics FetchPush-v4, on CPU,
+# for comparison with our Rust DDPG.
+#
+# For each torch thread count in THREADS (default "1 2") runs bench/sb3_ddpg.py, which
+# builds DDPG("MultiInputPolicy", FetchPush-v4) -- actor and critic [256,256,256],
+# batch 256, buffer 1e6, lr 1e-3, gamma 0.98, tau 0.05, plain replay buffer (no HER),
+# device cpu -- and measures separately:
+#   env_steps_per_s  SB3's own collection loop (actor forward + noise, env step,
+#                    replay insert), gradient updates switched off;
+#   updates_per_s    one model.train(gradient_steps=UPDATES, batch_size=256) call.
+# Each run prints one JSON line; a markdown table follows.
+#
+# Installs (once; skipped when the pinned versions are already there) a Python venv at
+# bench/.venv-sb3 (git-ignored) with, from PyPI:
+#   stable-baselines3==2.9.2  -- the current release when this script was written
+#   torch==2.15.0             -- the default PyPI wheel, i.e. the CUDA build (~5 GB venv
+#                                with its nvidia-* wheels); it is only run on CPU here
+#   gymnasium-robotics==1.4.2 (pulls in gymnasium, numpy, ...)
+#   mujoco==3.11.0            -- a 3.x pin on purpose: mujoco 4.x breaks FetchPush in
+#                                gymnasium-robotics 1.4.2.
+#
+# Usage: bench/sb3_ddpg.sh [STEPS] [UPDATES]   (defaults 3000 and 300)
+#   THREADS="1 2" overrides the torch thread counts, SEED=... the seed (default 0).
+# Run it on an otherwise idle machine: anything else using a core skews the numbers.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+VENV="$ROOT/bench/.venv-sb3"
+PY="$VENV/bin/python"
+STEPS="${1:-3000}"
+UPDATES="${2:-300}"
+THREADS="${THREADS:-1 2}"
+SEED="${SEED:-0}"
+SB3_VERSION="2.9.2"
+TORCH_VERSION="2.15.0"
+GR_VERSION="1.4.2"
+MUJOCO_VERSION="3.11.0"
+
+log() { printf '[sb3_ddpg] %s\n' "$*" >&2; }
+
+is_digits() { case "$1" in ''|*[!0-9]*) return 1 ;; esac; }
+is_pos() { is_digits "$1" && [ "$((10#$1))" -gt 0 ]; }
+is_pos "$STEPS"   || { log "STEPS must be a positive integer, got '$STEPS'"; exit 2; }
+is_pos "$UPDATES" || { log "UPDATES must be a positive integer, got '$UPDATES'"; exit 2; }
+is_digits "$SEED" || { log "SEED must be a non-negative integer, got '$SEED'"; exit 2; }
+[ -n "${THREADS// /}" ] || { log "THREADS must list at least one thread count"; exit 2; }
+for t in $THREADS; do
+    is_pos "$t" || { log "THREADS must be positive integers, got '$THREADS'"; exit 2; }
+done
+
+# --- venv -----------------------------------------------------------------------------
+have_pins() {
+    [ -x "$PY" ] && "$PY" - "$SB3_VERSION" "$TORCH_VERSION" "$GR_VERSION" "$MUJOCO_VERSION" \
+        <<'EOF' 2>/dev/null
+import sys
+from importlib.metadata import version
+want = dict(zip(["stable-baselines3", "torch", "gymnasium-robotics", "mujoco"], sys.argv[1:]))
+# torch wheels may carry a local tag (2.x.y+cu...); compare the public part.
+sys.exit(any(version(p).split("+")[0] != v for p, v in want.items()))
+EOF
+}
+
+PINS="stable-baselines3==$SB3_VERSION torch==$TORCH_VERSION gymnasium-robotics==$GR_VERSION mujoco==$MUJOCO_VERSION"
+if have_pins; then
+    log "venv $VENV already has $PINS"
+else
+    log "creating venv $VENV and installing $PINS (torch is a large download; minutes)"
+    python3 -m venv "$VENV"
+    # shellcheck disable=SC2086  # PINS is a word list on purpose
+    "$PY" -m pip install --quiet --disable-pip-version-check $PINS
+    have_pins || { log "install finished but pinned versions not found in $VENV"; exit 1; }
+fi
+
+# --- measurements ---------------------------------------------------------------------
+LINES=()
+for t in $THREADS; do
+    log "SB3 DDPG, FetchPush-v4, threads=$t: $STEPS env steps, $UPDATES updates"
+    # Keep the last line of stdout (the JSON); warnings go to stderr.
+    line="$("$PY" "$ROOT/bench/sb3_ddpg.py" --steps "$STEPS" --updates "$UPDATES" \
+        --threads "$t" --seed "$SEED" | tail -n 1)"
+    echo "$line"
+    LINES+=("$line")
+done
+
+# --- table ----------------------------------------------------------------------------
+echo
+"$PY" - "${LINES[@]}" <<'EOF'
+import json, sys
+
+rows = [json.loads(a) for a in sys.argv[1:]]
+if rows:
+    r = rows[0]
+    print(f"stable-baselines3 {r['sb3']}, torch {r['torch']}, batch {r['batch_size']}, CPU")
+    print()
+print("| impl | torch threads | env steps/s (collect) | updates/s |")
+print("| --- | ---: | ---: | ---: |")
+for r in rows:
+    print(f"| sb3 DDPG | {r['threads']} | {r['env_steps_per_s']:,.0f} | {r['updates_per_s']:,.1f} |")
+EOF
