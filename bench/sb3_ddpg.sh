@@ -23,6 +23,10 @@
 # Usage: bench/sb3_ddpg.sh [STEPS] [UPDATES]   (defaults 3000 and 300)
 #   THREADS="1 2" overrides the torch thread counts, SEED=... the seed (default 0).
 # Run it on an otherwise idle machine: anything else using a core skews the numbers.
+# With threads=2 on a busy 2-core machine, torch's OpenMP workers spin-wait for each other
+# and both rates collapse (5-10x slower here); OMP_WAIT_POLICY=PASSIVE, which the Python
+# process inherits from this script's environment, avoids that. Left at the default on purpose,
+# so that the numbers show plain SB3 as people run it.
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

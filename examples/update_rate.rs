@@ -4,6 +4,7 @@ use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::replay::ReplayBuffer;
 use rand::{Rng, SeedableRng};
 fn main() {
+    blockpuzzle::blas::ensure_fast_kernels();
     let batch: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(256);
     let threads: i32 = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(2);
     tch::set_num_threads(threads);
@@ -24,5 +25,9 @@ fn main() {
     for _ in 0..n {
         agent.update(&buf.sample(batch, &mut rng));
     }
-    println!("batch {batch}, {threads} threads: {:.1} updates/s", n as f64 / t.elapsed().as_secs_f64());
+    let core = blockpuzzle::blas::openblas_core().unwrap_or_else(|| "?".into());
+    println!(
+        "batch {batch}, {threads} threads, OpenBLAS {core}: {:.1} updates/s",
+        n as f64 / t.elapsed().as_secs_f64()
+    );
 }

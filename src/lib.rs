@@ -16,6 +16,7 @@ pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
 pub mod agents;
 pub mod bench;
+pub mod blas;
 pub mod cli;
 pub mod policy;
 pub mod rollout;

@@ -1,4 +1,5 @@
 fn main() {
+    blockpuzzle::blas::ensure_fast_kernels();
     if let Err(e) = blockpuzzle::cli::main() {
         eprintln!("error: {e:#}");
         std::process::exit(1);

@@ -1,0 +1,64 @@
+//! OpenBLAS kernel selection.
+//!
+//! Debian's OpenBLAS picks its kernels at load time from the CPU it detects.
+//! On some virtual machines (this project's CI among them) it fails to
+//! recognise the processor and falls back to the Prescott (SSE3) kernels,
+//! which makes libtorch's matrix products 3–4× slower. OpenBLAS reads the
+//! `OPENBLAS_CORETYPE` environment variable when it is loaded, i.e. before
+//! `main`, so the fix is to set it and re-execute the program once.
+
+use std::ffi::CStr;
+
+/// Kernel families that already use AVX2/FMA or better.
+const FAST_CORES: &[&str] = &["haswell", "skylakex", "cooperlake", "sapphirerapids", "zen"];
+
+/// The core type OpenBLAS selected, if OpenBLAS is loaded.
+pub fn openblas_core() -> Option<String> {
+    // SAFETY: dlsym with RTLD_DEFAULT only looks the symbol up among the
+    // loaded libraries; the name is a NUL-terminated literal.
+    let sym = unsafe { libc::dlsym(libc::RTLD_DEFAULT, c"openblas_get_corename".as_ptr()) };
+    if sym.is_null() {
+        return None;
+    }
+    // SAFETY: OpenBLAS exports `char *openblas_get_corename(void)`; the
+    // pointer came from the loaded library under that name.
+    let f: extern "C" fn() -> *const libc::c_char = unsafe { std::mem::transmute(sym) };
+    let p = f();
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: OpenBLAS returns a pointer to a static NUL-terminated string.
+    Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+}
+
+/// The best kernel family this CPU supports, by its instruction sets.
+fn best_core() -> Option<&'static str> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512dq") && has!("avx512bw") && has!("avx512vl") && has!("avx512cd") {
+            return Some("SkylakeX");
+        }
+        if has!("avx2") && has!("fma") {
+            return Some("Haswell");
+        }
+    }
+    None
+}
+
+/// If OpenBLAS chose slower kernels than the CPU supports and the user did
+/// not set `OPENBLAS_CORETYPE`, re-executes the current program with it set.
+/// Returns normally when nothing needs doing or the re-execution fails.
+pub fn ensure_fast_kernels() {
+    if std::env::var_os("OPENBLAS_CORETYPE").is_some() {
+        return;
+    }
+    let (Some(core), Some(best)) = (openblas_core(), best_core()) else { return };
+    if FAST_CORES.iter().any(|c| core.to_lowercase().contains(c)) {
+        return;
+    }
+    let Ok(exe) = std::env::current_exe() else { return };
+    use std::os::unix::process::CommandExt;
+    let err = std::process::Command::new(exe).args(std::env::args_os().skip(1)).env("OPENBLAS_CORETYPE", best).exec();
+    eprintln!("note: OpenBLAS uses its {core} kernels; restarting with OPENBLAS_CORETYPE={best} failed ({err}); training will be slower");
+}
