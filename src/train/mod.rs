@@ -16,6 +16,10 @@
 
 pub mod checkpoint;
 pub mod plot;
+mod rundir;
+
+use rundir::write_progress;
+pub use rundir::{load_policy, read_progress, write_json_atomic, RunDir, SavedPolicy};
 
 use crate::agents::ddpg::{Ddpg, DdpgConfig, DdpgPolicy, UpdateStats};
 use crate::agents::replay::ReplayBuffer;
@@ -25,7 +29,7 @@ use checkpoint::RunState;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// Training hyperparameters (defaults: the paper's DDPG set-up).
@@ -201,84 +205,6 @@ fn success_rate(eps: &[Episode]) -> f64 {
         return 0.0;
     }
     eps.iter().filter(|e| e.success).count() as f64 / eps.len() as f64
-}
-
-/// Files of a run directory.
-pub struct RunDir {
-    /// The folder.
-    pub dir: PathBuf,
-}
-
-impl RunDir {
-    /// `config.json`.
-    pub fn config(&self) -> PathBuf {
-        self.dir.join("config.json")
-    }
-    /// `progress.csv`.
-    pub fn progress(&self) -> PathBuf {
-        self.dir.join("progress.csv")
-    }
-    /// `checkpoint.bin`.
-    pub fn checkpoint(&self) -> PathBuf {
-        self.dir.join("checkpoint.bin")
-    }
-    /// `policy.json`.
-    pub fn policy(&self) -> PathBuf {
-        self.dir.join("policy.json")
-    }
-    /// `success.png`.
-    pub fn plot(&self) -> PathBuf {
-        self.dir.join("success.png")
-    }
-    /// `best_policy.json`.
-    pub fn best_policy(&self) -> PathBuf {
-        self.dir.join("best_policy.json")
-    }
-}
-
-/// A saved policy: the actor, its normaliser and what it was trained on.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SavedPolicy {
-    /// Environment id it was trained on.
-    pub env_id: String,
-    /// Epochs of training behind it.
-    pub epoch: usize,
-    /// Its finals success when saved.
-    pub finals_success: f64,
-    /// The policy.
-    pub policy: DdpgPolicy,
-}
-
-/// Writes `value` as JSON to `path` through a temporary file.
-///
-/// # Errors
-/// I/O errors with the path.
-pub fn write_json_atomic(path: &Path, value: &impl Serialize) -> Result<()> {
-    let tmp = path.with_extension("json.tmp");
-    let text = serde_json::to_vec_pretty(value)?;
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Loads a policy from a file, or from a run directory (`best_policy.json`,
-/// else `policy.json`).
-///
-/// # Errors
-/// A clear message for a missing or malformed file.
-pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
-    let file = if path.is_dir() {
-        let run = RunDir { dir: path.to_owned() };
-        if run.best_policy().exists() {
-            run.best_policy()
-        } else {
-            run.policy()
-        }
-    } else {
-        path.to_owned()
-    };
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))
 }
 
 /// Per-epoch callback for progress reporting.
@@ -473,24 +399,4 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         on_epoch(&row, config);
     }
     Ok(rows)
-}
-
-fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
-    let tmp = path.with_extension("csv.tmp");
-    let mut w = csv::Writer::from_path(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
-    for r in rows {
-        w.serialize(r)?;
-    }
-    w.flush()?;
-    drop(w);
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Reads `progress.csv`.
-///
-/// # Errors
-/// A message naming the file for a missing or malformed file.
-pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize().collect::<Result<Vec<EpochRow>, _>>().with_context(|| format!("{} is malformed", path.display()))
 }
