@@ -363,3 +363,20 @@ fn eval(a: EvalArgs) -> Result<()> {
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::wilson95;
+
+    #[test]
+    fn wilson_interval_matches_known_values() {
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
+        let (lo, hi) = wilson95(50, 100);
+        assert!(close(lo, 0.4038) && close(hi, 0.5962), "{lo} {hi}");
+        let (lo, hi) = wilson95(0, 10);
+        assert!(close(lo, 0.0) && close(hi, 0.2775), "{lo} {hi}");
+        let (lo, hi) = wilson95(10, 10);
+        assert!(close(lo, 0.7225) && close(hi, 1.0), "{lo} {hi}");
+        assert_eq!(wilson95(0, 0), (0.0, 1.0));
+    }
+}
