@@ -4,7 +4,9 @@
 CARGO ?= cargo
 OUT ?= out
 
-.PHONY: setup demo test bench build clean-assets
+RUN ?= runs/BlocksTouch-v0-ddpg-s0
+
+.PHONY: setup demo test bench train build clean-assets
 
 setup:
 	bash scripts/setup.sh
@@ -21,6 +23,11 @@ demo: build
 
 test: setup
 	$(CARGO) test --all
+
+# DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
+train: build
+	$(CARGO) run --release --quiet -- train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 \
+		--seed 0 --run-dir $(RUN) $$(test -f $(RUN)/checkpoint.bin && echo --resume)
 
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
