@@ -212,7 +212,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     let mut policy: Box<dyn Policy> = match a.policy.as_str() {
         "random" => Box::new(RandomPolicy::new(a.seed)),
         "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
-        path => Box::new(trained_policy(Path::new(path), &env)?),
+        path => Box::new(trained_policy(Path::new(path), crate::train::load_policy(Path::new(path))?, &env)?),
     };
     let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
     for k in 0..a.episodes {
@@ -251,8 +251,7 @@ impl Policy for Trained {
     }
 }
 
-fn trained_policy(path: &Path, env: &BlockEnv) -> Result<Trained> {
-    let saved = crate::train::load_policy(path)?;
+fn trained_policy(path: &Path, saved: crate::train::SavedPolicy, env: &BlockEnv) -> Result<Trained> {
     let dim = env.observation_space().dim();
     if saved.policy.norm.dim() != dim {
         bail!(
@@ -334,7 +333,8 @@ fn eval(a: EvalArgs) -> Result<()> {
     if a.episodes == 0 {
         bail!("--episodes must be at least 1");
     }
-    let mut policy = trained_policy(&a.checkpoint, &env)?;
+    let policy_epoch = saved.epoch;
+    let mut policy = trained_policy(&a.checkpoint, saved, &env)?;
     let mut wins = 0;
     for k in 0..a.episodes {
         let ep = run_episode(&mut env, &mut policy, a.seed.wrapping_add(k as u64))?;
@@ -344,7 +344,7 @@ fn eval(a: EvalArgs) -> Result<()> {
     let rate = wins as f64 / a.episodes as f64;
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": env.level(), "episodes": a.episodes, "seed": a.seed,
-        "successes": wins, "success_rate": rate, "ci95": [lo, hi], "policy": a.checkpoint, "policy_epoch": saved.epoch,
+        "successes": wins, "success_rate": rate, "ci95": [lo, hi], "policy": a.checkpoint, "policy_epoch": policy_epoch,
     });
     let out = a.out.clone().unwrap_or_else(|| {
         let dir = if a.checkpoint.is_dir() {
