@@ -1,6 +1,15 @@
 #!/usr/bin/env bash
-# Measure stable-baselines3 DDPG throughput on gymnasium-robotics FetchPush-v4, on CPU,
-# for comparison with our Rust DDPG.
+# DDPG throughput side by side: stable-baselines3 on gymnasium-robotics FetchPush-v4 and
+# blockpuzzle on BlocksTouch-v0 (the same Fetch robot plus two blocks), both on CPU, with the
+# ratio blockpuzzle / SB3 for updates/s and env steps/s.
+#
+# For each torch thread count, blockpuzzle runs first, SB3 right after, so that both see the
+# same machine load:
+#   blockpuzzle bench --ddpg --workers 1 --torch-threads T --steps STEPS --updates UPDATES
+#     (src/bench/ddpg.rs: the training loop's collection path -- plain-Rust actor + noise,
+#     env step, replay insert, normaliser update -- then DDPG updates at batch 256);
+# and once more with --workers 2 (two environments stepped in parallel threads, as
+# `train --workers 2` collects).
 #
 # For each torch thread count in THREADS (default "1 2") runs bench/sb3_ddpg.py, which
 # builds DDPG("MultiInputPolicy", FetchPush-v4) -- actor and critic [256,256,256],
@@ -21,6 +30,7 @@
 #                                gymnasium-robotics 1.4.2.
 #
 # Usage: bench/sb3_ddpg.sh [STEPS] [UPDATES]   (defaults 3000 and 300)
+# Needs the project set up (make setup) for the blockpuzzle side.
 #   THREADS="1 2" overrides the torch thread counts, SEED=... the seed (default 0).
 # Run it on an otherwise idle machine: anything else using a core skews the numbers.
 # With threads=2 on a busy 2-core machine, torch's OpenMP workers spin-wait for each other
@@ -77,8 +87,16 @@ else
 fi
 
 # --- measurements ---------------------------------------------------------------------
+log "building blockpuzzle (release)"
+(cd "$ROOT" && cargo build --release --quiet)
+BP="$ROOT/target/release/blockpuzzle"
 LINES=()
 for t in $THREADS; do
+    log "blockpuzzle DDPG, BlocksTouch-v0, threads=$t: $STEPS env steps, $UPDATES updates"
+    line="$("$BP" bench --ddpg --workers 1 --torch-threads "$t" --steps "$STEPS" \
+        --updates "$UPDATES" --seed "$SEED" --json)"
+    echo "$line"
+    LINES+=("$line")
     log "SB3 DDPG, FetchPush-v4, threads=$t: $STEPS env steps, $UPDATES updates"
     # Keep the last line of stdout (the JSON); warnings go to stderr.
     line="$("$PY" "$ROOT/bench/sb3_ddpg.py" --steps "$STEPS" --updates "$UPDATES" \
@@ -86,6 +104,10 @@ for t in $THREADS; do
     echo "$line"
     LINES+=("$line")
 done
+log "blockpuzzle DDPG collection with 2 workers: $STEPS env steps"
+line="$("$BP" bench --ddpg --workers 2 --torch-threads 1 --steps "$STEPS" --updates 1 --seed "$SEED" --json)"
+echo "$line"
+LINES+=("$line")
 
 # --- table ----------------------------------------------------------------------------
 echo
@@ -93,12 +115,25 @@ echo
 import json, sys
 
 rows = [json.loads(a) for a in sys.argv[1:]]
-if rows:
-    r = rows[0]
-    print(f"stable-baselines3 {r['sb3']}, torch {r['torch']}, batch {r['batch_size']}, CPU")
+sb3 = {r["threads"]: r for r in rows if r["impl"] == "sb3"}
+ours = {r["threads"]: r for r in rows if r["impl"] == "blockpuzzle" and r["workers"] == 1}
+two = [r for r in rows if r["impl"] == "blockpuzzle" and r["workers"] == 2]
+if sb3:
+    r = next(iter(sb3.values()))
+    print(f"stable-baselines3 {r['sb3']} (torch {r['torch']}) on {r['env']} vs blockpuzzle on "
+          f"BlocksTouch-v0; batch {r['batch_size']}, CPU, one environment")
     print()
-print("| impl | torch threads | env steps/s (collect) | updates/s |")
-print("| --- | ---: | ---: | ---: |")
-for r in rows:
-    print(f"| sb3 DDPG | {r['threads']} | {r['env_steps_per_s']:,.0f} | {r['updates_per_s']:,.1f} |")
+print("| torch threads | updates/s sb3 | updates/s ours | ratio | env steps/s sb3 | env steps/s ours | ratio |")
+print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+for t, s in sb3.items():
+    o = ours.get(t)
+    if o is None:
+        continue
+    print(f"| {t} | {s['updates_per_s']:,.1f} | {o['updates_per_s']:,.1f} | "
+          f"{o['updates_per_s'] / s['updates_per_s']:.2f}x | {s['env_steps_per_s']:,.0f} | "
+          f"{o['env_steps_per_s']:,.0f} | {o['env_steps_per_s'] / s['env_steps_per_s']:.2f}x |")
+for o in two:
+    s = sb3.get(1)
+    ratio = f" ({o['env_steps_per_s'] / s['env_steps_per_s']:.2f}x sb3's one environment)" if s else ""
+    print(f"\nblockpuzzle collection with 2 workers: {o['env_steps_per_s']:,.0f} env steps/s{ratio}")
 EOF

@@ -141,3 +141,40 @@ fn bench_prints_json() {
     assert!(v["env_steps_per_s"].as_f64().unwrap() > 0.0);
     assert!(v["mj_steps_per_s"].as_f64().unwrap() > v["env_steps_per_s"].as_f64().unwrap());
 }
+
+#[test]
+fn ddpg_bench_collects_whole_episodes_and_times_updates() {
+    let o = bp(&[
+        "bench",
+        "--ddpg",
+        "--env",
+        "GripperTouch-v0",
+        "--workers",
+        "2",
+        "--steps",
+        "120",
+        "--updates",
+        "5",
+        "--batch-size",
+        "32",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["workers"], 2);
+    assert_eq!(v["updates"], 5);
+    // Whole episodes: at least the requested steps, and the warm-up's too in the buffer.
+    let steps = v["steps"].as_u64().unwrap();
+    assert!(steps >= 120, "{v}");
+    assert!(v["buffer_transitions"].as_u64().unwrap() >= steps + 200, "{v}");
+    assert!(v["updates_per_s"].as_f64().unwrap() > 0.0);
+    let f = v["forward_fraction"].as_f64().unwrap();
+    assert!(f > 0.0 && f < 1.0, "{v}");
+}
+
+#[test]
+fn ddpg_only_bench_options_need_ddpg() {
+    let o = bp(&["bench", "--updates", "5"]);
+    assert!(!o.status.success());
+    assert!(text(&o).contains("--ddpg"), "{}", text(&o));
+}

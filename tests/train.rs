@@ -30,6 +30,7 @@ fn comparable(rows: &[EpochRow]) -> Vec<EpochRow> {
         .map(|r| EpochRow {
             wall_seconds: 0.0,
             env_seconds: 0.0,
+            forward_seconds: 0.0,
             update_seconds: 0.0,
             cpu_utilisation: 0.0,
             ..r.clone()
@@ -49,6 +50,8 @@ fn short_run_writes_every_run_directory_file() {
     assert_eq!(comparable(&progress), comparable(&rows));
     assert!(rows[1].env_steps > rows[0].env_steps && rows[1].env_steps <= 2 * 3 * 2 * 50, "{rows:?}");
     assert_eq!(rows[1].updates, 2 * 3 * 5);
+    // The actor's time is a part of the collection time.
+    assert!(rows.iter().all(|r| r.forward_seconds > 0.0 && r.forward_seconds < r.env_seconds), "{rows:?}");
     let header = std::fs::read_to_string(dir.path().join("progress.csv")).unwrap();
     assert!(header.starts_with("epoch,curriculum/level,train/success,test/success,finals/success"));
     let cfg: TrainConfig =

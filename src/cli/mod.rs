@@ -131,6 +131,25 @@ struct BenchArgs {
     /// Turn the robot collision filter off (to measure what it saves).
     #[arg(long)]
     no_collision_filter: bool,
+    /// Measure DDPG instead: env steps/s while collecting with the exploring
+    /// actor (replay insert included) and gradient updates/s.
+    #[arg(long, conflicts_with_all = ["threads", "no_collision_filter"])]
+    ddpg: bool,
+    /// DDPG: collection workers, each stepping its own environment.
+    #[arg(long, default_value_t = 1, requires = "ddpg")]
+    workers: usize,
+    /// DDPG: gradient updates to time.
+    #[arg(long, default_value_t = 300, requires = "ddpg")]
+    updates: usize,
+    /// DDPG: transitions per update batch.
+    #[arg(long, default_value_t = 256, requires = "ddpg")]
+    batch_size: usize,
+    /// DDPG: threads libtorch may use for the updates.
+    #[arg(long, default_value_t = 1, requires = "ddpg")]
+    torch_threads: usize,
+    /// DDPG: seed of networks, layouts and noise.
+    #[arg(long, default_value_t = 0, requires = "ddpg")]
+    seed: u64,
 }
 
 /// Runs the command line.
@@ -178,6 +197,26 @@ pub fn main() -> Result<()> {
                 collision_filter: c.collision_filter,
             };
             print!("{}", crate::scene::mjcf(&spec)?);
+            Ok(())
+        }
+        Command::Bench(a) if a.ddpg => {
+            let r = crate::bench::ddpg::run(&crate::bench::ddpg::DdpgBenchConfig {
+                env: a.env,
+                workers: a.workers,
+                steps: a.steps,
+                updates: a.updates,
+                batch_size: a.batch_size,
+                torch_threads: a.torch_threads,
+                seed: a.seed,
+            })?;
+            if a.json {
+                println!("{}", serde_json::to_string(&r)?);
+            } else {
+                println!(
+                    "DDPG on {}: {} worker(s), {} torch thread(s), batch {}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
+                    r.env, r.workers, r.threads, r.batch_size, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
+                );
+            }
             Ok(())
         }
         Command::Bench(a) => {

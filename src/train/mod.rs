@@ -22,6 +22,7 @@ use rundir::write_progress;
 pub use rundir::{load_policy, read_progress, write_json_atomic, RunDir, SavedPolicy};
 
 use crate::agents::ddpg::{Ddpg, DdpgConfig, DdpgPolicy, UpdateStats};
+use crate::agents::normalizer::Normalizer;
 use crate::agents::replay::ReplayBuffer;
 use crate::env::{registry, BlockEnv, EnvError};
 use anyhow::{bail, Context, Result};
@@ -100,8 +101,14 @@ pub struct EpochRow {
     pub updates: u64,
     #[serde(rename = "time/wall_seconds")]
     pub wall_seconds: f64,
+    /// Wall seconds of collection and test episodes (policy and environment).
     #[serde(rename = "time/env_seconds")]
     pub env_seconds: f64,
+    /// The policy's share of `env_seconds`: actor forward passes and noise,
+    /// summed over workers and divided by their number.
+    #[serde(rename = "time/forward_seconds", default)]
+    pub forward_seconds: f64,
+    /// Wall seconds of gradient updates and target updates.
     #[serde(rename = "time/update_seconds")]
     pub update_seconds: f64,
     /// CPU time of the process over the epoch / (wall time × cores).
@@ -125,16 +132,43 @@ fn cpu_seconds() -> f64 {
 }
 
 /// A finished episode's transitions and outcome.
-struct Episode {
-    obs: Vec<Vec<f32>>,
-    act: Vec<Vec<f32>>,
-    rew: Vec<f32>,
-    terminated: bool,
-    success: bool,
+pub(crate) struct Episode {
+    pub(crate) obs: Vec<Vec<f32>>,
+    pub(crate) act: Vec<Vec<f32>>,
+    pub(crate) rew: Vec<f32>,
+    pub(crate) terminated: bool,
+    pub(crate) success: bool,
+    /// Seconds spent in the policy (actor forward pass and noise).
+    pub(crate) forward_seconds: f64,
+}
+
+impl Episode {
+    /// Environment steps taken.
+    pub(crate) fn len(&self) -> usize {
+        self.rew.len()
+    }
+
+    /// Appends the transitions to `replay` (with each step's discounted
+    /// return-to-go as the extra column) and feeds the observations to the
+    /// normaliser.
+    pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64) {
+        let n = self.rew.len();
+        let mut ret = vec![0.0f32; n];
+        let mut g = 0.0;
+        for t in (0..n).rev() {
+            g = self.rew[t] + gamma as f32 * g;
+            ret[t] = g;
+        }
+        for (t, ret_t) in ret.iter().enumerate() {
+            let done = self.terminated && t + 1 == n;
+            replay.push(&self.obs[t], &self.act[t], self.rew[t], &self.obs[t + 1], done, *ret_t);
+        }
+        norm.update(&self.obs.concat());
+    }
 }
 
 /// Mixes the run seed with counters into an independent stream seed.
-fn stream_seed(seed: u64, parts: &[u64]) -> u64 {
+pub(crate) fn stream_seed(seed: u64, parts: &[u64]) -> u64 {
     // SplitMix64 steps over the parts: cheap and well distributed.
     let mut z = seed ^ 0x9E37_79B9_7F4A_7C15;
     for &p in parts {
@@ -151,12 +185,15 @@ fn play(env: &mut BlockEnv, policy: &DdpgPolicy, seed: u64, explore: Option<(f64
     // The layout comes from `seed`; the exploration noise from a stream derived from it.
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
     let (mut obs, _) = env.reset(Some(seed))?;
-    let mut ep = Episode { obs: vec![], act: vec![], rew: vec![], terminated: false, success: false };
+    let mut ep =
+        Episode { obs: vec![], act: vec![], rew: vec![], terminated: false, success: false, forward_seconds: 0.0 };
     loop {
+        let t = Instant::now();
         let act = match explore {
             Some((r, n)) => policy.explore(&obs, r, n, &mut rng),
             None => policy.act(&obs),
         };
+        ep.forward_seconds += t.elapsed().as_secs_f64();
         let s = env.step(&act)?;
         ep.obs.push(obs);
         ep.act.push(act);
@@ -172,7 +209,7 @@ fn play(env: &mut BlockEnv, policy: &DdpgPolicy, seed: u64, explore: Option<(f64
 }
 
 /// Runs `per_worker` episodes on every worker's environment in parallel.
-fn play_all(
+pub(crate) fn play_all(
     envs: &mut [BlockEnv],
     policy: &DdpgPolicy,
     per_worker: usize,
@@ -283,7 +320,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         for env in &mut envs {
             env.set_level(state.level.min(max_level))?;
         }
-        let (mut env_seconds, mut update_seconds) = (0.0, 0.0);
+        let (mut env_seconds, mut update_seconds, mut forward_seconds) = (0.0, 0.0, 0.0);
         let (mut train_eps, mut train_wins) = (0usize, 0usize);
         let mut stats = Vec::new();
         for cycle in 0..config.cycles {
@@ -303,20 +340,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             for ep in &eps {
                 train_eps += 1;
                 train_wins += ep.success as usize;
-                let n = ep.rew.len();
-                let gamma = config.ddpg.gamma as f32;
-                let mut ret = vec![0.0f32; n];
-                let mut g = 0.0;
-                for t in (0..n).rev() {
-                    g = ep.rew[t] + gamma * g;
-                    ret[t] = g;
-                }
-                for (t, ret_t) in ret.iter().enumerate() {
-                    let done = ep.terminated && t + 1 == n;
-                    replay.push(&ep.obs[t], &ep.act[t], ep.rew[t], &ep.obs[t + 1], done, *ret_t);
-                }
-                state.env_steps += n as u64;
-                agent.norm.update(&ep.obs.concat());
+                state.env_steps += ep.len() as u64;
+                forward_seconds += ep.forward_seconds / config.workers as f64;
+                ep.store(&mut replay, &mut agent.norm, config.ddpg.gamma);
             }
             // Learn.
             let t = Instant::now();
@@ -351,6 +377,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             None,
         )?;
         env_seconds += t.elapsed().as_secs_f64();
+        forward_seconds += test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / config.workers as f64;
 
         let mean = |f: fn(&UpdateStats) -> f64| {
             if stats.is_empty() {
@@ -375,6 +402,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             updates: state.updates,
             wall_seconds: state.wall_seconds,
             env_seconds,
+            forward_seconds,
             update_seconds,
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         };

@@ -1,6 +1,9 @@
 //! Throughput measurement: environment steps per second, MuJoCo `mj_step`
 //! calls per second on the same trajectories, and the environment's overhead
-//! (the share of a step spent outside `mj_step`).
+//! (the share of a step spent outside `mj_step`); DDPG collection and
+//! update rates in [`ddpg`].
+
+pub mod ddpg;
 
 use crate::env::{registry, BlockEnv, EnvError};
 use crate::policy::{Policy, RandomPolicy};

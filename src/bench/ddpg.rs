@@ -1,0 +1,152 @@
+//! DDPG throughput as training sees it, in the two numbers people compare
+//! RL libraries by: environment steps per second while collecting with the
+//! exploring actor, and gradient updates per second.
+//!
+//! * Collection runs the training loop's own path: every worker steps its
+//!   environment in its own thread with the plain-Rust actor plus
+//!   exploration noise, then the transitions go into the replay buffer and
+//!   the normaliser (timed).
+//! * Updates are full DDPG updates (critic and actor step) on batches of
+//!   `batch_size` drawn from those transitions, with libtorch using
+//!   `torch_threads` threads, plus one target update per 40 batches as in a
+//!   training cycle.
+//!
+//! The networks are untrained (seeded), which does not change the cost of a
+//! forward pass or an update.
+
+use crate::agents::ddpg::{Ddpg, DdpgConfig};
+use crate::agents::replay::ReplayBuffer;
+use crate::env::registry;
+use crate::train::{play_all, stream_seed};
+use anyhow::{bail, Result};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Debug, Clone)]
+pub struct DdpgBenchConfig {
+    /// Environment id.
+    pub env: String,
+    /// Workers stepping environments in parallel during collection.
+    pub workers: usize,
+    /// Environment steps to collect (at least; whole episodes are played).
+    pub steps: usize,
+    /// Gradient updates to time.
+    pub updates: usize,
+    /// Transitions per update batch.
+    pub batch_size: usize,
+    /// Threads libtorch may use for the updates.
+    pub torch_threads: usize,
+    /// Seed of the networks, layouts and noise.
+    pub seed: u64,
+}
+
+/// Measured rates.
+#[derive(Debug, Clone, Serialize)]
+pub struct DdpgBenchReport {
+    /// Always "blockpuzzle".
+    pub r#impl: &'static str,
+    /// Environment id.
+    pub env: String,
+    /// Collection workers.
+    pub workers: usize,
+    /// libtorch threads during the updates.
+    pub threads: usize,
+    /// Transitions per update batch.
+    pub batch_size: usize,
+    /// Environment steps per second while collecting (actor forward, noise,
+    /// environment step, replay insert, normaliser update), all workers.
+    pub env_steps_per_s: f64,
+    /// Share of the collection time spent in the actor and noise.
+    pub forward_fraction: f64,
+    /// Gradient updates per second.
+    pub updates_per_s: f64,
+    /// Environment steps timed.
+    pub steps: usize,
+    /// Seconds of the timed collection.
+    pub collect_seconds: f64,
+    /// Updates timed.
+    pub updates: usize,
+    /// Seconds of the timed updates.
+    pub train_seconds: f64,
+    /// Transitions in the replay buffer during the updates.
+    pub buffer_transitions: usize,
+    /// OpenBLAS' kernel family, when known.
+    pub openblas_core: Option<String>,
+}
+
+/// Environment steps in the warm-up before the timed collection.
+const WARMUP_STEPS: usize = 200;
+/// Updates before the timed ones.
+const WARMUP_UPDATES: usize = 20;
+
+/// Runs the benchmark.
+///
+/// # Errors
+/// Unknown environment id, zero counts, environment failures.
+pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
+    if c.workers == 0 || c.steps == 0 || c.updates == 0 || c.batch_size == 0 || c.torch_threads == 0 {
+        bail!("--workers, --steps, --updates, --batch-size and --torch-threads must be at least 1");
+    }
+    tch::set_num_threads(c.torch_threads as i32);
+    let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;
+    let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
+    let ddpg = DdpgConfig::default();
+    let explore = Some((ddpg.random_eps, ddpg.noise_eps));
+    let gamma = ddpg.gamma;
+    let mut agent = Ddpg::new(obs_dim, act_dim, ddpg, &mut ChaCha8Rng::seed_from_u64(c.seed));
+    let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
+
+    // Collect: one episode per worker per round, as in a training cycle.
+    let mut round = 0u64;
+    let mut collect = |target: usize, replay: &mut ReplayBuffer, agent: &mut Ddpg| -> Result<(usize, f64, f64)> {
+        let (mut steps, mut forward) = (0usize, 0.0);
+        let t = Instant::now();
+        while steps < target {
+            let policy = agent.policy();
+            let eps = play_all(&mut envs, &policy, 1, |w, _| stream_seed(c.seed, &[9, w as u64, round]), explore)?;
+            round += 1;
+            for ep in &eps {
+                steps += ep.len();
+                forward += ep.forward_seconds;
+                ep.store(replay, &mut agent.norm, gamma);
+            }
+        }
+        Ok((steps, t.elapsed().as_secs_f64(), forward / c.workers as f64))
+    };
+    collect(WARMUP_STEPS, &mut replay, &mut agent)?;
+    let (steps, collect_seconds, forward_seconds) = collect(c.steps, &mut replay, &mut agent)?;
+
+    // Update.
+    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(c.seed, &[10]));
+    for _ in 0..WARMUP_UPDATES {
+        agent.update(&replay.sample(c.batch_size, &mut rng));
+    }
+    let t = Instant::now();
+    for k in 0..c.updates {
+        agent.update(&replay.sample(c.batch_size, &mut rng));
+        if (k + 1) % 40 == 0 {
+            agent.update_targets();
+        }
+    }
+    let train_seconds = t.elapsed().as_secs_f64();
+
+    Ok(DdpgBenchReport {
+        r#impl: "blockpuzzle",
+        env: c.env.clone(),
+        workers: c.workers,
+        threads: c.torch_threads,
+        batch_size: c.batch_size,
+        env_steps_per_s: steps as f64 / collect_seconds,
+        forward_fraction: forward_seconds / collect_seconds,
+        updates_per_s: c.updates as f64 / train_seconds,
+        steps,
+        collect_seconds,
+        updates: c.updates,
+        train_seconds,
+        buffer_transitions: replay.len(),
+        openblas_core: crate::blas::openblas_core(),
+    })
+}
