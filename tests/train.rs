@@ -1,7 +1,11 @@
-//! DDPG training end to end: run directory, resume, checkpoints, policies.
+//! Training end to end (DDPG, PGGD, AggreVaTeD): run directory, resume,
+//! checkpoints, policies.
 
 use blockpuzzle::agents::ddpg::DdpgConfig;
-use blockpuzzle::train::{checkpoint, load_policy, read_progress, train, EpochRow, TrainConfig};
+use blockpuzzle::agents::AnyPolicy;
+use blockpuzzle::train::{
+    checkpoint, load_policy, read_progress, train, AggrevatedConfig, Algo, EpochRow, PgWeight, TrainConfig,
+};
 use std::path::Path;
 
 fn tiny(env: &str, epochs: usize) -> TrainConfig {
@@ -19,7 +23,14 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         seed: 7,
         torch_threads: 1,
         ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
+        algo: Algo::Ddpg,
+        pggd: Default::default(),
+        aggrevated: Default::default(),
     }
+}
+
+fn tiny_pggd(env: &str, epochs: usize, aggrevated: AggrevatedConfig) -> TrainConfig {
+    TrainConfig { algo: Algo::Pggd, aggrevated, ..tiny(env, epochs) }
 }
 
 fn quiet(_: &EpochRow, _: &TrainConfig) {}
@@ -121,4 +132,87 @@ fn resume_with_other_settings_is_refused() {
     assert!(err.to_string().contains("different settings"), "{err}");
     let err = train(&tiny("GripperTouch-v0", 2), Path::new("/nonexistent/run"), true, &mut quiet).unwrap_err();
     assert!(!err.to_string().is_empty());
+}
+
+#[test]
+fn pggd_resume_restores_the_exact_state() {
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&tiny_pggd("GripperTouch-v0", 3, Default::default()), straight.path(), false, &mut quiet).unwrap();
+    let split = tempfile::tempdir().unwrap();
+    train(&tiny_pggd("GripperTouch-v0", 2, Default::default()), split.path(), false, &mut quiet).unwrap();
+    let b = train(&tiny_pggd("GripperTouch-v0", 3, Default::default()), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    let pa = load_policy(&straight.path().join("policy.json")).unwrap();
+    assert!(matches!(pa.policy, AnyPolicy::Pggd(_)), "policy.json holds the PGGD policy");
+    assert_eq!(pa.policy, load_policy(&split.path().join("policy.json")).unwrap().policy);
+    assert!(a.iter().all(|r| r.critic_loss == 0.0 && r.beta == 0.0 && r.expert_share == 0.0));
+    // A DDPG resume of a PGGD run is refused.
+    let err = train(&tiny("GripperTouch-v0", 4), split.path(), true, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("different settings"), "{err}");
+}
+
+/// A tiny DDPG expert on BlocksTouch-v0 in `dir`.
+fn expert(dir: &Path) {
+    train(&tiny("BlocksTouch-v0", 1), dir, false, &mut quiet).unwrap();
+}
+
+#[test]
+fn aggrevated_mixes_by_beta() {
+    let exp = tempfile::tempdir().unwrap();
+    expert(exp.path());
+    let with = |beta0: f64, t0: f64, pg_weight: PgWeight| AggrevatedConfig {
+        expert: Some(exp.path().to_owned()),
+        beta0,
+        t0,
+        pg_weight,
+    };
+    // β = 1: the expert takes every exploration step.
+    let dir = tempfile::tempdir().unwrap();
+    let rows =
+        train(&tiny_pggd("BlocksChoose-v0", 2, with(1.0, 50.0, PgWeight::Return)), dir.path(), false, &mut quiet)
+            .unwrap();
+    assert!(rows.iter().all(|r| r.beta == 1.0 && r.expert_share == 1.0), "{rows:?}");
+    // β = 0 (t0 = 0: β0 from the start): never.
+    let dir = tempfile::tempdir().unwrap();
+    let rows = train(&tiny_pggd("BlocksChoose-v0", 1, with(0.0, 0.0, PgWeight::Return)), dir.path(), false, &mut quiet)
+        .unwrap();
+    assert!(rows.iter().all(|r| r.beta == 0.0 && r.expert_share == 0.0), "{rows:?}");
+    // The paper's schedule (β0 = 0, t0 = 50) with the expert critic's advantage.
+    let dir = tempfile::tempdir().unwrap();
+    let rows = train(
+        &tiny_pggd("BlocksChoose-v0", 2, with(0.0, 50.0, PgWeight::ExpertAdvantage)),
+        dir.path(),
+        false,
+        &mut quiet,
+    )
+    .unwrap();
+    assert_eq!(rows[0].beta, 1.0);
+    assert!((rows[1].beta - (-1.0f64 / 50.0).exp()).abs() < 1e-12, "{rows:?}");
+    assert!(rows.iter().all(|r| r.actor_loss.is_finite()));
+}
+
+#[test]
+fn bad_expert_settings_are_clear_errors() {
+    let exp = tempfile::tempdir().unwrap();
+    expert(exp.path());
+    let dir = tempfile::tempdir().unwrap();
+    let adv = AggrevatedConfig { pg_weight: PgWeight::ExpertAdvantage, ..Default::default() };
+    let err = train(&tiny_pggd("BlocksChoose-v0", 1, adv), dir.path(), false, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("--expert"), "{err}");
+    let missing = AggrevatedConfig { expert: Some("/nonexistent/expert".into()), ..Default::default() };
+    let err = train(&tiny_pggd("BlocksChoose-v0", 1, missing), dir.path(), false, &mut quiet).unwrap_err();
+    assert!(format!("{err:#}").contains("/nonexistent/expert"), "{err:#}");
+    // An expert whose observation does not fit even without grey blocks.
+    let gt = tempfile::tempdir().unwrap();
+    train(&tiny("GripperTouch-v0", 1), gt.path(), false, &mut quiet).unwrap();
+    let wrong = AggrevatedConfig { expert: Some(gt.path().to_owned()), ..Default::default() };
+    let err = train(&tiny_pggd("BlocksChoose-v0", 1, wrong), dir.path(), false, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("without grey blocks"), "{err}");
+    // DDPG takes no expert.
+    let ddpg = TrainConfig {
+        aggrevated: AggrevatedConfig { expert: Some(exp.path().to_owned()), ..Default::default() },
+        ..tiny("BlocksChoose-v0", 1)
+    };
+    let err = train(&ddpg, dir.path(), false, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("--algo pggd"), "{err}");
 }

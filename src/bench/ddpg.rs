@@ -17,7 +17,7 @@
 use crate::agents::ddpg::{Ddpg, DdpgConfig};
 use crate::agents::replay::ReplayBuffer;
 use crate::env::registry;
-use crate::train::{play_all, stream_seed};
+use crate::train::{play_all, stream_seed, Behaviour};
 use anyhow::{bail, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -94,7 +94,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let ddpg = DdpgConfig::default();
-    let explore = Some((ddpg.random_eps, ddpg.noise_eps));
+    let (random_eps, noise_eps) = (ddpg.random_eps, ddpg.noise_eps);
     let gamma = ddpg.gamma;
     let mut agent = Ddpg::new(obs_dim, act_dim, ddpg, &mut ChaCha8Rng::seed_from_u64(c.seed));
     let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
@@ -106,7 +106,8 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         let t = Instant::now();
         while steps < target {
             let policy = agent.policy();
-            let eps = play_all(&mut envs, &policy, 1, |w, _| stream_seed(c.seed, &[9, w as u64, round]), explore)?;
+            let explore = Behaviour::DdpgExplore { policy: &policy, random_eps, noise_eps };
+            let eps = play_all(&mut envs, &explore, 1, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
             round += 1;
             for ep in &eps {
                 steps += ep.len();

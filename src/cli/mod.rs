@@ -1,7 +1,7 @@
 //! The `blockpuzzle` command line.
 
 use anyhow::{bail, Context, Result};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 
 use crate::env::{registry, BlockEnv};
@@ -43,17 +43,8 @@ enum Command {
     },
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum Algo {
-    /// Deep deterministic policy gradient (OpenAI baselines' HER DDPG, no HER).
-    Ddpg,
-}
-
 #[derive(Debug, clap::Args)]
 struct TrainArgs {
-    /// Algorithm.
-    #[arg(long, value_enum, default_value = "ddpg")]
-    algo: Algo,
     /// Run directory (config.json, progress.csv, checkpoints); default runs/ENV-ALGO-sSEED.
     #[arg(long)]
     run_dir: Option<PathBuf>,
@@ -184,7 +175,7 @@ pub fn main() -> Result<()> {
             .with_context(|| format!("{} is not a training config", run.config().display()))?;
             let rows = crate::train::read_progress(&run.progress())?;
             let max_level = registry::config(&config.env)?.layout.max_level();
-            crate::train::plot::success_curves(&run.plot(), &format!("DDPG on {}", config.env), &rows, max_level)?;
+            crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
             println!("wrote {}", run.plot().display());
             Ok(())
         }
@@ -251,7 +242,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     let mut policy: Box<dyn Policy> = match a.policy.as_str() {
         "random" => Box::new(RandomPolicy::new(a.seed)),
         "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
-        path => Box::new(trained_policy(Path::new(path), crate::train::load_policy(Path::new(path))?, &env)?),
+        path => Box::new(trained_policy(Path::new(path), crate::train::load_policy(Path::new(path))?, &mut env)?),
     };
     let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
     for k in 0..a.episodes {
@@ -280,48 +271,67 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     Ok(())
 }
 
-/// A trained policy as a [`Policy`], checked against the environment.
-struct Trained(crate::agents::ddpg::DdpgPolicy);
+/// A trained policy as a [`Policy`], checked against the environment; a
+/// policy trained without the grey block (BlocksTouch) acting in an
+/// environment with one sees it removed from its observation (the paper's
+/// "DDPG (2 blocks)" row).
+pub(crate) struct Trained {
+    policy: crate::agents::AnyPolicy,
+    grey_blind: bool,
+}
 
 impl Policy for Trained {
     fn act(&mut self, obs: &[f32]) -> [f32; crate::env::ACTION_DIM] {
-        let a = self.0.act(obs);
+        let a = if self.grey_blind {
+            self.policy.act(&crate::agents::expert::without_grey(obs))
+        } else {
+            self.policy.act(obs)
+        };
         std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
     }
 }
 
-fn trained_policy(path: &Path, saved: crate::train::SavedPolicy, env: &BlockEnv) -> Result<Trained> {
+pub(crate) fn trained_policy(path: &Path, saved: crate::train::SavedPolicy, env: &mut BlockEnv) -> Result<Trained> {
     let dim = env.observation_space().dim();
-    if saved.policy.norm.dim() != dim {
-        bail!(
-            "policy {} expects {}-dimensional observations ({}), {} has {dim}",
-            path.display(),
-            saved.policy.norm.dim(),
-            saved.env_id,
-            env.id()
-        );
+    let wanted = saved.policy.obs_dim();
+    if wanted == dim {
+        return Ok(Trained { policy: saved.policy, grey_blind: false });
     }
-    Ok(Trained(saved.policy))
+    let blind = crate::agents::expert::without_grey(&env.reset(Some(0))?.0).len();
+    if wanted == blind {
+        return Ok(Trained { policy: saved.policy, grey_blind: true });
+    }
+    bail!(
+        "policy {} expects {wanted}-dimensional observations ({}), {} has {dim} ({blind} without grey blocks)",
+        path.display(),
+        saved.env_id,
+        env.id()
+    )
 }
 
 fn train(a: TrainArgs) -> Result<()> {
-    let Algo::Ddpg = a.algo;
     let c = &a.config;
-    let run_dir = a.run_dir.clone().unwrap_or_else(|| PathBuf::from(format!("runs/{}-ddpg-s{}", c.env, c.seed)));
+    let algo = match (c.algo, &c.aggrevated.expert) {
+        (crate::train::Algo::Ddpg, _) => "ddpg",
+        (crate::train::Algo::Pggd, None) => "pggd",
+        (crate::train::Algo::Pggd, Some(_)) => "pggd-aggrevated",
+    };
+    let run_dir = a.run_dir.clone().unwrap_or_else(|| PathBuf::from(format!("runs/{}-{algo}-s{}", c.env, c.seed)));
     let bar = indicatif::ProgressBar::new(c.epochs as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut last: Option<crate::train::EpochRow> = None;
-    let mut on_epoch = |row: &crate::train::EpochRow, _: &crate::train::TrainConfig| {
+    let mut on_epoch = |row: &crate::train::EpochRow, cfg: &crate::train::TrainConfig| {
         let (steps, updates, secs) = match &last {
             Some(p) => (row.env_steps - p.env_steps, row.updates - p.updates, row.wall_seconds - p.wall_seconds),
             None => (row.env_steps, row.updates, row.wall_seconds),
         };
         bar.set_position(row.epoch as u64 + 1);
+        let beta = if cfg.aggrevated.expert.is_some() { format!(" beta {:.2}", row.beta) } else { String::new() };
         bar.set_message(format!(
-            "level {} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
+            "level {}{beta} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
             row.level,
             row.train_success,
             row.test_success,
@@ -373,7 +383,7 @@ fn eval(a: EvalArgs) -> Result<()> {
         bail!("--episodes must be at least 1");
     }
     let policy_epoch = saved.epoch;
-    let mut policy = trained_policy(&a.checkpoint, saved, &env)?;
+    let mut policy = trained_policy(&a.checkpoint, saved, &mut env)?;
     let mut wins = 0;
     for k in 0..a.episodes {
         let ep = run_episode(&mut env, &mut policy, a.seed.wrapping_add(k as u64))?;

@@ -4,8 +4,10 @@
 //! Written to a temporary file and renamed, so a crash never leaves a
 //! half-written checkpoint.
 
+use super::learner::{Agent, Algo};
 use crate::agents::ddpg::{Ddpg, DdpgConfig};
 use crate::agents::normalizer::Normalizer;
+use crate::agents::pggd::{Pggd, PggdConfig};
 use crate::agents::replay::{Batch, ReplayBuffer};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -56,7 +58,14 @@ pub struct RunState {
 #[derive(Serialize, Deserialize)]
 struct Header {
     state: RunState,
+    /// Absent in checkpoints written before PGGD existed: DDPG.
+    #[serde(default)]
+    algo: Algo,
+    /// DDPG's hyperparameters; for PGGD the source of the network shape and
+    /// the normaliser settings.
     ddpg: DdpgConfig,
+    #[serde(default)]
+    pggd: PggdConfig,
     normalizer: Normalizer,
     actor_adam_t: u64,
     critic_adam_t: u64,
@@ -70,23 +79,41 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> CheckpointError + '_ {
     move |source| CheckpointError::Io { path: path.to_owned(), source }
 }
 
-/// Saves the learner, the replay buffer and the run state to `path` atomically.
+/// Saves the agent, the replay buffer and the run state to `path`
+/// atomically; `ddpg` is the run's DDPG configuration (for PGGD: the network
+/// shape and normaliser settings).
 ///
 /// # Errors
 /// [`CheckpointError::Io`].
-pub fn save(path: &Path, state: &RunState, agent: &Ddpg, replay: &ReplayBuffer) -> Result<(), CheckpointError> {
+pub fn save(
+    path: &Path,
+    state: &RunState,
+    agent: &Agent,
+    ddpg: &DdpgConfig,
+    replay: &ReplayBuffer,
+) -> Result<(), CheckpointError> {
     let mut blobs: Vec<(String, Vec<f32>)> = Vec::new();
     let mut add = |prefix: &str, vecs: Vec<Vec<f32>>| {
         for (i, v) in vecs.into_iter().enumerate() {
             blobs.push((format!("{prefix}.{i}"), v));
         }
     };
-    add("actor", agent.actor.to_vecs());
-    add("critic", agent.critic.to_vecs());
-    add("actor_target", agent.actor_target.to_vecs());
-    add("critic_target", agent.critic_target.to_vecs());
-    add("actor_adam", agent.actor_opt.to_vecs());
-    add("critic_adam", agent.critic_opt.to_vecs());
+    let (normalizer, actor_adam_t, critic_adam_t, pggd) = match agent {
+        Agent::Ddpg(a) => {
+            add("actor", a.actor.to_vecs());
+            add("critic", a.critic.to_vecs());
+            add("actor_target", a.actor_target.to_vecs());
+            add("critic_target", a.critic_target.to_vecs());
+            add("actor_adam", a.actor_opt.to_vecs());
+            add("critic_adam", a.critic_opt.to_vecs());
+            (a.norm.clone(), a.actor_opt.t, a.critic_opt.t, PggdConfig::default())
+        }
+        Agent::Pggd(a) => {
+            add("actor", a.net.to_vecs());
+            add("actor_adam", a.opt.to_vecs());
+            (a.norm.clone(), a.opt.t, 0, a.config.clone())
+        }
+    };
     let (r, replay_next) = replay.parts();
     add(
         "replay",
@@ -101,10 +128,12 @@ pub fn save(path: &Path, state: &RunState, agent: &Ddpg, replay: &ReplayBuffer) 
     }
     let header = Header {
         state: state.clone(),
-        ddpg: agent.config.clone(),
-        normalizer: agent.norm.clone(),
-        actor_adam_t: agent.actor_opt.t,
-        critic_adam_t: agent.critic_opt.t,
+        algo: agent.algo(),
+        ddpg: ddpg.clone(),
+        pggd,
+        normalizer,
+        actor_adam_t,
+        critic_adam_t,
         replay_capacity: replay.capacity(),
         replay_next,
         blobs: blobs.iter().map(|(n, v)| (n.clone(), v.len())).collect(),
@@ -133,8 +162,8 @@ pub fn save(path: &Path, state: &RunState, agent: &Ddpg, replay: &ReplayBuffer) 
 pub struct Loaded {
     /// The run state.
     pub state: RunState,
-    /// The learner, exactly as saved.
-    pub agent: Ddpg,
+    /// The agent, exactly as saved.
+    pub agent: Agent,
     /// The replay buffer, exactly as saved.
     pub replay: ReplayBuffer,
 }
@@ -190,18 +219,32 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
     // Network shapes come from the saved hyperparameters; the seed does not
     // matter because every value is overwritten.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
-    let mut agent = Ddpg::new(obs_dim, act_dim, header.ddpg.clone(), &mut rng);
     let fill = |r: Result<(), String>| r.map_err(&mismatch);
-    fill(agent.actor.load_vecs(&take("actor")))?;
-    fill(agent.critic.load_vecs(&take("critic")))?;
-    fill(agent.actor_target.load_vecs(&take("actor_target")))?;
-    fill(agent.critic_target.load_vecs(&take("critic_target")))?;
-    fill(agent.actor_opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
-    fill(agent.critic_opt.load_vecs(&take("critic_adam"), header.critic_adam_t))?;
     if header.normalizer.dim() != obs_dim {
         return Err(mismatch("normaliser size differs".into()));
     }
-    agent.norm = header.normalizer;
+    let d = &header.ddpg;
+    let agent = match header.algo {
+        Algo::Ddpg => {
+            let mut a = Ddpg::new(obs_dim, act_dim, d.clone(), &mut rng);
+            fill(a.actor.load_vecs(&take("actor")))?;
+            fill(a.critic.load_vecs(&take("critic")))?;
+            fill(a.actor_target.load_vecs(&take("actor_target")))?;
+            fill(a.critic_target.load_vecs(&take("critic_target")))?;
+            fill(a.actor_opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
+            fill(a.critic_opt.load_vecs(&take("critic_adam"), header.critic_adam_t))?;
+            a.norm = header.normalizer;
+            Agent::Ddpg(a)
+        }
+        Algo::Pggd => {
+            let (shape, norm) = ((d.layers, d.hidden), (d.norm_eps, d.norm_clip));
+            let mut a = Pggd::new(obs_dim, act_dim, shape, norm, header.pggd.clone(), &mut rng);
+            fill(a.net.load_vecs(&take("actor")))?;
+            fill(a.opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
+            a.norm = header.normalizer;
+            Agent::Pggd(a)
+        }
+    };
 
     let r = take("replay");
     if r.len() != 6 {

@@ -15,27 +15,37 @@
 //! finals success) and `success.png` (the success curves).
 
 pub mod checkpoint;
+mod learner;
 pub mod plot;
+mod rollouts;
 mod rundir;
 
-use rundir::write_progress;
+pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
+pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{load_policy, read_progress, write_json_atomic, RunDir, SavedPolicy};
 
-use crate::agents::ddpg::{Ddpg, DdpgConfig, DdpgPolicy, UpdateStats};
-use crate::agents::normalizer::Normalizer;
+use crate::agents::ddpg::{DdpgConfig, UpdateStats};
+use crate::agents::pggd::PggdConfig;
 use crate::agents::replay::ReplayBuffer;
-use crate::env::{registry, BlockEnv, EnvError};
+use crate::env::{registry, BlockEnv};
 use anyhow::{bail, Context, Result};
 use checkpoint::RunState;
+use learner::{Expert, Learner};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rollouts::success_rate;
+use rundir::write_progress;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
-/// Training hyperparameters (defaults: the paper's DDPG set-up).
+/// Training hyperparameters (defaults: the paper's set-up).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct TrainConfig {
+    /// Algorithm.
+    #[arg(long, value_enum, default_value = "ddpg")]
+    #[serde(default)]
+    pub algo: Algo,
     /// Environment id.
     #[arg(long)]
     pub env: String,
@@ -72,9 +82,17 @@ pub struct TrainConfig {
     /// Threads libtorch may use for updates (0: all cores).
     #[arg(long, default_value_t = 0)]
     pub torch_threads: usize,
-    /// DDPG hyperparameters.
+    /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
     #[command(flatten)]
     pub ddpg: DdpgConfig,
+    /// PGGD hyperparameters.
+    #[command(flatten)]
+    #[serde(default)]
+    pub pggd: PggdConfig,
+    /// AggreVaTeD settings (PGGD with an expert).
+    #[command(flatten)]
+    #[serde(default)]
+    pub aggrevated: AggrevatedConfig,
 }
 
 /// One row of `progress.csv`.
@@ -111,6 +129,12 @@ pub struct EpochRow {
     /// Wall seconds of gradient updates and target updates.
     #[serde(rename = "time/update_seconds")]
     pub update_seconds: f64,
+    /// AggreVaTeD: probability that the expert acts in this epoch's roll-ins (0 without an expert).
+    #[serde(rename = "aggrevated/beta", default)]
+    pub beta: f64,
+    /// AggreVaTeD: share of this epoch's exploration steps taken by the expert.
+    #[serde(rename = "aggrevated/expert_share", default)]
+    pub expert_share: f64,
     /// CPU time of the process over the epoch / (wall time × cores).
     #[serde(rename = "time/cpu_utilisation", default)]
     pub cpu_utilisation: f64,
@@ -131,119 +155,6 @@ fn cpu_seconds() -> f64 {
     secs(usage.ru_utime) + secs(usage.ru_stime)
 }
 
-/// A finished episode's transitions and outcome.
-pub(crate) struct Episode {
-    pub(crate) obs: Vec<Vec<f32>>,
-    pub(crate) act: Vec<Vec<f32>>,
-    pub(crate) rew: Vec<f32>,
-    pub(crate) terminated: bool,
-    pub(crate) success: bool,
-    /// Seconds spent in the policy (actor forward pass and noise).
-    pub(crate) forward_seconds: f64,
-}
-
-impl Episode {
-    /// Environment steps taken.
-    pub(crate) fn len(&self) -> usize {
-        self.rew.len()
-    }
-
-    /// Appends the transitions to `replay` (with each step's discounted
-    /// return-to-go as the extra column) and feeds the observations to the
-    /// normaliser.
-    pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64) {
-        let n = self.rew.len();
-        let mut ret = vec![0.0f32; n];
-        let mut g = 0.0;
-        for t in (0..n).rev() {
-            g = self.rew[t] + gamma as f32 * g;
-            ret[t] = g;
-        }
-        for (t, ret_t) in ret.iter().enumerate() {
-            let done = self.terminated && t + 1 == n;
-            replay.push(&self.obs[t], &self.act[t], self.rew[t], &self.obs[t + 1], done, *ret_t);
-        }
-        norm.update(&self.obs.concat());
-    }
-}
-
-/// Mixes the run seed with counters into an independent stream seed.
-pub(crate) fn stream_seed(seed: u64, parts: &[u64]) -> u64 {
-    // SplitMix64 steps over the parts: cheap and well distributed.
-    let mut z = seed ^ 0x9E37_79B9_7F4A_7C15;
-    for &p in parts {
-        z = z.wrapping_add(p).wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-    }
-    z
-}
-
-/// Plays one episode with `policy` (exploring when `explore` is Some((random_eps, noise_eps))).
-fn play(env: &mut BlockEnv, policy: &DdpgPolicy, seed: u64, explore: Option<(f64, f64)>) -> Result<Episode, EnvError> {
-    // The layout comes from `seed`; the exploration noise from a stream derived from it.
-    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
-    let (mut obs, _) = env.reset(Some(seed))?;
-    let mut ep =
-        Episode { obs: vec![], act: vec![], rew: vec![], terminated: false, success: false, forward_seconds: 0.0 };
-    loop {
-        let t = Instant::now();
-        let act = match explore {
-            Some((r, n)) => policy.explore(&obs, r, n, &mut rng),
-            None => policy.act(&obs),
-        };
-        ep.forward_seconds += t.elapsed().as_secs_f64();
-        let s = env.step(&act)?;
-        ep.obs.push(obs);
-        ep.act.push(act);
-        ep.rew.push(s.reward);
-        ep.success |= s.info.is_success;
-        obs = s.obs;
-        if s.terminated || s.truncated {
-            ep.terminated = s.terminated;
-            ep.obs.push(obs);
-            return Ok(ep);
-        }
-    }
-}
-
-/// Runs `per_worker` episodes on every worker's environment in parallel.
-pub(crate) fn play_all(
-    envs: &mut [BlockEnv],
-    policy: &DdpgPolicy,
-    per_worker: usize,
-    seed_of: impl Fn(usize, usize) -> u64 + Sync,
-    explore: Option<(f64, f64)>,
-) -> Result<Vec<Episode>> {
-    let results: Vec<Result<Vec<Episode>, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = envs
-            .iter_mut()
-            .enumerate()
-            .map(|(w, env)| {
-                let seed_of = &seed_of;
-                s.spawn(move || (0..per_worker).map(|k| play(env, policy, seed_of(w, k), explore)).collect())
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("worker panicked".into()))))
-            .collect()
-    });
-    let mut out = Vec::new();
-    for r in results {
-        out.extend(r?);
-    }
-    Ok(out)
-}
-
-fn success_rate(eps: &[Episode]) -> f64 {
-    if eps.is_empty() {
-        return 0.0;
-    }
-    eps.iter().filter(|e| e.success).count() as f64 / eps.len() as f64
-}
-
 /// Per-epoch callback for progress reporting.
 pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
 
@@ -258,6 +169,12 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if !(0.0..1.0).contains(&config.ddpg.gamma) {
         bail!("--gamma must be in [0, 1)");
     }
+    if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
+        bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
+    }
+    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || config.aggrevated.t0 < 0.0 {
+        bail!("--beta0 must be in [0, 1] and --t0 at least 0");
+    }
     let run = RunDir { dir: run_dir.to_owned() };
     std::fs::create_dir_all(&run.dir).with_context(|| format!("cannot create run directory {}", run.dir.display()))?;
     tch::set_num_threads(if config.torch_threads == 0 {
@@ -270,14 +187,24 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     let mut envs: Vec<BlockEnv> = (0..config.workers).map(|_| registry::make(&config.env)).collect::<Result<_, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let max_level = envs[0].max_level();
+    let expert = Expert::load(&config.aggrevated, &envs[0].reset(Some(0))?.0)?;
+    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
+        bail!("--pg-weight is for --algo pggd");
+    }
 
-    // Learner, replay buffer, run state: fresh or from the checkpoint.
-    let (mut agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
+    // Agent, replay buffer, run state: fresh or from the checkpoint.
+    let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
         let saved: TrainConfig = serde_json::from_str(&std::fs::read_to_string(run.config())?)
             .with_context(|| format!("{} is not a training config", run.config().display()))?;
-        if saved.env != config.env || saved.ddpg != config.ddpg || saved.workers != config.workers {
+        if saved.env != config.env
+            || saved.algo != config.algo
+            || saved.ddpg != config.ddpg
+            || saved.pggd != config.pggd
+            || saved.aggrevated != config.aggrevated
+            || saved.workers != config.workers
+        {
             bail!(
-                "--resume with different settings than {} (env, workers or DDPG hyperparameters differ)",
+                "--resume with different settings than {} (env, algorithm, workers, expert or hyperparameters differ)",
                 run.config().display()
             );
         }
@@ -295,7 +222,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             );
         }
         let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-        let agent = Ddpg::new(obs_dim, act_dim, config.ddpg.clone(), &mut rng);
+        let agent = Agent::new(config, obs_dim, act_dim, &mut rng);
         let state = RunState {
             env_id: config.env.clone(),
             obs_dim,
@@ -310,9 +237,12 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         };
         (agent, ReplayBuffer::new(obs_dim, act_dim, config.buffer_size), state, Vec::new())
     };
+    if agent.algo() != config.algo {
+        bail!("{} holds a {:?} agent, not {:?}", run.checkpoint().display(), agent.algo(), config.algo);
+    }
+    let mut learner = Learner { agent, expert };
     write_json_atomic(&run.config(), config)?;
 
-    let explore = Some((config.ddpg.random_eps, config.ddpg.noise_eps));
     while state.epoch < config.epochs {
         let epoch = state.epoch;
         let started = Instant::now();
@@ -321,61 +251,54 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             env.set_level(state.level.min(max_level))?;
         }
         let (mut env_seconds, mut update_seconds, mut forward_seconds) = (0.0, 0.0, 0.0);
-        let (mut train_eps, mut train_wins) = (0usize, 0usize);
+        let (mut train_eps, mut train_wins, mut train_steps, mut expert_steps) = (0usize, 0usize, 0usize, 0usize);
         let mut stats = Vec::new();
         for cycle in 0..config.cycles {
             // Collect.
             let t = Instant::now();
-            let policy = agent.policy();
+            let policy = learner.agent.policy();
+            let behaviour = learner.behaviour(&policy, epoch, config);
             let base = state.episodes_per_worker;
-            let eps = play_all(
-                &mut envs,
-                &policy,
-                config.rollouts,
-                |w, k| stream_seed(config.seed, &[1, w as u64, base + k as u64]),
-                explore,
-            )?;
+            let eps = play_all(&mut envs, &behaviour, config.rollouts, |w, k| {
+                stream_seed(config.seed, &[1, w as u64, base + k as u64])
+            })?;
             state.episodes_per_worker += config.rollouts as u64;
             env_seconds += t.elapsed().as_secs_f64();
             for ep in &eps {
                 train_eps += 1;
                 train_wins += ep.success as usize;
+                train_steps += ep.len();
+                expert_steps += ep.expert_steps;
                 state.env_steps += ep.len() as u64;
                 forward_seconds += ep.forward_seconds / config.workers as f64;
-                ep.store(&mut replay, &mut agent.norm, config.ddpg.gamma);
+                ep.store(&mut replay, learner.agent.norm_mut(), config.ddpg.gamma);
             }
             // Learn.
             let t = Instant::now();
             let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, epoch as u64, cycle as u64]));
             for _ in 0..config.batches {
                 let batch = replay.sample(config.batch_size * config.workers, &mut rng);
-                stats.push(agent.update(&batch));
+                stats.push(learner.update(&batch, obs_dim));
                 state.updates += 1;
             }
-            agent.update_targets();
+            learner.end_cycle();
             update_seconds += t.elapsed().as_secs_f64();
         }
 
-        // Test at the current level, finals at the maximum level.
+        // Test at the current level, finals at the maximum level, both with
+        // the deterministic policy.
         let t = Instant::now();
-        let policy = agent.policy();
-        let test = play_all(
-            &mut envs,
-            &policy,
-            config.test_episodes,
-            |w, k| stream_seed(config.seed, &[3, epoch as u64, w as u64, k as u64]),
-            None,
-        )?;
+        let policy = learner.agent.policy();
+        let greedy = Behaviour::Greedy(&policy);
+        let test = play_all(&mut envs, &greedy, config.test_episodes, |w, k| {
+            stream_seed(config.seed, &[3, epoch as u64, w as u64, k as u64])
+        })?;
         for env in &mut envs {
             env.set_level(max_level)?;
         }
-        let finals = play_all(
-            &mut envs,
-            &policy,
-            config.test_episodes,
-            |w, k| stream_seed(config.seed, &[4, epoch as u64, w as u64, k as u64]),
-            None,
-        )?;
+        let finals = play_all(&mut envs, &greedy, config.test_episodes, |w, k| {
+            stream_seed(config.seed, &[4, epoch as u64, w as u64, k as u64])
+        })?;
         env_seconds += t.elapsed().as_secs_f64();
         forward_seconds += test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / config.workers as f64;
 
@@ -404,6 +327,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             env_seconds,
             forward_seconds,
             update_seconds,
+            beta: learner.beta(epoch, config).unwrap_or(0.0),
+            expert_share: if train_steps == 0 { 0.0 } else { expert_steps as f64 / train_steps as f64 },
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         };
         if row.test_success >= config.success_threshold && state.level < max_level {
@@ -415,7 +340,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         // crash before it repeats at most this epoch).
         rows.push(row.clone());
         write_progress(&run.progress(), &rows)?;
-        plot::success_curves(&run.plot(), &format!("DDPG on {}", config.env), &rows, max_level)?;
+        plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         let saved =
             SavedPolicy { env_id: config.env.clone(), epoch: state.epoch, finals_success: row.finals_success, policy };
         write_json_atomic(&run.policy(), &saved)?;
@@ -423,8 +348,20 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             state.best_finals = row.finals_success;
             write_json_atomic(&run.best_policy(), &saved)?;
         }
-        checkpoint::save(&run.checkpoint(), &state, &agent, &replay)?;
+        checkpoint::save(&run.checkpoint(), &state, &learner.agent, &config.ddpg, &replay)?;
         on_epoch(&row, config);
     }
     Ok(rows)
+}
+
+impl TrainConfig {
+    /// Plot title: algorithm and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
+    pub fn title(&self) -> String {
+        let algo = match (self.algo, &self.aggrevated.expert) {
+            (Algo::Ddpg, _) => "DDPG",
+            (Algo::Pggd, None) => "PGGD",
+            (Algo::Pggd, Some(_)) => "PGGD + AggreVaTeD",
+        };
+        format!("{algo} on {}", self.env)
+    }
 }

@@ -1,7 +1,7 @@
 //! The run directory: its files, saved policies, `progress.csv`.
 
 use super::EpochRow;
-use crate::agents::ddpg::DdpgPolicy;
+use crate::agents::AnyPolicy;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -49,7 +49,7 @@ pub struct SavedPolicy {
     /// Its finals success when saved.
     pub finals_success: f64,
     /// The policy.
-    pub policy: DdpgPolicy,
+    pub policy: AnyPolicy,
 }
 
 /// Writes `value` as JSON to `path` through a temporary file.

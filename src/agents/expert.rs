@@ -1,0 +1,153 @@
+//! AggreVaTeD's ingredients (paper, "Imitation Learning"): the expert's view
+//! of the 3-block observation (the grey block removed), the annealed mixing
+//! probability β, and the mixed roll-in policy.
+
+use super::ddpg::DdpgPolicy;
+use super::pggd::PggdPolicy;
+use super::AnyPolicy;
+use crate::env::{BLOCK_OBS, ROBOT_OBS};
+use rand::Rng;
+
+/// Index of "grey" in a block's colour one-hot (red, blue, green, grey),
+/// counted from the end of the block's features.
+const GREY_FROM_END: usize = 1;
+
+/// Whether the block features `b` (one block's `BLOCK_OBS` values) are a grey block's.
+fn is_grey(b: &[f32]) -> bool {
+    b[BLOCK_OBS - GREY_FROM_END] > 0.5
+}
+
+/// The observation with every grey block's features removed: a BlocksChoose
+/// observation becomes a BlocksTouch one (robot, blue, green).
+pub fn without_grey(obs: &[f32]) -> Vec<f32> {
+    let (robot, blocks) = obs.split_at(ROBOT_OBS.min(obs.len()));
+    let mut out = robot.to_vec();
+    for b in blocks.chunks(BLOCK_OBS) {
+        if b.len() < BLOCK_OBS || !is_grey(b) {
+            out.extend_from_slice(b);
+        }
+    }
+    out
+}
+
+/// β at `epoch`: β0 + (1 − β0)·exp(−epoch / t0) (t0 = 0: β0 from the start).
+pub fn beta(epoch: usize, beta0: f64, t0: f64) -> f64 {
+    if t0 <= 0.0 {
+        return beta0;
+    }
+    beta0 + (1.0 - beta0) * (-(epoch as f64) / t0).exp()
+}
+
+/// A policy that sees a 3-block observation through [`without_grey`].
+#[derive(Debug, Clone)]
+pub struct GreyBlind(pub AnyPolicy);
+
+impl GreyBlind {
+    /// The wrapped policy's action on the grey-removed observation.
+    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
+        self.0.act(&without_grey(obs))
+    }
+}
+
+/// Which policy chose a mixed roll-in step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Actor {
+    /// The expert (grey-blind DDPG).
+    Expert,
+    /// The learner (sampling its Gaussian).
+    Learner,
+}
+
+/// The roll-in policy β·π* + (1 − β)·π_θ: per step the expert acts with
+/// probability β on the grey-removed view, else the learner samples.
+#[derive(Debug, Clone)]
+pub struct Mixture<'a> {
+    /// The expert.
+    pub expert: &'a DdpgPolicy,
+    /// The learner.
+    pub learner: &'a PggdPolicy,
+    /// Probability that the expert acts.
+    pub beta: f64,
+}
+
+impl Mixture<'_> {
+    /// `(who, action before clipping)` for one step.
+    pub fn act(&self, obs: &[f32], rng: &mut impl Rng) -> (Actor, Vec<f32>) {
+        if rng.gen_bool(self.beta.clamp(0.0, 1.0)) {
+            (Actor::Expert, self.expert.act(&without_grey(obs)))
+        } else {
+            (Actor::Learner, self.learner.sample(obs, rng))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn beta_follows_the_schedule() {
+        assert_eq!(beta(0, 0.0, 50.0), 1.0);
+        assert!((beta(50, 0.0, 50.0) - (-1.0f64).exp()).abs() < 1e-12);
+        assert!((beta(100, 0.2, 50.0) - (0.2 + 0.8 * (-2.0f64).exp())).abs() < 1e-12);
+        assert!(beta(10_000, 0.2, 50.0) - 0.2 < 1e-12);
+        assert_eq!(beta(7, 0.3, 0.0), 0.3);
+        let mut last = f64::INFINITY;
+        for e in 0..300 {
+            let b = beta(e, 0.0, 50.0);
+            assert!(b < last && b > 0.0);
+            last = b;
+        }
+    }
+
+    #[test]
+    fn beta_one_is_all_expert_and_beta_zero_all_learner() {
+        use crate::agents::ddpg::{Ddpg, DdpgConfig};
+        use crate::agents::pggd::{Pggd, PggdConfig};
+        use rand::SeedableRng;
+        use rand_chacha::ChaCha8Rng;
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let dim = ROBOT_OBS + 3 * BLOCK_OBS;
+        let expert =
+            Ddpg::new(dim - BLOCK_OBS, 4, DdpgConfig { hidden: 16, ..DdpgConfig::default() }, &mut rng).policy();
+        let learner = Pggd::new(dim, 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng).policy();
+        let mut obs: Vec<f32> = (0..dim).map(|k| (k as f32 * 0.7).sin()).collect();
+        obs[dim - 4..].copy_from_slice(&[0.0, 0.0, 0.0, 1.0]); // the third block is grey
+        for (beta, who) in [(1.0, Actor::Expert), (0.0, Actor::Learner)] {
+            let m = Mixture { expert: &expert, learner: &learner, beta };
+            let (mut r1, mut r2) = (ChaCha8Rng::seed_from_u64(9), ChaCha8Rng::seed_from_u64(9));
+            for _ in 0..100 {
+                let (w, a) = m.act(&obs, &mut r1);
+                assert_eq!(w, who);
+                let expected = if who == Actor::Expert {
+                    let _ = r2.gen_bool(1.0); // the mixture's draw
+                    expert.act(&without_grey(&obs))
+                } else {
+                    let _ = r2.gen_bool(0.0);
+                    learner.sample(&obs, &mut r2)
+                };
+                assert_eq!(a, expected);
+            }
+        }
+        // In between, both act, in proportion.
+        let m = Mixture { expert: &expert, learner: &learner, beta: 0.3 };
+        let mut r = ChaCha8Rng::seed_from_u64(2);
+        let n = (0..10_000).filter(|_| m.act(&obs, &mut r).0 == Actor::Expert).count();
+        assert!((2_700..3_300).contains(&n), "{n}");
+    }
+
+    #[test]
+    fn grey_blocks_are_cut_out_whole() {
+        let mut obs: Vec<f32> = (0..ROBOT_OBS).map(|k| k as f32).collect();
+        for (tag, one_hot) in
+            [(100.0, [0.0, 1.0, 0.0, 0.0]), (200.0, [0.0, 0.0, 0.0, 1.0]), (300.0, [0.0, 0.0, 1.0, 0.0])]
+        {
+            obs.extend((0..BLOCK_OBS - 4).map(|k| tag + k as f32));
+            obs.extend(one_hot);
+        }
+        let v = without_grey(&obs);
+        assert_eq!(v.len(), ROBOT_OBS + 2 * BLOCK_OBS);
+        assert_eq!(&v[..ROBOT_OBS + BLOCK_OBS], &obs[..ROBOT_OBS + BLOCK_OBS]);
+        assert_eq!(&v[ROBOT_OBS + BLOCK_OBS..], &obs[ROBOT_OBS + 2 * BLOCK_OBS..]);
+    }
+}

@@ -1,0 +1,288 @@
+//! PGGD, the paper's "Policy Gradient with Gaussian Distribution": no
+//! critic; the actor outputs a Gaussian over actions.
+//!
+//! * trunk: `layers` × `hidden` ReLU on the normalised observation; a linear
+//!   head for the mean μ(s) and a softplus head for the standard deviation
+//!   σ(s) = softplus(·) + σ_min (both heads are the last layer of one net,
+//!   outputs `[μ | σ pre-activation]`);
+//! * exploring: a ~ N(μ, σ²) per component, the environment gets clip(a, ±1),
+//!   the replay buffer keeps the pre-clip `a` (its log-probability is what
+//!   the gradient uses); testing and finals use clip(μ, ±1);
+//! * update, off-policy from replay: loss = −mean_i(w_i · log π(a_i | s_i)),
+//!   w the per-transition weight (the discounted return-to-go stored with the
+//!   transition, or an expert's advantage), optionally standardised over the
+//!   batch (see [`WeightNorm`]); Adam, lr 1e-4.
+
+use super::ddpg::UpdateStats;
+use super::mlp::TanhMlp;
+use super::nets::{grads, Adam, Net};
+use super::normalizer::Normalizer;
+use super::replay::Batch;
+use rand::Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+use tch::Tensor;
+
+/// What happens to the per-transition weights before the gradient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum WeightNorm {
+    /// Subtract the batch mean and divide by the batch standard deviation
+    /// (the usual REINFORCE baseline). BlockPuzzle returns are all ≤ 0, so
+    /// raw weights push every sampled action down and inflate σ without end.
+    Standardize,
+    /// Use the weights as they are (the literal textbook gradient).
+    None,
+}
+
+/// PGGD hyperparameters (defaults: the paper's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+pub struct PggdConfig {
+    /// PGGD learning rate (Adam).
+    #[arg(long = "pg-lr", default_value_t = 1e-4)]
+    pub lr: f64,
+    /// PGGD: floor added to the softplus standard deviation.
+    #[arg(long = "pg-sigma-min", default_value_t = 0.01)]
+    pub sigma_min: f64,
+    /// PGGD: normalisation of the per-transition weights within a batch.
+    #[arg(long = "pg-normalize", value_enum, default_value = "standardize")]
+    pub normalize: WeightNorm,
+}
+
+impl Default for PggdConfig {
+    fn default() -> Self {
+        Self { lr: 1e-4, sigma_min: 0.01, normalize: WeightNorm::Standardize }
+    }
+}
+
+/// ln √(2π).
+const LN_SQRT_2PI: f64 = 0.918_938_533_204_672_8;
+
+/// log N(a; μ, σ²) summed over the action components, one value per row.
+pub fn gaussian_log_prob(a: &Tensor, mean: &Tensor, std: &Tensor) -> Tensor {
+    let z = (a - mean) / std;
+    (z.square() * -0.5 - std.log() - LN_SQRT_2PI).sum_dim_intlist(Some(&[1i64][..]), false, tch::Kind::Float)
+}
+
+/// σ = softplus(x) + floor, computed stably.
+fn softplus_std(x: &Tensor, floor: f64) -> Tensor {
+    x.relu() + (-x.abs()).exp().log1p() + floor
+}
+
+/// The PGGD learner.
+pub struct Pggd {
+    /// Hyperparameters.
+    pub config: PggdConfig,
+    /// Observation normaliser.
+    pub norm: Normalizer,
+    /// The policy network: outputs `[μ | σ pre-activation]`.
+    pub net: Net,
+    /// Its optimiser.
+    pub opt: Adam,
+    act_dim: usize,
+}
+
+impl Pggd {
+    /// A fresh learner with `layers` × `hidden` ReLU layers; `rng` fixes the
+    /// initial weights.
+    pub fn new(
+        obs_dim: usize,
+        act_dim: usize,
+        (layers, hidden): (usize, usize),
+        (norm_eps, norm_clip): (f64, f32),
+        config: PggdConfig,
+        rng: &mut impl Rng,
+    ) -> Self {
+        let sizes: Vec<usize> = std::iter::once(obs_dim)
+            .chain(std::iter::repeat(hidden).take(layers))
+            .chain(std::iter::once(2 * act_dim))
+            .collect();
+        let net = Net::new(&sizes, false, rng);
+        let opt = Adam::new(&net.params, config.lr);
+        Self { norm: Normalizer::new(obs_dim, norm_eps, norm_clip), net, opt, act_dim, config }
+    }
+
+    /// Action size.
+    pub fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
+    /// Mean and standard deviation for a batch of raw observations.
+    pub fn distribution(&self, obs: &[f32]) -> (Tensor, Tensor) {
+        let mut x = obs.to_vec();
+        self.norm.normalize_in_place(&mut x);
+        let out = self.net.forward(&Tensor::of_slice(&x).view([-1, self.norm.dim() as i64]));
+        let a = self.act_dim as i64;
+        (out.narrow(1, 0, a), softplus_std(&out.narrow(1, a, a), self.config.sigma_min))
+    }
+
+    /// One gradient step on `batch` with per-transition `weights`.
+    pub fn update(&mut self, batch: &Batch, weights: &[f32]) -> UpdateStats {
+        let n = batch.len() as i64;
+        let raw = Tensor::of_slice(weights).view([n, 1]);
+        let w = match self.config.normalize {
+            WeightNorm::None => raw.shallow_clone(),
+            WeightNorm::Standardize => {
+                let centred = &raw - raw.mean(tch::Kind::Float);
+                let sd = centred.square().mean(tch::Kind::Float).sqrt();
+                centred / (sd + 1e-8)
+            }
+        };
+        let (mean, std) = self.distribution(&batch.obs);
+        let act = Tensor::of_slice(&batch.act).view([n, self.act_dim as i64]);
+        let log_prob = gaussian_log_prob(&act, &mean, &std);
+        let loss = -(w.view([-1]) * &log_prob).mean(tch::Kind::Float);
+        self.net.zero_grad();
+        loss.backward();
+        let g = grads(&self.net.params);
+        self.opt.step(&mut self.net.params, &g);
+        UpdateStats {
+            critic_loss: 0.0,
+            actor_loss: loss.double_value(&[]),
+            mean_q: raw.mean(tch::Kind::Float).double_value(&[]),
+        }
+    }
+
+    /// A self-contained policy for rollouts (weights and normaliser frozen).
+    pub fn policy(&self) -> PggdPolicy {
+        PggdPolicy {
+            net: self.net.to_plain(),
+            norm: self.norm.clone(),
+            act_dim: self.act_dim,
+            sigma_min: self.config.sigma_min,
+        }
+    }
+}
+
+/// A frozen PGGD policy: plain Rust, `Send + Sync`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PggdPolicy {
+    /// The network, outputs `[μ | σ pre-activation]`.
+    pub net: TanhMlp,
+    /// The observation normaliser it was trained with.
+    pub norm: Normalizer,
+    /// Action size.
+    pub act_dim: usize,
+    /// Floor of σ.
+    pub sigma_min: f64,
+}
+
+impl PggdPolicy {
+    /// μ(s) and σ(s).
+    pub fn distribution(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
+        let mut x = obs.to_vec();
+        self.norm.normalize_in_place(&mut x);
+        let out = self.net.forward(&x);
+        let (mean, pre) = out.split_at(self.act_dim);
+        let std = pre.iter().map(|&v| (v.max(0.0) + (-v.abs()).exp().ln_1p()) + self.sigma_min as f32).collect();
+        (mean.to_vec(), std)
+    }
+
+    /// The deterministic action clip(μ(s), ±1) (testing, finals, evaluation).
+    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
+        let (mean, _) = self.distribution(obs);
+        mean.iter().map(|m| m.clamp(-1.0, 1.0)).collect()
+    }
+
+    /// A sampled action `a ~ N(μ, σ²)`, before clipping.
+    pub fn sample(&self, obs: &[f32], rng: &mut impl Rng) -> Vec<f32> {
+        let (mean, std) = self.distribution(obs);
+        mean.iter()
+            .zip(&std)
+            .map(|(m, s)| {
+                let z: f64 = StandardNormal.sample(rng);
+                m + s * z as f32
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn gaussian_log_prob_matches_the_closed_form() {
+        // Two components: N(0.3; 0.1, 0.5²) and N(−1.2; 0.4, 2²).
+        let a = Tensor::of_slice(&[0.3f32, -1.2]).view([1, 2]);
+        let m = Tensor::of_slice(&[0.1f32, 0.4]).view([1, 2]);
+        let s = Tensor::of_slice(&[0.5f32, 2.0]).view([1, 2]);
+        let lp = gaussian_log_prob(&a, &m, &s).double_value(&[0]);
+        let one = |x: f64, mu: f64, sd: f64| {
+            -((x - mu) * (x - mu)) / (2.0 * sd * sd) - sd.ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+        };
+        let expected = one(0.3, 0.1, 0.5) + one(-1.2, 0.4, 2.0);
+        assert!((lp - expected).abs() < 1e-5, "{lp} vs {expected}");
+    }
+
+    fn batch_of(obs: Vec<f32>, act: Vec<f32>) -> Batch {
+        let n = act.len() / 4;
+        Batch { next_obs: obs.clone(), obs, act, rew: vec![0.0; n], done: vec![0.0; n], extra: vec![0.0; n] }
+    }
+
+    #[test]
+    fn a_positively_weighted_action_becomes_more_likely() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut agent = Pggd::new(
+            6,
+            4,
+            (2, 32),
+            (0.01, 5.0),
+            PggdConfig { lr: 1e-3, normalize: WeightNorm::None, ..PggdConfig::default() },
+            &mut rng,
+        );
+        let obs: Vec<f32> = (0..6).map(|k| k as f32 * 0.1).collect();
+        let act = vec![0.5f32, -0.3, 0.2, 0.9];
+        let b = batch_of(obs.clone(), act.clone());
+        let log_prob = |agent: &Pggd| {
+            let (m, s) = agent.distribution(&obs);
+            gaussian_log_prob(&Tensor::of_slice(&act).view([1, 4]), &m, &s).double_value(&[0])
+        };
+        let before = log_prob(&agent);
+        agent.update(&b, &[1.0]);
+        let up = log_prob(&agent);
+        assert!(up > before, "weight +1: {before} -> {up}");
+        agent.update(&b, &[-1.0]);
+        agent.update(&b, &[-1.0]);
+        let down = log_prob(&agent);
+        assert!(down < up, "weight -1: {up} -> {down}");
+    }
+
+    #[test]
+    fn standardised_weights_favour_the_better_action() {
+        // Same state, two actions; the better return (−1 vs −10) must gain
+        // probability relative to the worse one, although both are negative.
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let mut agent =
+            Pggd::new(3, 4, (2, 32), (0.01, 5.0), PggdConfig { lr: 1e-3, ..PggdConfig::default() }, &mut rng);
+        let obs = vec![0.1f32, 0.2, 0.3, 0.1, 0.2, 0.3];
+        let (good, bad) = ([0.5f32, 0.5, 0.5, 0.5], [-0.5f32, -0.5, -0.5, -0.5]);
+        let b = batch_of(obs.clone(), good.iter().chain(&bad).copied().collect());
+        let gap = |agent: &Pggd| {
+            let (m, s) = agent.distribution(&obs[..3]);
+            let lp = |a: &[f32]| gaussian_log_prob(&Tensor::of_slice(a).view([1, 4]), &m, &s).double_value(&[0]);
+            lp(&good) - lp(&bad)
+        };
+        let before = gap(&agent);
+        for _ in 0..5 {
+            agent.update(&b, &[-1.0, -10.0]);
+        }
+        assert!(gap(&agent) > before, "{before} -> {}", gap(&agent));
+    }
+
+    #[test]
+    fn plain_policy_matches_the_tensor_one() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let agent = Pggd::new(5, 4, (3, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
+        let obs = [0.3f32, -0.2, 0.9, 0.0, 1.5];
+        let (m, s) = agent.distribution(&obs);
+        let (pm, ps) = agent.policy().distribution(&obs);
+        for k in 0..4 {
+            assert!((m.double_value(&[0, k]) - pm[k as usize] as f64).abs() < 1e-5);
+            assert!((s.double_value(&[0, k]) - ps[k as usize] as f64).abs() < 1e-5);
+            assert!(ps[k as usize] >= 0.01);
+        }
+    }
+}

@@ -1,0 +1,219 @@
+//! The learner being trained (DDPG or PGGD) and, for AggreVaTeD, the expert.
+
+use super::rollouts::Behaviour;
+use super::{load_policy, TrainConfig};
+use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
+use crate::agents::expert::{beta, without_grey, Mixture};
+use crate::agents::normalizer::Normalizer;
+use crate::agents::pggd::Pggd;
+use crate::agents::replay::Batch;
+use crate::agents::AnyPolicy;
+use anyhow::{bail, Context, Result};
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Training algorithm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Algo {
+    /// Deep deterministic policy gradient (OpenAI baselines' HER DDPG, no HER).
+    #[default]
+    Ddpg,
+    /// Policy gradient with a Gaussian policy (the paper's PGGD); with
+    /// `--expert`, trained by AggreVaTeD.
+    Pggd,
+}
+
+/// The descent direction of PGGD under AggreVaTeD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum PgWeight {
+    /// Each step's discounted return-to-go of the (mixed) roll-in.
+    #[default]
+    Return,
+    /// The expert critic's advantage Q*(s̃, a) − Q*(s̃, π*(s̃)), s̃ the grey-removed observation.
+    ExpertAdvantage,
+}
+
+/// AggreVaTeD settings (PGGD only).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+pub struct AggrevatedConfig {
+    /// AggreVaTeD expert: a DDPG run directory (or policy file) trained on the
+    /// grey-less layout; it sees the observation with grey blocks removed.
+    #[arg(long)]
+    pub expert: Option<PathBuf>,
+    /// β0 of the mixing schedule β = β0 + (1 − β0)·exp(−epoch / t0).
+    #[arg(long, default_value_t = 0.0)]
+    pub beta0: f64,
+    /// t0 of the mixing schedule, in epochs.
+    #[arg(long, default_value_t = 50.0)]
+    pub t0: f64,
+    /// Weight of each step's log-probability gradient.
+    #[arg(long, value_enum, default_value = "return")]
+    pub pg_weight: PgWeight,
+}
+
+impl Default for AggrevatedConfig {
+    fn default() -> Self {
+        Self { expert: None, beta0: 0.0, t0: 50.0, pg_weight: PgWeight::Return }
+    }
+}
+
+/// The AggreVaTeD expert: its policy and, for `expert-advantage`, its whole
+/// DDPG learner (critic included).
+pub(crate) struct Expert {
+    policy: DdpgPolicy,
+    critic: Option<Ddpg>,
+}
+
+impl Expert {
+    /// Loads the expert named by `config` and checks that it fits
+    /// observations like `sample_obs` once grey blocks are removed.
+    ///
+    /// # Errors
+    /// Missing or malformed files, a PGGD policy, a size mismatch.
+    pub(crate) fn load(config: &AggrevatedConfig, sample_obs: &[f32]) -> Result<Option<Self>> {
+        let Some(path) = &config.expert else {
+            if config.pg_weight == PgWeight::ExpertAdvantage {
+                bail!("--pg-weight expert-advantage needs an expert (--expert DIR)");
+            }
+            return Ok(None);
+        };
+        let saved = load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?;
+        let AnyPolicy::Ddpg(policy) = saved.policy else {
+            bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
+        };
+        let seen = without_grey(sample_obs).len();
+        if policy.norm.dim() != seen {
+            bail!(
+                "expert {} expects {}-dimensional observations ({}), but this environment's observation without \
+                 grey blocks has {seen}",
+                path.display(),
+                policy.norm.dim(),
+                saved.env_id
+            );
+        }
+        let critic = if config.pg_weight == PgWeight::ExpertAdvantage {
+            let ckpt = if path.is_dir() { path.join("checkpoint.bin") } else { path.with_file_name("checkpoint.bin") };
+            if !ckpt.exists() {
+                bail!("--pg-weight expert-advantage needs the expert's critic, but {} does not exist", ckpt.display());
+            }
+            let loaded = super::checkpoint::load(&ckpt, &saved.env_id, seen, crate::env::ACTION_DIM)?;
+            let Agent::Ddpg(agent) = loaded.agent else {
+                bail!("{} is not a DDPG checkpoint", ckpt.display());
+            };
+            Some(agent)
+        } else {
+            None
+        };
+        Ok(Some(Self { policy, critic }))
+    }
+
+    /// The expert critic's advantage of each row's action, on grey-removed observations.
+    fn advantage(&self, batch: &Batch, obs_dim: usize) -> Option<Vec<f32>> {
+        let critic = self.critic.as_ref()?;
+        let seen: Vec<f32> = batch.obs.chunks_exact(obs_dim).flat_map(without_grey).collect();
+        Some(critic.advantage(&seen, &batch.act))
+    }
+}
+
+/// A learner's networks, optimisers and normaliser: what a checkpoint holds.
+/// (One lives per run, so the variants' size difference does not matter.)
+#[allow(clippy::large_enum_variant)]
+pub enum Agent {
+    /// DDPG.
+    Ddpg(Ddpg),
+    /// PGGD.
+    Pggd(Pggd),
+}
+
+impl Agent {
+    /// A fresh agent for `config`.
+    pub(crate) fn new(config: &TrainConfig, obs_dim: usize, act_dim: usize, rng: &mut impl Rng) -> Self {
+        let d = &config.ddpg;
+        match config.algo {
+            Algo::Ddpg => Self::Ddpg(Ddpg::new(obs_dim, act_dim, d.clone(), rng)),
+            Algo::Pggd => Self::Pggd(Pggd::new(
+                obs_dim,
+                act_dim,
+                (d.layers, d.hidden),
+                (d.norm_eps, d.norm_clip),
+                config.pggd.clone(),
+                rng,
+            )),
+        }
+    }
+
+    /// Which algorithm.
+    pub fn algo(&self) -> Algo {
+        match self {
+            Self::Ddpg(_) => Algo::Ddpg,
+            Self::Pggd(_) => Algo::Pggd,
+        }
+    }
+
+    /// The deterministic policy, frozen.
+    pub fn policy(&self) -> AnyPolicy {
+        match self {
+            Self::Ddpg(a) => AnyPolicy::Ddpg(a.policy()),
+            Self::Pggd(a) => AnyPolicy::Pggd(a.policy()),
+        }
+    }
+
+    /// The observation normaliser.
+    pub(crate) fn norm_mut(&mut self) -> &mut Normalizer {
+        match self {
+            Self::Ddpg(a) => &mut a.norm,
+            Self::Pggd(a) => &mut a.norm,
+        }
+    }
+}
+
+/// What the training loop trains: the agent and, for AggreVaTeD, the expert.
+pub(crate) struct Learner {
+    pub(crate) agent: Agent,
+    pub(crate) expert: Option<Expert>,
+}
+
+impl Learner {
+    /// One gradient step.
+    pub(crate) fn update(&mut self, batch: &Batch, obs_dim: usize) -> UpdateStats {
+        match &mut self.agent {
+            Agent::Ddpg(a) => a.update(batch),
+            Agent::Pggd(a) => match self.expert.as_ref().and_then(|e| e.advantage(batch, obs_dim)) {
+                Some(adv) => a.update(batch, &adv),
+                None => a.update(batch, &batch.extra),
+            },
+        }
+    }
+
+    /// End of a cycle: DDPG's target networks follow.
+    pub(crate) fn end_cycle(&mut self) {
+        if let Agent::Ddpg(a) = &mut self.agent {
+            a.update_targets();
+        }
+    }
+
+    /// β of the AggreVaTeD mixture at `epoch` (None without an expert).
+    pub(crate) fn beta(&self, epoch: usize, config: &TrainConfig) -> Option<f64> {
+        self.expert.as_ref().map(|_| beta(epoch, config.aggrevated.beta0, config.aggrevated.t0))
+    }
+
+    /// The exploring behaviour of `frozen` (this learner's policy) at `epoch`.
+    pub(crate) fn behaviour<'a>(&'a self, frozen: &'a AnyPolicy, epoch: usize, config: &TrainConfig) -> Behaviour<'a> {
+        match (frozen, &self.expert) {
+            (AnyPolicy::Pggd(p), Some(e)) => Behaviour::Mixture(Mixture {
+                expert: &e.policy,
+                learner: p,
+                beta: self.beta(epoch, config).unwrap_or(0.0),
+            }),
+            (AnyPolicy::Pggd(p), None) => Behaviour::PggdSample(p),
+            (AnyPolicy::Ddpg(p), _) => Behaviour::DdpgExplore {
+                policy: p,
+                random_eps: config.ddpg.random_eps,
+                noise_eps: config.ddpg.noise_eps,
+            },
+        }
+    }
+}
