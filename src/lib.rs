@@ -7,10 +7,12 @@
 
 pub mod curriculum;
 pub mod env;
+pub mod evaluate;
 pub mod math;
 pub mod mj;
 pub mod rules;
 pub mod scene;
+pub mod table;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;

@@ -178,3 +178,48 @@ fn ddpg_only_bench_options_need_ddpg() {
     assert!(!o.status.success());
     assert!(text(&o).contains("--ddpg"), "{}", text(&o));
 }
+
+#[test]
+fn table_runs_end_to_end_and_reports_missing_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let (expert, pggd) = (dir.path().join("expert"), dir.path().join("pggd"));
+    let small = ["--epochs", "1", "--cycles", "1", "--batches", "2", "--test-episodes", "1", "--hidden", "16"];
+    let mut args = vec!["train", "--env", "BlocksTouch-v0", "--run-dir", expert.to_str().unwrap()];
+    args.extend(small);
+    let o = bp(&args);
+    assert!(o.status.success(), "{}", text(&o));
+    let mut args = vec!["train", "--algo", "pggd", "--env", "BlocksChoose-v0", "--expert", expert.to_str().unwrap()];
+    args.extend(["--run-dir", pggd.to_str().unwrap()]);
+    args.extend(small);
+    let o = bp(&args);
+    assert!(o.status.success(), "{}", text(&o));
+
+    let out = dir.path().join("table.md");
+    let o = bp(&[
+        "table",
+        "--expert",
+        expert.to_str().unwrap(),
+        "--pggd",
+        pggd.to_str().unwrap(),
+        "--pggd-alone",
+        "/nonexistent/run",
+        "--episodes",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let md = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(md, String::from_utf8_lossy(&o.stdout));
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| Method")).collect();
+    assert_eq!(rows.len(), 4, "{md}");
+    assert!(
+        rows[0].starts_with("| DDPG (2 blocks)") && rows[0].contains("paper 0.44") && rows[0].contains("grey removed")
+    );
+    assert!(rows[0].contains("paper 0.24"), "{md}");
+    assert!(rows[1].contains("not trained (paper 0.97)"), "{md}");
+    assert!(
+        rows[2].starts_with("| PGGD + AggreVaTeD") && rows[2].contains("paper 0.64") && rows[2].contains("(epoch 1)")
+    );
+    assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
+}

@@ -28,6 +28,8 @@ enum Command {
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
+    /// The paper's results table on BlocksChoose-v0 (Normal and Challenge), beside the paper's numbers.
+    Table(TableArgs),
     /// Redraw a run's success curves (success.png) from its progress.csv.
     Plot {
         /// Run directory.
@@ -56,6 +58,34 @@ struct TrainArgs {
 }
 
 #[derive(Debug, clap::Args)]
+struct TableArgs {
+    /// The 2-block DDPG expert (run directory or policy file); evaluated with grey blocks removed from its view.
+    #[arg(long)]
+    expert: Option<PathBuf>,
+    /// DDPG trained on BlocksChoose-v0.
+    #[arg(long)]
+    ddpg: Option<PathBuf>,
+    /// PGGD trained with AggreVaTeD on BlocksChoose-v0.
+    #[arg(long)]
+    pggd: Option<PathBuf>,
+    /// PGGD trained alone on BlocksChoose-v0.
+    #[arg(long)]
+    pggd_alone: Option<PathBuf>,
+    /// Episodes per cell.
+    #[arg(long, default_value_t = 1000)]
+    episodes: usize,
+    /// Seed of the first episode (episode k uses seed + k).
+    #[arg(long, default_value_t = 1_000_000)]
+    seed: u64,
+    /// Write the Markdown table here too (atomically).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Threads playing episodes (default: all cores); the result does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+#[derive(Debug, clap::Args)]
 struct EvalArgs {
     /// A policy file or a run directory (uses best_policy.json, else policy.json).
     #[arg(long)]
@@ -78,6 +108,9 @@ struct EvalArgs {
     /// Where to write the JSON result (default: next to the policy).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Threads playing episodes (default: all cores); the result does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -166,6 +199,7 @@ pub fn main() -> Result<()> {
         Command::Rollout(a) => rollout(a),
         Command::Train(a) => train(a),
         Command::Eval(a) => eval(a),
+        Command::Table(a) => table(a),
         Command::Plot { run_dir } => {
             let run = crate::train::RunDir { dir: run_dir };
             let config: crate::train::TrainConfig = serde_json::from_str(
@@ -242,7 +276,11 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     let mut policy: Box<dyn Policy> = match a.policy.as_str() {
         "random" => Box::new(RandomPolicy::new(a.seed)),
         "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
-        path => Box::new(trained_policy(Path::new(path), crate::train::load_policy(Path::new(path))?, &mut env)?),
+        path => Box::new(crate::evaluate::trained_policy(
+            Path::new(path),
+            crate::train::load_policy(Path::new(path))?,
+            &mut env,
+        )?),
     };
     let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
     for k in 0..a.episodes {
@@ -269,44 +307,6 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         a.out.display()
     );
     Ok(())
-}
-
-/// A trained policy as a [`Policy`], checked against the environment; a
-/// policy trained without the grey block (BlocksTouch) acting in an
-/// environment with one sees it removed from its observation (the paper's
-/// "DDPG (2 blocks)" row).
-pub(crate) struct Trained {
-    policy: crate::agents::AnyPolicy,
-    grey_blind: bool,
-}
-
-impl Policy for Trained {
-    fn act(&mut self, obs: &[f32]) -> [f32; crate::env::ACTION_DIM] {
-        let a = if self.grey_blind {
-            self.policy.act(&crate::agents::expert::without_grey(obs))
-        } else {
-            self.policy.act(obs)
-        };
-        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
-    }
-}
-
-pub(crate) fn trained_policy(path: &Path, saved: crate::train::SavedPolicy, env: &mut BlockEnv) -> Result<Trained> {
-    let dim = env.observation_space().dim();
-    let wanted = saved.policy.obs_dim();
-    if wanted == dim {
-        return Ok(Trained { policy: saved.policy, grey_blind: false });
-    }
-    let blind = crate::agents::expert::without_grey(&env.reset(Some(0))?.0).len();
-    if wanted == blind {
-        return Ok(Trained { policy: saved.policy, grey_blind: true });
-    }
-    bail!(
-        "policy {} expects {wanted}-dimensional observations ({}), {} has {dim} ({blind} without grey blocks)",
-        path.display(),
-        saved.env_id,
-        env.id()
-    )
 }
 
 fn train(a: TrainArgs) -> Result<()> {
@@ -358,42 +358,45 @@ fn train(a: TrainArgs) -> Result<()> {
     Ok(())
 }
 
-/// Wilson score interval for a binomial proportion at 95%.
-pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, 1.0);
+fn table(a: TableArgs) -> Result<()> {
+    if a.episodes == 0 {
+        bail!("--episodes must be at least 1");
     }
-    let (z, nf) = (1.959_963_984_540_054, n as f64);
-    let p = successes as f64 / nf;
-    let denom = 1.0 + z * z / nf;
-    let centre = (p + z * z / (2.0 * nf)) / denom;
-    let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
-    ((centre - half).max(0.0), (centre + half).min(1.0))
+    let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let rows = crate::table::rows(a.expert, a.ddpg, a.pggd, a.pggd_alone);
+    let mut done = Vec::new();
+    for row in rows {
+        eprintln!("evaluating {} ...", row.method);
+        let outcome = crate::table::evaluate_row(&row, a.episodes, a.seed, threads);
+        done.push((row, outcome));
+    }
+    let md = crate::table::markdown(&done, a.episodes, a.seed);
+    print!("{md}");
+    if let Some(out) = &a.out {
+        let tmp = out.with_extension("md.tmp");
+        std::fs::write(&tmp, &md).with_context(|| format!("cannot write {}", tmp.display()))?;
+        std::fs::rename(&tmp, out).with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    Ok(())
 }
 
 fn eval(a: EvalArgs) -> Result<()> {
     let saved = crate::train::load_policy(&a.checkpoint)?;
     let id = a.env.clone().unwrap_or_else(|| saved.env_id.clone());
-    let mut env = registry::make(&id)?;
-    if a.challenge {
-        env.set_challenge(true)?;
-    }
-    env.set_level(a.level.unwrap_or(env.max_level()))?;
-    if a.episodes == 0 {
-        bail!("--episodes must be at least 1");
-    }
     let policy_epoch = saved.epoch;
-    let mut policy = trained_policy(&a.checkpoint, saved, &mut env)?;
-    let mut wins = 0;
-    for k in 0..a.episodes {
-        let ep = run_episode(&mut env, &mut policy, a.seed.wrapping_add(k as u64))?;
-        wins += ep.success as usize;
-    }
-    let (lo, hi) = wilson95(wins, a.episodes);
-    let rate = wins as f64 / a.episodes as f64;
+    let spec = crate::evaluate::EvalSpec {
+        env: &id,
+        challenge: a.challenge,
+        level: a.level,
+        episodes: a.episodes,
+        seed: a.seed,
+        threads: a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    };
+    let r = crate::evaluate::evaluate(&a.checkpoint, saved, &spec)?;
     let result = serde_json::json!({
-        "env": id, "challenge": a.challenge, "level": env.level(), "episodes": a.episodes, "seed": a.seed,
-        "successes": wins, "success_rate": rate, "ci95": [lo, hi], "policy": a.checkpoint, "policy_epoch": policy_epoch,
+        "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
+        "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
+        "grey_blind": r.grey_blind, "policy": a.checkpoint, "policy_epoch": policy_epoch,
     });
     let out = a.out.clone().unwrap_or_else(|| {
         let dir = if a.checkpoint.is_dir() {
@@ -405,27 +408,15 @@ fn eval(a: EvalArgs) -> Result<()> {
     });
     crate::train::write_json_atomic(&out, &result)?;
     println!(
-        "{id}{}: success {rate:.3} (95% CI {lo:.3}-{hi:.3}, {wins}/{}) -> {}",
+        "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}) -> {}",
         if a.challenge { " challenge" } else { "" },
+        if r.grey_blind { " (grey blocks removed from the policy's view)" } else { "" },
+        r.success_rate,
+        r.ci95.0,
+        r.ci95.1,
+        r.successes,
         a.episodes,
         out.display()
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::wilson95;
-
-    #[test]
-    fn wilson_interval_matches_known_values() {
-        let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
-        let (lo, hi) = wilson95(50, 100);
-        assert!(close(lo, 0.4038) && close(hi, 0.5962), "{lo} {hi}");
-        let (lo, hi) = wilson95(0, 10);
-        assert!(close(lo, 0.0) && close(hi, 0.2775), "{lo} {hi}");
-        let (lo, hi) = wilson95(10, 10);
-        assert!(close(lo, 0.7225) && close(hi, 1.0), "{lo} {hi}");
-        assert_eq!(wilson95(0, 0), (0.0, 1.0));
-    }
 }

@@ -1,0 +1,183 @@
+//! Evaluating a trained policy: success rate over seeded episodes with a
+//! Wilson 95% interval, episodes spread over threads (each episode's seed
+//! fixes it, so the result does not depend on the thread count).
+
+use crate::agents::expert::without_grey;
+use crate::agents::AnyPolicy;
+use crate::env::{registry, BlockEnv, ACTION_DIM};
+use crate::policy::Policy;
+use crate::rollout::run_episode;
+use crate::train::SavedPolicy;
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// A trained policy as a [`Policy`]. A policy trained without the grey
+/// block (BlocksTouch) acting in an environment with one sees it removed
+/// from its observation: the paper's "DDPG (2 blocks)" row.
+#[derive(Debug, Clone)]
+pub struct Trained {
+    policy: AnyPolicy,
+    grey_blind: bool,
+}
+
+impl Trained {
+    /// Whether the policy sees the observation with grey blocks removed.
+    pub fn grey_blind(&self) -> bool {
+        self.grey_blind
+    }
+}
+
+impl Policy for Trained {
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        let a = if self.grey_blind { self.policy.act(&without_grey(obs)) } else { self.policy.act(obs) };
+        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+    }
+}
+
+/// Fits `saved` (loaded from `path`) to `env`'s observations, directly or
+/// with grey blocks removed.
+///
+/// # Errors
+/// The observation sizes fit neither way.
+pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &mut BlockEnv) -> Result<Trained> {
+    let dim = env.observation_space().dim();
+    let wanted = saved.policy.obs_dim();
+    if wanted == dim {
+        return Ok(Trained { policy: saved.policy, grey_blind: false });
+    }
+    let blind = without_grey(&env.reset(Some(0))?.0).len();
+    if wanted == blind {
+        return Ok(Trained { policy: saved.policy, grey_blind: true });
+    }
+    bail!(
+        "policy {} expects {wanted}-dimensional observations ({}), {} has {dim} ({blind} without grey blocks)",
+        path.display(),
+        saved.env_id,
+        env.id()
+    )
+}
+
+/// Wilson score interval for a binomial proportion at 95%.
+pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (z, nf) = (1.959_963_984_540_054, n as f64);
+    let p = successes as f64 / nf;
+    let denom = 1.0 + z * z / nf;
+    let centre = (p + z * z / (2.0 * nf)) / denom;
+    let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
+    ((centre - half).max(0.0), (centre + half).min(1.0))
+}
+
+/// An evaluation's outcome.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evaluation {
+    /// Environment id.
+    pub env: String,
+    /// Challenge distribution.
+    pub challenge: bool,
+    /// Curriculum level.
+    pub level: usize,
+    /// Episodes played.
+    pub episodes: usize,
+    /// Seed of the first episode (episode k: seed + k).
+    pub seed: u64,
+    /// Successful episodes.
+    pub successes: usize,
+    /// successes / episodes.
+    pub success_rate: f64,
+    /// Wilson 95% interval.
+    pub ci95: (f64, f64),
+    /// Whether the policy saw the observation without grey blocks.
+    pub grey_blind: bool,
+}
+
+/// What to evaluate on.
+#[derive(Debug, Clone)]
+pub struct EvalSpec<'a> {
+    /// Environment id.
+    pub env: &'a str,
+    /// Challenge distribution (BlocksChoose-v0).
+    pub challenge: bool,
+    /// Curriculum level (None: the maximum).
+    pub level: Option<usize>,
+    /// Episodes.
+    pub episodes: usize,
+    /// Seed of the first episode.
+    pub seed: u64,
+    /// Threads, each with its own environment.
+    pub threads: usize,
+}
+
+fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
+    let mut env = registry::make(spec.env)?;
+    if spec.challenge {
+        env.set_challenge(true)?;
+    }
+    env.set_level(spec.level.unwrap_or(env.max_level()))?;
+    Ok(env)
+}
+
+/// Plays `spec.episodes` deterministic episodes of the policy in `saved`.
+///
+/// # Errors
+/// Unknown environment, bad level or challenge flag, a policy that does not
+/// fit the environment, environment failures.
+pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
+    if spec.episodes == 0 {
+        bail!("--episodes must be at least 1");
+    }
+    let mut env = make_env(spec)?;
+    let policy = trained_policy(path, saved, &mut env)?;
+    let threads = spec.threads.clamp(1, spec.episodes);
+    let wins: Vec<Result<usize>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| {
+                let mut policy = policy.clone();
+                s.spawn(move || -> Result<usize> {
+                    let mut env = make_env(spec)?;
+                    let mut wins = 0;
+                    for k in (t..spec.episodes).step_by(threads) {
+                        let seed = spec.seed.wrapping_add(k as u64);
+                        let ep =
+                            run_episode(&mut env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
+                        wins += ep.success as usize;
+                    }
+                    Ok(wins)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| bail!("evaluation thread panicked"))).collect()
+    });
+    let successes = wins.into_iter().sum::<Result<usize>>()?;
+    Ok(Evaluation {
+        env: spec.env.to_owned(),
+        challenge: spec.challenge,
+        level: env.level(),
+        episodes: spec.episodes,
+        seed: spec.seed,
+        successes,
+        success_rate: successes as f64 / spec.episodes as f64,
+        ci95: wilson95(successes, spec.episodes),
+        grey_blind: policy.grey_blind(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wilson95;
+
+    #[test]
+    fn wilson_interval_matches_known_values() {
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
+        let (lo, hi) = wilson95(50, 100);
+        assert!(close(lo, 0.4038) && close(hi, 0.5962), "{lo} {hi}");
+        let (lo, hi) = wilson95(0, 10);
+        assert!(close(lo, 0.0) && close(hi, 0.2775), "{lo} {hi}");
+        let (lo, hi) = wilson95(10, 10);
+        assert!(close(lo, 0.7225) && close(hi, 1.0), "{lo} {hi}");
+        assert_eq!(wilson95(0, 0), (0.0, 1.0));
+    }
+}
