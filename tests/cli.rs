@@ -222,4 +222,15 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
         rows[2].starts_with("| PGGD + AggreVaTeD") && rows[2].contains("paper 0.64") && rows[2].contains("(epoch 1)")
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
+
+    // The runs' finals curves in one figure.
+    let png = dir.path().join("overlay.png");
+    let o =
+        bp(&["plot", "--overlay", expert.to_str().unwrap(), pggd.to_str().unwrap(), "--out", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    let o = bp(&["plot", "--overlay", expert.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("--out"), "{}", text(&o));
+    let o = bp(&["plot", "--overlay", "/nonexistent/run", "--out", png.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("/nonexistent/run/config.json"), "{}", text(&o));
 }

@@ -30,12 +30,9 @@ enum Command {
     Eval(EvalArgs),
     /// The paper's results table on BlocksChoose-v0 (Normal and Challenge), beside the paper's numbers.
     Table(TableArgs),
-    /// Redraw a run's success curves (success.png) from its progress.csv.
-    Plot {
-        /// Run directory.
-        #[arg(long)]
-        run_dir: PathBuf,
-    },
+    /// Redraw a run's success curves (success.png) from its progress.csv, or
+    /// overlay the finals success of several runs (--overlay) in one PNG.
+    Plot(PlotArgs),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -55,6 +52,23 @@ struct TrainArgs {
     resume: bool,
     #[command(flatten)]
     config: crate::train::TrainConfig,
+}
+
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay"])))]
+struct PlotArgs {
+    /// Run directory whose success.png to redraw.
+    #[arg(long)]
+    run_dir: Option<PathBuf>,
+    /// Run directories whose finals success to draw in one figure (needs --out).
+    #[arg(long, num_args = 1.., requires = "out")]
+    overlay: Vec<PathBuf>,
+    /// Output PNG of --overlay.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Title of the --overlay figure.
+    #[arg(long, default_value = "Finals success (maximum level)")]
+    title: String,
 }
 
 #[derive(Debug, clap::Args)]
@@ -200,19 +214,7 @@ pub fn main() -> Result<()> {
         Command::Train(a) => train(a),
         Command::Eval(a) => eval(a),
         Command::Table(a) => table(a),
-        Command::Plot { run_dir } => {
-            let run = crate::train::RunDir { dir: run_dir };
-            let config: crate::train::TrainConfig = serde_json::from_str(
-                &std::fs::read_to_string(run.config())
-                    .with_context(|| format!("cannot read {}", run.config().display()))?,
-            )
-            .with_context(|| format!("{} is not a training config", run.config().display()))?;
-            let rows = crate::train::read_progress(&run.progress())?;
-            let max_level = registry::config(&config.env)?.layout.max_level();
-            crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
-            println!("wrote {}", run.plot().display());
-            Ok(())
-        }
+        Command::Plot(a) => plot(a),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             let spec = crate::scene::SceneSpec {
@@ -354,6 +356,37 @@ fn train(a: TrainArgs) -> Result<()> {
             r.wall_seconds,
             run_dir.display()
         );
+    }
+    Ok(())
+}
+
+/// A run directory's config and progress rows.
+fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
+    let run = crate::train::RunDir { dir: dir.to_owned() };
+    let config: crate::train::TrainConfig = serde_json::from_str(
+        &std::fs::read_to_string(run.config()).with_context(|| format!("cannot read {}", run.config().display()))?,
+    )
+    .with_context(|| format!("{} is not a training config", run.config().display()))?;
+    Ok((config, crate::train::read_progress(&run.progress())?))
+}
+
+fn plot(a: PlotArgs) -> Result<()> {
+    if let Some(dir) = a.run_dir {
+        let (config, rows) = read_run(&dir)?;
+        let max_level = registry::config(&config.env)?.layout.max_level();
+        let run = crate::train::RunDir { dir };
+        crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
+        println!("wrote {}", run.plot().display());
+    }
+    if let Some(out) = a.out {
+        let mut runs = Vec::new();
+        for dir in &a.overlay {
+            let (config, rows) = read_run(dir)?;
+            let workers = if config.workers == 1 { "1 worker".into() } else { format!("{} workers", config.workers) };
+            runs.push((format!("{} ({workers})", config.title()), rows));
+        }
+        crate::train::plot::overlay(&out, &a.title, &runs)?;
+        println!("wrote {}", out.display());
     }
     Ok(())
 }

@@ -25,43 +25,37 @@ fn register_font() -> Result<()> {
     result
 }
 
-/// A curve: legend, colour, value of a row.
-type Series = (&'static str, RGBColor, fn(&EpochRow) -> f64);
+/// A named curve of (x, y) points.
+struct Curve {
+    label: String,
+    colour: RGBColor,
+    points: Vec<(f64, f64)>,
+}
 
-/// Train, test and finals success against the epoch, plus the curriculum level
-/// (scaled to [0, 1] by the maximum level), written to `path`.
-///
-/// # Errors
-/// A missing font or an unwritable file.
-pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: usize) -> Result<()> {
-    register_font()?;
-    let root = BitMapBackend::new(path, (900, 540)).into_drawing_area();
-    let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
-    root.fill(&WHITE).map_err(draw)?;
-    let epochs = rows.last().map_or(1, |r| r.epoch + 1).max(1);
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
+/// One chart of success-rate curves against `x_desc` on `area`.
+fn panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    x_desc: &str,
+    curves: &[Curve],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let draw = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e:?}");
+    let x_max = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)).fold(1e-9, f64::max);
+    let mut chart = ChartBuilder::on(area)
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(50)
-        .build_cartesian_2d(0f64..epochs as f64, 0f64..1.02f64)
+        .build_cartesian_2d(0f64..x_max, 0f64..1.02f64)
         .map_err(draw)?;
-    chart.configure_mesh().x_desc("epoch").y_desc("success rate").draw().map_err(draw)?;
-    let series: [Series; 4] = [
-        ("train", RGBColor(120, 120, 120), |r| r.train_success),
-        ("test (current level)", RGBColor(30, 90, 200), |r| r.test_success),
-        ("finals (max level)", RGBColor(200, 40, 40), |r| r.finals_success),
-        ("level / max", RGBColor(40, 150, 60), |r| r.level as f64),
-    ];
-    for (i, (name, colour, f)) in series.into_iter().enumerate() {
-        let scale = if i == 3 { 1.0 / max_level.max(1) as f64 } else { 1.0 };
+    chart.configure_mesh().x_desc(x_desc).y_desc("success rate").draw().map_err(draw)?;
+    for c in curves {
+        let colour = c.colour;
         chart
-            .draw_series(LineSeries::new(
-                rows.iter().map(|r| (r.epoch as f64 + 1.0, f(r) * scale)),
-                colour.stroke_width(2),
-            ))
+            .draw_series(LineSeries::new(c.points.iter().copied(), colour.stroke_width(2)))
             .map_err(draw)?
-            .label(name)
+            .label(c.label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
     chart
@@ -71,5 +65,84 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
         .border_style(BLACK)
         .draw()
         .map_err(draw)?;
+    Ok(())
+}
+
+/// Two panels of the same curves: against the epoch (left) and against
+/// millions of environment steps (right).
+fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
+    register_font()?;
+    let root = BitMapBackend::new(path, (1400, 540)).into_drawing_area();
+    let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
+    root.fill(&WHITE).map_err(draw)?;
+    let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
+    let (left, right) = root.split_horizontally(700);
+    panel(&left, "epoch", &curves(false)).with_context(|| format!("drawing {}", path.display()))?;
+    panel(&right, "environment steps (millions)", &curves(true))
+        .with_context(|| format!("drawing {}", path.display()))?;
     root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
+}
+
+/// The x value of a row: epochs completed, or millions of env steps.
+fn x_of(r: &EpochRow, by_steps: bool) -> f64 {
+    if by_steps {
+        r.env_steps as f64 / 1e6
+    } else {
+        r.epoch as f64 + 1.0
+    }
+}
+
+/// Train, test and finals success, plus the curriculum level (scaled to
+/// [0, 1] by the maximum level), against the epoch and against env steps,
+/// written to `path`.
+///
+/// # Errors
+/// A missing font or an unwritable file.
+pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: usize) -> Result<()> {
+    let series: [(&str, RGBColor, fn(&EpochRow) -> f64); 4] = [
+        ("train", RGBColor(120, 120, 120), |r| r.train_success),
+        ("test (current level)", RGBColor(30, 90, 200), |r| r.test_success),
+        ("finals (max level)", RGBColor(200, 40, 40), |r| r.finals_success),
+        ("level / max", RGBColor(40, 150, 60), |r| r.level as f64),
+    ];
+    two_panels(path, title, |by_steps| {
+        series
+            .iter()
+            .enumerate()
+            .map(|(i, (name, colour, f))| {
+                let scale = if i == 3 { 1.0 / max_level.max(1) as f64 } else { 1.0 };
+                Curve {
+                    label: (*name).to_owned(),
+                    colour: *colour,
+                    points: rows.iter().map(|r| (x_of(r, by_steps), f(r) * scale)).collect(),
+                }
+            })
+            .collect()
+    })
+}
+
+/// Finals success of several runs, one curve each, against the epoch and
+/// against env steps (the paper's training-plot figure), written to `path`.
+///
+/// # Errors
+/// A missing font or an unwritable file.
+pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<EpochRow>)]) -> Result<()> {
+    const COLOURS: [RGBColor; 6] = [
+        RGBColor(200, 40, 40),
+        RGBColor(30, 90, 200),
+        RGBColor(40, 150, 60),
+        RGBColor(230, 140, 20),
+        RGBColor(130, 60, 170),
+        RGBColor(90, 90, 90),
+    ];
+    two_panels(path, title, |by_steps| {
+        runs.iter()
+            .enumerate()
+            .map(|(i, (label, rows))| Curve {
+                label: label.clone(),
+                colour: COLOURS[i % COLOURS.len()],
+                points: rows.iter().map(|r| (x_of(r, by_steps), r.finals_success)).collect(),
+            })
+            .collect()
+    })
 }
