@@ -83,6 +83,9 @@ fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> 
     root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
 }
 
+/// A column of `progress.csv` to draw: legend, colour, value of a row.
+type Series = (&'static str, RGBColor, fn(&EpochRow) -> f64);
+
 /// The x value of a row: epochs completed, or millions of env steps.
 fn x_of(r: &EpochRow, by_steps: bool) -> f64 {
     if by_steps {
@@ -99,7 +102,7 @@ fn x_of(r: &EpochRow, by_steps: bool) -> f64 {
 /// # Errors
 /// A missing font or an unwritable file.
 pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: usize) -> Result<()> {
-    let series: [(&str, RGBColor, fn(&EpochRow) -> f64); 4] = [
+    let series: [Series; 4] = [
         ("train", RGBColor(120, 120, 120), |r| r.train_success),
         ("test (current level)", RGBColor(30, 90, 200), |r| r.test_success),
         ("finals (max level)", RGBColor(200, 40, 40), |r| r.finals_success),
