@@ -172,6 +172,14 @@ fn aggrevated_mixes_by_beta() {
         train(&tiny_pggd("BlocksChoose-v0", 2, with(1.0, 50.0, PgWeight::Return)), dir.path(), false, &mut quiet)
             .unwrap();
     assert!(rows.iter().all(|r| r.beta == 1.0 && r.expert_share == 1.0), "{rows:?}");
+    // The run keeps its own copy of the expert and resumes from it, even when
+    // the expert's run directory is gone.
+    let copy = load_policy(&dir.path().join("expert_policy.json")).unwrap();
+    assert_eq!(copy.policy, load_policy(exp.path()).unwrap().policy);
+    let moved = tempfile::tempdir().unwrap();
+    std::fs::rename(exp.path(), moved.path().join("expert")).unwrap();
+    train(&tiny_pggd("BlocksChoose-v0", 3, with(1.0, 50.0, PgWeight::Return)), dir.path(), true, &mut quiet).unwrap();
+    std::fs::rename(moved.path().join("expert"), exp.path()).unwrap();
     // β = 0 (t0 = 0: β0 from the start): never.
     let dir = tempfile::tempdir().unwrap();
     let rows = train(&tiny_pggd("BlocksChoose-v0", 1, with(0.0, 0.0, PgWeight::Return)), dir.path(), false, &mut quiet)

@@ -1,7 +1,7 @@
 //! The learner being trained (DDPG or PGGD) and, for AggreVaTeD, the expert.
 
 use super::rollouts::Behaviour;
-use super::{load_policy, TrainConfig};
+use super::{load_policy, write_json_atomic, TrainConfig};
 use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
 use crate::agents::expert::{beta, without_grey, Mixture};
 use crate::agents::normalizer::Normalizer;
@@ -11,7 +11,7 @@ use crate::agents::AnyPolicy;
 use anyhow::{bail, Context, Result};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Training algorithm.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
@@ -69,18 +69,32 @@ pub(crate) struct Expert {
 
 impl Expert {
     /// Loads the expert named by `config` and checks that it fits
-    /// observations like `sample_obs` once grey blocks are removed.
+    /// observations like `sample_obs` once grey blocks are removed. A resumed
+    /// run takes the policy from its copy `frozen` (when there is one); a new
+    /// run takes it from the configured path and writes the copy.
     ///
     /// # Errors
     /// Missing or malformed files, a PGGD policy, a size mismatch.
-    pub(crate) fn load(config: &AggrevatedConfig, sample_obs: &[f32]) -> Result<Option<Self>> {
+    pub(crate) fn load(
+        config: &AggrevatedConfig,
+        sample_obs: &[f32],
+        frozen: &Path,
+        resume: bool,
+    ) -> Result<Option<Self>> {
         let Some(path) = &config.expert else {
             if config.pg_weight == PgWeight::ExpertAdvantage {
                 bail!("--pg-weight expert-advantage needs an expert (--expert DIR)");
             }
             return Ok(None);
         };
-        let saved = load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?;
+        let saved = if resume && frozen.exists() {
+            load_policy(frozen)
+                .with_context(|| format!("loading this run's copy of the expert, {}", frozen.display()))?
+        } else {
+            let saved = load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?;
+            write_json_atomic(frozen, &saved)?;
+            saved
+        };
         let AnyPolicy::Ddpg(policy) = saved.policy else {
             bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
         };

@@ -187,7 +187,6 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     let mut envs: Vec<BlockEnv> = (0..config.workers).map(|_| registry::make(&config.env)).collect::<Result<_, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let max_level = envs[0].max_level();
-    let expert = Expert::load(&config.aggrevated, &envs[0].reset(Some(0))?.0)?;
     if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
         bail!("--pg-weight is for --algo pggd");
     }
@@ -240,6 +239,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if agent.algo() != config.algo {
         bail!("{} holds a {:?} agent, not {:?}", run.checkpoint().display(), agent.algo(), config.algo);
     }
+    let expert = Expert::load(&config.aggrevated, &envs[0].reset(Some(0))?.0, &run.expert_policy(), resume)?;
     let mut learner = Learner { agent, expert };
     write_json_atomic(&run.config(), config)?;
 

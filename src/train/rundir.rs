@@ -37,6 +37,11 @@ impl RunDir {
     pub fn best_policy(&self) -> PathBuf {
         self.dir.join("best_policy.json")
     }
+    /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
+    /// (a resumed run uses this copy, so the expert cannot change under it).
+    pub fn expert_policy(&self) -> PathBuf {
+        self.dir.join("expert_policy.json")
+    }
 }
 
 /// A saved policy: the actor, its normaliser and what it was trained on.
