@@ -5,8 +5,12 @@ CARGO ?= cargo
 OUT ?= out
 
 RUN ?= runs/BlocksTouch-v0-ddpg-s0
+EXPERT ?= $(RUN)/policy.json
+EPISODES ?= 1000
+BP = $(CARGO) run --release --quiet --
+resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated pggd table
 
 setup:
 	bash scripts/setup.sh
@@ -26,8 +30,28 @@ test: setup
 
 # DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build
-	$(CARGO) run --release --quiet -- train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 \
-		--seed 0 --run-dir $(RUN) $$(test -f $(RUN)/checkpoint.bin && echo --resume)
+	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 \
+		--seed 0 --run-dir $(RUN) $(call resume,$(RUN))
+
+# The paper's results table, one target per row (each resumes its run directory):
+#   DDPG (2 blocks) = `make train` above, its policy the AggreVaTeD expert ($(EXPERT));
+#   DDPG (3 blocks) on BlocksChoose-v0;
+ddpg3: build
+	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 \
+		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
+#   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
+aggrevated: build
+	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
+		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
+#   PGGD alone on BlocksChoose-v0;
+pggd: build
+	$(BP) train --algo pggd --env BlocksChoose-v0 --workers 2 --epochs 200 \
+		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-s0 $(call resume,runs/BlocksChoose-v0-pggd-s0)
+#   and the table itself (rows whose run is missing say so).
+table: build
+	$(BP) table --expert $(EXPERT) --ddpg runs/BlocksChoose-v0-ddpg-s0 \
+		--pggd runs/BlocksChoose-v0-pggd-aggrevated-s0 --pggd-alone runs/BlocksChoose-v0-pggd-s0 \
+		--episodes $(EPISODES) --out results/table.md
 
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
