@@ -1,4 +1,4 @@
-# BlockPuzzle: the two commands a newcomer needs are `make demo` and `make test`.
+# BlockPuzzle: the two commands a newcomer needs are `make train` and `make test`.
 # Both run the idempotent set-up first (system packages + pinned Fetch assets).
 
 CARGO ?= cargo
@@ -18,7 +18,7 @@ setup:
 build: setup
 	$(CARGO) build --release
 
-# Main job: the scripted pushing controller on BlocksTouch-v0 at full difficulty,
+# A quick look: the scripted pushing controller on BlocksTouch-v0 at full difficulty,
 # with a trajectory dump you can replay or render.
 demo: build
 	mkdir -p $(OUT)
@@ -28,7 +28,7 @@ demo: build
 test: setup
 	$(CARGO) test --all
 
-# DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
+# Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build
 	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 \
 		--seed 0 --run-dir $(RUN) $(call resume,$(RUN))
