@@ -344,7 +344,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         let saved =
             SavedPolicy { env_id: config.env.clone(), epoch: state.epoch, finals_success: row.finals_success, policy };
         write_json_atomic(&run.policy(), &saved)?;
-        if row.finals_success > state.best_finals {
+        // Ties go to the newer policy: same finals score, more training.
+        if row.finals_success >= state.best_finals {
             state.best_finals = row.finals_success;
             write_json_atomic(&run.best_policy(), &saved)?;
         }
