@@ -13,6 +13,8 @@ pub struct Net {
     pub params: Vec<Tensor>,
     sizes: Vec<usize>,
     tanh_out: bool,
+    /// Hidden-to-hidden products in bfloat16 (see [`Net::with_bf16`]).
+    bf16: bool,
 }
 
 impl Net {
@@ -28,7 +30,17 @@ impl Net {
             params.push(Tensor::of_slice(&data).view([n_out as i64, n_in as i64]).set_requires_grad(true));
             params.push(Tensor::zeros(&[n_out as i64], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true));
         }
-        Self { params, sizes: sizes.to_vec(), tanh_out }
+        Self { params, sizes: sizes.to_vec(), tanh_out, bf16: false }
+    }
+
+    /// Computes the hidden-to-hidden matrix products (the bulk of the work:
+    /// 91% of the multiply-adds of a 3 × 256 net) in bfloat16 with float
+    /// accumulation, the parameters staying float (mixed precision). The
+    /// input and output layers stay float. On CPUs with AMX these products
+    /// run several times faster.
+    pub fn with_bf16(mut self, on: bool) -> Self {
+        self.bf16 = on;
+        self
     }
 
     /// Layer sizes, input first.
@@ -41,7 +53,12 @@ impl Net {
         let n_layers = self.params.len() / 2;
         let mut h = x.shallow_clone();
         for l in 0..n_layers {
-            h = h.matmul(&self.params[2 * l].tr()) + &self.params[2 * l + 1];
+            let (w, b) = (&self.params[2 * l], &self.params[2 * l + 1]);
+            h = if self.bf16 && l > 0 && l + 1 < n_layers {
+                h.to_kind(Kind::BFloat16).matmul(&w.to_kind(Kind::BFloat16).tr()).to_kind(Kind::Float) + b
+            } else {
+                h.matmul(&w.tr()) + b
+            };
             if l + 1 < n_layers {
                 h = h.relu();
             } else if self.tanh_out {
@@ -57,6 +74,7 @@ impl Net {
             params: self.params.iter().map(|p| p.detach().copy()).collect(),
             sizes: self.sizes.clone(),
             tanh_out: self.tanh_out,
+            bf16: self.bf16,
         }
     }
 
@@ -67,6 +85,7 @@ impl Net {
             params: self.params.iter().map(Tensor::detach).collect(),
             sizes: self.sizes.clone(),
             tanh_out: self.tanh_out,
+            bf16: self.bf16,
         }
     }
 

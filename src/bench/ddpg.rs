@@ -14,7 +14,7 @@
 //! The networks are untrained (seeded), which does not change the cost of a
 //! forward pass or an update.
 
-use crate::agents::ddpg::{Ddpg, DdpgConfig};
+use crate::agents::ddpg::{Ddpg, DdpgConfig, Precision};
 use crate::agents::replay::ReplayBuffer;
 use crate::env::registry;
 use crate::train::{play_all, stream_seed, Behaviour};
@@ -41,6 +41,8 @@ pub struct DdpgBenchConfig {
     pub torch_threads: usize,
     /// Seed of the networks, layouts and noise.
     pub seed: u64,
+    /// Arithmetic of the updates' hidden-layer products.
+    pub precision: Precision,
 }
 
 /// Measured rates.
@@ -56,6 +58,8 @@ pub struct DdpgBenchReport {
     pub threads: usize,
     /// Transitions per update batch.
     pub batch_size: usize,
+    /// Arithmetic of the updates' hidden-layer products.
+    pub precision: Precision,
     /// Environment steps per second while collecting (actor forward, noise,
     /// environment step, replay insert, normaliser update), all workers.
     pub env_steps_per_s: f64,
@@ -93,7 +97,10 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     tch::set_num_threads(c.torch_threads as i32);
     let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
-    let ddpg = DdpgConfig::default();
+    if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
+        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
+    }
+    let ddpg = DdpgConfig { precision: c.precision, ..DdpgConfig::default() };
     let (random_eps, noise_eps) = (ddpg.random_eps, ddpg.noise_eps);
     let gamma = ddpg.gamma;
     let mut agent = Ddpg::new(obs_dim, act_dim, ddpg, &mut ChaCha8Rng::seed_from_u64(c.seed));
@@ -140,6 +147,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         workers: c.workers,
         threads: c.torch_threads,
         batch_size: c.batch_size,
+        precision: c.precision,
         env_steps_per_s: steps as f64 / collect_seconds,
         forward_fraction: forward_seconds / collect_seconds,
         updates_per_s: c.updates as f64 / train_seconds,

@@ -188,6 +188,9 @@ struct BenchArgs {
     /// DDPG: seed of networks, layouts and noise.
     #[arg(long, default_value_t = 0, requires = "ddpg")]
     seed: u64,
+    /// DDPG: arithmetic of the updates' hidden-layer products.
+    #[arg(long, value_enum, default_value = "f32", requires = "ddpg")]
+    precision: crate::agents::ddpg::Precision,
 }
 
 /// Runs the command line.
@@ -235,13 +238,14 @@ pub fn main() -> Result<()> {
                 batch_size: a.batch_size,
                 torch_threads: a.torch_threads,
                 seed: a.seed,
+                precision: a.precision,
             })?;
             if a.json {
                 println!("{}", serde_json::to_string(&r)?);
             } else {
                 println!(
-                    "DDPG on {}: {} worker(s), {} torch thread(s), batch {}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
-                    r.env, r.workers, r.threads, r.batch_size, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
+                    "DDPG on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
+                    r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
                 );
             }
             Ok(())

@@ -24,7 +24,7 @@ pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{load_policy, read_progress, write_json_atomic, RunDir, SavedPolicy};
 
-use crate::agents::ddpg::{DdpgConfig, UpdateStats};
+use crate::agents::ddpg::{DdpgConfig, Precision, UpdateStats};
 use crate::agents::pggd::PggdConfig;
 use crate::agents::replay::ReplayBuffer;
 use crate::env::{registry, BlockEnv};
@@ -168,6 +168,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     }
     if !(0.0..1.0).contains(&config.ddpg.gamma) {
         bail!("--gamma must be in [0, 1)");
+    }
+    if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
+        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
     if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
         bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
