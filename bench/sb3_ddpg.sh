@@ -8,8 +8,9 @@
 #   blockpuzzle bench --ddpg --workers 1 --torch-threads T --steps STEPS --updates UPDATES
 #     (src/bench/ddpg.rs: the training loop's collection path -- plain-Rust actor + noise,
 #     env step, replay insert, normaliser update -- then DDPG updates at batch 256);
-# and once more with --workers 2 (two environments stepped in parallel threads, as
-# `train --workers 2` collects).
+# on CPUs with AMX or AVX512-BF16 also with --precision bf16 (hidden-layer products in
+# bfloat16, an opt-in departure from the paper's float32); and once more with --workers 2 (two
+# environments stepped in parallel threads, as `train --workers 2` collects).
 #
 # For each torch thread count in THREADS (default "1 2") runs bench/sb3_ddpg.py, which
 # builds DDPG("MultiInputPolicy", FetchPush-v4) -- actor and critic [256,256,256],
@@ -97,6 +98,13 @@ for t in $THREADS; do
         --updates "$UPDATES" --seed "$SEED" --json)"
     echo "$line"
     LINES+=("$line")
+    if grep -qwE 'amx_bf16|avx512_bf16' /proc/cpuinfo; then
+        log "blockpuzzle DDPG, --precision bf16, threads=$t: $UPDATES updates"
+        line="$("$BP" bench --ddpg --workers 1 --torch-threads "$t" --steps 500 \
+            --updates "$UPDATES" --seed "$SEED" --precision bf16 --json)"
+        echo "$line"
+        LINES+=("$line")
+    fi
     log "SB3 DDPG, FetchPush-v4, threads=$t: $STEPS env steps, $UPDATES updates"
     # Keep the last line of stdout (the JSON); warnings go to stderr.
     line="$("$PY" "$ROOT/bench/sb3_ddpg.py" --steps "$STEPS" --updates "$UPDATES" \
@@ -116,7 +124,9 @@ import json, sys
 
 rows = [json.loads(a) for a in sys.argv[1:]]
 sb3 = {r["threads"]: r for r in rows if r["impl"] == "sb3"}
-ours = {r["threads"]: r for r in rows if r["impl"] == "blockpuzzle" and r["workers"] == 1}
+ours = {r["threads"]: r for r in rows
+        if r["impl"] == "blockpuzzle" and r["workers"] == 1 and r.get("precision", "f32") == "f32"}
+bf16 = {r["threads"]: r for r in rows if r["impl"] == "blockpuzzle" and r.get("precision") == "bf16"}
 two = [r for r in rows if r["impl"] == "blockpuzzle" and r["workers"] == 2]
 if sb3:
     r = next(iter(sb3.values()))
@@ -132,6 +142,11 @@ for t, s in sb3.items():
     print(f"| {t} | {s['updates_per_s']:,.1f} | {o['updates_per_s']:,.1f} | "
           f"{o['updates_per_s'] / s['updates_per_s']:.2f}x | {s['env_steps_per_s']:,.0f} | "
           f"{o['env_steps_per_s']:,.0f} | {o['env_steps_per_s'] / s['env_steps_per_s']:.2f}x |")
+for t, o in bf16.items():
+    s = sb3.get(t)
+    if s:
+        print(f"\nblockpuzzle --precision bf16, {t} thread(s): {o['updates_per_s']:,.1f} updates/s "
+              f"({o['updates_per_s'] / s['updates_per_s']:.2f}x sb3's float32)")
 for o in two:
     s = sb3.get(1)
     ratio = f" ({o['env_steps_per_s'] / s['env_steps_per_s']:.2f}x sb3's one environment)" if s else ""
