@@ -1,10 +1,13 @@
-//! DDPG training with the paper's curriculum, readable top to bottom.
+//! Training with the paper's curriculum, readable top to bottom: DDPG, PGGD,
+//! and PGGD by AggreVaTeD from a DDPG expert (`learner.rs`).
 //!
 //! An epoch is `cycles` cycles; in a cycle every worker (one environment
-//! each, stepped in its own thread) collects `rollouts` exploration episodes,
-//! then the learner takes `batches` gradient steps on batches of
-//! `batch_size × workers` transitions (the average of the workers' gradients,
-//! as baselines' MPI Adam computes it) and the target networks follow. After
+//! each, stepped in its own thread) collects `rollouts` exploration episodes
+//! (DDPG: actor + noise; PGGD: Gaussian samples; AggreVaTeD: per step the
+//! expert with probability β, else the learner), then the learner takes
+//! `batches` gradient steps on batches of `batch_size × workers` transitions
+//! (the average of the workers' gradients, as baselines' MPI Adam computes
+//! it) and DDPG's target networks follow. After
 //! the cycles every worker plays `test_episodes` deterministic episodes at
 //! the current level ("test") and at the maximum level ("finals"); when the
 //! test success reaches `success_threshold` the curriculum moves up a level.
@@ -12,7 +15,8 @@
 //! The run directory holds `config.json`, `progress.csv` (one row per epoch),
 //! `checkpoint.bin` (everything, written atomically every epoch),
 //! `policy.json` (latest actor + normaliser), `best_policy.json` (best
-//! finals success) and `success.png` (the success curves).
+//! finals success), `success.png` (the success curves) and, for AggreVaTeD,
+//! `expert_policy.json` (the run's copy of its expert).
 
 pub mod checkpoint;
 mod learner;
