@@ -21,5 +21,6 @@ pub mod bench;
 pub mod blas;
 pub mod cli;
 pub mod policy;
+pub mod render;
 pub mod rollout;
 pub mod train;

@@ -24,6 +24,8 @@ enum Command {
     Rollout(RolloutArgs),
     /// Measure environment steps/s and raw mj_step/s.
     Bench(BenchArgs),
+    /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
+    Render(RenderArgs),
     /// Train an agent (DDPG with the paper's curriculum).
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
@@ -150,6 +152,65 @@ struct RolloutArgs {
     /// Output file (JSON Lines); written atomically.
     #[arg(long)]
     out: PathBuf,
+    /// Also render the first episode: FILE.gif, FILE.png with --filmstrip N, or a folder.
+    #[arg(long)]
+    render: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewArgs,
+}
+
+/// Frame size and camera (the Fetch viewer's by default).
+#[derive(Debug, Clone, clap::Args)]
+struct ViewArgs {
+    /// Frame width in pixels.
+    #[arg(long, default_value_t = 480)]
+    width: usize,
+    /// Frame height in pixels.
+    #[arg(long, default_value_t = 480)]
+    height: usize,
+    /// Camera distance from the point it looks at (m).
+    #[arg(long, default_value_t = 2.5)]
+    distance: f64,
+    /// Camera azimuth (degrees).
+    #[arg(long, default_value_t = 132.0)]
+    azimuth: f64,
+    /// Camera elevation (degrees, negative looks down).
+    #[arg(long, default_value_t = -14.0, allow_negative_numbers = true)]
+    elevation: f64,
+    /// Frames per second of a GIF.
+    #[arg(long, default_value_t = 10)]
+    fps: u32,
+    /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
+    #[arg(long)]
+    filmstrip: Option<usize>,
+}
+
+impl ViewArgs {
+    fn view(&self) -> crate::render::View {
+        crate::render::View {
+            width: self.width,
+            height: self.height,
+            distance: self.distance,
+            azimuth: self.azimuth,
+            elevation: self.elevation,
+            ..Default::default()
+        }
+    }
+}
+
+#[derive(Debug, clap::Args)]
+struct RenderArgs {
+    /// Trajectory dump written by `rollout` (JSON Lines).
+    #[arg(long)]
+    traj: PathBuf,
+    /// Which episode of the dump (0-based).
+    #[arg(long, default_value_t = 0)]
+    episode: usize,
+    /// Output: FILE.gif (animation), FILE.png with --filmstrip N, or a folder (one PNG per frame).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    view: ViewArgs,
 }
 
 #[derive(Debug, clap::Args)]
@@ -216,6 +277,18 @@ pub fn main() -> Result<()> {
         Command::Rollout(a) => rollout(a),
         Command::Train(a) => train(a),
         Command::Eval(a) => eval(a),
+        Command::Render(a) => {
+            let kind = crate::render::replay::Output::for_path(&a.out, a.view.filmstrip, a.view.fps)?;
+            let (frames, fps) = crate::render::replay::render_dump(&a.traj, a.episode, &a.view.view(), &a.out, &kind)?;
+            println!(
+                "rendered {frames} frames of episode {} at {}x{} ({fps:.1} frames/s) -> {}",
+                a.episode,
+                a.view.width,
+                a.view.height,
+                a.out.display()
+            );
+            Ok(())
+        }
         Command::Table(a) => table(a),
         Command::Plot(a) => plot(a),
         Command::Scene { env } => {
@@ -269,6 +342,12 @@ pub fn main() -> Result<()> {
 }
 
 fn rollout(a: RolloutArgs) -> Result<()> {
+    // Check the --render output before spending time on the episodes.
+    let render_kind = a
+        .render
+        .as_deref()
+        .map(|out| crate::render::replay::Output::for_path(out, a.view.filmstrip, a.view.fps))
+        .transpose()?;
     let mut env: BlockEnv = registry::make(&a.env)?;
     if a.challenge {
         env.set_challenge(true)?;
@@ -298,6 +377,10 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         writer.write(&ep)?;
     }
     writer.finish()?;
+    if let (Some(out), Some(kind)) = (&a.render, &render_kind) {
+        let (frames, fps) = crate::render::replay::render_dump(&a.out, 0, &a.view.view(), out, kind)?;
+        println!("rendered episode 0: {frames} frames ({fps:.1} frames/s) -> {}", out.display());
+    }
     let n = a.episodes as f64;
     println!(
         "{} {} policy, level {}{}: success {:.3} ({}/{}), failure {:.3}, mean length {:.1}; wrote {}",

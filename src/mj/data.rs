@@ -96,6 +96,11 @@ impl Data {
         unsafe { self.ptr.as_ref() }
     }
 
+    /// The raw `mjData` (for the renderer).
+    pub(crate) fn as_mut_ptr(&mut self) -> *mut sys::mjData {
+        self.ptr.as_ptr()
+    }
+
     /// One physics step (`mj_step`).
     pub fn step(&mut self) {
         // SAFETY: model and data are live and belong together (same Arc).

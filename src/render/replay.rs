@@ -1,0 +1,103 @@
+//! Frames of a recorded episode: the stored `qpos` of every state is put
+//! back into the environment's model and rendered, so the frames show
+//! exactly the recorded trajectory.
+
+use super::{output, Renderer, View};
+use crate::env::registry;
+use crate::rollout::EpisodeRecord;
+use anyhow::{bail, Context, Result};
+use image::RgbImage;
+use std::path::Path;
+use std::time::Instant;
+
+/// The frames of `ep` (the reset state, then one per step) and the seconds
+/// spent rendering them.
+///
+/// # Errors
+/// Unknown environment id, a state of the wrong size, rendering errors.
+pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>, f64)> {
+    let mut env = registry::make(&ep.env_id)?;
+    env.reset(Some(ep.seed))?;
+    let nq = env.data().qpos().len();
+    let model = env.data().model().clone();
+    let mut renderer = Renderer::new(&model, view)?;
+    let n = ep.steps.len();
+    let outcome = if ep.success {
+        "success"
+    } else if ep.failure {
+        "failure"
+    } else {
+        ""
+    };
+    let mut frames = Vec::with_capacity(n + 1);
+    let started = Instant::now();
+    for k in 0..=n {
+        let state = if k == 0 { &ep.initial } else { &ep.steps[k - 1].state };
+        if state.qpos.len() != nq {
+            bail!("step {k} of the episode stores {} positions, {} has {nq}", state.qpos.len(), ep.env_id);
+        }
+        let data = env.data_mut();
+        data.qpos_mut().copy_from_slice(&state.qpos);
+        data.forward();
+        let reached = if k == n { outcome } else { "" };
+        let caption = (format!("{}\nstep\n{reached}", ep.env_id), format!("\n{k}/{n}\n"));
+        frames.push(renderer.render(env.data_mut(), Some((&caption.0, &caption.1))));
+    }
+    Ok((frames, started.elapsed().as_secs_f64()))
+}
+
+/// Where frames go: an animated GIF, a filmstrip PNG, or a folder of PNGs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// `.gif`: animated, looping, at the given frames per second.
+    Gif { fps: u32 },
+    /// A PNG of this many evenly spaced frames side by side.
+    Filmstrip(usize),
+    /// A folder of `frame_00000.png`, ...
+    Folder,
+}
+
+impl Output {
+    /// The output kind for `out` and the `--filmstrip` option.
+    ///
+    /// # Errors
+    /// A filmstrip not written to `.png`, a `.png` without `--filmstrip`.
+    pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self> {
+        let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
+        match (ext.as_deref(), filmstrip) {
+            (Some("png"), Some(n)) if n > 0 => Ok(Self::Filmstrip(n)),
+            (_, Some(_)) => bail!("--filmstrip N writes a PNG: give --out FILE.png with N ≥ 1"),
+            (Some("gif"), None) => Ok(Self::Gif { fps }),
+            (Some("png"), None) => {
+                bail!("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", out.display())
+            }
+            _ => Ok(Self::Folder),
+        }
+    }
+
+    /// Writes `frames` to `out`.
+    ///
+    /// # Errors
+    /// I/O and encoding errors.
+    pub fn write(&self, out: &Path, frames: &[RgbImage]) -> Result<()> {
+        match self {
+            Self::Gif { fps } => output::gif(out, frames, *fps),
+            Self::Filmstrip(n) => output::filmstrip(out, frames, *n),
+            Self::Folder => output::png_folder(out, frames),
+        }
+    }
+}
+
+/// Renders episode `index` of the dump at `traj` to `out`; returns (frames, frames per second).
+///
+/// # Errors
+/// Unreadable dump, missing episode, rendering or writing errors.
+pub fn render_dump(traj: &Path, index: usize, view: &View, out: &Path, kind: &Output) -> Result<(usize, f64)> {
+    let episodes = crate::rollout::read_dump(traj).with_context(|| format!("reading {}", traj.display()))?;
+    let Some(ep) = episodes.get(index) else {
+        bail!("{} holds {} episodes; --episode {index} does not exist", traj.display(), episodes.len());
+    };
+    let (frames, seconds) = episode_frames(ep, view)?;
+    kind.write(out, &frames)?;
+    Ok((frames.len(), frames.len() as f64 / seconds.max(1e-9)))
+}

@@ -1,0 +1,126 @@
+//! Headless rendering (EGL + Mesa's software rasteriser): a known state
+//! shows its blocks where the camera projects them, and the GIF and
+//! filmstrip outputs decode with the expected frames and sizes.
+
+use blockpuzzle::curriculum::Layout;
+use blockpuzzle::env::{registry, BlockEnv};
+use blockpuzzle::render::{Renderer, View};
+use image::{AnimationDecoder, Rgb};
+use std::process::Command;
+
+const BLUE_AT: [f64; 2] = [1.30, 0.70];
+const GREEN_AT: [f64; 2] = [1.40, 0.82];
+
+fn blueish(p: &Rgb<u8>) -> bool {
+    let [r, g, b] = p.0.map(i32::from);
+    b > r + 40 && b > g + 20
+}
+
+fn greenish(p: &Rgb<u8>) -> bool {
+    // The Fetch skybox is a light green (about 112, 217, 143): the block is darker and purer.
+    let [r, g, b] = p.0.map(i32::from);
+    g > r + 40 && g > b + 40 && r < 80
+}
+
+#[test]
+fn blocks_appear_where_the_camera_projects_them() {
+    let mut c = registry::config("BlocksTouch-v0").unwrap();
+    c.layout = Layout::Fixed(vec![BLUE_AT, GREEN_AT]);
+    let mut env = BlockEnv::new(c).unwrap();
+    env.reset(Some(0)).unwrap();
+    let model = env.data().model().clone();
+    // A closer camera than the default, so that each block covers many pixels.
+    let view = View { width: 320, height: 240, distance: 1.2, ..View::default() };
+    let mut r = Renderer::new(&model, &view).unwrap();
+    let img = r.render(env.data_mut(), Some(("test", "0")));
+    assert_eq!(img.dimensions(), (320, 240));
+    let first = *img.get_pixel(0, 0);
+    assert!(img.pixels().any(|p| *p != first), "the image is uniform");
+    let blocks = env.block_positions();
+    for (pos, (is_colour, name)) in blocks.iter().zip([(blueish as fn(&Rgb<u8>) -> bool, "blue"), (greenish, "green")])
+    {
+        let (x, y) = r.project(*pos).expect("in front of the camera");
+        assert!((0.0..320.0).contains(&x) && (0.0..240.0).contains(&y), "{name} projects off-frame: {x}, {y}");
+        let p = img.get_pixel(x as u32, y as u32);
+        assert!(is_colour(p), "{name} block centre at ({x:.0}, {y:.0}) has colour {p:?}");
+    }
+    // Somewhere else on the table: neither colour.
+    let (x, y) = r.project([1.15, 0.95, 0.42]).unwrap();
+    let p = img.get_pixel(x as u32, y as u32);
+    assert!(!blueish(p) && !greenish(p), "table pixel {p:?}");
+}
+
+fn bp(args: &[&str], no_egl: bool) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
+    cmd.args(args);
+    if no_egl {
+        cmd.env(blockpuzzle::render::egl::DISABLE_VAR, "1");
+    } else {
+        cmd.env_remove(blockpuzzle::render::egl::DISABLE_VAR);
+    }
+    cmd.output().unwrap()
+}
+
+fn text(o: &std::process::Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+#[test]
+fn gif_and_filmstrip_decode_with_the_expected_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+    let (traj, gif, strip) = (path("r.jsonl"), path("r.gif"), path("strip.png"));
+    let o = bp(
+        &[
+            "rollout",
+            "--env",
+            "GripperTouch-v0",
+            "--policy",
+            "scripted",
+            "--episodes",
+            "1",
+            "--out",
+            &traj,
+            "--render",
+            &gif,
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+        false,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let steps = blockpuzzle::rollout::read_dump(std::path::Path::new(&traj)).unwrap()[0].steps.len();
+    let decoder = image::codecs::gif::GifDecoder::new(std::fs::File::open(&gif).unwrap()).unwrap();
+    let frames = decoder.into_frames().collect_frames().unwrap();
+    assert_eq!(frames.len(), steps + 1, "reset state + one frame per step");
+    assert!(frames.iter().all(|f| f.buffer().dimensions() == (64, 48)));
+
+    let o =
+        bp(&["render", "--traj", &traj, "--filmstrip", "3", "--width", "40", "--height", "30", "--out", &strip], false);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(image::open(&strip).unwrap().to_rgb8().dimensions(), (3 * 40, 30));
+
+    let o = bp(&["render", "--traj", &traj, "--episode", "5", "--out", &path("x.gif")], false);
+    assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
+    let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
+    assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
+}
+
+#[test]
+fn without_egl_rendering_fails_clearly_and_the_rest_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let traj = dir.path().join("r.jsonl");
+    let traj = traj.to_str().unwrap();
+    let o =
+        bp(&["rollout", "--env", "GripperTouch-v0", "--policy", "scripted", "--episodes", "1", "--out", traj], true);
+    assert!(o.status.success(), "{}", text(&o));
+    let gif = dir.path().join("r.gif");
+    let o = bp(&["render", "--traj", traj, "--out", gif.to_str().unwrap()], true);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(t.contains("needs EGL") && t.contains("libegl1") && t.contains("make setup"), "{t}");
+    assert!(!gif.exists(), "nothing written");
+    assert!(bp(&["envs"], true).status.success());
+}
