@@ -216,6 +216,7 @@ fn bad_expert_settings_are_clear_errors() {
     let wrong = AggrevatedConfig { expert: Some(gt.path().to_owned()), ..Default::default() };
     let err = train(&tiny_pggd("BlocksChoose-v0", 1, wrong), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("without grey blocks"), "{err}");
+    assert!(!dir.path().join("expert_policy.json").exists(), "a rejected expert is not copied into the run");
     // DDPG takes no expert.
     let ddpg = TrainConfig {
         aggrevated: AggrevatedConfig { expert: Some(exp.path().to_owned()), ..Default::default() },

@@ -87,14 +87,14 @@ impl Expert {
             }
             return Ok(None);
         };
-        let saved = if resume && frozen.exists() {
+        let from_copy = resume && frozen.exists();
+        let saved = if from_copy {
             load_policy(frozen)
                 .with_context(|| format!("loading this run's copy of the expert, {}", frozen.display()))?
         } else {
-            let saved = load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?;
-            write_json_atomic(frozen, &saved)?;
-            saved
+            load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?
         };
+        let copy = saved.clone();
         let AnyPolicy::Ddpg(policy) = saved.policy else {
             bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
         };
@@ -121,6 +121,10 @@ impl Expert {
         } else {
             None
         };
+        // Only a valid expert is copied into the run.
+        if !from_copy {
+            write_json_atomic(frozen, &copy)?;
+        }
         Ok(Some(Self { policy, critic }))
     }
 
