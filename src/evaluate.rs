@@ -2,7 +2,7 @@
 //! Wilson 95% interval, episodes spread over threads (each episode's seed
 //! fixes it, so the result does not depend on the thread count).
 
-use crate::agents::expert::without_grey;
+use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
 use crate::env::{registry, BlockEnv, ACTION_DIM};
 use crate::policy::Policy;
@@ -40,13 +40,13 @@ impl Policy for Trained {
 ///
 /// # Errors
 /// The observation sizes fit neither way.
-pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &mut BlockEnv) -> Result<Trained> {
+pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result<Trained> {
     let dim = env.observation_space().dim();
     let wanted = saved.policy.obs_dim();
     if wanted == dim {
         return Ok(Trained { policy: saved.policy, grey_blind: false });
     }
-    let blind = without_grey(&env.reset(Some(0))?.0).len();
+    let blind = obs_dim_without_grey(&env.config().blocks);
     if wanted == blind {
         return Ok(Trained { policy: saved.policy, grey_blind: true });
     }
@@ -129,8 +129,8 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     if spec.episodes == 0 {
         bail!("--episodes must be at least 1");
     }
-    let mut env = make_env(spec)?;
-    let policy = trained_policy(path, saved, &mut env)?;
+    let env = make_env(spec)?;
+    let policy = trained_policy(path, saved, &env)?;
     let threads = spec.threads.clamp(1, spec.episodes);
     let wins: Vec<Result<usize>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)

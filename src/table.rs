@@ -53,13 +53,15 @@ pub enum Outcome {
 /// Evaluates one row.
 pub fn evaluate_row(row: &Row, episodes: usize, seed: u64, threads: usize) -> Outcome {
     let Some(path) = &row.policy else { return Outcome::NotGiven };
-    let run = |challenge: bool| -> Result<(Evaluation, usize)> {
+    // The policy file is read once; each evaluation gets its own copy.
+    let run = || -> Result<(Evaluation, Evaluation, usize)> {
         let saved = load_policy(path)?;
         let epoch = saved.epoch;
-        let spec = EvalSpec { env: ENV, challenge, level: None, episodes, seed, threads };
-        Ok((evaluate(path, saved, &spec)?, epoch))
+        let spec = |challenge| EvalSpec { env: ENV, challenge, level: None, episodes, seed, threads };
+        let normal = evaluate(path, saved.clone(), &spec(false))?;
+        Ok((normal, evaluate(path, saved, &spec(true))?, epoch))
     };
-    match run(false).and_then(|(normal, epoch)| Ok((normal, run(true)?.0, epoch))) {
+    match run() {
         Ok((normal, challenge, epoch)) => Outcome::Done { normal, challenge, epoch },
         Err(e) => Outcome::Missing(format!("{e:#}")),
     }

@@ -2,7 +2,7 @@
 //! removed is, field by field, the BlocksTouch observation of the same
 //! blue and green blocks.
 
-use blockpuzzle::agents::expert::without_grey;
+use blockpuzzle::agents::expert::{obs_dim_without_grey, without_grey};
 use blockpuzzle::curriculum::Layout;
 use blockpuzzle::env::{registry, BlockEnv, BLOCK_OBS, ROBOT_OBS};
 
@@ -24,6 +24,7 @@ fn grey_removed_view_matches_the_blocks_touch_layout() {
     let (mut b, _) = choose.reset(Some(0)).unwrap();
     assert_eq!(b.len(), ROBOT_OBS + 3 * BLOCK_OBS);
     assert_eq!(a.len(), ROBOT_OBS + 2 * BLOCK_OBS);
+    assert_eq!(obs_dim_without_grey(&choose.config().blocks), a.len());
     // The grey block's own features are what was cut: its one-hot says grey.
     assert_eq!(&b[b.len() - 4..], &[0.0, 0.0, 0.0, 1.0]);
     // At reset and while the arm moves (away from the grey block), the views

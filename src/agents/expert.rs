@@ -4,8 +4,8 @@
 
 use super::ddpg::DdpgPolicy;
 use super::pggd::PggdPolicy;
-use super::AnyPolicy;
-use crate::env::{BLOCK_OBS, ROBOT_OBS};
+use crate::env::{obs_dim, BLOCK_OBS, ROBOT_OBS};
+use crate::rules::Colour;
 use rand::Rng;
 
 /// Index of "grey" in a block's colour one-hot (red, blue, green, grey),
@@ -30,23 +30,17 @@ pub fn without_grey(obs: &[f32]) -> Vec<f32> {
     out
 }
 
+/// Size of [`without_grey`]'s output for a scene with blocks of `colours`.
+pub fn obs_dim_without_grey(colours: &[Colour]) -> usize {
+    obs_dim(colours.iter().filter(|&&c| c != Colour::Grey).count())
+}
+
 /// β at `epoch`: β0 + (1 − β0)·exp(−epoch / t0) (t0 = 0: β0 from the start).
 pub fn beta(epoch: usize, beta0: f64, t0: f64) -> f64 {
     if t0 <= 0.0 {
         return beta0;
     }
     beta0 + (1.0 - beta0) * (-(epoch as f64) / t0).exp()
-}
-
-/// A policy that sees a 3-block observation through [`without_grey`].
-#[derive(Debug, Clone)]
-pub struct GreyBlind(pub AnyPolicy);
-
-impl GreyBlind {
-    /// The wrapped policy's action on the grey-removed observation.
-    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
-        self.0.act(&without_grey(obs))
-    }
 }
 
 /// Which policy chose a mixed roll-in step.

@@ -364,7 +364,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         path => Box::new(crate::evaluate::trained_policy(
             Path::new(path),
             crate::train::load_policy(Path::new(path))?,
-            &mut env,
+            &env,
         )?),
     };
     let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
@@ -400,12 +400,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
 
 fn train(a: TrainArgs) -> Result<()> {
     let c = &a.config;
-    let algo = match (c.algo, &c.aggrevated.expert) {
-        (crate::train::Algo::Ddpg, _) => "ddpg",
-        (crate::train::Algo::Pggd, None) => "pggd",
-        (crate::train::Algo::Pggd, Some(_)) => "pggd-aggrevated",
-    };
-    let run_dir = a.run_dir.clone().unwrap_or_else(|| PathBuf::from(format!("runs/{}-{algo}-s{}", c.env, c.seed)));
+    let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
     let bar = indicatif::ProgressBar::new(c.epochs as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
@@ -450,11 +445,7 @@ fn train(a: TrainArgs) -> Result<()> {
 /// A run directory's config and progress rows.
 fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
     let run = crate::train::RunDir { dir: dir.to_owned() };
-    let config: crate::train::TrainConfig = serde_json::from_str(
-        &std::fs::read_to_string(run.config()).with_context(|| format!("cannot read {}", run.config().display()))?,
-    )
-    .with_context(|| format!("{} is not a training config", run.config().display()))?;
-    Ok((config, crate::train::read_progress(&run.progress())?))
+    Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
 }
 
 fn plot(a: PlotArgs) -> Result<()> {
@@ -493,9 +484,7 @@ fn table(a: TableArgs) -> Result<()> {
     let md = crate::table::markdown(&done, a.episodes, a.seed);
     print!("{md}");
     if let Some(out) = &a.out {
-        let tmp = out.with_extension("md.tmp");
-        std::fs::write(&tmp, &md).with_context(|| format!("cannot write {}", tmp.display()))?;
-        std::fs::rename(&tmp, out).with_context(|| format!("cannot write {}", out.display()))?;
+        crate::train::write_atomic(out, md.as_bytes())?;
     }
     Ok(())
 }

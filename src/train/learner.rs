@@ -68,19 +68,14 @@ pub(crate) struct Expert {
 }
 
 impl Expert {
-    /// Loads the expert named by `config` and checks that it fits
-    /// observations like `sample_obs` once grey blocks are removed. A resumed
+    /// Loads the expert named by `config` and checks that it takes `seen`
+    /// observation components (the environment's, grey blocks removed). A resumed
     /// run takes the policy from its copy `frozen` (when there is one); a new
     /// run takes it from the configured path and writes the copy.
     ///
     /// # Errors
     /// Missing or malformed files, a PGGD policy, a size mismatch.
-    pub(crate) fn load(
-        config: &AggrevatedConfig,
-        sample_obs: &[f32],
-        frozen: &Path,
-        resume: bool,
-    ) -> Result<Option<Self>> {
+    pub(crate) fn load(config: &AggrevatedConfig, seen: usize, frozen: &Path, resume: bool) -> Result<Option<Self>> {
         let Some(path) = &config.expert else {
             if config.pg_weight == PgWeight::ExpertAdvantage {
                 bail!("--pg-weight expert-advantage needs an expert (--expert DIR)");
@@ -98,7 +93,6 @@ impl Expert {
         let AnyPolicy::Ddpg(policy) = saved.policy else {
             bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
         };
-        let seen = without_grey(sample_obs).len();
         if policy.norm.dim() != seen {
             bail!(
                 "expert {} expects {}-dimensional observations ({}), but this environment's observation without \

@@ -26,7 +26,7 @@ mod rundir;
 
 pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{load_policy, read_progress, write_json_atomic, RunDir, SavedPolicy};
+pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, RunDir, SavedPolicy};
 
 use crate::agents::ddpg::{DdpgConfig, Precision, UpdateStats};
 use crate::agents::pggd::PggdConfig;
@@ -179,6 +179,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
         bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
     }
+    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
+        bail!("--pg-weight is for --algo pggd");
+    }
     if !(0.0..=1.0).contains(&config.aggrevated.beta0) || config.aggrevated.t0 < 0.0 {
         bail!("--beta0 must be in [0, 1] and --t0 at least 0");
     }
@@ -194,14 +197,10 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     let mut envs: Vec<BlockEnv> = (0..config.workers).map(|_| registry::make(&config.env)).collect::<Result<_, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let max_level = envs[0].max_level();
-    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
-        bail!("--pg-weight is for --algo pggd");
-    }
 
     // Agent, replay buffer, run state: fresh or from the checkpoint.
     let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
-        let saved: TrainConfig = serde_json::from_str(&std::fs::read_to_string(run.config())?)
-            .with_context(|| format!("{} is not a training config", run.config().display()))?;
+        let saved = run.read_config()?;
         if saved.env != config.env
             || saved.algo != config.algo
             || saved.ddpg != config.ddpg
@@ -246,7 +245,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if agent.algo() != config.algo {
         bail!("{} holds a {:?} agent, not {:?}", run.checkpoint().display(), agent.algo(), config.algo);
     }
-    let expert = Expert::load(&config.aggrevated, &envs[0].reset(Some(0))?.0, &run.expert_policy(), resume)?;
+    let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks);
+    let expert = Expert::load(&config.aggrevated, seen, &run.expert_policy(), resume)?;
     let mut learner = Learner { agent, expert };
     write_json_atomic(&run.config(), config)?;
 
@@ -363,13 +363,22 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
 }
 
 impl TrainConfig {
-    /// Plot title: algorithm and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
+    /// The method as (display name, short name): DDPG, PGGD, or PGGD + AggreVaTeD.
+    fn method(&self) -> (&'static str, &'static str) {
+        match (self.algo, &self.aggrevated.expert) {
+            (Algo::Ddpg, _) => ("DDPG", "ddpg"),
+            (Algo::Pggd, None) => ("PGGD", "pggd"),
+            (Algo::Pggd, Some(_)) => ("PGGD + AggreVaTeD", "pggd-aggrevated"),
+        }
+    }
+
+    /// Plot title: method and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
     pub fn title(&self) -> String {
-        let algo = match (self.algo, &self.aggrevated.expert) {
-            (Algo::Ddpg, _) => "DDPG",
-            (Algo::Pggd, None) => "PGGD",
-            (Algo::Pggd, Some(_)) => "PGGD + AggreVaTeD",
-        };
-        format!("{algo} on {}", self.env)
+        format!("{} on {}", self.method().0, self.env)
+    }
+
+    /// The default run directory, `runs/ENV-METHOD-sSEED`.
+    pub fn default_run_dir(&self) -> std::path::PathBuf {
+        format!("runs/{}-{}-s{}", self.env, self.method().1, self.seed).into()
     }
 }

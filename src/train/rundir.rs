@@ -1,6 +1,6 @@
 //! The run directory: its files, saved policies, `progress.csv`.
 
-use super::EpochRow;
+use super::{EpochRow, TrainConfig};
 use crate::agents::AnyPolicy;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
@@ -37,6 +37,15 @@ impl RunDir {
     pub fn best_policy(&self) -> PathBuf {
         self.dir.join("best_policy.json")
     }
+    /// The run's `config.json`.
+    ///
+    /// # Errors
+    /// A missing or malformed file, named.
+    pub fn read_config(&self) -> Result<TrainConfig> {
+        let path = self.config();
+        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("{} is not a training config", path.display()))
+    }
     /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
     /// (a resumed run uses this copy, so the expert cannot change under it).
     pub fn expert_policy(&self) -> PathBuf {
@@ -57,15 +66,25 @@ pub struct SavedPolicy {
     pub policy: AnyPolicy,
 }
 
+/// Writes `bytes` to `path` through a temporary file `path.EXT.tmp`.
+///
+/// # Errors
+/// I/O errors with the path.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = match path.extension() {
+        Some(ext) => path.with_extension(format!("{}.tmp", ext.to_string_lossy())),
+        None => path.with_extension("tmp"),
+    };
+    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+}
+
 /// Writes `value` as JSON to `path` through a temporary file.
 ///
 /// # Errors
 /// I/O errors with the path.
 pub fn write_json_atomic(path: &Path, value: &impl Serialize) -> Result<()> {
-    let tmp = path.with_extension("json.tmp");
-    let text = serde_json::to_vec_pretty(value)?;
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    write_atomic(path, &serde_json::to_vec_pretty(value)?)
 }
 
 /// Loads a policy from a file, or from a run directory (`best_policy.json`,
