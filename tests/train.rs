@@ -225,3 +225,51 @@ fn bad_expert_settings_are_clear_errors() {
     let err = train(&ddpg, dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--algo pggd"), "{err}");
 }
+
+#[test]
+fn expert_advantage_uses_the_critic_of_the_experts_epoch() {
+    use blockpuzzle::train::SavedPolicy;
+    let exp = tempfile::tempdir().unwrap();
+    expert(exp.path());
+    let adv = |expert: &Path| AggrevatedConfig {
+        expert: Some(expert.to_owned()),
+        pg_weight: PgWeight::ExpertAdvantage,
+        ..Default::default()
+    };
+    let read = |p: &Path| -> SavedPolicy { serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap() };
+    // A policy saved by training carries its critic: no checkpoint needed.
+    let saved = read(&exp.path().join("policy.json"));
+    assert!(saved.critic.is_some());
+    let alone = tempfile::tempdir().unwrap();
+    std::fs::copy(exp.path().join("policy.json"), alone.path().join("expert.json")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    train(&tiny_pggd("BlocksChoose-v0", 1, adv(&alone.path().join("expert.json"))), dir.path(), false, &mut quiet)
+        .unwrap();
+    // The run's copy keeps the critic, so the run resumes without the original.
+    assert_eq!(read(&dir.path().join("expert_policy.json")).critic, saved.critic);
+    drop(alone);
+    let cfg: TrainConfig =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
+    train(&TrainConfig { epochs: 2, ..cfg }, dir.path(), true, &mut quiet).unwrap();
+
+    // An older policy without a critic: the checkpoint beside it is used only
+    // when it is of the same epoch.
+    let old = SavedPolicy { critic: None, ..saved };
+    std::fs::write(exp.path().join("policy.json"), serde_json::to_string(&old).unwrap()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    train(&tiny_pggd("BlocksChoose-v0", 1, adv(&exp.path().join("policy.json"))), dir.path(), false, &mut quiet)
+        .unwrap();
+    assert!(read(&dir.path().join("expert_policy.json")).critic.is_some(), "the copy gets the checkpoint's critic");
+    let stale = SavedPolicy { epoch: old.epoch + 5, ..old };
+    std::fs::write(exp.path().join("policy.json"), serde_json::to_string(&stale).unwrap()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let err =
+        train(&tiny_pggd("BlocksChoose-v0", 1, adv(&exp.path().join("policy.json"))), dir.path(), false, &mut quiet)
+            .unwrap_err();
+    assert!(format!("{err:#}").contains("another policy"), "{err:#}");
+    std::fs::remove_file(exp.path().join("checkpoint.bin")).unwrap();
+    let err =
+        train(&tiny_pggd("BlocksChoose-v0", 1, adv(&exp.path().join("policy.json"))), dir.path(), false, &mut quiet)
+            .unwrap_err();
+    assert!(format!("{err:#}").contains("no ") && format!("{err:#}").contains("checkpoint.bin"), "{err:#}");
+}

@@ -3,10 +3,14 @@
 //! probability β, and the mixed roll-in policy.
 
 use super::ddpg::DdpgPolicy;
+use super::mlp::TanhMlp;
+use super::nets::{tensor_to_vec, Net};
+use super::normalizer::Normalizer;
 use super::pggd::PggdPolicy;
 use crate::env::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 use crate::rules::Colour;
 use rand::Rng;
+use tch::Tensor;
 
 /// Index of "grey" in a block's colour one-hot (red, blue, green, grey),
 /// counted from the end of the block's features.
@@ -75,6 +79,54 @@ impl Mixture<'_> {
     }
 }
 
+/// The expert's actor and critic in libtorch, for batched advantages
+/// A*(s̃, a) = Q*(s̃, a) − Q*(s̃, π*(s̃)) (AggreVaTeD's `expert-advantage`).
+pub struct ExpertCritic {
+    actor: Net,
+    critic: Net,
+    norm: Normalizer,
+    act_dim: usize,
+}
+
+impl ExpertCritic {
+    /// From a saved DDPG policy and the critic saved with it.
+    ///
+    /// # Errors
+    /// A message when the critic does not take the policy's observation and
+    /// action, or does not output one value.
+    pub fn new(policy: &DdpgPolicy, critic: &TanhMlp) -> Result<Self, String> {
+        let actor = Net::from_plain(&policy.net).map_err(|e| format!("actor: {e}"))?;
+        let critic = Net::from_plain(critic).map_err(|e| format!("critic: {e}"))?;
+        let (obs_dim, act_dim) = (actor.sizes()[0], *actor.sizes().last().unwrap_or(&0));
+        if critic.sizes()[0] != obs_dim + act_dim || critic.sizes().last() != Some(&1) {
+            return Err(format!(
+                "the critic maps {} inputs to {:?} outputs; the actor's observation and action need {} inputs and 1 \
+                 output",
+                critic.sizes()[0],
+                critic.sizes().last(),
+                obs_dim + act_dim
+            ));
+        }
+        if policy.norm.dim() != obs_dim {
+            return Err(format!("the normaliser has {} entries, the actor {obs_dim} inputs", policy.norm.dim()));
+        }
+        Ok(Self { actor, critic, norm: policy.norm.clone(), act_dim })
+    }
+
+    /// A*(s̃, a) for rows of grey-removed observations and actions (actions
+    /// clipped to [−1, 1] as the environment does).
+    pub fn advantage(&self, obs: &[f32], act: &[f32]) -> Vec<f32> {
+        tch::no_grad(|| {
+            let mut x = obs.to_vec();
+            self.norm.normalize_in_place(&mut x);
+            let o = Tensor::of_slice(&x).view([-1, self.norm.dim() as i64]);
+            let a = Tensor::of_slice(act).view([-1, self.act_dim as i64]).clamp(-1.0, 1.0);
+            let q = |a: &Tensor| self.critic.forward(&Tensor::cat(&[&o, a], 1));
+            tensor_to_vec(&(q(&a) - q(&self.actor.forward(&o))))
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,6 +180,30 @@ mod tests {
         let mut r = ChaCha8Rng::seed_from_u64(2);
         let n = (0..10_000).filter(|_| m.act(&obs, &mut r).0 == Actor::Expert).count();
         assert!((2_700..3_300).contains(&n), "{n}");
+    }
+
+    #[test]
+    fn saved_critic_gives_the_learners_advantage() {
+        use crate::agents::ddpg::{Ddpg, DdpgConfig};
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut ddpg = Ddpg::new(6, 4, DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &mut rng);
+        let obs: Vec<f32> = (0..18).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
+        ddpg.norm.update(&obs);
+        let act: Vec<f32> = (0..12).map(|k| (k as f32 * 0.91).cos() * 1.5).collect();
+        let expert = ExpertCritic::new(&ddpg.policy(), &ddpg.critic.to_plain()).unwrap();
+        let (ours, theirs) = (expert.advantage(&obs, &act), ddpg.advantage(&obs, &act));
+        assert_eq!(ours.len(), 3);
+        for (a, b) in ours.iter().zip(&theirs) {
+            assert!((a - b).abs() < 1e-5, "{ours:?} vs {theirs:?}");
+        }
+        assert!(ours.iter().any(|a| a.abs() > 1e-4), "a random critic gives non-zero advantages");
+        // The expert's own action has zero advantage.
+        let own: Vec<f32> = obs.chunks(6).flat_map(|o| ddpg.policy().act(o)).collect();
+        assert!(expert.advantage(&obs, &own).iter().all(|a| a.abs() < 1e-5));
+        // A critic of another shape is refused.
+        let other = Ddpg::new(5, 4, DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &mut rng);
+        assert!(ExpertCritic::new(&ddpg.policy(), &other.critic.to_plain()).is_err());
     }
 
     #[test]

@@ -1,9 +1,11 @@
 //! The learner being trained (DDPG or PGGD) and, for AggreVaTeD, the expert.
 
 use super::rollouts::Behaviour;
+use super::rundir::SavedPolicy;
 use super::{load_policy, write_json_atomic, TrainConfig};
 use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
-use crate::agents::expert::{beta, without_grey, Mixture};
+use crate::agents::expert::{beta, without_grey, ExpertCritic, Mixture};
+use crate::agents::mlp::TanhMlp;
 use crate::agents::normalizer::Normalizer;
 use crate::agents::pggd::Pggd;
 use crate::agents::replay::Batch;
@@ -60,21 +62,21 @@ impl Default for AggrevatedConfig {
     }
 }
 
-/// The AggreVaTeD expert: its policy and, for `expert-advantage`, its whole
-/// DDPG learner (critic included).
+/// The AggreVaTeD expert: its policy and, for `expert-advantage`, its critic.
 pub(crate) struct Expert {
     policy: DdpgPolicy,
-    critic: Option<Ddpg>,
+    critic: Option<ExpertCritic>,
 }
 
 impl Expert {
     /// Loads the expert named by `config` and checks that it takes `seen`
     /// observation components (the environment's, grey blocks removed). A resumed
-    /// run takes the policy from its copy `frozen` (when there is one); a new
-    /// run takes it from the configured path and writes the copy.
+    /// run takes the policy (and critic) from its copy `frozen` (when there is
+    /// one); a new run takes them from the configured path and writes the copy.
     ///
     /// # Errors
-    /// Missing or malformed files, a PGGD policy, a size mismatch.
+    /// Missing or malformed files, a PGGD policy, a size mismatch, no critic
+    /// of the policy's epoch for `expert-advantage`.
     pub(crate) fn load(config: &AggrevatedConfig, seen: usize, frozen: &Path, resume: bool) -> Result<Option<Self>> {
         let Some(path) = &config.expert else {
             if config.pg_weight == PgWeight::ExpertAdvantage {
@@ -83,14 +85,13 @@ impl Expert {
             return Ok(None);
         };
         let from_copy = resume && frozen.exists();
-        let saved = if from_copy {
+        let mut saved = if from_copy {
             load_policy(frozen)
                 .with_context(|| format!("loading this run's copy of the expert, {}", frozen.display()))?
         } else {
             load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?
         };
-        let copy = saved.clone();
-        let AnyPolicy::Ddpg(policy) = saved.policy else {
+        let AnyPolicy::Ddpg(policy) = saved.policy.clone() else {
             bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
         };
         if policy.norm.dim() != seen {
@@ -103,21 +104,22 @@ impl Expert {
             );
         }
         let critic = if config.pg_weight == PgWeight::ExpertAdvantage {
-            let ckpt = if path.is_dir() { path.join("checkpoint.bin") } else { path.with_file_name("checkpoint.bin") };
-            if !ckpt.exists() {
-                bail!("--pg-weight expert-advantage needs the expert's critic, but {} does not exist", ckpt.display());
+            if saved.critic.is_none() {
+                if from_copy {
+                    bail!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display());
+                }
+                saved.critic = Some(critic_from_checkpoint(path, &saved, seen)?);
             }
-            let loaded = super::checkpoint::load(&ckpt, &saved.env_id, seen, crate::env::ACTION_DIM)?;
-            let Agent::Ddpg(agent) = loaded.agent else {
-                bail!("{} is not a DDPG checkpoint", ckpt.display());
-            };
-            Some(agent)
+            let plain = saved.critic.as_ref().expect("set above");
+            let critic = ExpertCritic::new(&policy, plain)
+                .map_err(|e| anyhow::anyhow!("the critic saved with expert {} does not fit it: {e}", path.display()))?;
+            Some(critic)
         } else {
             None
         };
-        // Only a valid expert is copied into the run.
+        // Only a valid expert is copied into the run (with its critic when used).
         if !from_copy {
-            write_json_atomic(frozen, &copy)?;
+            write_json_atomic(frozen, &saved)?;
         }
         Ok(Some(Self { policy, critic }))
     }
@@ -127,6 +129,34 @@ impl Expert {
         let critic = self.critic.as_ref()?;
         let seen: Vec<f32> = batch.obs.chunks_exact(obs_dim).flat_map(without_grey).collect();
         Some(critic.advantage(&seen, &batch.act))
+    }
+}
+
+/// The critic of an expert policy saved without one (older runs): from the
+/// checkpoint of its run directory, which must be of the policy's epoch.
+fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Result<TanhMlp> {
+    let ckpt = if path.is_dir() { path.join("checkpoint.bin") } else { path.with_file_name("checkpoint.bin") };
+    let no_critic = format!(
+        "--pg-weight expert-advantage needs the expert's critic: {} (epoch {}) was saved without one",
+        path.display(),
+        saved.epoch
+    );
+    if !ckpt.exists() {
+        bail!("{no_critic}, and there is no {} beside it", ckpt.display());
+    }
+    let loaded = super::checkpoint::load(&ckpt, &saved.env_id, seen, crate::env::ACTION_DIM)
+        .with_context(|| format!("{no_critic}; reading the critic from {}", ckpt.display()))?;
+    if loaded.state.epoch != saved.epoch {
+        bail!(
+            "{no_critic}, and {} is at epoch {}, so its critic belongs to another policy; use the policy.json \
+             written with that checkpoint, or a policy saved by this version (it carries its critic)",
+            ckpt.display(),
+            loaded.state.epoch
+        );
+    }
+    match loaded.agent {
+        Agent::Ddpg(agent) => Ok(agent.critic.to_plain()),
+        Agent::Pggd(_) => bail!("{} is not a DDPG checkpoint", ckpt.display()),
     }
 }
 
@@ -170,6 +200,14 @@ impl Agent {
         match self {
             Self::Ddpg(a) => AnyPolicy::Ddpg(a.policy()),
             Self::Pggd(a) => AnyPolicy::Pggd(a.policy()),
+        }
+    }
+
+    /// DDPG's critic as a plain network (saved beside the policy); none for PGGD.
+    pub fn critic(&self) -> Option<TanhMlp> {
+        match self {
+            Self::Ddpg(a) => Some(a.critic.to_plain()),
+            Self::Pggd(_) => None,
         }
     }
 

@@ -348,8 +348,13 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         rows.push(row.clone());
         write_progress(&run.progress(), &rows)?;
         plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
-        let saved =
-            SavedPolicy { env_id: config.env.clone(), epoch: state.epoch, finals_success: row.finals_success, policy };
+        let saved = SavedPolicy {
+            env_id: config.env.clone(),
+            epoch: state.epoch,
+            finals_success: row.finals_success,
+            policy,
+            critic: learner.agent.critic(),
+        };
         write_json_atomic(&run.policy(), &saved)?;
         // Ties go to the newer policy: same finals score, more training.
         if row.finals_success >= state.best_finals {

@@ -1,6 +1,7 @@
 //! The run directory: its files, saved policies, `progress.csv`.
 
 use super::{EpochRow, TrainConfig};
+use crate::agents::mlp::TanhMlp;
 use crate::agents::AnyPolicy;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
@@ -64,6 +65,12 @@ pub struct SavedPolicy {
     pub finals_success: f64,
     /// The policy.
     pub policy: AnyPolicy,
+    /// DDPG's critic Q(s, a) of the same epoch (input: the normalised
+    /// observation, then the action), so that the policy can be an AggreVaTeD
+    /// expert with `--pg-weight expert-advantage`. Absent for PGGD and in
+    /// policies saved before the critic was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critic: Option<TanhMlp>,
 }
 
 /// Writes `bytes` to `path` through a temporary file `path.EXT.tmp`.
