@@ -10,7 +10,7 @@ EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated pggd table
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table
 
 setup:
 	bash scripts/setup.sh
@@ -43,6 +43,11 @@ ddpg3: build
 aggrevated: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
 		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
+#   the same with the paper's descent direction, the expert critic's advantage (not a table row);
+aggrevated-adv: build
+	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --pg-weight expert-advantage --workers 2 \
+		--epochs 300 --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-adv-s0 \
+		$(call resume,runs/BlocksChoose-v0-pggd-aggrevated-adv-s0)
 #   PGGD alone on BlocksChoose-v0;
 pggd: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --workers 2 --epochs 200 \

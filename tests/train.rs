@@ -273,3 +273,26 @@ fn expert_advantage_uses_the_critic_of_the_experts_epoch() {
             .unwrap_err();
     assert!(format!("{err:#}").contains("no ") && format!("{err:#}").contains("checkpoint.bin"), "{err:#}");
 }
+
+#[test]
+fn each_method_has_its_own_default_run_directory() {
+    let with = |pg_weight| AggrevatedConfig { expert: Some("e".into()), pg_weight, ..Default::default() };
+    let dirs: Vec<_> = [
+        tiny("BlocksChoose-v0", 1),
+        tiny_pggd("BlocksChoose-v0", 1, AggrevatedConfig::default()),
+        tiny_pggd("BlocksChoose-v0", 1, with(PgWeight::Return)),
+        tiny_pggd("BlocksChoose-v0", 1, with(PgWeight::ExpertAdvantage)),
+    ]
+    .iter()
+    .map(|c| c.default_run_dir().display().to_string())
+    .collect();
+    assert_eq!(
+        dirs,
+        [
+            "runs/BlocksChoose-v0-ddpg-s7",
+            "runs/BlocksChoose-v0-pggd-s7",
+            "runs/BlocksChoose-v0-pggd-aggrevated-s7",
+            "runs/BlocksChoose-v0-pggd-aggrevated-adv-s7"
+        ]
+    );
+}

@@ -373,7 +373,10 @@ impl TrainConfig {
         match (self.algo, &self.aggrevated.expert) {
             (Algo::Ddpg, _) => ("DDPG", "ddpg"),
             (Algo::Pggd, None) => ("PGGD", "pggd"),
-            (Algo::Pggd, Some(_)) => ("PGGD + AggreVaTeD", "pggd-aggrevated"),
+            (Algo::Pggd, Some(_)) => match self.aggrevated.pg_weight {
+                PgWeight::Return => ("PGGD + AggreVaTeD", "pggd-aggrevated"),
+                PgWeight::ExpertAdvantage => ("PGGD + AggreVaTeD (expert advantage)", "pggd-aggrevated-adv"),
+            },
         }
     }
 
