@@ -104,15 +104,16 @@ impl Expert {
             );
         }
         let critic = if config.pg_weight == PgWeight::ExpertAdvantage {
-            if saved.critic.is_none() {
-                if from_copy {
-                    bail!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display());
+            let plain = match &saved.critic {
+                Some(c) => c.clone(),
+                None if from_copy => {
+                    bail!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display())
                 }
-                saved.critic = Some(critic_from_checkpoint(path, &saved, seen)?);
-            }
-            let plain = saved.critic.as_ref().expect("set above");
-            let critic = ExpertCritic::new(&policy, plain)
+                None => critic_from_checkpoint(path, &saved, seen)?,
+            };
+            let critic = ExpertCritic::new(&policy, &plain)
                 .map_err(|e| anyhow::anyhow!("the critic saved with expert {} does not fit it: {e}", path.display()))?;
+            saved.critic = Some(plain);
             Some(critic)
         } else {
             None
