@@ -228,17 +228,6 @@ impl Ddpg {
         }
     }
 
-    /// Q(s, a) − Q(s, π(s)) for rows of raw observations and actions (the
-    /// advantage of `a` under this agent's critic; no gradients).
-    pub fn advantage(&self, obs: &[f32], act: &[f32]) -> Vec<f32> {
-        tch::no_grad(|| {
-            let o = self.obs_tensor(obs);
-            let a = Tensor::of_slice(act).view([-1, self.act_dim as i64]).clamp(-1.0, 1.0);
-            let adv = Self::q(&self.critic, &o, &a) - Self::q(&self.critic, &o, &self.actor.forward(&o));
-            super::nets::tensor_to_vec(&adv)
-        })
-    }
-
     /// The critic targets y of the last update, one per transition.
     pub fn last_targets(&self) -> &[f32] {
         &self.last_targets

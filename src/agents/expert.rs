@@ -191,8 +191,23 @@ mod tests {
         let obs: Vec<f32> = (0..18).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
         ddpg.norm.update(&obs);
         let act: Vec<f32> = (0..12).map(|k| (k as f32 * 0.91).cos() * 1.5).collect();
-        let expert = ExpertCritic::new(&ddpg.policy(), &ddpg.critic.to_plain()).unwrap();
-        let (ours, theirs) = (expert.advantage(&obs, &act), ddpg.advantage(&obs, &act));
+        let (policy, critic) = (ddpg.policy(), ddpg.critic.to_plain());
+        let expert = ExpertCritic::new(&policy, &critic).unwrap();
+        // The reference: the plain-Rust networks, row by row.
+        let theirs: Vec<f32> = obs
+            .chunks(6)
+            .zip(act.chunks(4))
+            .map(|(o, a)| {
+                let mut x = o.to_vec();
+                policy.norm.normalize_in_place(&mut x);
+                let q = |a: &[f32]| {
+                    let a: Vec<f32> = a.iter().map(|v| v.clamp(-1.0, 1.0)).collect();
+                    critic.forward(&[x.as_slice(), &a].concat())[0]
+                };
+                q(a) - q(&policy.net.forward(&x))
+            })
+            .collect();
+        let ours = expert.advantage(&obs, &act);
         assert_eq!(ours.len(), 3);
         for (a, b) in ours.iter().zip(&theirs) {
             assert!((a - b).abs() < 1e-5, "{ours:?} vs {theirs:?}");
