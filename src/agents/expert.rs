@@ -204,7 +204,7 @@ mod tests {
                     let a: Vec<f32> = a.iter().map(|v| v.clamp(-1.0, 1.0)).collect();
                     critic.forward(&[x.as_slice(), &a].concat())[0]
                 };
-                q(a) - q(&policy.net.forward(&x))
+                q(a) - q(&policy.act(o))
             })
             .collect();
         let ours = expert.advantage(&obs, &act);

@@ -104,8 +104,8 @@ impl Expert {
             );
         }
         let critic = if config.pg_weight == PgWeight::ExpertAdvantage {
-            let plain = match &saved.critic {
-                Some(c) => c.clone(),
+            let plain = match saved.critic.take() {
+                Some(c) => c,
                 None if from_copy => {
                     bail!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display())
                 }
