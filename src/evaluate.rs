@@ -46,7 +46,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     if wanted == dim {
         return Ok(Trained { policy: saved.policy, grey_blind: false });
     }
-    let blind = obs_dim_without_grey(&env.config().blocks);
+    let blind = obs_dim_without_grey(&env.config().blocks());
     if wanted == blind {
         return Ok(Trained { policy: saved.policy, grey_blind: true });
     }

@@ -5,7 +5,6 @@
 //! every blue object touches a green one. The environments put coloured blocks
 //! in front of the OpenAI Fetch robot in MuJoCo.
 
-pub mod curriculum;
 pub mod env;
 pub mod evaluate;
 pub mod math;
@@ -13,6 +12,7 @@ pub mod mj;
 pub mod rules;
 pub mod scene;
 pub mod table;
+pub mod task;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;

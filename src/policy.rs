@@ -74,7 +74,7 @@ pub struct ScriptedPolicy {
 impl ScriptedPolicy {
     /// The controller for an environment configuration.
     pub fn for_env(config: &EnvConfig) -> Self {
-        Self { reach: config.gripper == Colour::Blue }
+        Self { reach: config.gripper() == Colour::Blue }
     }
 }
 

@@ -3,17 +3,15 @@
 //! blue and green blocks.
 
 use blockpuzzle::agents::expert::{obs_dim_without_grey, without_grey};
-use blockpuzzle::curriculum::Layout;
-use blockpuzzle::env::{registry, BlockEnv, BLOCK_OBS, ROBOT_OBS};
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig, BLOCK_OBS, ROBOT_OBS};
 
 const BLUE: [f64; 2] = [1.30, 0.70];
 const GREEN: [f64; 2] = [1.40, 0.82];
 const GREY_FAR: [f64; 2] = [1.15, 0.95];
 
 fn env(id: &str, positions: Vec<[f64; 2]>) -> BlockEnv {
-    let mut c = registry::config(id).unwrap();
-    c.layout = Layout::Fixed(positions);
-    BlockEnv::new(c).unwrap()
+    let spec = registry::task(id).unwrap().spec.with_fixed_layout(&positions).unwrap();
+    BlockEnv::new(EnvConfig::from_spec(spec).unwrap()).unwrap()
 }
 
 #[test]
@@ -24,7 +22,7 @@ fn grey_removed_view_matches_the_blocks_touch_layout() {
     let (mut b, _) = choose.reset(Some(0)).unwrap();
     assert_eq!(b.len(), ROBOT_OBS + 3 * BLOCK_OBS);
     assert_eq!(a.len(), ROBOT_OBS + 2 * BLOCK_OBS);
-    assert_eq!(obs_dim_without_grey(&choose.config().blocks), a.len());
+    assert_eq!(obs_dim_without_grey(&choose.config().blocks()), a.len());
     // The grey block's own features are what was cut: its one-hot says grey.
     assert_eq!(&b[b.len() - 4..], &[0.0, 0.0, 0.0, 1.0]);
     // At reset and while the arm moves (away from the grey block), the views

@@ -3,7 +3,7 @@
 
 mod common;
 
-use blockpuzzle::env::{ids, make, registry, BlockEnv, EnvError, ACTION_DIM};
+use blockpuzzle::env::{ids, make, registry, BlockEnv, EnvConfig, EnvError, ACTION_DIM};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use common::trajectory;
 
@@ -184,11 +184,14 @@ fn random_policy_rarely_succeeds_at_full_difficulty() {
 #[test]
 fn custom_configs_are_validated() {
     let mut cfg = registry::config("BlocksTouch-v0").unwrap();
-    cfg.max_episode_steps = 0;
+    cfg.n_substeps = 0;
     assert!(matches!(BlockEnv::new(cfg), Err(EnvError::Config(_))));
-    let mut cfg = registry::config("BlocksTouch-v0").unwrap();
-    cfg.blocks = vec![blockpuzzle::Colour::Green, blockpuzzle::Colour::Grey];
-    let err = BlockEnv::new(cfg).err().unwrap();
+    let mut spec = registry::task("BlocksTouch-v0").unwrap().spec;
+    spec.max_episode_steps = 0;
+    assert!(matches!(EnvConfig::from_spec(spec), Err(EnvError::Task(_))));
+    let mut spec = registry::task("BlocksTouch-v0").unwrap().spec;
+    spec.objects[0].get_mut().colour = blockpuzzle::Colour::Grey;
+    let err = EnvConfig::from_spec(spec).err().unwrap();
     assert!(err.to_string().contains("blue"), "{err}");
     let _ = RandomPolicy::new(0).act(&[]);
 }

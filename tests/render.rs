@@ -2,8 +2,7 @@
 //! shows its blocks where the camera projects them, and the GIF and
 //! filmstrip outputs decode with the expected frames and sizes.
 
-use blockpuzzle::curriculum::Layout;
-use blockpuzzle::env::{registry, BlockEnv};
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
 use blockpuzzle::render::{Renderer, View};
 use image::{AnimationDecoder, Rgb};
 use std::process::Command;
@@ -24,9 +23,8 @@ fn greenish(p: &Rgb<u8>) -> bool {
 
 #[test]
 fn blocks_appear_where_the_camera_projects_them() {
-    let mut c = registry::config("BlocksTouch-v0").unwrap();
-    c.layout = Layout::Fixed(vec![BLUE_AT, GREEN_AT]);
-    let mut env = BlockEnv::new(c).unwrap();
+    let spec = registry::task("BlocksTouch-v0").unwrap().spec.with_fixed_layout(&[BLUE_AT, GREEN_AT]).unwrap();
+    let mut env = BlockEnv::new(EnvConfig::from_spec(spec).unwrap()).unwrap();
     env.reset(Some(0)).unwrap();
     let model = env.data().model().clone();
     // A closer camera than the default, so that each block covers many pixels.

@@ -1,7 +1,7 @@
 //! Each rule scenario in simulation, with blocks placed by hand.
 
-use blockpuzzle::curriculum::Layout;
 use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError};
+use blockpuzzle::task::TaskSpec;
 use blockpuzzle::rules::{ContactState, Outcome};
 use blockpuzzle::Colour::{self, *};
 
@@ -10,8 +10,20 @@ const FAR: [f64; 2] = [1.12, 1.02];
 const A: [f64; 2] = [1.30, 0.60];
 const A_TOUCH: [f64; 2] = [1.349, 0.60];
 
+fn spec(blocks: Vec<Colour>, positions: Vec<[f64; 2]>) -> TaskSpec {
+    TaskSpec::fixed("test", &blocks, &positions).unwrap()
+}
+
 fn env(blocks: Vec<Colour>, positions: Vec<[f64; 2]>) -> BlockEnv {
-    BlockEnv::new(EnvConfig::custom("test", blocks, Layout::Fixed(positions))).unwrap()
+    BlockEnv::new(EnvConfig::from_spec(spec(blocks, positions)).unwrap()).unwrap()
+}
+
+/// A fixed-layout task with the gripper and table in these colours.
+fn coloured(gripper: Colour, table: Colour, blocks: Vec<Colour>, positions: Vec<[f64; 2]>) -> BlockEnv {
+    let mut s = spec(blocks, positions);
+    s.robot.gripper = gripper;
+    s.table.colour = table;
+    BlockEnv::new(EnvConfig::from_spec(s).unwrap()).unwrap()
 }
 
 #[test]
@@ -36,22 +48,14 @@ fn red_touching_blue_at_reset_is_rejected() {
         }
         other => panic!("{other:?}"),
     }
-    let mut red_table = BlockEnv::new(EnvConfig {
-        table: Red,
-        ..EnvConfig::custom("t", vec![Blue, Green], Layout::Fixed(vec![A, FAR]))
-    })
-    .unwrap();
+    let mut red_table = coloured(Grey, Red, vec![Blue, Green], vec![A, FAR]);
     let err = red_table.reset(Some(0)).unwrap_err();
     assert!(err.to_string().contains("table") && err.to_string().contains("block0"), "{err}");
 }
 
 #[test]
 fn blue_gripper_on_red_block_fails_with_the_remaining_steps_as_penalty() {
-    let mut e = BlockEnv::new(EnvConfig {
-        gripper: Blue,
-        ..EnvConfig::custom("t", vec![Red, Green], Layout::Fixed(vec![[1.342, 0.749], FAR]))
-    })
-    .unwrap();
+    let mut e = coloured(Blue, Grey, vec![Red, Green], vec![[1.342, 0.749], FAR]);
     e.reset(Some(0)).unwrap();
     let mut t = 0;
     loop {
@@ -70,12 +74,7 @@ fn blue_gripper_on_red_block_fails_with_the_remaining_steps_as_penalty() {
 
 #[test]
 fn blue_gripper_on_red_table_fails() {
-    let mut e = BlockEnv::new(EnvConfig {
-        gripper: Blue,
-        table: Red,
-        ..EnvConfig::custom("t", vec![Green], Layout::Fixed(vec![FAR]))
-    })
-    .unwrap();
+    let mut e = coloured(Blue, Red, vec![Green], vec![FAR]);
     e.reset(Some(0)).unwrap();
     let outcome = (0..20).find_map(|_| {
         let s = e.step(&[0.0, 0.0, -1.0, 0.0]).unwrap();

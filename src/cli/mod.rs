@@ -263,13 +263,13 @@ pub fn main() -> Result<()> {
     match cli.command {
         Command::Envs => {
             for r in registry::REGISTRY {
-                let env = registry::config(r.id)?;
+                let task = registry::task(r.id)?;
                 println!(
-                    "{:<16} obs {:>2}  levels 0-{:<2}  {}",
+                    "{:<24} obs {:>3}  levels 0-{:<2}  {}",
                     r.id,
-                    crate::env::obs_dim(env.blocks.len()),
-                    env.layout.max_level(),
-                    r.summary
+                    crate::env::obs_dim(task.spec.objects.len()),
+                    task.max_level(),
+                    task.spec.summary
                 );
             }
             Ok(())
@@ -293,13 +293,7 @@ pub fn main() -> Result<()> {
         Command::Plot(a) => plot(a),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
-            let spec = crate::scene::SceneSpec {
-                blocks: c.blocks,
-                gripper: c.gripper,
-                table: c.table,
-                collision_filter: c.collision_filter,
-            };
-            print!("{}", crate::scene::mjcf(&spec)?);
+            print!("{}", crate::scene::mjcf(&c.scene_spec())?);
             Ok(())
         }
         Command::Bench(a) if a.ddpg => {
@@ -451,7 +445,7 @@ fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::
 fn plot(a: PlotArgs) -> Result<()> {
     if let Some(dir) = a.run_dir {
         let (config, rows) = read_run(&dir)?;
-        let max_level = registry::config(&config.env)?.layout.max_level();
+        let max_level = registry::task(&config.env)?.max_level();
         let run = crate::train::RunDir { dir };
         crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());

@@ -1,56 +1,74 @@
 //! Environment configuration and the errors of the environment API.
 
-use crate::curriculum::{Layout, PlacementError};
 use crate::mj::MjError;
 use crate::rules::Colour;
-use crate::scene::SceneError;
-use serde::{Deserialize, Serialize};
+use crate::scene::{BlockSpec, SceneError, SceneSpec};
+use crate::task::{PlacementError, Task, TaskError, TaskSpec};
 use thiserror::Error;
 
-/// Everything that defines an environment.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Everything that defines an environment: the task (objects, colours,
+/// layouts, curriculum, episode length) and the physics settings.
+#[derive(Debug, Clone, PartialEq)]
 pub struct EnvConfig {
-    /// Registry id (or a free-form name for custom tasks).
-    pub id: String,
-    /// Colour of each block, in scene and observation order.
-    pub blocks: Vec<Colour>,
-    /// Colour of the gripper.
-    pub gripper: Colour,
-    /// Colour of the table.
-    pub table: Colour,
-    /// Where the blocks start.
-    pub layout: Layout,
-    /// Steps per episode before `truncated` (50 as in Fetch).
-    pub max_episode_steps: usize,
+    /// The compiled task.
+    pub task: Task,
     /// Physics substeps per action (20 as in Fetch; timestep 0.002 s).
     pub n_substeps: usize,
-    /// Height of the gripper above the Fetch default at reset (0.2 as in the
-    /// original BlockPuzzle code; FetchPush uses 0).
-    pub gripper_extra_height: f64,
     /// Exclude robot collision pairs that never touch (faster, same physics).
     pub collision_filter: bool,
     /// After the substeps, recompute the state with a full `mj_forward`
     /// (gymnasium-robotics' step callback) instead of only the kinematics,
     /// velocities and contacts the observation and the rules read. Both give
     /// bit-identical trajectories (tested); the full pass is slower.
-    #[serde(default)]
     pub full_forward: bool,
 }
 
 impl EnvConfig {
-    /// A custom task with default physics: grey gripper and table unless changed.
-    pub fn custom(id: &str, blocks: Vec<Colour>, layout: Layout) -> Self {
-        Self {
-            id: id.to_owned(),
-            blocks,
-            gripper: Colour::Grey,
-            table: Colour::Grey,
-            layout,
-            max_episode_steps: 50,
-            n_substeps: 20,
-            gripper_extra_height: 0.2,
-            collision_filter: true,
-            full_forward: false,
+    /// The default physics around a compiled task.
+    pub fn new(task: Task) -> Self {
+        Self { task, n_substeps: 20, collision_filter: true, full_forward: false }
+    }
+
+    /// Compiles `spec` (a task made in code) with the default physics.
+    ///
+    /// # Errors
+    /// [`EnvError::Task`] naming what is wrong with the spec.
+    pub fn from_spec(spec: TaskSpec) -> Result<Self, EnvError> {
+        Ok(Self::new(Task::from_spec(spec)?))
+    }
+
+    /// The task's id.
+    pub fn id(&self) -> &str {
+        self.task.id()
+    }
+    /// Colour of each block as written in the task, in observation order.
+    pub fn blocks(&self) -> Vec<Colour> {
+        self.task.colours()
+    }
+    /// Colour of the gripper.
+    pub fn gripper(&self) -> Colour {
+        self.task.spec.robot.gripper
+    }
+    /// What the scene holds: the task's blocks, gripper, table and floor.
+    pub fn scene_spec(&self) -> SceneSpec {
+        let task = &self.task.spec;
+        SceneSpec {
+            blocks: self
+                .task
+                .objects()
+                .map(|o| BlockSpec {
+                    name: o.name.clone(),
+                    colour: o.colour,
+                    half_extents: o.half_extents,
+                    mass: o.mass,
+                    friction: o.friction,
+                })
+                .collect(),
+            gripper: task.robot.gripper,
+            table: task.table.colour,
+            floor: task.floor.as_ref().map(|f| f.colour),
+            finger_actuators: task.robot.gripper_action,
+            collision_filter: self.collision_filter,
         }
     }
 }
@@ -59,8 +77,11 @@ impl EnvConfig {
 #[derive(Debug, Error)]
 pub enum EnvError {
     /// `make` with an id the registry does not know.
-    #[error("unknown environment id {id:?}; known ids: {}", known.join(", "))]
+    #[error("unknown environment id {id:?}; known ids: {}; or give the path of a task file (.toml)", known.join(", "))]
     UnknownId { id: String, known: Vec<String> },
+    /// A task file or spec that does not make a task.
+    #[error(transparent)]
+    Task(#[from] TaskError),
     /// The scene could not be built.
     #[error(transparent)]
     Scene(#[from] SceneError),
@@ -83,8 +104,14 @@ pub enum EnvError {
     #[error("level {level} is beyond the maximum level {max} of {id}")]
     LevelOutOfRange { id: String, level: usize, max: usize },
     /// Challenge mode on an environment without one.
-    #[error("{id} has no challenge mode (only BlocksChoose-v0 has one)")]
+    #[error("{id} has no challenge mode (its task file defines no [distributions.challenge])")]
     NoChallenge { id: String },
+    /// A distribution the task does not define.
+    #[error("{id} has no distribution {name:?} (it has: {})", if known.is_empty() { "none".to_owned() } else { known.join(", ") })]
+    NoDistribution { id: String, name: String, known: Vec<String> },
+    /// Reset found no layout that passes the physics checks.
+    #[error("{id}: no valid reset state after {attempts} layouts ({level}): {reason}; widen the sampling ranges or raise placement.max_reset_attempts")]
+    ResetExhausted { id: String, attempts: usize, level: String, reason: String },
     /// The reset state already breaks a rule.
     #[error(
         "invalid scene: at reset the red object {red:?} already touches the blue object {blue:?}; move them apart"

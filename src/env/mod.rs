@@ -17,14 +17,16 @@ pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
 
 use crate::mj::{Data, ObjType, Warning};
-use crate::rules::{ContactMatrix, Outcome, Rules, Touching};
-use crate::scene::{Scene, SceneObject, SceneSpec};
+use crate::rules::{Colour, ContactMatrix, Outcome, Rules, Touching};
+use crate::scene::{Scene, SceneObject};
+use crate::task::Placed;
+use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 /// Dimension of the action space: Box[-1, 1]^4 (dx, dy, dz, gripper; the
-/// gripper component is ignored because the fingers are blocked).
+/// gripper component is ignored unless the task enables the gripper action).
 pub const ACTION_DIM: usize = 4;
 /// Scale from an action component to a gripper displacement in metres.
 pub const ACTION_SCALE: f64 = 0.05;
@@ -38,6 +40,9 @@ pub const INITIAL_SLIDES: [f64; 3] = [0.405, 0.48, 0.0];
 pub const GRIPPER_SETUP_OFFSET: [f64; 3] = [-0.498, 0.005, -0.431];
 /// Actions used to settle the robot at set-up.
 pub const SETTLE_ACTIONS: usize = 10;
+/// Deepest interpenetration of two objects a reset state may have (m):
+/// deeper, the layout is rejected as overlapping.
+pub const OVERLAP_TOLERANCE: f64 = 0.002;
 
 /// Auxiliary information of a step or reset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -50,6 +55,9 @@ pub struct Info {
     pub level: usize,
     /// Whether the episode uses the challenge distribution.
     pub challenge: bool,
+    /// The evaluation distribution of the episode (`None`: the curriculum).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distribution: Option<String>,
     /// Object pairs `(a, b)`, `a < b`, that touched at any substep of this
     /// step (at reset: in the reset state). Indices into [`BlockEnv::objects`].
     pub touching: Vec<(usize, usize)>,
@@ -107,7 +115,13 @@ pub struct BlockEnv {
     rules: Rules,
     rng: ChaCha8Rng,
     level: usize,
-    challenge: bool,
+    distribution: Option<usize>,
+    /// Rule objects of the current episode (colours move when the task shuffles roles).
+    objects: Vec<SceneObject>,
+    /// Block colours of the current episode, in observation order.
+    colours: Vec<Colour>,
+    /// Finger actuators' qpos addresses, when the gripper action is enabled.
+    finger_ctrl: Vec<usize>,
     steps: usize,
     phase: Phase,
     touching: Touching,
@@ -123,18 +137,11 @@ impl BlockEnv {
     /// [`EnvError`] for an invalid configuration, missing assets, or a model
     /// MuJoCo refuses.
     pub fn new(config: EnvConfig) -> Result<Self, EnvError> {
-        if config.max_episode_steps == 0 || config.n_substeps == 0 {
-            return Err(EnvError::Config("max_episode_steps and n_substeps must be positive".into()));
+        if config.n_substeps == 0 {
+            return Err(EnvError::Config("n_substeps must be positive".into()));
         }
-        if !config.gripper_extra_height.is_finite() {
-            return Err(EnvError::Config("gripper_extra_height must be finite".into()));
-        }
-        let scene = Scene::build(&SceneSpec {
-            blocks: config.blocks.clone(),
-            gripper: config.gripper,
-            table: config.table,
-            collision_filter: config.collision_filter,
-        })?;
+        let task = &config.task.spec;
+        let scene = Scene::build(&config.scene_spec())?;
         let rules = Rules::new(scene.colours()).map_err(crate::scene::SceneError::from)?;
         let mut data = Data::new(scene.model.clone())?;
 
@@ -149,7 +156,7 @@ impl BlockEnv {
         for k in 0..3 {
             target[k] = grip[k] + GRIPPER_SETUP_OFFSET[k];
         }
-        target[2] += config.gripper_extra_height;
+        target[2] += task.robot.extra_height;
         data.mocap_pos_mut()[scene.mocap] = target;
         data.mocap_quat_mut()[scene.mocap] = GRIPPER_ROT;
         for _ in 0..SETTLE_ACTIONS * config.n_substeps {
@@ -158,10 +165,15 @@ impl BlockEnv {
         data.forward();
         let initial_grip = data.site_xpos()[scene.grip_site];
         let initial = data.try_clone()?;
+        let model = scene.model.clone();
+        let finger_ctrl: Vec<usize> =
+            model.actuator_joint().iter().map(|&j| model.jnt_qposadr()[j as usize] as usize).collect();
 
         let n = scene.objects.len();
-        let obs = vec![0.0; obs_dim(config.blocks.len())];
+        let obs = vec![0.0; obs_dim(scene.blocks.len())];
         Ok(Self {
+            objects: scene.objects.clone(),
+            colours: config.task.colours(),
             config,
             scene,
             data,
@@ -170,7 +182,8 @@ impl BlockEnv {
             rules,
             rng: ChaCha8Rng::from_entropy(),
             level: 0,
-            challenge: false,
+            distribution: None,
+            finger_ctrl,
             steps: 0,
             phase: Phase::NeedsReset,
             touching: Touching::new(n),
@@ -182,7 +195,7 @@ impl BlockEnv {
 
     /// Registry id (or custom name).
     pub fn id(&self) -> &str {
-        &self.config.id
+        self.config.id()
     }
     /// The configuration.
     pub fn config(&self) -> &EnvConfig {
@@ -194,12 +207,18 @@ impl BlockEnv {
     }
     /// Unbounded box of [`obs_dim`] dimensions.
     pub fn observation_space(&self) -> BoxSpace {
-        let n = obs_dim(self.config.blocks.len());
+        let n = obs_dim(self.scene.blocks.len());
         BoxSpace { low: vec![f32::NEG_INFINITY; n], high: vec![f32::INFINITY; n] }
     }
-    /// Rule objects: gripper, table, blocks.
+    /// Rule objects of the current episode: gripper, table, blocks (then the
+    /// floor, when the task makes it one).
     pub fn objects(&self) -> &[SceneObject] {
-        &self.scene.objects
+        &self.objects
+    }
+    /// Block colours of the current episode, in observation order (they
+    /// differ from the task's between episodes only when it shuffles roles).
+    pub fn block_colours(&self) -> &[Colour] {
+        &self.colours
     }
     /// The compiled scene (model and ids).
     pub fn scene(&self) -> &Scene {
@@ -250,7 +269,7 @@ impl BlockEnv {
 
     /// Highest curriculum level.
     pub fn max_level(&self) -> usize {
-        self.config.layout.max_level()
+        self.config.task.max_level()
     }
     /// Current curriculum level.
     pub fn level(&self) -> usize {
@@ -262,24 +281,43 @@ impl BlockEnv {
     /// [`EnvError::LevelOutOfRange`] beyond [`BlockEnv::max_level`].
     pub fn set_level(&mut self, level: usize) -> Result<(), EnvError> {
         if level > self.max_level() {
-            return Err(EnvError::LevelOutOfRange { id: self.config.id.clone(), level, max: self.max_level() });
+            return Err(EnvError::LevelOutOfRange { id: self.id().to_owned(), level, max: self.max_level() });
         }
         self.level = level;
         Ok(())
     }
     /// Whether episodes use the challenge distribution.
     pub fn challenge(&self) -> bool {
-        self.challenge
+        self.distribution_name() == Some("challenge")
     }
     /// Switches the challenge distribution on or off from the next reset on.
     ///
     /// # Errors
     /// [`EnvError::NoChallenge`] for environments without a challenge mode.
     pub fn set_challenge(&mut self, on: bool) -> Result<(), EnvError> {
-        if on && !self.config.layout.has_challenge() {
-            return Err(EnvError::NoChallenge { id: self.config.id.clone() });
+        if on && self.config.task.distribution("challenge").is_none() {
+            return Err(EnvError::NoChallenge { id: self.id().to_owned() });
         }
-        self.challenge = on;
+        self.set_distribution(on.then_some("challenge"))
+    }
+    /// The evaluation distribution in use (`None`: the curriculum).
+    pub fn distribution_name(&self) -> Option<&str> {
+        self.distribution.map(|d| self.config.task.distribution_names()[d])
+    }
+    /// Uses the named evaluation distribution (or, with `None`, the
+    /// curriculum) from the next reset on.
+    ///
+    /// # Errors
+    /// [`EnvError::NoDistribution`] naming the task's distributions.
+    pub fn set_distribution(&mut self, name: Option<&str>) -> Result<(), EnvError> {
+        self.distribution = match name {
+            None => None,
+            Some(n) => Some(self.config.task.distribution(n).ok_or_else(|| EnvError::NoDistribution {
+                id: self.id().to_owned(),
+                name: n.to_owned(),
+                known: self.config.task.distribution_names().iter().map(|s| s.to_string()).collect(),
+            })?),
+        };
         Ok(())
     }
 
@@ -288,43 +326,170 @@ impl BlockEnv {
     /// actions; with `None` it continues its stream (seeded from the OS at
     /// construction).
     ///
+    /// The layout is drawn from the task (shuffled roles first, when the task
+    /// shuffles, then the starts), settled when the task asks for it, and
+    /// redrawn while the reset state has objects overlapping, an object that
+    /// moved while settling, red touching blue, or the task already solved.
+    ///
     /// # Errors
-    /// [`EnvError::Placement`] if no layout is found, [`EnvError::InitialViolation`]
-    /// if red touches blue in the reset state.
+    /// [`EnvError::Placement`] if the sampler finds no layout,
+    /// [`EnvError::ResetExhausted`] if no layout passes the physics checks,
+    /// [`EnvError::InitialViolation`] if a fixed layout has red touching blue.
     pub fn reset(&mut self, seed: Option<u64>) -> Result<(Vec<f32>, Info), EnvError> {
         if let Some(s) = seed {
             self.rng = ChaCha8Rng::seed_from_u64(s);
         }
         self.phase = Phase::NeedsReset;
+        let task = &self.config.task;
+        let deterministic = task.is_deterministic();
+        let attempts = task.spec.placement.max_reset_attempts;
+        let mut reasons: Vec<(String, usize)> = Vec::new();
+        for _ in 0..attempts {
+            let Some(reason) = self.try_layout()? else {
+                self.steps = 0;
+                self.phase = Phase::Running;
+                obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+                let info = self.info(false, false, self.touching.pairs());
+                return Ok((self.obs.clone(), info));
+            };
+            if let Some((r, b)) = self.rules.violation(&self.touching).filter(|_| deterministic) {
+                return Err(EnvError::InitialViolation {
+                    red: self.objects[r].name.clone(),
+                    blue: self.objects[b].name.clone(),
+                });
+            }
+            match reasons.iter_mut().find(|(s, _)| *s == reason) {
+                Some(e) => e.1 += 1,
+                None => reasons.push((reason, 1)),
+            }
+            if deterministic {
+                break;
+            }
+        }
+        let (reason, n) = reasons.iter().max_by_key(|(_, n)| *n).cloned().unwrap_or_default();
+        Err(EnvError::ResetExhausted {
+            id: self.id().to_owned(),
+            attempts: reasons.iter().map(|r| r.1).sum(),
+            level: match self.distribution_name() {
+                Some(d) => format!("distribution {d}"),
+                None => format!("level {}", self.level),
+            },
+            reason: format!("{reason} in {n} of them"),
+        })
+    }
+
+    /// Draws roles and a layout and puts the objects there; returns why the
+    /// reset state is unusable, if it is.
+    fn try_layout(&mut self) -> Result<Option<String>, EnvError> {
         self.data.copy_from(&self.initial)?;
+        let roles = self.draw_roles()?;
         let origin = [self.initial_grip[0], self.initial_grip[1]];
-        let positions =
-            self.config.layout.sample(self.level, self.challenge, origin, self.scene.blocks.len(), &mut self.rng)?;
-        for (b, p) in self.scene.blocks.iter().zip(&positions) {
+        let placed = self.config.task.sample(self.level, self.distribution, origin, &mut self.rng)?;
+        let mut targets = Vec::with_capacity(roles.len());
+        for (b, &role) in self.scene.blocks.iter().zip(&roles) {
+            let Placed { xy, z, yaw } = placed[role];
             let q = self.data.qpos_mut();
-            q[b.qpos] = p[0];
-            q[b.qpos + 1] = p[1];
+            q[b.qpos] = xy[0];
+            q[b.qpos + 1] = xy[1];
+            if let Some(z) = z {
+                q[b.qpos + 2] = z;
+            }
+            if let Some(t) = yaw {
+                let (s, c) = (t / 2.0).sin_cos();
+                q[b.qpos + 3..b.qpos + 7].copy_from_slice(&[c, 0.0, 0.0, s]);
+            }
+            targets.push([xy[0], xy[1], q[b.qpos + 2]]);
             self.data.qvel_mut()[b.dof..b.dof + 6].fill(0.0);
         }
         self.data.forward();
+        let settled = self.settle(&targets);
         self.rules.reset();
         self.scan_contacts();
-        if let Some((r, b)) = self.rules.violation(&self.touching) {
-            return Err(EnvError::InitialViolation {
-                red: self.scene.objects[r].name.clone(),
-                blue: self.scene.objects[b].name.clone(),
-            });
+        if settled.is_some() {
+            return Ok(settled);
         }
-        self.steps = 0;
-        self.phase = Phase::Running;
-        obs::write(&self.scene, &self.data, self.dt(), &mut self.obs);
-        let info = self.info(false, false, self.touching.pairs());
-        Ok((self.obs.clone(), info))
+        if let Some(r) = self.overlap() {
+            return Ok(Some(r));
+        }
+        let name = |i: usize| self.objects[i].name.clone();
+        if let Some((r, b)) = self.rules.violation(&self.touching) {
+            return Ok(Some(format!("red {:?} touched blue {:?}", name(r), name(b))));
+        }
+        // A layout that already succeeds teaches nothing (the filter of PHYRE);
+        // fixed layouts are kept as written (tests place blocks touching on purpose).
+        if !self.config.task.is_deterministic() && self.rules.all_blue_on_green(&self.touching) {
+            return Ok(Some("the task was already solved".into()));
+        }
+        Ok(None)
+    }
+
+    /// The role each block slot plays this episode (identity unless the task
+    /// shuffles), with the colours, rule objects and rules set to match.
+    fn draw_roles(&mut self) -> Result<Vec<usize>, EnvError> {
+        let n = self.scene.blocks.len();
+        let mut roles: Vec<usize> = (0..n).collect();
+        if self.config.task.shuffle.is_empty() {
+            return Ok(roles);
+        }
+        for group in &self.config.task.shuffle {
+            let mut g = group.clone();
+            g.shuffle(&mut self.rng);
+            for (&slot, &role) in group.iter().zip(&g) {
+                roles[slot] = role;
+            }
+        }
+        let specs: Vec<&crate::task::ObjectSpec> = self.config.task.objects().collect();
+        for (slot, &role) in roles.iter().enumerate() {
+            self.colours[slot] = specs[role].colour;
+            let o = &mut self.objects[crate::scene::FIRST_BLOCK_OBJECT + slot];
+            o.colour = specs[role].colour;
+            o.name.clone_from(&specs[role].name);
+        }
+        let colours = self.objects.iter().map(|o| o.colour).collect();
+        self.rules = Rules::new(colours).map_err(crate::scene::SceneError::from)?;
+        Ok(roles)
+    }
+
+    /// Runs the task's settling time with the gripper held still; the first
+    /// block that moved more than the tolerance from `targets`, in words.
+    fn settle(&mut self, targets: &[[f64; 3]]) -> Option<String> {
+        let p = &self.config.task.spec.placement;
+        if p.settle_seconds <= 0.0 {
+            return None;
+        }
+        let steps = (p.settle_seconds / self.scene.model.timestep()).round() as usize;
+        for _ in 0..steps {
+            self.data.step();
+        }
+        self.data.forward();
+        let tol = p.settle_tolerance;
+        self.scene.blocks.iter().zip(targets).enumerate().find_map(|(i, (b, t))| {
+            let x = self.data.qpos()[b.qpos..b.qpos + 3].to_vec();
+            let moved = ((x[0] - t[0]).powi(2) + (x[1] - t[1]).powi(2) + (x[2] - t[2]).powi(2)).sqrt();
+            (moved > tol || !moved.is_finite()).then(|| {
+                format!(
+                    "{:?} moved {moved:.3} m while settling (more than placement.settle_tolerance = {tol}): a stack that falls over?",
+                    self.objects[crate::scene::FIRST_BLOCK_OBJECT + i].name
+                )
+            })
+        })
+    }
+
+    /// Two rule objects that interpenetrate deeper than [`OVERLAP_TOLERANCE`], in words.
+    fn overlap(&self) -> Option<String> {
+        self.data.contacts().iter().find_map(|c| {
+            let (a, b) = (self.scene.geom_object[c.geom1()], self.scene.geom_object[c.geom2()]);
+            (a >= 0 && b >= 0 && a != b && c.dist() < -OVERLAP_TOLERANCE).then(|| {
+                format!("{:?} and {:?} overlapped by {:.1} mm", self.objects[a as usize].name, self.objects[b as usize].name, -c.dist() * 1e3)
+            })
+        })
     }
 
     /// Applies one action for `n_substeps` physics substeps.
     ///
-    /// Components are clipped to [-1, 1]; the fourth is ignored (blocked gripper).
+    /// Components are clipped to [-1, 1]; the fourth opens (> 0) or closes
+    /// (< 0) the fingers when the task enables the gripper action, and is
+    /// ignored otherwise (fingers held closed).
     ///
     /// # Errors
     /// [`EnvError::BadAction`] for a wrong length or a non-finite value,
@@ -354,8 +519,10 @@ impl BlockEnv {
             self.observe_substep();
         }
         // Blocked gripper: fingers back to closed, then recompute the state.
-        for &a in &self.scene.finger_qpos {
-            self.data.qpos_mut()[a] = 0.0;
+        if self.finger_ctrl.is_empty() {
+            for &a in &self.scene.finger_qpos {
+                self.data.qpos_mut()[a] = 0.0;
+            }
         }
         if self.config.full_forward {
             self.data.forward();
@@ -372,14 +539,15 @@ impl BlockEnv {
         let outcome = if unstable { None } else { self.rules.outcome() };
         let (is_success, is_failure) = (outcome == Some(Outcome::Success), outcome == Some(Outcome::Failure));
         let terminated = outcome.is_some();
-        let truncated = !terminated && (unstable || self.steps >= self.config.max_episode_steps);
+        let max_steps = self.config.task.spec.max_episode_steps;
+        let truncated = !terminated && (unstable || self.steps >= max_steps);
         let reward = match outcome {
             Some(Outcome::Success) => 0.0,
-            Some(Outcome::Failure) => -((self.config.max_episode_steps + 1).saturating_sub(self.steps) as f32),
+            Some(Outcome::Failure) => -((max_steps + 1).saturating_sub(self.steps) as f32),
             None => -1.0,
         };
         if !unstable {
-            obs::write(&self.scene, &self.data, self.dt(), &mut self.obs);
+            obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
         } // else: keep the last finite observation; NaN never reaches the agent
         if terminated || truncated {
             self.phase = Phase::Over;
@@ -405,7 +573,8 @@ impl BlockEnv {
             is_success,
             is_failure,
             level: self.level,
-            challenge: self.challenge,
+            challenge: self.challenge(),
+            distribution: self.distribution_name().map(str::to_owned),
             touching,
             unstable: false,
             elapsed_steps: self.steps,
@@ -425,6 +594,12 @@ impl BlockEnv {
         let mq = &mut self.data.mocap_quat_mut()[m];
         for k in 0..4 {
             mq[k] = quat[k] + GRIPPER_ROT[k];
+        }
+        // gymnasium-robotics' ctrl_set_action for position actuators: target = finger position + action.
+        let grip = f64::from(action[3].clamp(-1.0, 1.0));
+        for (i, &a) in self.finger_ctrl.iter().enumerate() {
+            let target = self.data.qpos()[a] + grip;
+            self.data.ctrl_mut()[i] = target;
         }
     }
 

@@ -8,6 +8,7 @@
 
 use crate::math::mat2euler;
 use crate::mj::{Data, ObjType};
+use crate::rules::Colour;
 use crate::scene::Scene;
 
 /// Robot features.
@@ -25,8 +26,9 @@ fn site_velocity(data: &Data, site: usize) -> [f64; 6] {
     data.object_velocity(ObjType::Site, site, false).unwrap_or([0.0; 6])
 }
 
-/// Writes the observation of `data` into `out` (resized as needed).
-pub fn write(scene: &Scene, data: &Data, dt: f64, out: &mut Vec<f32>) {
+/// Writes the observation of `data` into `out` (resized as needed), with
+/// `colours` the blocks' colours this episode.
+pub fn write(scene: &Scene, data: &Data, dt: f64, colours: &[Colour], out: &mut Vec<f32>) {
     out.clear();
     let grip = data.site_xpos()[scene.grip_site];
     let gv = site_velocity(data, scene.grip_site);
@@ -36,7 +38,7 @@ pub fn write(scene: &Scene, data: &Data, dt: f64, out: &mut Vec<f32>) {
     out.extend(scene.finger_qpos.iter().map(|&a| q[a] as f32));
     out.extend(grip_velp.iter().map(|&x| x as f32));
     out.extend(scene.finger_dof.iter().map(|&a| (v[a] * dt) as f32));
-    for (block, colour) in scene.blocks.iter().zip(&scene.spec.blocks) {
+    for (block, colour) in scene.blocks.iter().zip(colours) {
         let pos = data.site_xpos()[block.site];
         let euler = mat2euler(&data.site_xmat()[block.site]);
         let bv = site_velocity(data, block.site);

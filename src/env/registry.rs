@@ -1,32 +1,31 @@
-//! The registry of versioned environment ids.
+//! The registry of versioned environment ids: each is a task file shipped in
+//! `tasks/` and embedded in the binary, compiled by the same code as a
+//! user's task file. Wherever an id is accepted, a task file path is too.
 
 use super::{BlockEnv, EnvConfig, EnvError};
-use crate::curriculum::Layout;
-use crate::rules::Colour::*;
+use crate::task::{Task, TaskSource};
+use std::path::Path;
 
-/// A registered environment.
+/// A registered environment: its id and its task file.
 #[derive(Debug, Clone, Copy)]
 pub struct Registration {
     /// Versioned id, e.g. "BlocksTouch-v0".
     pub id: &'static str,
-    /// One-line description.
-    pub summary: &'static str,
+    /// The task file's text (`tasks/ID.toml`).
+    pub toml: &'static str,
+}
+
+macro_rules! builtin {
+    ($id:literal) => {
+        Registration { id: $id, toml: include_str!(concat!("../../tasks/", $id, ".toml")) }
+    };
 }
 
 /// Every registered environment, in listing order.
 pub const REGISTRY: &[Registration] = &[
-    Registration {
-        id: "BlocksTouch-v0",
-        summary: "push the blue block against the green one (2 blocks, curriculum levels 0-5)",
-    },
-    Registration {
-        id: "BlocksChoose-v0",
-        summary: "blue to green with a grey distractor, grey last in the observation (levels 0-10, challenge mode)",
-    },
-    Registration {
-        id: "GripperTouch-v0",
-        summary: "touch the green block with the blue gripper (1 block, no curriculum): the quickest learning check",
-    },
+    builtin!("BlocksTouch-v0"),
+    builtin!("BlocksChoose-v0"),
+    builtin!("GripperTouch-v0"),
 ];
 
 /// The registered ids.
@@ -34,29 +33,65 @@ pub fn ids() -> Vec<&'static str> {
     REGISTRY.iter().map(|r| r.id).collect()
 }
 
-/// The configuration registered under `id`.
-///
-/// # Errors
-/// [`EnvError::UnknownId`] naming the known ids.
-pub fn config(id: &str) -> Result<EnvConfig, EnvError> {
-    let cfg = match id {
-        "BlocksTouch-v0" => EnvConfig::custom(id, vec![Blue, Green], Layout::Touch),
-        "BlocksChoose-v0" => EnvConfig::custom(id, vec![Blue, Green, Grey], Layout::Choose),
-        "GripperTouch-v0" => EnvConfig {
-            gripper: Blue,
-            ..EnvConfig::custom(id, vec![Green], Layout::NearGripper { min: 0.1, max: 0.15 })
-        },
-        _ => {
-            return Err(EnvError::UnknownId { id: id.to_owned(), known: ids().iter().map(|s| s.to_string()).collect() })
-        }
-    };
-    Ok(cfg)
+/// Whether `arg` names a task file rather than an id: it ends in `.toml`,
+/// has a path separator, or is an existing file.
+pub fn is_path(arg: &str) -> bool {
+    arg.ends_with(".toml") || arg.contains('/') || arg.contains('\\') || Path::new(arg).is_file()
 }
 
-/// Builds the environment registered under `id`.
+/// The task registered under `id`, or read from the task file at `id` when
+/// it is a path.
 ///
 /// # Errors
-/// [`EnvError::UnknownId`], or whatever building the scene reports.
+/// [`EnvError::UnknownId`] naming the known ids, or [`EnvError::Task`] for a
+/// file that does not make a task.
+pub fn task(id: &str) -> Result<Task, EnvError> {
+    if let Some(r) = REGISTRY.iter().find(|r| r.id == id) {
+        let origin = format!("tasks/{id}.toml (built in)");
+        let mut t = Task::parse(r.toml, &origin, None)?;
+        t.source.path = None;
+        return Ok(t);
+    }
+    if is_path(id) {
+        return Ok(Task::from_file(Path::new(id))?);
+    }
+    Err(EnvError::UnknownId { id: id.to_owned(), known: ids().iter().map(|s| s.to_string()).collect() })
+}
+
+/// The task of a recorded source: the file or built-in of that id when it
+/// still has the same content, otherwise the recorded copy (so runs,
+/// policies and dumps outlive a moved or edited task file).
+///
+/// # Errors
+/// A recorded copy that no longer compiles.
+pub fn recorded(source: &TaskSource) -> Result<Task, EnvError> {
+    let current = match &source.path {
+        Some(p) => Task::from_file(p).ok(),
+        None => task(&source.id).ok(),
+    };
+    match current {
+        Some(t) if t.source.hash == source.hash => Ok(t),
+        _ => {
+            let origin = format!("the recorded copy of {}", source.id);
+            let mut t = Task::parse(&source.toml, &origin, None)?;
+            t.source.path.clone_from(&source.path);
+            Ok(t)
+        }
+    }
+}
+
+/// The configuration of the environment `id` (a registered id or a task file path).
+///
+/// # Errors
+/// As [`task`].
+pub fn config(id: &str) -> Result<EnvConfig, EnvError> {
+    Ok(EnvConfig::new(task(id)?))
+}
+
+/// Builds the environment `id` (a registered id or a task file path).
+///
+/// # Errors
+/// As [`task`], or whatever building the scene reports.
 pub fn make(id: &str) -> Result<BlockEnv, EnvError> {
     BlockEnv::new(config(id)?)
 }

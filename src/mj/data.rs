@@ -187,6 +187,15 @@ impl Data {
         let (p, n) = (self.raw().qvel, self.model.nv());
         self.reals_mut(p, n)
     }
+    /// Actuator controls (`nu`).
+    pub fn ctrl(&self) -> &[f64] {
+        self.reals(self.raw().ctrl, self.model.nu())
+    }
+    /// Mutable actuator controls.
+    pub fn ctrl_mut(&mut self) -> &mut [f64] {
+        let (p, n) = (self.raw().ctrl, self.model.nu());
+        self.reals_mut(p, n)
+    }
     /// Generalised accelerations (`nv`).
     pub fn qacc(&self) -> &[f64] {
         self.reals(self.raw().qacc, self.model.nv())

@@ -94,6 +94,10 @@ impl Model {
     pub fn nv(&self) -> usize {
         self.raw().nv as usize
     }
+    /// Number of actuators.
+    pub fn nu(&self) -> usize {
+        self.raw().nu as usize
+    }
     /// Number of bodies (the world body included).
     pub fn nbody(&self) -> usize {
         self.raw().nbody as usize
@@ -172,6 +176,11 @@ impl Model {
     /// Address of each joint's first coordinate in qpos (`jnt_qposadr`).
     pub fn jnt_qposadr(&self) -> &[i32] {
         self.ints(self.raw().jnt_qposadr, self.njnt())
+    }
+    /// The joint (or other transmission target) of each actuator: the first
+    /// of `actuator_trnid`'s two ids.
+    pub fn actuator_joint(&self) -> Vec<i32> {
+        self.ints(self.raw().actuator_trnid, 2 * self.nu()).chunks_exact(2).map(|c| c[0]).collect()
     }
     /// Address of each joint's first degree of freedom in qvel (`jnt_dofadr`).
     pub fn jnt_dofadr(&self) -> &[i32] {

@@ -35,15 +35,41 @@ pub enum SceneError {
     Rules(#[from] RuleError),
 }
 
+/// One block of a scene: a free box.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlockSpec {
+    /// Rule-object name (the model names its body `block0`, `block1`, ...).
+    pub name: String,
+    /// Colour.
+    pub colour: Colour,
+    /// Half extents (x, y, z) in metres.
+    pub half_extents: [f64; 3],
+    /// Mass in kg.
+    pub mass: f64,
+    /// MuJoCo friction, or its default.
+    pub friction: Option<[f64; 3]>,
+}
+
+impl BlockSpec {
+    /// A 5 cm cube of 2 kg (the paper's block) named `name`.
+    pub fn cube(name: &str, colour: Colour) -> Self {
+        Self { name: name.to_owned(), colour, half_extents: [xml::BLOCK_HALF; 3], mass: 2.0, friction: None }
+    }
+}
+
 /// What a scene contains.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneSpec {
-    /// Colour of each block, in scene (and observation) order.
-    pub blocks: Vec<Colour>,
+    /// The blocks, in scene (and observation) order.
+    pub blocks: Vec<BlockSpec>,
     /// Colour of the gripper (both fingers and the gripper link).
     pub gripper: Colour,
     /// Colour of the table.
     pub table: Colour,
+    /// Colour of the floor when it is a rule object (the last one); `None`: not one.
+    pub floor: Option<Colour>,
+    /// Position actuators on the fingers (the gripper action of FetchPickAndPlace).
+    pub finger_actuators: bool,
     /// Exclude robot collision pairs that cannot touch in this workspace
     /// ([`EXCLUDED_BODY_PAIRS`]); trajectories are bit-identical either way.
     pub collision_filter: bool,
@@ -89,6 +115,8 @@ pub struct Scene {
     pub grip_site: usize,
     /// `robot0:gripper_link` body (welded to the mocap).
     pub gripper_body: usize,
+    /// The rule object of the floor, if it is one.
+    pub floor_object: Option<usize>,
     /// Index of `robot0:mocap` among mocap bodies.
     pub mocap: usize,
     /// qpos addresses of the right and left finger joints.
@@ -136,7 +164,11 @@ impl Scene {
     /// [`SceneError`] for missing assets, an invalid task, or a model MuJoCo refuses.
     pub fn build(spec: &SceneSpec) -> Result<Scene, SceneError> {
         crate::mj::install_handlers();
-        let colours: Vec<Colour> = [spec.gripper, spec.table].into_iter().chain(spec.blocks.iter().copied()).collect();
+        let colours: Vec<Colour> = [spec.gripper, spec.table]
+            .into_iter()
+            .chain(spec.blocks.iter().map(|b| b.colour))
+            .chain(spec.floor)
+            .collect();
         Rules::new(colours)?;
         let dir = models_dir();
         let text = mjcf(spec)?;
@@ -191,18 +223,24 @@ impl Scene {
             SceneObject { name: "gripper".into(), colour: spec.gripper },
             SceneObject { name: "table".into(), colour: spec.table },
         ];
-        objects.extend(
-            spec.blocks.iter().enumerate().map(|(i, &colour)| SceneObject { name: xml::block_name(i), colour }),
-        );
+        objects.extend(spec.blocks.iter().map(|b| SceneObject { name: b.name.clone(), colour: b.colour }));
+        let floor_object = spec.floor.map(|colour| {
+            objects.push(SceneObject { name: "floor".into(), colour });
+            objects.len() - 1
+        });
+        let floor_geom = model.id(ObjType::Geom, "floor0")?;
         let geom_object = model
             .geom_bodyid()
             .iter()
-            .map(|&b| {
+            .enumerate()
+            .map(|(g, &b)| {
                 let b = b as usize;
                 if gripper_bodies.contains(&b) {
                     GRIPPER_OBJECT as i16
                 } else if b == table_body {
                     TABLE_OBJECT as i16
+                } else if g == floor_geom {
+                    floor_object.map_or(-1, |f| f as i16)
                 } else {
                     blocks.iter().position(|k| k.body == b).map_or(-1, |i| (FIRST_BLOCK_OBJECT + i) as i16)
                 }
@@ -218,6 +256,7 @@ impl Scene {
             finger_qpos: [rq, lq],
             finger_dof: [rd, ld],
             slide_qpos,
+            floor_object,
             blocks,
             objects,
             geom_object,

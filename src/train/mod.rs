@@ -245,7 +245,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if agent.algo() != config.algo {
         bail!("{} holds a {:?} agent, not {:?}", run.checkpoint().display(), agent.algo(), config.algo);
     }
-    let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks);
+    let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
     let expert = Expert::load(&config.aggrevated, seen, &run.expert_policy(), resume)?;
     let mut learner = Learner { agent, expert };
     write_json_atomic(&run.config(), config)?;

@@ -1,0 +1,483 @@
+//! Tasks as data: a task file (TOML, [`spec`]) describes the objects, their
+//! colours and sizes, where each starts (samplers over the curriculum
+//! level), the curriculum, named evaluation distributions, the gripper and
+//! table colours, and the episode length. [`Task::from_toml`] checks a file
+//! and compiles it; [`sampler`] draws layouts from it. The built-in
+//! environments are task files too (`tasks/*.toml`, embedded in the binary)
+//! and go through the same code.
+
+pub mod expr;
+pub mod sampler;
+pub mod spec;
+
+pub use sampler::{Placed, PlacementError};
+pub use spec::{
+    Anchor, CurriculumSpec, Density, DistributionSpec, Kind, ObjectSpec, PlacementSpec, RobotSpec, StartSpec,
+    SurfaceSpec, TaskSpec, Value, Yaw, FORMAT_VERSION,
+};
+
+use crate::rules::{Colour, Rules, MAX_OBJECTS};
+use expr::Expr;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// Names objects may not take: they name the robot and the surfaces.
+pub const RESERVED_NAMES: [&str; 3] = ["gripper", "table", "floor"];
+/// Most objects a task may place (the gripper, table and floor are rule objects too).
+pub const MAX_TASK_OBJECTS: usize = MAX_OBJECTS - RESERVED_NAMES.len();
+/// Highest curriculum level a task may have.
+pub const MAX_LEVEL: usize = 1000;
+
+/// A problem with a task file: where (file and line) and what, with the fix.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TaskError {
+    /// The file, or `built-in ID`.
+    pub origin: String,
+    /// 1-based line of the offending entry, when known.
+    pub line: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for TaskError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{l}: {}", self.origin, self.message),
+            None => write!(f, "{}: {}", self.origin, self.message),
+        }
+    }
+}
+
+impl std::error::Error for TaskError {}
+
+/// Where a task came from and its exact text, so that runs, saved policies
+/// and dumps can rebuild it after the file moved or changed.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TaskSource {
+    /// The task id.
+    pub id: String,
+    /// The file it was read from (absent for built-ins and tasks made in code).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    /// The task file's text.
+    pub toml: String,
+    /// `sha256:` of the canonical form of the spec (comments and layout do not count).
+    pub hash: String,
+}
+
+/// A compiled distribution (the normal curriculum is index 0 of nothing: see [`Task`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Distribution {
+    pub name: String,
+    pub level: usize,
+    pub values: Vec<f64>,
+    pub starts: Vec<sampler::Placement>,
+}
+
+/// A checked, compiled task.
+#[derive(Debug, Clone)]
+pub struct Task {
+    /// The spec as written.
+    pub spec: TaskSpec,
+    /// Where it came from.
+    pub source: TaskSource,
+    /// Parameter names, in evaluation order after `level`, `max_level`, `pi`.
+    pub(crate) names: Vec<String>,
+    /// Values of `names` at each level of the normal curriculum.
+    pub(crate) values: Vec<Vec<f64>>,
+    /// Compiled starts of the objects.
+    pub(crate) starts: Vec<sampler::Placement>,
+    /// Compiled named distributions.
+    pub(crate) distributions: Vec<Distribution>,
+    /// Object indices of each shuffle group.
+    pub(crate) shuffle: Vec<Vec<usize>>,
+}
+
+impl PartialEq for Task {
+    fn eq(&self, other: &Self) -> bool {
+        self.spec == other.spec
+    }
+}
+
+/// 1-based line of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].bytes().filter(|&b| b == b'\n').count() + 1
+}
+
+/// Checks and compiles a spec; `text` (the file) locates errors.
+struct Checker<'a> {
+    origin: &'a str,
+    text: &'a str,
+}
+
+impl Checker<'_> {
+    fn err(&self, span: Option<std::ops::Range<usize>>, message: impl Into<String>) -> TaskError {
+        // Specs made in code have no text: their spans locate nothing.
+        let line = span.filter(|_| !self.text.is_empty()).map(|s| line_of(self.text, s.start));
+        TaskError { origin: self.origin.to_owned(), line, message: message.into() }
+    }
+}
+
+fn canonical_hash(spec: &TaskSpec) -> String {
+    use sha2::{Digest, Sha256};
+    // serde_json keeps struct field order and sorts nothing else: BTreeMaps are
+    // already ordered, so equal specs give equal bytes.
+    let bytes = serde_json::to_vec(spec).unwrap_or_default();
+    let digest = Sha256::digest(&bytes);
+    format!("sha256:{}", digest.iter().map(|b| format!("{b:02x}")).collect::<String>())
+}
+
+impl Task {
+    /// Reads and compiles a task file.
+    ///
+    /// # Errors
+    /// An unreadable file, or anything [`Task::from_toml`] reports.
+    pub fn from_file(path: &Path) -> Result<Task, TaskError> {
+        let text = std::fs::read_to_string(path).map_err(|e| TaskError {
+            origin: path.display().to_string(),
+            line: None,
+            message: format!("cannot read the task file: {e}"),
+        })?;
+        Task::from_toml(&text, Some(path))
+    }
+
+    /// Parses and compiles task-file text; `path` names it in errors (and is recorded).
+    ///
+    /// # Errors
+    /// [`TaskError`] with the file and line: malformed TOML (the parser's
+    /// line and column), unknown keys, a task without blue or green, a bad
+    /// reference, an expression that does not parse or goes out of range, …
+    pub fn from_toml(text: &str, path: Option<&Path>) -> Result<Task, TaskError> {
+        let origin = path.map_or_else(|| "task".to_owned(), |p| p.display().to_string());
+        Task::parse(text, &origin, path)
+    }
+
+    /// As [`Task::from_toml`], with `origin` naming the text in errors.
+    pub(crate) fn parse(text: &str, origin: &str, path: Option<&Path>) -> Result<Task, TaskError> {
+        let spec: TaskSpec = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| line_of(text, s.start));
+            TaskError { origin: origin.to_owned(), line, message: e.message().trim_end().to_owned() }
+        })?;
+        Task::compile(spec, text, path, origin)
+    }
+
+    /// Compiles a spec made in code.
+    ///
+    /// # Errors
+    /// As [`Task::from_toml`], without line numbers.
+    pub fn from_spec(spec: TaskSpec) -> Result<Task, TaskError> {
+        let text = toml::to_string(&spec).map_err(|e| TaskError {
+            origin: spec.id.clone(),
+            line: None,
+            message: format!("cannot write the spec as TOML: {e}"),
+        })?;
+        let origin = format!("task {}", spec.id);
+        Task::compile(spec, "", None, &origin).map(|mut t| {
+            t.source.toml = text;
+            t
+        })
+    }
+
+    fn compile(spec: TaskSpec, text: &str, path: Option<&Path>, origin: &str) -> Result<Task, TaskError> {
+        let c = Checker { origin, text };
+        if spec.version != FORMAT_VERSION {
+            return Err(c.err(None, format!("version = {}: this build reads task files of version {FORMAT_VERSION}; write version = {FORMAT_VERSION}", spec.version)));
+        }
+        if spec.id.trim().is_empty() {
+            return Err(c.err(None, "id is empty: give the task a versioned id such as \"MyTask-v0\""));
+        }
+        if spec.max_episode_steps == 0 {
+            return Err(c.err(None, "max_episode_steps must be at least 1"));
+        }
+        if !spec.robot.extra_height.is_finite() {
+            return Err(c.err(None, "robot.extra_height must be a finite number of metres"));
+        }
+        let cur = &spec.curriculum;
+        if cur.max_level > MAX_LEVEL {
+            return Err(c.err(None, format!("curriculum.max_level = {} is above the limit {MAX_LEVEL}", cur.max_level)));
+        }
+        if !(0.0..=1.0).contains(&cur.success_threshold) {
+            return Err(c.err(None, "curriculum.success_threshold must be in [0, 1]"));
+        }
+        let p = &spec.placement;
+        if !(p.min_separation >= 0.0 && p.table_margin.is_finite() && p.settle_seconds >= 0.0 && p.settle_tolerance > 0.0)
+            || !p.min_separation.is_finite()
+            || !p.settle_seconds.is_finite()
+        {
+            return Err(c.err(None, "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite"));
+        }
+        if p.max_attempts == 0 || p.max_reset_attempts == 0 {
+            return Err(c.err(None, "placement: max_attempts and max_reset_attempts must be at least 1"));
+        }
+
+        // Objects: names, shapes, colours.
+        if spec.objects.is_empty() {
+            return Err(c.err(None, "the task has no objects: add [[objects]] entries"));
+        }
+        if spec.objects.len() > MAX_TASK_OBJECTS {
+            return Err(c.err(
+                Some(spec.objects[MAX_TASK_OBJECTS].span()),
+                format!("too many objects: {} (at most {MAX_TASK_OBJECTS})", spec.objects.len()),
+            ));
+        }
+        let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
+        for (i, o) in spec.objects.iter().enumerate() {
+            let (span, o) = (Some(o.span()), o.get_ref());
+            if o.name.trim().is_empty() || RESERVED_NAMES.contains(&o.name.as_str()) {
+                return Err(c.err(span, format!("object name {:?} is empty or reserved (gripper, table, floor): choose another", o.name)));
+            }
+            if names[..i].contains(&o.name.as_str()) {
+                return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
+            }
+            if !o.half_extents.iter().all(|h| h.is_finite() && *h > 0.0) {
+                return Err(c.err(span, format!("object {:?}: half_extents must be positive metres", o.name)));
+            }
+            if !(o.mass.is_finite() && o.mass > 0.0) {
+                return Err(c.err(span, format!("object {:?}: mass must be a positive number of kg", o.name)));
+            }
+            if o.friction.is_some_and(|f| !f.iter().all(|v| v.is_finite() && *v >= 0.0)) {
+                return Err(c.err(span, format!("object {:?}: friction values must be ≥ 0", o.name)));
+            }
+        }
+        let mut colours = vec![spec.robot.gripper, spec.table.colour];
+        colours.extend(spec.objects.iter().map(|o| o.get_ref().colour));
+        colours.extend(spec.floor.as_ref().map(|f| f.colour));
+        Rules::new(colours).map_err(|e| c.err(None, format!("{e} (the gripper, table and floor count too)")))?;
+
+        // Parameters in dependency order, then their values at every level.
+        let order = param_order(&c, &cur.params)?;
+        let names_all: Vec<String> = order.iter().map(|(n, _)| n.clone()).collect();
+        let values = (0..=cur.max_level)
+            .map(|level| eval_params(&c, &order, level, cur.max_level, &BTreeMap::new()))
+            .collect::<Result<Vec<_>, _>>()?;
+
+        let starts = spec
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, o)| sampler::Placement::compile(&c, &spec, i, &o.get_ref().start, Some(o.span())))
+            .collect::<Result<Vec<_>, _>>()?;
+        fn scope<'a>(names: &'a [String], values: &'a [f64], level: usize, max_level: usize) -> Scope<'a> {
+            Scope { names, values, level, max_level }
+        }
+        for (level, vals) in values.iter().enumerate() {
+            for (i, s) in starts.iter().enumerate() {
+                s.check(&c, &scope(&names_all, vals, level, cur.max_level), &spec.objects[i], &format!("at level {level}"))?;
+            }
+        }
+
+        let mut distributions = Vec::new();
+        for (name, d) in &spec.distributions {
+            let (span, d) = (Some(d.span()), d.get_ref());
+            let level = d.level.unwrap_or(cur.max_level);
+            if level > cur.max_level {
+                return Err(c.err(span, format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level)));
+            }
+            for key in d.params.keys() {
+                if !cur.params.contains_key(key) {
+                    return Err(c.err(span, format!("distribution {name:?} replaces parameter {key:?}, which [curriculum.params] does not define")));
+                }
+            }
+            let vals = eval_params(&c, &order, level, cur.max_level, &d.params)?;
+            let mut dstarts = starts.clone();
+            for (obj, start) in &d.starts {
+                let Some(i) = names.iter().position(|n| n == obj) else {
+                    return Err(c.err(span, format!("distribution {name:?} gives a start for {obj:?}, which is not an object (objects: {})", names.join(", "))));
+                };
+                dstarts[i] = sampler::Placement::compile(&c, &spec, i, start, span.clone())?;
+            }
+            for (i, s) in dstarts.iter().enumerate() {
+                s.check(&c, &scope(&names_all, &vals, level, cur.max_level), &spec.objects[i], &format!("in distribution {name:?}"))?;
+            }
+            distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts });
+        }
+
+        let mut shuffle = Vec::new();
+        let mut seen = Vec::new();
+        for group in &spec.shuffle {
+            let mut idx = Vec::new();
+            for n in group {
+                let Some(i) = names.iter().position(|m| m == n) else {
+                    return Err(c.err(None, format!("shuffle names {n:?}, which is not an object (objects: {})", names.join(", "))));
+                };
+                if seen.contains(&i) {
+                    return Err(c.err(None, format!("object {n:?} is in two shuffle groups (or twice in one)")));
+                }
+                seen.push(i);
+                idx.push(i);
+            }
+            if idx.len() < 2 {
+                return Err(c.err(None, "a shuffle group needs at least two objects"));
+            }
+            let shape = |i: usize| {
+                let o = spec.objects[i].get_ref();
+                (o.kind, o.half_extents, o.mass, o.friction)
+            };
+            if idx.iter().any(|&i| shape(i) != shape(idx[0])) {
+                return Err(c.err(None, format!("shuffle group {group:?}: the objects must have the same kind, size, mass and friction (only their roles move)")));
+            }
+            shuffle.push(idx);
+        }
+
+        let hash = canonical_hash(&spec);
+        let source = TaskSource { id: spec.id.clone(), path: path.map(Path::to_path_buf), toml: text.to_owned(), hash };
+        Ok(Task { spec, source, names: names_all, values, starts, distributions, shuffle })
+    }
+
+    /// The id.
+    pub fn id(&self) -> &str {
+        &self.spec.id
+    }
+    /// Highest curriculum level.
+    pub fn max_level(&self) -> usize {
+        self.spec.curriculum.max_level
+    }
+    /// Names of the evaluation distributions.
+    pub fn distribution_names(&self) -> Vec<&str> {
+        self.distributions.iter().map(|d| d.name.as_str()).collect()
+    }
+    /// Index of a named distribution.
+    pub fn distribution(&self, name: &str) -> Option<usize> {
+        self.distributions.iter().position(|d| d.name == name)
+    }
+    /// Object colours as written (before any shuffle), in object order.
+    pub fn colours(&self) -> Vec<Colour> {
+        self.spec.objects.iter().map(|o| o.get_ref().colour).collect()
+    }
+    /// Object specs in order.
+    pub fn objects(&self) -> impl Iterator<Item = &ObjectSpec> {
+        self.spec.objects.iter().map(Spanned::get_ref)
+    }
+    /// Whether every layout is the same: no random draw, no shuffle.
+    pub fn is_deterministic(&self) -> bool {
+        self.shuffle.is_empty()
+            && self.starts.iter().all(|s| !s.is_random())
+            && self.distributions.iter().all(|d| d.starts.iter().all(|s| !s.is_random()))
+    }
+    /// Parameter values at `level` (or of a distribution), by name.
+    pub fn params(&self, level: usize, distribution: Option<usize>) -> Vec<(String, f64)> {
+        let vals = match distribution {
+            Some(d) => &self.distributions[d].values,
+            None => &self.values[level.min(self.max_level())],
+        };
+        self.names.iter().cloned().zip(vals.iter().copied()).collect()
+    }
+
+    /// The fields in which `other` differs from this task, as dotted paths
+    /// (`curriculum.params.R`, `objects[1].start`, …); empty when equal.
+    pub fn differences(&self, other: &Task) -> Vec<String> {
+        let (a, b) = (serde_json::to_value(&self.spec), serde_json::to_value(&other.spec));
+        let mut out = Vec::new();
+        if let (Ok(a), Ok(b)) = (a, b) {
+            diff_values("", &a, &b, &mut out);
+        }
+        out
+    }
+}
+
+fn diff_values(path: &str, a: &serde_json::Value, b: &serde_json::Value, out: &mut Vec<String>) {
+    use serde_json::Value as J;
+    match (a, b) {
+        (J::Object(x), J::Object(y)) => {
+            let keys: std::collections::BTreeSet<&String> = x.keys().chain(y.keys()).collect();
+            for k in keys {
+                let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                match (x.get(k), y.get(k)) {
+                    (Some(u), Some(v)) => diff_values(&p, u, v, out),
+                    _ => out.push(p),
+                }
+            }
+        }
+        (J::Array(x), J::Array(y)) if x.len() == y.len() => {
+            for (i, (u, v)) in x.iter().zip(y).enumerate() {
+                diff_values(&format!("{path}[{i}]"), u, v, out);
+            }
+        }
+        _ if a != b => out.push(if path.is_empty() { "(the whole task)".into() } else { path.to_owned() }),
+        _ => {}
+    }
+}
+
+/// Names an expression may read, and their values.
+pub(crate) struct Scope<'a> {
+    pub names: &'a [String],
+    pub values: &'a [f64],
+    pub level: usize,
+    pub max_level: usize,
+}
+
+impl Scope<'_> {
+    pub fn lookup(&self, name: &str) -> Option<f64> {
+        match name {
+            "level" => Some(self.level as f64),
+            "max_level" => Some(self.max_level as f64),
+            "pi" => Some(std::f64::consts::PI),
+            _ => self.names.iter().position(|n| n == name).map(|i| self.values[i]),
+        }
+    }
+}
+
+fn parse_value(c: &Checker, span: Option<std::ops::Range<usize>>, what: &str, v: &Value) -> Result<Expr, TaskError> {
+    match v {
+        Value::Num(x) => Ok(Expr::Num(*x)),
+        Value::Expr(s) => Expr::parse(s).map_err(|e| c.err(span, format!("{what} = {s:?} does not parse: {e}"))),
+    }
+}
+
+/// Parameters sorted so that each comes after those it reads; cycles and
+/// unknown names are errors.
+fn param_order(c: &Checker, params: &BTreeMap<String, Spanned<Value>>) -> Result<Vec<(String, Expr)>, TaskError> {
+    let mut pending: Vec<(String, Expr, std::ops::Range<usize>)> = Vec::new();
+    for (name, v) in params {
+        if ["level", "max_level", "pi"].contains(&name.as_str()) {
+            return Err(c.err(Some(v.span()), format!("parameter {name:?} shadows a built-in name (level, max_level, pi): rename it")));
+        }
+        let e = parse_value(c, Some(v.span()), &format!("curriculum.params.{name}"), v.get_ref())?;
+        for n in e.names() {
+            if !["level", "max_level", "pi"].contains(&n) && !params.contains_key(n) {
+                return Err(c.err(Some(v.span()), format!("curriculum.params.{name} reads {n:?}, which is neither a parameter nor level, max_level or pi")));
+            }
+        }
+        pending.push((name.clone(), e, v.span()));
+    }
+    let mut order: Vec<(String, Expr)> = Vec::new();
+    while !pending.is_empty() {
+        let ready = pending.iter().position(|(_, e, _)| {
+            e.names().iter().all(|n| ["level", "max_level", "pi"].contains(n) || order.iter().any(|(m, _)| m == n))
+        });
+        let Some(i) = ready else {
+            let (name, _, span) = &pending[0];
+            return Err(c.err(Some(span.clone()), format!("curriculum.params.{name} depends on itself through other parameters: break the cycle")));
+        };
+        let (name, e, _) = pending.remove(i);
+        order.push((name, e));
+    }
+    Ok(order)
+}
+
+fn eval_params(
+    c: &Checker,
+    order: &[(String, Expr)],
+    level: usize,
+    max_level: usize,
+    overrides: &BTreeMap<String, Spanned<Value>>,
+) -> Result<Vec<f64>, TaskError> {
+    let names: Vec<String> = order.iter().map(|(n, _)| n.clone()).collect();
+    let mut values = vec![f64::NAN; order.len()];
+    for (i, (name, e)) in order.iter().enumerate() {
+        let (e, span) = match overrides.get(name) {
+            Some(v) => (parse_value(c, Some(v.span()), &format!("params.{name}"), v.get_ref())?, Some(v.span())),
+            None => (e.clone(), None),
+        };
+        let scope = Scope { names: &names[..i], values: &values[..i], level, max_level };
+        let v = e.eval(&|n| scope.lookup(n)).map_err(|m| c.err(span.clone(), format!("parameter {name}: {m}")))?;
+        if !v.is_finite() {
+            return Err(c.err(span, format!("parameter {name} is {v} at level {level}: expressions must stay finite")));
+        }
+        values[i] = v;
+    }
+    Ok(values)
+}
