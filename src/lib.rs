@@ -18,6 +18,7 @@ pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
 pub mod agents;
 pub mod bench;
+pub mod check;
 pub mod blas;
 pub mod cli;
 pub mod policy;

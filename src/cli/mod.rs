@@ -35,6 +35,9 @@ enum Command {
     /// Redraw a run's success curves (success.png) from its progress.csv, or
     /// overlay the finals success of several runs (--overlay) in one PNG.
     Plot(PlotArgs),
+    /// Task files: `task check FILE` validates a task and samples its layouts.
+    #[command(subcommand)]
+    Task(TaskCommand),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -42,6 +45,32 @@ enum Command {
         #[arg(long)]
         env: String,
     },
+}
+
+#[derive(Debug, Subcommand)]
+enum TaskCommand {
+    /// Validate a task file (errors with file and line), reset it --samples
+    /// times at every level and in every distribution, and print how often
+    /// layouts were redrawn and why; --render writes a filmstrip of one reset
+    /// state per level and distribution.
+    Check(TaskCheckArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct TaskCheckArgs {
+    /// Task file (.toml) or registered id.
+    file: String,
+    /// Resets per level and distribution.
+    #[arg(long, default_value_t = 100)]
+    samples: u64,
+    /// Seed of the first reset (reset k uses seed + k).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Filmstrip PNG of one reset state per level and distribution.
+    #[arg(long)]
+    render: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewArgs,
 }
 
 #[derive(Debug, clap::Args)]
@@ -290,6 +319,7 @@ pub fn main() -> Result<()> {
             Ok(())
         }
         Command::Table(a) => table(a),
+        Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
@@ -389,6 +419,52 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         steps as f64 / n,
         a.out.display()
     );
+    Ok(())
+}
+
+fn task_check(a: TaskCheckArgs) -> Result<()> {
+    if a.samples == 0 {
+        bail!("--samples must be at least 1");
+    }
+    if let Some(out) = &a.render {
+        if out.extension().map_or(true, |e| !e.eq_ignore_ascii_case("png")) {
+            bail!("--render writes a filmstrip PNG: give a FILE.png");
+        }
+    }
+    let report = crate::check::check(&a.file, a.samples, a.seed)?;
+    let task = registry::task(&a.file)?;
+    println!(
+        "{}: task {} is valid: {} objects, levels 0-{}, distributions: {}",
+        a.file,
+        report.id,
+        task.spec.objects.len(),
+        task.max_level(),
+        if task.distribution_names().is_empty() { "none".to_owned() } else { task.distribution_names().join(", ") }
+    );
+    for l in &report.levels {
+        println!("{}", l.line());
+    }
+    if let Some(out) = &a.render {
+        let config = registry::config(&a.file)?;
+        let mut frames = Vec::new();
+        let mut env = BlockEnv::new(config)?;
+        let mut renderer = crate::render::Renderer::new(env.scene().model.as_ref(), &a.view.view())?;
+        for (label, level, distribution) in crate::check::settings(&task) {
+            env.set_level(level)?;
+            env.set_distribution(distribution.as_deref())?;
+            if env.reset(Some(a.seed)).is_err() {
+                continue;
+            }
+            renderer.colour_blocks(env.scene(), env.block_colours())?;
+            frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", report.id), ""))));
+        }
+        let n = frames.len();
+        crate::render::output::filmstrip(out, &frames, n)?;
+        println!("wrote {} ({n} reset states)", out.display());
+    }
+    if !report.ok() {
+        bail!("{}: some levels could not be reset (see above)", a.file);
+    }
     Ok(())
 }
 

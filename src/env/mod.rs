@@ -15,6 +15,7 @@ pub mod registry;
 pub use config::{EnvConfig, EnvError};
 pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
+// ResetStats is defined below.
 
 use crate::mj::{Data, ObjType, Warning};
 use crate::rules::{Colour, ContactMatrix, Outcome, Rules, Touching};
@@ -65,6 +66,29 @@ pub struct Info {
     pub unstable: bool,
     /// Steps taken in this episode.
     pub elapsed_steps: usize,
+}
+
+/// What resets have cost so far: how often the sampler and the physics
+/// checks redrew a layout (see `blockpuzzle task check`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ResetStats {
+    /// Resets that produced an episode.
+    pub resets: u64,
+    /// Layouts the sampler drew, those it rejected included.
+    pub draws: u64,
+    /// Layouts that passed the sampler and went to the physics checks.
+    pub layouts: u64,
+    /// Layouts the physics checks rejected, by reason.
+    pub rejected: Vec<(String, u64)>,
+}
+
+impl ResetStats {
+    fn reject(&mut self, reason: &str) {
+        match self.rejected.iter_mut().find(|(r, _)| r == reason) {
+            Some(e) => e.1 += 1,
+            None => self.rejected.push((reason.to_owned(), 1)),
+        }
+    }
 }
 
 /// The result of one step.
@@ -122,6 +146,7 @@ pub struct BlockEnv {
     colours: Vec<Colour>,
     /// Finger actuators' qpos addresses, when the gripper action is enabled.
     finger_ctrl: Vec<usize>,
+    stats: ResetStats,
     steps: usize,
     phase: Phase,
     touching: Touching,
@@ -184,6 +209,7 @@ impl BlockEnv {
             level: 0,
             distribution: None,
             finger_ctrl,
+            stats: ResetStats::default(),
             steps: 0,
             phase: Phase::NeedsReset,
             touching: Touching::new(n),
@@ -261,6 +287,10 @@ impl BlockEnv {
     /// everything else in `step` is environment overhead).
     pub fn physics_seconds(&self) -> f64 {
         self.physics.as_secs_f64()
+    }
+    /// What the resets since construction cost (sampler and physics rejections).
+    pub fn reset_stats(&self) -> &ResetStats {
+        &self.stats
     }
     /// Steps taken in the current episode.
     pub fn elapsed_steps(&self) -> usize {
@@ -346,6 +376,7 @@ impl BlockEnv {
         let mut reasons: Vec<(String, usize)> = Vec::new();
         for _ in 0..attempts {
             let Some(reason) = self.try_layout()? else {
+                self.stats.resets += 1;
                 self.steps = 0;
                 self.phase = Phase::Running;
                 obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
@@ -358,6 +389,7 @@ impl BlockEnv {
                     blue: self.objects[b].name.clone(),
                 });
             }
+            self.stats.reject(&reason);
             match reasons.iter_mut().find(|(s, _)| *s == reason) {
                 Some(e) => e.1 += 1,
                 None => reasons.push((reason, 1)),
@@ -384,7 +416,14 @@ impl BlockEnv {
         self.data.copy_from(&self.initial)?;
         let roles = self.draw_roles()?;
         let origin = [self.initial_grip[0], self.initial_grip[1]];
-        let placed = self.config.task.sample(self.level, self.distribution, origin, &mut self.rng)?;
+        let placed = self.config.task.sample_counted(
+            self.level,
+            self.distribution,
+            origin,
+            &mut self.rng,
+            &mut self.stats.draws,
+        )?;
+        self.stats.layouts += 1;
         let mut targets = Vec::with_capacity(roles.len());
         for (b, &role) in self.scene.blocks.iter().zip(&roles) {
             let Placed { xy, z, yaw } = placed[role];
@@ -480,7 +519,12 @@ impl BlockEnv {
         self.data.contacts().iter().find_map(|c| {
             let (a, b) = (self.scene.geom_object[c.geom1()], self.scene.geom_object[c.geom2()]);
             (a >= 0 && b >= 0 && a != b && c.dist() < -OVERLAP_TOLERANCE).then(|| {
-                format!("{:?} and {:?} overlapped by {:.1} mm", self.objects[a as usize].name, self.objects[b as usize].name, -c.dist() * 1e3)
+                format!(
+                    "{:?} and {:?} overlapped (deeper than {} mm)",
+                    self.objects[a as usize].name,
+                    self.objects[b as usize].name,
+                    OVERLAP_TOLERANCE * 1e3
+                )
             })
         })
     }

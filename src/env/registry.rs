@@ -26,6 +26,10 @@ pub const REGISTRY: &[Registration] = &[
     builtin!("BlocksTouch-v0"),
     builtin!("BlocksChoose-v0"),
     builtin!("GripperTouch-v0"),
+    builtin!("BlocksChooseShuffled-v0"),
+    builtin!("ReachAvoid-v0"),
+    builtin!("ToppleTower-v0"),
+    builtin!("BlocksStack-v0"),
 ];
 
 /// The registered ids.

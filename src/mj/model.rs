@@ -266,6 +266,16 @@ impl Model {
         Ok(())
     }
 
+    /// RGBA of each material (`mat_rgba`).
+    pub fn mat_rgba(&self) -> &[[f32; 4]] {
+        let (p, n) = (self.raw().mat_rgba, self.nmat());
+        if n == 0 || p.is_null() {
+            return &[];
+        }
+        // SAFETY: MuJoCo sizes mat_rgba as nmat × 4 floats; the model outlives `&self`.
+        unsafe { std::slice::from_raw_parts(p as *const [f32; 4], n) }
+    }
+
     fn ints(&self, p: *const i32, n: usize) -> &[i32] {
         if n == 0 || p.is_null() {
             return &[];

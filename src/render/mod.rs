@@ -87,6 +87,8 @@ pub struct Renderer {
     camera: sys::mjvCamera,
     option: sys::mjvOption,
     view: View,
+    /// Colours drawn instead of the model's, by geom id.
+    recolour: Vec<(usize, [f32; 4])>,
     // Declared last: dropped after the MuJoCo objects that use it.
     _gl: egl::GlContext,
 }
@@ -132,7 +134,20 @@ impl Renderer {
         camera.distance = view.distance;
         camera.azimuth = view.azimuth;
         camera.elevation = view.elevation;
-        Ok(Self { scene, context, camera, option, view: view.clone(), _gl: gl })
+        Ok(Self { scene, context, camera, option, view: view.clone(), recolour: Vec::new(), _gl: gl })
+    }
+
+    /// Draws each block of `scene` in the given colour (the episode's, when
+    /// the task shuffles roles) instead of the model's material.
+    ///
+    /// # Errors
+    /// A scene without the BlockPuzzle materials.
+    pub fn colour_blocks(&mut self, scene: &crate::scene::Scene, colours: &[crate::rules::Colour]) -> Result<(), crate::mj::MjError> {
+        self.recolour.clear();
+        for (b, &c) in scene.blocks.iter().zip(colours) {
+            self.recolour.push((b.geom, scene.rgba(c)?));
+        }
+        Ok(())
     }
 
     /// The frame size and camera.
@@ -160,7 +175,8 @@ impl Renderer {
         let m = data.model().as_ptr();
         // SAFETY: model and data belong together (Data holds its Model); the
         // scene and context were made for a model of this kind on this
-        // thread's current OpenGL context; `rgb` holds width × height × 3
+        // thread's current OpenGL context; `scene.geoms` holds `ngeom`
+        // initialised geoms after mjv_updateScene; `rgb` holds width × height × 3
         // bytes, what mjr_readPixels writes for `viewport`; no depth buffer.
         unsafe {
             sys::mjv_updateScene(
@@ -172,6 +188,14 @@ impl Renderer {
                 sys::mjtCatBit::mjCAT_ALL as i32,
                 self.scene.as_mut(),
             );
+            for i in 0..self.scene.ngeom.max(0) as usize {
+                let g = &mut *self.scene.geoms.add(i);
+                if g.objtype == sys::mjtObj::mjOBJ_GEOM as i32 {
+                    if let Some((_, rgba)) = self.recolour.iter().find(|(id, _)| *id as i32 == g.objid) {
+                        g.rgba = *rgba;
+                    }
+                }
+            }
             sys::mjr_render(viewport, self.scene.as_mut(), self.context.as_ref());
             if let Some((a, b)) = &text {
                 sys::mjr_overlay(

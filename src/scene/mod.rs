@@ -91,6 +91,8 @@ pub struct BlockIds {
     pub body: usize,
     /// Centre site id.
     pub site: usize,
+    /// Geom id.
+    pub geom: usize,
     /// Address of its free joint in qpos (7 values).
     pub qpos: usize,
     /// Address of its free joint in qvel (6 values).
@@ -214,6 +216,7 @@ impl Scene {
             blocks.push(BlockIds {
                 body: model.id(ObjType::Body, &name)?,
                 site: model.id(ObjType::Site, &name)?,
+                geom: model.id(ObjType::Geom, &name)?,
                 qpos,
                 dof,
             });
@@ -261,6 +264,15 @@ impl Scene {
             objects,
             geom_object,
         })
+    }
+
+    /// RGBA the scene's material gives `colour`.
+    ///
+    /// # Errors
+    /// A scene template without the BlockPuzzle materials.
+    pub fn rgba(&self, colour: Colour) -> Result<[f32; 4], MjError> {
+        let id = self.model.id(ObjType::Material, xml::material(colour))?;
+        Ok(self.model.mat_rgba()[id])
     }
 
     /// Colours of the rule objects, in object order.

@@ -344,6 +344,21 @@ impl Task {
         gripper: [f64; 2],
         rng: &mut impl Rng,
     ) -> Result<Vec<Placed>, PlacementError> {
+        self.sample_counted(level, distribution, gripper, rng, &mut 0)
+    }
+
+    /// As [`Task::sample`], adding the number of draws (rejected ones included) to `draws`.
+    ///
+    /// # Errors
+    /// As [`Task::sample`].
+    pub fn sample_counted(
+        &self,
+        level: usize,
+        distribution: Option<usize>,
+        gripper: [f64; 2],
+        rng: &mut impl Rng,
+        draws: &mut u64,
+    ) -> Result<Vec<Placed>, PlacementError> {
         let (level, values, starts) = match distribution {
             Some(d) => {
                 let d = &self.distributions[d];
@@ -360,6 +375,7 @@ impl Task {
         let mut reasons: Vec<(String, usize)> = Vec::new();
         let mut placed = Vec::with_capacity(specs.len());
         for _ in 0..p.max_attempts {
+            *draws += 1;
             placed.clear();
             for (start, object) in starts.iter().zip(&specs) {
                 let next = start.draw(object, &specs, &placed, gripper, &scope, rng);
