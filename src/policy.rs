@@ -1,5 +1,7 @@
-//! Policies that need no learning: uniform random actions, and a scripted
-//! pushing controller that proves the tasks solvable.
+//! Policies that need no learning: uniform random actions, and scripted
+//! controllers that prove the tasks solvable: pushing blue onto green,
+//! reaching green with a blue gripper (over any red wall), toppling a tower
+//! with a red gripper, and picking blue up and putting it on green.
 //!
 //! Both read only the observation (plus, for the scripted one, which task it
 //! is playing), so they run on exactly what an agent sees.
@@ -63,18 +65,58 @@ const STANDOFF: f64 = 0.065;
 /// Proportional gain from metres of error to action units.
 const GAIN: f64 = 1.0 / 0.05;
 
+/// Which scripted behaviour a task calls for, chosen from its colours and
+/// whether the gripper action is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Script {
+    /// Grey gripper, blocked fingers: push blue against green.
+    Push,
+    /// Blue gripper: move onto the green block, over any red block in the way.
+    Reach,
+    /// Red gripper: knock the tower under the blue block over without touching blue.
+    Topple,
+    /// Gripper action on: pick blue up and put it on green.
+    PickPlace,
+}
+
 /// The scripted controller: for block tasks, get behind the blue block and
 /// push it towards the green one (or push the green one onto the blue one if
 /// that path is clearer of grey blocks); for a blue-gripper task, move the
-/// gripper onto the green block.
+/// gripper onto the green block, above the top of any red block until over
+/// it; for a red-gripper tower, push the grey blocks out from under the blue
+/// one; with the gripper action, pick blue up and put it on green.
 pub struct ScriptedPolicy {
-    reach: bool,
+    script: Script,
+    /// Pick-and-place: the blue block has been grasped this episode.
+    grasped: bool,
+    /// Steps spent closing the fingers.
+    closing: usize,
+    /// Topple: the swipe's direction and the base's first position, fixed for the episode.
+    push: Option<[f64; 4]>,
+    /// Topple: the swipe is under way.
+    swiping: bool,
+    /// Topple: the swipe is done; keep still.
+    swiped: bool,
 }
 
 impl ScriptedPolicy {
     /// The controller for an environment configuration.
     pub fn for_env(config: &EnvConfig) -> Self {
-        Self { reach: config.gripper() == Colour::Blue }
+        let script = if config.task.spec.robot.gripper_action {
+            Script::PickPlace
+        } else {
+            match config.gripper() {
+                Colour::Blue => Script::Reach,
+                Colour::Red => Script::Topple,
+                _ => Script::Push,
+            }
+        };
+        Self { script, grasped: false, closing: 0, push: None, swiping: false, swiped: false }
+    }
+
+    /// The behaviour in use.
+    pub fn script(&self) -> Script {
+        self.script
     }
 }
 
@@ -143,22 +185,196 @@ impl ScriptedPolicy {
     }
 }
 
+/// Height of the table top.
+const TABLE_TOP: f64 = 0.4;
+/// How far the fingertips reach below the grip site.
+const FINGERTIP_BELOW: f64 = 0.0185;
+
+impl ScriptedPolicy {
+    /// Onto the green block; while red blocks stand around, first above the
+    /// highest red top (a block's top is read from its centre height).
+    fn reach(grip: [f64; 3], blocks: &[SeenBlock]) -> [f32; ACTION_DIM] {
+        let Some(g) = blocks.iter().find(|b| b.colour == Colour::Green) else {
+            return [0.0; ACTION_DIM];
+        };
+        let red_top = blocks
+            .iter()
+            .filter(|b| b.colour == Colour::Red)
+            .map(|b| TABLE_TOP + 2.0 * (b.pos[2] - TABLE_TOP))
+            .fold(f64::NEG_INFINITY, f64::max);
+        // Grip height whose fingertips clear every red top by 2.5 cm.
+        let clear = red_top + FINGERTIP_BELOW + 0.025;
+        if xy_dist(grip, g.pos) <= 0.01 {
+            return toward(grip, g.pos);
+        }
+        if grip[2] < clear - 0.005 {
+            // Up first (a little sideways is fine: nothing red is above the start).
+            return toward(grip, [grip[0], grip[1], clear + 0.01]);
+        }
+        toward(grip, [g.pos[0], g.pos[1], grip[2].max(g.pos[2] + 0.05).max(clear)])
+    }
+}
+
 impl Policy for ScriptedPolicy {
+    fn reset(&mut self) {
+        self.grasped = false;
+        self.closing = 0;
+        self.push = None;
+        self.swiping = false;
+        self.swiped = false;
+    }
+
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
         if obs.len() < ROBOT_OBS {
             return [0.0; ACTION_DIM]; // not a BlockPuzzle observation: stand still
         }
         let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
+        let fingers = [obs[3] as f64, obs[4] as f64];
         let blocks = read_blocks(obs);
-        if self.reach {
-            return match blocks.iter().find(|b| b.colour == Colour::Green) {
-                Some(g) if xy_dist(grip, g.pos) > 0.01 => {
-                    toward(grip, [g.pos[0], g.pos[1], grip[2].max(g.pos[2] + 0.05)])
-                }
-                Some(g) => toward(grip, [g.pos[0], g.pos[1], g.pos[2]]),
-                None => [0.0; ACTION_DIM],
-            };
+        match self.script {
+            Script::Push => self.push(grip, &blocks),
+            Script::Reach => Self::reach(grip, &blocks),
+            Script::Topple => self.topple(grip, &blocks),
+            Script::PickPlace => self.pick_place(grip, fingers, &blocks),
         }
-        self.push(grip, &blocks)
+    }
+}
+
+/// The y of the table's centre line.
+const TABLE_CENTRE_Y: f64 = 0.75;
+/// Topple: grip height of the swipe (fingertips just above the table).
+const TOPPLE_Z: f64 = 0.425;
+/// Topple: distance from the tower's centre to the start of the swipe.
+const TOPPLE_STANDOFF: f64 = 0.12;
+/// Topple: speed of the swipe (action units: 0.4 is 2 cm a step; faster
+/// throws blue off the table, slower lets the tower ride on the gripper).
+const TOPPLE_SPEED: f64 = 0.4;
+/// Topple: how far past the tower's centre the swipe goes.
+const TOPPLE_THROUGH: f64 = 0.10;
+
+impl ScriptedPolicy {
+    /// Knock the tower's base out from under it: come down to just above
+    /// the table (there the whole gripper passes under the blue block) away
+    /// from the tower, go round to the side of the base farther from the
+    /// table's centre line, then swipe through the base at full speed along y
+    /// (along x the wrist leads the fingers) towards the centre line. The
+    /// gripper's body hits the pillar too, so the tower falls ahead of it onto
+    /// the table, and the gripper passes under blue as it comes down.
+    /// (Designed on ToppleTower-v0's tall tower, whose blue block is above the
+    /// gripper's body when the fingertips skim the table.)
+    fn topple(&mut self, grip: [f64; 3], blocks: &[SeenBlock]) -> [f32; ACTION_DIM] {
+        let Some(blue) = blocks.iter().find(|b| b.colour == Colour::Blue).map(|b| b.pos) else {
+            return [0.0; ACTION_DIM];
+        };
+        if self.swiped {
+            return [0.0; ACTION_DIM];
+        }
+        // The tower's base: the lowest non-blue block under blue.
+        let base = blocks
+            .iter()
+            .filter(|b| b.colour != Colour::Blue && xy_dist(b.pos, blue) < 0.04)
+            .map(|b| b.pos)
+            .min_by(|a, b| a[2].total_cmp(&b[2]));
+        let Some(base) = base else {
+            return [0.0; ACTION_DIM]; // no tower under blue: nothing to do
+        };
+        let [dx, dy, x0, y0] = *self.push.get_or_insert_with(|| {
+            [0.0, if base[1] >= TABLE_CENTRE_Y { -1.0 } else { 1.0 }, base[0], base[1]]
+        });
+        let d = [dx, dy];
+        let rel = [grip[0] - base[0], grip[1] - base[1]];
+        let along = rel[0] * d[0] + rel[1] * d[1];
+        let across = rel[0] * -d[1] + rel[1] * d[0];
+        let at = |along: f64, across: f64, z: f64| {
+            [base[0] + d[0] * along - d[1] * across, base[1] + d[1] * along + d[0] * across, z]
+        };
+        let low = grip[2] < TOPPLE_Z + 0.01;
+        // Swiping starts behind the base, lined up, and then goes on along the
+        // line whatever the blocks do, until a little past where the base stood.
+        self.swiping |= low && (along + TOPPLE_STANDOFF).abs() < 0.015 && across.abs() < 0.015;
+        if self.swiping {
+            let past = (grip[0] - x0) * d[0] + (grip[1] - y0) * d[1];
+            if past >= TOPPLE_THROUGH {
+                self.swiped = true;
+                return [0.0; ACTION_DIM];
+            }
+            // Full speed along the line, holding the height and the line's offset.
+            let off = (grip[0] - x0) * -d[1] + (grip[1] - y0) * d[0];
+            let hold = |e: f64| (e * GAIN).clamp(-1.0, 1.0);
+            let side = hold(-off);
+            return [
+                (d[0] * TOPPLE_SPEED - d[1] * side) as f32,
+                (d[1] * TOPPLE_SPEED + d[0] * side) as f32,
+                hold(TOPPLE_Z - grip[2]) as f32,
+                0.0,
+            ];
+        }
+        let clear = TOPPLE_STANDOFF - 0.01;
+        if !low {
+            // Down, stepping away from the tower while the gripper's body is at blue's height.
+            if along.hypot(across) < clear {
+                let n = along.hypot(across).max(1e-9);
+                return toward(grip, at(along / n * clear, across / n * clear, TOPPLE_Z));
+            }
+            return toward(grip, [grip[0], grip[1], TOPPLE_Z]);
+        }
+        if along > -TOPPLE_STANDOFF + 0.01 && across.abs() < clear {
+            // Round the tower: out to the side first.
+            let side = if across >= 0.0 { 1.0 } else { -1.0 };
+            return toward(grip, at(along, side * (clear + 0.02), TOPPLE_Z));
+        }
+        if along > -TOPPLE_STANDOFF + 0.01 {
+            return toward(grip, at(-TOPPLE_STANDOFF, across, TOPPLE_Z));
+        }
+        toward(grip, at(-TOPPLE_STANDOFF, 0.0, TOPPLE_Z))
+    }
+
+    /// Open, come down around blue, close, lift, carry above green, lower
+    /// onto it (success ends the episode at the touch).
+    fn pick_place(&mut self, grip: [f64; 3], fingers: [f64; 2], blocks: &[SeenBlock]) -> [f32; ACTION_DIM] {
+        let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
+        let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
+            return [0.0; ACTION_DIM];
+        };
+        let with = |mut a: [f32; ACTION_DIM], g: f32| {
+            a[3] = g;
+            a
+        };
+        let held = xy_dist(grip, blue) < 0.02 && (grip[2] - blue[2]).abs() < 0.02;
+        if !self.grasped {
+            let open = fingers[0] + fingers[1] > 0.07;
+            if xy_dist(grip, blue) > 0.008 {
+                // Above blue, fingers opening.
+                let z = (blue[2] + 0.06).max(grip[2].min(blue[2] + 0.08));
+                return with(toward(grip, [blue[0], blue[1], z]), 1.0);
+            }
+            if !open && self.closing == 0 {
+                return with([0.0; ACTION_DIM], 1.0);
+            }
+            if grip[2] > blue[2] + 0.005 && self.closing == 0 {
+                return with(toward(grip, blue), 1.0);
+            }
+            // Close for a few steps until the fingers stop on the block.
+            self.closing += 1;
+            if self.closing >= 3 {
+                self.grasped = true;
+            }
+            return with([0.0; ACTION_DIM], -1.0);
+        }
+        if !held {
+            // Dropped: start over.
+            self.grasped = false;
+            self.closing = 0;
+            return with([0.0; ACTION_DIM], 1.0);
+        }
+        // Carry: above green with blue's bottom clear of green's top by 3 cm, then down.
+        let carry = green[2] + 0.05 + 0.03;
+        if xy_dist(blue, green) > 0.006 {
+            let z = if blue[2] < carry - 0.01 { carry + 0.01 } else { carry.max(blue[2]) };
+            let up_first = blue[2] < carry - 0.01;
+            let target = if up_first { [grip[0], grip[1], z] } else { [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z] };
+            return with(toward(grip, target), -1.0);
+        }
+        with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
     }
 }
