@@ -4,7 +4,8 @@
 
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
-use crate::env::{registry, BlockEnv, ACTION_DIM};
+use crate::env::{BlockEnv, EnvConfig, ACTION_DIM};
+use crate::task::Task;
 use crate::policy::Policy;
 use crate::rollout::run_episode;
 use crate::train::SavedPolicy;
@@ -97,8 +98,8 @@ pub struct Evaluation {
 /// What to evaluate on.
 #[derive(Debug, Clone)]
 pub struct EvalSpec<'a> {
-    /// Environment id.
-    pub env: &'a str,
+    /// The task.
+    pub task: &'a Task,
     /// Challenge distribution (BlocksChoose-v0).
     pub challenge: bool,
     /// Curriculum level (None: the maximum).
@@ -112,7 +113,7 @@ pub struct EvalSpec<'a> {
 }
 
 fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
-    let mut env = registry::make(spec.env)?;
+    let mut env = BlockEnv::new(EnvConfig::new(spec.task.clone()))?;
     if spec.challenge {
         env.set_challenge(true)?;
     }
@@ -153,7 +154,7 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     });
     let successes = wins.into_iter().sum::<Result<usize>>()?;
     Ok(Evaluation {
-        env: spec.env.to_owned(),
+        env: spec.task.id().to_owned(),
         challenge: spec.challenge,
         level: env.level(),
         episodes: spec.episodes,

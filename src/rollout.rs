@@ -81,6 +81,13 @@ pub struct StepRecord {
 pub struct EpisodeRecord {
     /// Environment id.
     pub env_id: String,
+    /// The task by content, so that the dump replays after its task file
+    /// moved or changed (absent in dumps written before tasks were files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<crate::task::TaskSource>,
+    /// The evaluation distribution, if not the curriculum.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distribution: Option<String>,
     /// Seed passed to `reset`.
     pub seed: u64,
     /// Curriculum level.
@@ -123,6 +130,8 @@ pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Re
     policy.reset();
     let mut rec = EpisodeRecord {
         env_id: env.id().to_owned(),
+        task: Some(env.config().task.source.clone()),
+        distribution: env.distribution_name().map(str::to_owned),
         seed,
         level: env.level(),
         challenge: env.challenge(),

@@ -57,7 +57,8 @@ pub fn evaluate_row(row: &Row, episodes: usize, seed: u64, threads: usize) -> Ou
     let run = || -> Result<(Evaluation, Evaluation, usize)> {
         let saved = load_policy(path)?;
         let epoch = saved.epoch;
-        let spec = |challenge| EvalSpec { env: ENV, challenge, level: None, episodes, seed, threads };
+        let task = crate::env::registry::task(ENV)?;
+        let spec = |challenge| EvalSpec { task: &task, challenge, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
         Ok((normal, evaluate(path, saved, &spec(true))?, epoch))
     };

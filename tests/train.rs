@@ -19,13 +19,14 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         batch_size: 32,
         buffer_size: 10_000,
         test_episodes: 2,
-        success_threshold: 0.7,
+        success_threshold: None,
         seed: 7,
         torch_threads: 1,
         ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
         algo: Algo::Ddpg,
         pggd: Default::default(),
         aggrevated: Default::default(),
+        task: None,
     }
 }
 

@@ -455,7 +455,8 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
             if env.reset(Some(a.seed)).is_err() {
                 continue;
             }
-            renderer.colour_blocks(env.scene(), env.block_colours())?;
+            let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
+            renderer.colour_objects(env.scene(), &colours)?;
             frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", report.id), ""))));
         }
         let n = frames.len();
@@ -521,7 +522,10 @@ fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::
 fn plot(a: PlotArgs) -> Result<()> {
     if let Some(dir) = a.run_dir {
         let (config, rows) = read_run(&dir)?;
-        let max_level = registry::task(&config.env)?.max_level();
+        let max_level = match &config.task {
+            Some(source) => registry::recorded(source)?.max_level(),
+            None => registry::task(&config.env)?.max_level(),
+        };
         let run = crate::train::RunDir { dir };
         crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());
@@ -561,10 +565,16 @@ fn table(a: TableArgs) -> Result<()> {
 
 fn eval(a: EvalArgs) -> Result<()> {
     let saved = crate::train::load_policy(&a.checkpoint)?;
-    let id = a.env.clone().unwrap_or_else(|| saved.env_id.clone());
+    // The task named, else the one the policy was trained on (its recorded copy if the file moved or changed).
+    let task = match (&a.env, &saved.task) {
+        (Some(env), _) => registry::task(env)?,
+        (None, Some(source)) => registry::recorded(source)?,
+        (None, None) => registry::task(&saved.env_id)?,
+    };
+    let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
     let spec = crate::evaluate::EvalSpec {
-        env: &id,
+        task: &task,
         challenge: a.challenge,
         level: a.level,
         episodes: a.episodes,

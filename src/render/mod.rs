@@ -137,15 +137,26 @@ impl Renderer {
         Ok(Self { scene, context, camera, option, view: view.clone(), recolour: Vec::new(), _gl: gl })
     }
 
-    /// Draws each block of `scene` in the given colour (the episode's, when
-    /// the task shuffles roles) instead of the model's material.
+    /// Draws every geom of the rule objects in its object's colour (`colours`
+    /// in rule-object order: the episode's, which move between episodes when
+    /// the task shuffles roles): the blocks always, the gripper, table and
+    /// floor when they are not grey (the Fetch gripper's geoms carry their own
+    /// grey, which would hide a material).
     ///
     /// # Errors
     /// A scene without the BlockPuzzle materials.
-    pub fn colour_blocks(&mut self, scene: &crate::scene::Scene, colours: &[crate::rules::Colour]) -> Result<(), crate::mj::MjError> {
+    pub fn colour_objects(
+        &mut self,
+        scene: &crate::scene::Scene,
+        colours: &[crate::rules::Colour],
+    ) -> Result<(), crate::mj::MjError> {
         self.recolour.clear();
-        for (b, &c) in scene.blocks.iter().zip(colours) {
-            self.recolour.push((b.geom, scene.rgba(c)?));
+        for (g, &o) in scene.geom_object.iter().enumerate() {
+            let Some(&c) = usize::try_from(o).ok().and_then(|o| colours.get(o)) else { continue };
+            let block = o as usize >= crate::scene::FIRST_BLOCK_OBJECT && Some(o as usize) != scene.floor_object;
+            if block || c != crate::rules::Colour::Grey {
+                self.recolour.push((g, scene.rgba(c)?));
+            }
         }
         Ok(())
     }

@@ -3,7 +3,8 @@
 //! exactly the recorded trajectory.
 
 use super::{output, Renderer, View};
-use crate::env::registry;
+use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::rules::Colour;
 use crate::rollout::EpisodeRecord;
 use anyhow::{bail, Context, Result};
 use image::RgbImage;
@@ -16,11 +17,17 @@ use std::time::Instant;
 /// # Errors
 /// Unknown environment id, a state of the wrong size, rendering errors.
 pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>, f64)> {
-    let mut env = registry::make(&ep.env_id)?;
-    env.reset(Some(ep.seed))?;
+    let task = match &ep.task {
+        Some(source) => registry::recorded(source)?,
+        None => registry::task(&ep.env_id)?,
+    };
+    let mut env = BlockEnv::new(EnvConfig::new(task))?;
     let nq = env.data().qpos().len();
     let model = env.data().model().clone();
     let mut renderer = Renderer::new(&model, view)?;
+    // The episode's colours (they move between episodes when the task shuffles roles).
+    let colours: Vec<Colour> = ep.objects.iter().map(|o| o.colour).collect();
+    renderer.colour_objects(env.scene(), &colours)?;
     let n = ep.steps.len();
     let outcome = if ep.success {
         "success"

@@ -31,7 +31,8 @@ pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, Ru
 use crate::agents::ddpg::{DdpgConfig, Precision, UpdateStats};
 use crate::agents::pggd::PggdConfig;
 use crate::agents::replay::ReplayBuffer;
-use crate::env::{registry, BlockEnv};
+use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::task::Task;
 use anyhow::{bail, Context, Result};
 use checkpoint::RunState;
 use learner::{Expert, Learner};
@@ -77,9 +78,10 @@ pub struct TrainConfig {
     /// Test and finals episodes per worker per epoch.
     #[arg(long, default_value_t = 10)]
     pub test_episodes: usize,
-    /// Test success rate that moves the curriculum up a level.
-    #[arg(long, default_value_t = 0.7)]
-    pub success_threshold: f64,
+    /// Test success rate that moves the curriculum up a level (default: the
+    /// task file's `curriculum.success_threshold`, 0.7 for the paper's tasks).
+    #[arg(long)]
+    pub success_threshold: Option<f64>,
     /// Seed of everything (weights, layouts, exploration, batches).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -97,6 +99,11 @@ pub struct TrainConfig {
     #[command(flatten)]
     #[serde(default)]
     pub aggrevated: AggrevatedConfig,
+    /// The task, by id and content, recorded when the run starts: a resumed
+    /// run refuses a task file that changed, and survives one that moved.
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<crate::task::TaskSource>,
 }
 
 /// One row of `progress.csv`.
@@ -193,15 +200,24 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         config.torch_threads as i32
     });
 
-    // Environments: one per worker.
-    let mut envs: Vec<BlockEnv> = (0..config.workers).map(|_| registry::make(&config.env)).collect::<Result<_, _>>()?;
+    // The task (checked against the run's recorded copy on resume), then one environment per worker.
+    let task = run_task(config, &run, resume)?;
+    let mut config = config.clone();
+    config.task = Some(task.source.clone());
+    let config = &config;
+    let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
+    if !(0.0..=1.0).contains(&threshold) {
+        bail!("--success-threshold must be in [0, 1]");
+    }
+    let mut envs: Vec<BlockEnv> =
+        (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let max_level = envs[0].max_level();
 
     // Agent, replay buffer, run state: fresh or from the checkpoint.
     let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
         let saved = run.read_config()?;
-        if saved.env != config.env
+        if (saved.task.is_none() && saved.env != config.env)
             || saved.algo != config.algo
             || saved.ddpg != config.ddpg
             || saved.pggd != config.pggd
@@ -213,7 +229,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
                 run.config().display()
             );
         }
-        let loaded = checkpoint::load(&run.checkpoint(), &config.env, obs_dim, act_dim)?;
+        let loaded = checkpoint::load(&run.checkpoint(), task.id(), obs_dim, act_dim)?;
         let rows = read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < loaded.state.epoch).collect();
         (loaded.agent, loaded.replay, loaded.state, rows)
     } else {
@@ -229,7 +245,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
         let agent = Agent::new(config, obs_dim, act_dim, &mut rng);
         let state = RunState {
-            env_id: config.env.clone(),
+            env_id: task.id().to_owned(),
             obs_dim,
             act_dim,
             epoch: 0,
@@ -338,7 +354,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             expert_share: if train_steps == 0 { 0.0 } else { expert_steps as f64 / train_steps as f64 },
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         };
-        if row.test_success >= config.success_threshold && state.level < max_level {
+        if row.test_success >= threshold && state.level < max_level {
             state.level += 1;
         }
         state.epoch += 1;
@@ -349,7 +365,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         write_progress(&run.progress(), &rows)?;
         plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         let saved = SavedPolicy {
-            env_id: config.env.clone(),
+            env_id: task.id().to_owned(),
+            task: Some(task.source.clone()),
             epoch: state.epoch,
             finals_success: row.finals_success,
             policy,
@@ -380,13 +397,54 @@ impl TrainConfig {
         }
     }
 
-    /// Plot title: method and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
-    pub fn title(&self) -> String {
-        format!("{} on {}", self.method().0, self.env)
+    /// The task's id: the recorded one, else `--env` (a task file's stem when it is a path).
+    pub fn task_id(&self) -> String {
+        match &self.task {
+            Some(t) => t.id.clone(),
+            None if registry::is_path(&self.env) => {
+                Path::new(&self.env).file_stem().map_or(self.env.clone(), |s| s.to_string_lossy().into_owned())
+            }
+            None => self.env.clone(),
+        }
     }
 
-    /// The default run directory, `runs/ENV-METHOD-sSEED`.
-    pub fn default_run_dir(&self) -> std::path::PathBuf {
-        format!("runs/{}-{}-s{}", self.env, self.method().1, self.seed).into()
+    /// Plot title: method and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
+    pub fn title(&self) -> String {
+        format!("{} on {}", self.method().0, self.task_id())
     }
+
+    /// The default run directory, `runs/TASK-METHOD-sSEED`.
+    pub fn default_run_dir(&self) -> std::path::PathBuf {
+        format!("runs/{}-{}-s{}", self.task_id(), self.method().1, self.seed).into()
+    }
+}
+
+/// The task of a run: `--env` resolved; on resume, checked against the copy
+/// recorded in the run's `config.json` (a changed task is an error naming
+/// what changed; a task file that no longer exists is replaced by the copy).
+///
+/// # Errors
+/// An unknown id or bad task file, or a task that changed since the run started.
+fn run_task(config: &TrainConfig, run: &RunDir, resume: bool) -> Result<Task> {
+    let recorded = if resume && run.config().exists() { run.read_config()?.task } else { None };
+    let Some(source) = recorded else {
+        return Ok(registry::task(&config.env)?);
+    };
+    if registry::is_path(&config.env) && !Path::new(&config.env).exists() {
+        eprintln!("{} is gone: resuming with the copy of {} recorded in {}", config.env, source.id, run.config().display());
+        return Ok(registry::recorded(&source)?);
+    }
+    let current = registry::task(&config.env)?;
+    if current.source.hash != source.hash {
+        let copy = Task::parse(&source.toml, &format!("the copy in {}", run.config().display()), None)?;
+        let changed = copy.differences(&current);
+        bail!(
+            "--resume: the task {} has changed since the run started ({} differ from the copy in {}); \
+             restore the file, or start a new run with another --run-dir",
+            config.env,
+            if changed.is_empty() { "its contents".to_owned() } else { changed.join(", ") },
+            run.config().display()
+        );
+    }
+    Ok(current)
 }

@@ -59,6 +59,9 @@ impl RunDir {
 pub struct SavedPolicy {
     /// Environment id it was trained on.
     pub env_id: String,
+    /// The task it was trained on, by content (absent in policies saved before tasks were files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<crate::task::TaskSource>,
     /// Epochs of training behind it.
     pub epoch: usize,
     /// Its finals success when saved.
