@@ -15,12 +15,18 @@ pub enum RolloutError {
     /// The environment refused something.
     #[error(transparent)]
     Env(#[from] EnvError),
-    /// The output file could not be written.
-    #[error("cannot write trajectory dump {path}: {source}")]
+    /// The output file could not be written (the OS error is the source).
+    #[error("cannot write trajectory dump {path}")]
     Io { path: PathBuf, source: std::io::Error },
+    /// The dump could not be read (the OS error is the source).
+    #[error("cannot read trajectory dump {path}")]
+    Read { path: PathBuf, source: std::io::Error },
     /// JSON encoding failed.
-    #[error("cannot encode trajectory: {0}")]
+    #[error("cannot encode trajectory")]
     Json(#[from] serde_json::Error),
+    /// A line of a dump is not an episode record (garbage, or cut short).
+    #[error("{path} line {line} is not an episode record of a trajectory dump (written by `blockpuzzle rollout`; was the file cut short?)")]
+    Decode { path: PathBuf, line: usize, source: serde_json::Error },
 }
 
 /// An object of the episode and its colour.
@@ -236,8 +242,14 @@ impl Drop for DumpWriter {
 /// Reads a trajectory dump.
 ///
 /// # Errors
-/// [`RolloutError::Io`] or [`RolloutError::Json`] naming the bad line.
+/// [`RolloutError::Read`], or [`RolloutError::Decode`] naming the file and the bad line.
 pub fn read_dump(path: &Path) -> Result<Vec<EpisodeRecord>, RolloutError> {
-    let text = std::fs::read_to_string(path).map_err(|source| RolloutError::Io { path: path.to_owned(), source })?;
-    text.lines().filter(|l| !l.trim().is_empty()).map(|l| Ok(serde_json::from_str(l)?)).collect()
+    let text = std::fs::read_to_string(path).map_err(|source| RolloutError::Read { path: path.to_owned(), source })?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str(l).map_err(|source| RolloutError::Decode { path: path.to_owned(), line: i + 1, source })
+        })
+        .collect()
 }

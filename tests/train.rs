@@ -297,3 +297,31 @@ fn each_method_has_its_own_default_run_directory() {
         ]
     );
 }
+
+#[test]
+fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("reach.toml");
+    let text = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
+    std::fs::write(&file, text.replace("GripperTouch-v0", "MyReach-v0")).unwrap();
+    let run = dir.path().join("run");
+    let env = file.to_str().unwrap();
+    train(&tiny(env, 1), &run, false, &mut quiet).unwrap();
+    let saved = blockpuzzle::train::load_policy(&run).unwrap();
+    assert_eq!(saved.env_id, "MyReach-v0");
+    assert_eq!(saved.task.as_ref().unwrap().id, "MyReach-v0");
+    assert!(std::fs::read_to_string(run.join("config.json")).unwrap().contains("MyReach-v0"));
+
+    // A comment changes nothing; a changed setting is refused, by name.
+    std::fs::write(&file, format!("# edited\n{}", text.replace("GripperTouch-v0", "MyReach-v0"))).unwrap();
+    train(&tiny(env, 2), &run, true, &mut quiet).unwrap();
+    std::fs::write(&file, text.replace("GripperTouch-v0", "MyReach-v0").replace("max_episode_steps = 50", "max_episode_steps = 40"))
+        .unwrap();
+    let err = format!("{:#}", train(&tiny(env, 3), &run, true, &mut quiet).unwrap_err());
+    assert!(err.contains("has changed since the run started") && err.contains("max_episode_steps"), "{err}");
+
+    // Moved away: the run goes on with its recorded copy.
+    std::fs::remove_file(&file).unwrap();
+    let rows = train(&tiny(env, 3), &run, true, &mut quiet).unwrap();
+    assert_eq!(rows.len(), 3);
+}

@@ -6,7 +6,7 @@ use super::{output, Renderer, View};
 use crate::env::{registry, BlockEnv, EnvConfig};
 use crate::rules::Colour;
 use crate::rollout::EpisodeRecord;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use image::RgbImage;
 use std::path::Path;
 use std::time::Instant;
@@ -100,7 +100,7 @@ impl Output {
 /// # Errors
 /// Unreadable dump, missing episode, rendering or writing errors.
 pub fn render_dump(traj: &Path, index: usize, view: &View, out: &Path, kind: &Output) -> Result<(usize, f64)> {
-    let episodes = crate::rollout::read_dump(traj).with_context(|| format!("reading {}", traj.display()))?;
+    let episodes = crate::rollout::read_dump(traj)?;
     let Some(ep) = episodes.get(index) else {
         bail!("{} holds {} episodes; --episode {index} does not exist", traj.display(), episodes.len());
     };

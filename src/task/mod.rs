@@ -102,6 +102,12 @@ impl PartialEq for Task {
     }
 }
 
+/// Where `[KEY` or `[KEY.` first appears in `text` (a table header).
+fn key_span(text: &str, key: &str) -> Option<std::ops::Range<usize>> {
+    let at = text.find(&format!("[{key}]")).or_else(|| text.find(&format!("[{key}.")))?;
+    Some(at..at)
+}
+
 /// 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())].bytes().filter(|&b| b == b'\n').count() + 1
@@ -271,7 +277,8 @@ impl Task {
 
         let mut distributions = Vec::new();
         for (name, d) in &spec.distributions {
-            let (span, d) = (Some(d.span()), d.get_ref());
+            // (toml cannot give spans of tables made implicitly by a dotted header.)
+            let span = key_span(text, &format!("distributions.{name}"));
             let level = d.level.unwrap_or(cur.max_level);
             if level > cur.max_level {
                 return Err(c.err(span, format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level)));

@@ -74,7 +74,7 @@ pub struct TaskSpec {
     pub objects: Vec<Spanned<ObjectSpec>>,
     /// Named evaluation distributions (e.g. `challenge`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
-    pub distributions: BTreeMap<String, Spanned<DistributionSpec>>,
+    pub distributions: BTreeMap<String, DistributionSpec>,
 }
 
 fn default_max_episode_steps() -> usize {
