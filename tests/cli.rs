@@ -236,3 +236,51 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     let o = bp(&["plot", "--overlay", "/nonexistent/run", "--out", png.to_str().unwrap()]);
     assert!(!o.status.success() && text(&o).contains("/nonexistent/run/config.json"), "{}", text(&o));
 }
+
+#[test]
+fn task_files_work_wherever_an_id_does_and_task_check_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("mine.toml");
+    let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "BlocksChoose-v0").unwrap().toml;
+    std::fs::write(&file, source.replace("BlocksChoose-v0", "Mine-v0")).unwrap();
+    let (f, out) = (file.to_str().unwrap(), dir.path().join("x.jsonl"));
+    let o = bp(&["rollout", "--env", f, "--distribution", "challenge", "--episodes", "2", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success() && text(&o).contains("(challenge)"), "{}", text(&o));
+    let ep = &blockpuzzle::rollout::read_dump(&out).unwrap()[0];
+    assert_eq!((ep.env_id.as_str(), ep.distribution.as_deref()), ("Mine-v0", Some("challenge")));
+    assert!(ep.task.as_ref().unwrap().toml.contains("Mine-v0"), "the dump carries the task");
+    let o = bp(&["scene", "--env", f]);
+    assert!(o.status.success() && text(&o).contains("block2"), "{}", text(&o));
+    let o = bp(&["task", "check", f, "--samples", "5"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("task Mine-v0 is valid") && t.contains("level 10") && t.contains("distribution challenge"), "{t}");
+    let o = bp(&["rollout", "--env", f, "--distribution", "nope", "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("has no distribution \"nope\" (it has: challenge)"), "{}", text(&o));
+
+    // A bad file: the error names the file and line.
+    std::fs::write(&file, source.replace("colour = \"grey\"\nstart", "colour = \"gray\"\nstart")).unwrap();
+    let o = bp(&["task", "check", f]);
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains(&format!("{f}:34: unknown variant `gray`")), "{}", text(&o));
+    let o = bp(&["rollout", "--env", "NoSuch-v0", "--out", out.to_str().unwrap()]);
+    assert!(text(&o).contains("or give the path of a task file"), "{}", text(&o));
+}
+
+#[test]
+fn bad_dumps_are_named_read_and_decode_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.jsonl");
+    let o = bp(&["render", "--traj", missing.to_str().unwrap(), "--out", dir.path().join("x.gif").to_str().unwrap()]);
+    let t = text(&o);
+    assert!(t.contains("cannot read trajectory dump") && !t.contains("write"), "{t}");
+    assert_eq!(t.matches("os error 2").count(), 1, "{t}");
+    let bad = dir.path().join("bad.jsonl");
+    scripted_rollout(&bad);
+    let good = std::fs::read_to_string(&bad).unwrap();
+    let first = good.lines().next().unwrap();
+    std::fs::write(&bad, format!("{first}\n{}\n", &first[..first.len() / 2])).unwrap();
+    let o = bp(&["render", "--traj", bad.to_str().unwrap(), "--out", dir.path().join("x.gif").to_str().unwrap()]);
+    let t = text(&o);
+    assert!(t.contains("bad.jsonl line 2 is not an episode record") && !t.contains("encode"), "{t}");
+}

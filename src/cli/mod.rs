@@ -173,11 +173,14 @@ struct RolloutArgs {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Curriculum level (default: the maximum, i.e. the evaluation distribution).
-    #[arg(long, conflicts_with = "challenge")]
+    #[arg(long, conflicts_with_all = ["challenge", "distribution"])]
     level: Option<usize>,
-    /// Use the challenge distribution (BlocksChoose-v0 only).
-    #[arg(long)]
+    /// Use the challenge distribution (the same as --distribution challenge).
+    #[arg(long, conflicts_with = "distribution")]
     challenge: bool,
+    /// Use a named evaluation distribution of the task file ([distributions.NAME]).
+    #[arg(long)]
+    distribution: Option<String>,
     /// Output file (JSON Lines); written atomically.
     #[arg(long)]
     out: PathBuf,
@@ -376,6 +379,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     if a.challenge {
         env.set_challenge(true)?;
     }
+    env.set_distribution(a.distribution.as_deref().or(a.challenge.then_some("challenge")))?;
     let level = a.level.unwrap_or(env.max_level());
     env.set_level(level)?;
     if a.episodes == 0 {
@@ -411,7 +415,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         a.env,
         a.policy,
         level,
-        if a.challenge { " (challenge)" } else { "" },
+        env.distribution_name().map_or(String::new(), |d| format!(" ({d})")),
         successes as f64 / n,
         successes,
         a.episodes,
