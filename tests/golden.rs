@@ -61,10 +61,36 @@ fn absorb(h: &mut Sha256, ep: &EpisodeRecord) {
     }
 }
 
+/// The tasks added as task files, recorded when they were added: they pin the
+/// draw order of the `on`, `towards`, `angle` and `yaw` samplers, the shuffle,
+/// the settling at reset and the gripper action.
+const NEW_CASES: &[(&str, &str, usize, bool, u64)] = &[
+    ("BlocksChooseShuffled-v0", "scripted", 10, false, 200),
+    ("BlocksChooseShuffled-v0", "random", 3, true, 210),
+    ("ReachAvoid-v0", "scripted", 5, false, 220),
+    ("ReachAvoid-v0", "random", 2, false, 230),
+    ("ToppleTower-v0", "scripted", 3, false, 240),
+    ("ToppleTower-v0", "random", 0, false, 250),
+    ("BlocksStack-v0", "scripted", 4, false, 260),
+    ("BlocksStack-v0", "random", 1, false, 270),
+];
+
+const NEW_GOLDEN: &[&str] = &[
+    "6112c80f1072d3025d1616a82f1eff6baff2be634cca39350689675a557ba1e4",
+    "6ea200eecf90d4faa784c0a7871abd1f5a8c927383d3014c5690f84015799aad",
+    "4e5751272fc6f368ced96d3e6c3f9941cf238dadc934e044c7cf0066406e298a",
+    "9fa62554f12d417ec829c2d7dd55c0534afe67bb25bbcee6d1ab0f36b9b90101",
+    "6120d50130339c70024225f714a3fffddee65faf46eb55822de674e0da1617ee",
+    "ca5f6994374c715bae5bedd37b3a9039d9ba14c0f403989246146b9d63634cbb",
+    "ba7c165de8eef8cb9c6d210e12889e7dabf7b10688caaffbb253c564d3f40d7a",
+    "1b627df8da36b403f961d4f3cab9008b913fa6241720f23b10db93ed23912dca",
+];
+
 fn digest(&(id, policy, level, challenge, seed): &(&str, &str, usize, bool, u64)) -> String {
     let mut env = registry::make(id).unwrap();
     env.set_level(level).unwrap();
     env.set_challenge(challenge).unwrap();
+    let colours = |e: &blockpuzzle::BlockEnv| e.block_colours().iter().map(|c| *c as u8).collect::<Vec<u8>>();
     let mut policy: Box<dyn Policy> = match policy {
         "random" => Box::new(RandomPolicy::new(seed)),
         _ => Box::new(ScriptedPolicy::for_env(env.config())),
@@ -73,21 +99,33 @@ fn digest(&(id, policy, level, challenge, seed): &(&str, &str, usize, bool, u64)
     for k in 0..3 {
         let ep = run_episode(&mut env, policy.as_mut(), seed + k).unwrap();
         absorb(&mut h, &ep);
+        if !env.config().task.spec.shuffle.is_empty() {
+            h.update(colours(&env));
+        }
     }
     h.finalize().iter().map(|b| format!("{b:02x}")).collect()
 }
 
-#[test]
-fn builtin_environments_are_bit_identical_to_the_recorded_digests() {
-    let digests: Vec<String> = CASES.iter().map(digest).collect();
+fn check(cases: &[(&str, &str, usize, bool, u64)], golden: &[&str]) {
+    let digests: Vec<String> = cases.iter().map(digest).collect();
     if std::env::var_os("BLOCKPUZZLE_PRINT_GOLDEN").is_some() {
         for d in &digests {
             println!("    \"{d}\",");
         }
         return;
     }
-    assert_eq!(digests.len(), GOLDEN.len(), "one recorded digest per case");
-    for ((case, d), g) in CASES.iter().zip(&digests).zip(GOLDEN) {
+    assert_eq!(digests.len(), golden.len(), "one recorded digest per case");
+    for ((case, d), g) in cases.iter().zip(&digests).zip(golden) {
         assert_eq!(d, g, "episodes of {case:?} changed");
     }
+}
+
+#[test]
+fn builtin_environments_are_bit_identical_to_the_recorded_digests() {
+    check(CASES, GOLDEN);
+}
+
+#[test]
+fn new_tasks_are_bit_identical_to_their_recorded_digests() {
+    check(NEW_CASES, NEW_GOLDEN);
 }

@@ -3,6 +3,7 @@
 //! filmstrip outputs decode with the expected frames and sizes.
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
+use blockpuzzle::rules::Colour;
 use blockpuzzle::render::{Renderer, View};
 use image::{AnimationDecoder, Rgb};
 use std::process::Command;
@@ -121,4 +122,44 @@ fn without_egl_rendering_fails_clearly_and_the_rest_works() {
     assert!(t.contains("needs EGL") && t.contains("libegl1") && t.contains("make setup"), "{t}");
     assert!(!gif.exists(), "nothing written");
     assert!(bp(&["envs"], true).status.success());
+}
+
+#[test]
+fn task_check_renders_one_reset_state_per_level_and_a_shuffled_episode_in_its_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let strip = dir.path().join("resets.png");
+    let o = bp(
+        &["task", "check", "ToppleTower-v0", "--samples", "2", "--render", strip.to_str().unwrap(), "--width", "64", "--height", "48"],
+        false,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let img = image::open(&strip).unwrap();
+    assert_eq!((img.width(), img.height()), (4 * 64, 48), "levels 0-3, one frame each");
+
+    // A shuffled episode replays with the episode's colours, not the task file's: find a
+    // seed that deals the green role to slot 0 (blue in the file) where the camera sees it.
+    let view = View { width: 320, height: 240, distance: 1.2, ..View::default() };
+    let mut env = registry::make("BlocksChooseShuffled-v0").unwrap();
+    env.set_level(env.max_level()).unwrap();
+    let model = env.data().model().clone();
+    let mut probe = Renderer::new(&model, &view).unwrap();
+    let found = (0..200).find_map(|seed| {
+        env.reset(Some(seed)).unwrap();
+        if env.block_colours()[0] != Colour::Green {
+            return None;
+        }
+        let file_colours = probe.render(env.data_mut(), None);
+        let (x, y) = probe.project(env.block_positions()[0])?;
+        blueish(file_colours.get_pixel(x as u32, y as u32)).then_some((seed, x as u32, y as u32))
+    });
+    let (seed, x, y) = found.expect("a seed with slot 0 green and in view");
+    let traj = dir.path().join("s.jsonl");
+    let args = format!("rollout --env BlocksChooseShuffled-v0 --policy random --episodes 1 --seed {seed} --out");
+    let o = bp(&args.split(' ').chain([traj.to_str().unwrap()]).collect::<Vec<_>>(), false);
+    assert!(o.status.success(), "{}", text(&o));
+    let ep = &blockpuzzle::rollout::read_dump(&traj).unwrap()[0];
+    assert_eq!(ep.objects[2].colour, Colour::Green);
+    let (frames, _) = blockpuzzle::render::replay::episode_frames(ep, &view).unwrap();
+    let px = frames[0].get_pixel(x, y);
+    assert!(greenish(px), "slot 0 drawn green, as dealt this episode: {px:?}");
 }
