@@ -10,7 +10,7 @@ EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates
 
 setup:
 	bash scripts/setup.sh
@@ -64,3 +64,16 @@ bench: build
 
 clean-assets:
 	rm -rf models/gymnasium_robotics
+
+# The task framework's new tasks (results/tasks.md): DDPG with the paper's hyperparameters and the
+# task file's curriculum, one worker and one torch thread so that four runs share two cores;
+# `make ddpg-task TASK=ToppleTower-v0` (resumes runs/$(TASK)-ddpg-s0 if it exists).
+TASK ?= ReachAvoid-v0
+ddpg-task: build
+	$(BP) train --algo ddpg --env $(TASK) --workers 1 --torch-threads 1 --epochs 300 \
+		--seed 0 --run-dir runs/$(TASK)-ddpg-s0 $(call resume,runs/$(TASK)-ddpg-s0)
+# Scripted and random success rates of a task at its evaluation level (200 episodes each).
+task-rates: build
+	mkdir -p $(OUT)
+	for p in scripted random; do $(BP) rollout --env $(TASK) --policy $$p --episodes 200 --seed 0 \
+		--out $(OUT)/$(TASK)-$$p.jsonl; done

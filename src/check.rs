@@ -56,8 +56,8 @@ impl LevelReport {
 /// Every level's and distribution's report.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckReport {
-    /// The task's id.
-    pub id: String,
+    /// The task, compiled.
+    pub task: Task,
     /// Reports in order: levels 0..=max, then the distributions.
     pub levels: Vec<LevelReport>,
 }
@@ -85,7 +85,6 @@ pub fn settings(task: &Task) -> Vec<(String, usize, Option<String>)> {
 /// A task that does not compile, or a scene MuJoCo refuses.
 pub fn check(arg: &str, samples: u64, seed: u64) -> Result<CheckReport, EnvError> {
     let config = registry::config(arg)?;
-    let id = config.id().to_owned();
     let settings = settings(&config.task);
     let mut levels = Vec::new();
     for (label, level, distribution) in settings {
@@ -101,5 +100,5 @@ pub fn check(arg: &str, samples: u64, seed: u64) -> Result<CheckReport, EnvError
         }
         levels.push(LevelReport { label, samples, stats: env.reset_stats().clone(), error });
     }
-    Ok(CheckReport { id, levels })
+    Ok(CheckReport { task: config.task, levels })
 }

@@ -5,9 +5,9 @@
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvConfig, ACTION_DIM};
-use crate::task::Task;
 use crate::policy::Policy;
 use crate::rollout::run_episode;
+use crate::task::Task;
 use crate::train::SavedPolicy;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;

@@ -278,9 +278,9 @@ impl ScriptedPolicy {
         let Some(base) = base else {
             return [0.0; ACTION_DIM]; // no tower under blue: nothing to do
         };
-        let [dx, dy, x0, y0] = *self.push.get_or_insert_with(|| {
-            [0.0, if base[1] >= TABLE_CENTRE_Y { -1.0 } else { 1.0 }, base[0], base[1]]
-        });
+        let [dx, dy, x0, y0] = *self
+            .push
+            .get_or_insert_with(|| [0.0, if base[1] >= TABLE_CENTRE_Y { -1.0 } else { 1.0 }, base[0], base[1]]);
         let d = [dx, dy];
         let rel = [grip[0] - base[0], grip[1] - base[1]];
         let along = rel[0] * d[0] + rel[1] * d[1];
@@ -372,7 +372,11 @@ impl ScriptedPolicy {
         if xy_dist(blue, green) > 0.006 {
             let z = if blue[2] < carry - 0.01 { carry + 0.01 } else { carry.max(blue[2]) };
             let up_first = blue[2] < carry - 0.01;
-            let target = if up_first { [grip[0], grip[1], z] } else { [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z] };
+            let target = if up_first {
+                [grip[0], grip[1], z]
+            } else {
+                [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z]
+            };
             return with(toward(grip, target), -1.0);
         }
         with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)

@@ -249,7 +249,11 @@ pub fn read_dump(path: &Path) -> Result<Vec<EpisodeRecord>, RolloutError> {
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
-            serde_json::from_str(l).map_err(|source| RolloutError::Decode { path: path.to_owned(), line: i + 1, source })
+            serde_json::from_str(l).map_err(|source| RolloutError::Decode {
+                path: path.to_owned(),
+                line: i + 1,
+                source,
+            })
         })
         .collect()
 }

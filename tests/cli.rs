@@ -244,7 +244,8 @@ fn task_files_work_wherever_an_id_does_and_task_check_reports() {
     let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "BlocksChoose-v0").unwrap().toml;
     std::fs::write(&file, source.replace("BlocksChoose-v0", "Mine-v0")).unwrap();
     let (f, out) = (file.to_str().unwrap(), dir.path().join("x.jsonl"));
-    let o = bp(&["rollout", "--env", f, "--distribution", "challenge", "--episodes", "2", "--out", out.to_str().unwrap()]);
+    let o =
+        bp(&["rollout", "--env", f, "--distribution", "challenge", "--episodes", "2", "--out", out.to_str().unwrap()]);
     assert!(o.status.success() && text(&o).contains("(challenge)"), "{}", text(&o));
     let ep = &blockpuzzle::rollout::read_dump(&out).unwrap()[0];
     assert_eq!((ep.env_id.as_str(), ep.distribution.as_deref()), ("Mine-v0", Some("challenge")));
@@ -254,9 +255,16 @@ fn task_files_work_wherever_an_id_does_and_task_check_reports() {
     let o = bp(&["task", "check", f, "--samples", "5"]);
     assert!(o.status.success(), "{}", text(&o));
     let t = text(&o);
-    assert!(t.contains("task Mine-v0 is valid") && t.contains("level 10") && t.contains("distribution challenge"), "{t}");
+    assert!(
+        t.contains("task Mine-v0 is valid") && t.contains("level 10") && t.contains("distribution challenge"),
+        "{t}"
+    );
     let o = bp(&["rollout", "--env", f, "--distribution", "nope", "--out", out.to_str().unwrap()]);
-    assert!(!o.status.success() && text(&o).contains("has no distribution \"nope\" (it has: challenge)"), "{}", text(&o));
+    assert!(
+        !o.status.success() && text(&o).contains("has no distribution \"nope\" (it has: challenge)"),
+        "{}",
+        text(&o)
+    );
 
     // A bad file: the error names the file and line.
     std::fs::write(&file, source.replace("colour = \"grey\"\nstart", "colour = \"gray\"\nstart")).unwrap();

@@ -3,8 +3,8 @@
 //! filmstrip outputs decode with the expected frames and sizes.
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
-use blockpuzzle::rules::Colour;
 use blockpuzzle::render::{Renderer, View};
+use blockpuzzle::rules::Colour;
 use image::{AnimationDecoder, Rgb};
 use std::process::Command;
 
@@ -129,7 +129,19 @@ fn task_check_renders_one_reset_state_per_level_and_a_shuffled_episode_in_its_co
     let dir = tempfile::tempdir().unwrap();
     let strip = dir.path().join("resets.png");
     let o = bp(
-        &["task", "check", "ToppleTower-v0", "--samples", "2", "--render", strip.to_str().unwrap(), "--width", "64", "--height", "48"],
+        &[
+            "task",
+            "check",
+            "ToppleTower-v0",
+            "--samples",
+            "2",
+            "--render",
+            strip.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
         false,
     );
     assert!(o.status.success(), "{}", text(&o));

@@ -1,8 +1,8 @@
 //! Each rule scenario in simulation, with blocks placed by hand.
 
 use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError};
-use blockpuzzle::task::TaskSpec;
 use blockpuzzle::rules::{ContactState, Outcome};
+use blockpuzzle::task::TaskSpec;
 use blockpuzzle::Colour::{self, *};
 
 const FAR: [f64; 2] = [1.12, 1.02];

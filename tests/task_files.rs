@@ -8,7 +8,8 @@ use std::path::Path;
 const HEADER: &str = "version = 1\nid = \"Bad-v0\"\n";
 
 const BLUE: &str = "[[objects]]\nname = \"b\"\ncolour = \"blue\"\n";
-const GREEN: &str = "[[objects]]\nname = \"g\"\ncolour = \"green\"\nstart = { around = \"b\", distance = [0.1, 0.1] }\n";
+const GREEN: &str =
+    "[[objects]]\nname = \"g\"\ncolour = \"green\"\nstart = { around = \"b\", distance = [0.1, 0.1] }\n";
 
 fn load(body: &str) -> Result<Task, TaskError> {
     Task::from_toml(&format!("{HEADER}{body}"), Some(Path::new("bad.toml")))
@@ -48,7 +49,7 @@ fn unknown_keys_are_refused_with_their_line() {
 
 #[test]
 fn a_task_needs_blue_and_green() {
-    let e = error(&BLUE.to_string());
+    let e = error(BLUE);
     assert!(e.message.contains("green"), "{e}");
     let e = error(&GREEN.replace("around = \"b\", ", "").replace("distance = [0.1, 0.1]", "distance = [0, 0.1]"));
     assert!(e.message.contains("blue"), "{e}");
@@ -96,20 +97,21 @@ fn curriculum_expressions_must_parse_and_stay_in_range() {
 fn version_and_shuffle_are_checked() {
     let e = Task::from_toml(&format!("version = 2\nid = \"x\"\n{BLUE}{GREEN}"), None).unwrap_err();
     assert!(e.message.contains("version = 2"), "{e}");
-    let e = error(&format!("shuffle = [[\"b\", \"g\"]]\n{BLUE}{}", GREEN.replace("colour = \"green\"", "colour = \"green\"\nmass = 1.0")));
+    let e = error(&format!(
+        "shuffle = [[\"b\", \"g\"]]\n{BLUE}{}",
+        GREEN.replace("colour = \"green\"", "colour = \"green\"\nmass = 1.0")
+    ));
     assert!(e.message.contains("same kind, size, mass"), "{e}");
 }
 
 #[test]
 fn a_tower_that_falls_at_reset_is_reported() {
     // A block balanced on a 1 cm thick, 30 cm tall pole, off centre: it cannot stand.
-    let body = format!(
-        "[placement]\nsettle_seconds = 0.5\nmax_reset_attempts = 5\n\
-         [[objects]]\nname = \"pole\"\ncolour = \"grey\"\nhalf_extents = [0.005, 0.005, 0.15]\nstart = {{ around = \"gripper\", distance = [0.15, 0.2] }}\n\
-         [[objects]]\nname = \"b\"\ncolour = \"blue\"\nstart = {{ on = \"pole\", offset = [0.02, 0] }}\n\
-         [[objects]]\nname = \"g\"\ncolour = \"green\"\nstart = {{ around = \"pole\", distance = [0.1, 0.15] }}\n"
-    );
-    let task = load(&body).unwrap();
+    let body = "[placement]\nsettle_seconds = 0.5\nmax_reset_attempts = 5\n\
+         [[objects]]\nname = \"pole\"\ncolour = \"grey\"\nhalf_extents = [0.005, 0.005, 0.15]\nstart = { around = \"gripper\", distance = [0.15, 0.2] }\n\
+         [[objects]]\nname = \"b\"\ncolour = \"blue\"\nstart = { on = \"pole\", offset = [0.02, 0] }\n\
+         [[objects]]\nname = \"g\"\ncolour = \"green\"\nstart = { around = \"pole\", distance = [0.1, 0.15] }\n";
+    let task = load(body).unwrap();
     let mut env = BlockEnv::new(EnvConfig::new(task)).unwrap();
     let err = env.reset(Some(0)).unwrap_err().to_string();
     assert!(err.contains("no valid reset state after 5 layouts") && err.contains("while settling"), "{err}");

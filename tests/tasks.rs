@@ -3,7 +3,7 @@
 //! the scripted controllers solve them, and task files round-trip.
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError};
-use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
+use blockpuzzle::policy::{RandomPolicy, ScriptedPolicy};
 use blockpuzzle::rollout::run_episode;
 use blockpuzzle::rules::Colour;
 use blockpuzzle::task::Task;

@@ -315,8 +315,11 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     // A comment changes nothing; a changed setting is refused, by name.
     std::fs::write(&file, format!("# edited\n{}", text.replace("GripperTouch-v0", "MyReach-v0"))).unwrap();
     train(&tiny(env, 2), &run, true, &mut quiet).unwrap();
-    std::fs::write(&file, text.replace("GripperTouch-v0", "MyReach-v0").replace("max_episode_steps = 50", "max_episode_steps = 40"))
-        .unwrap();
+    std::fs::write(
+        &file,
+        text.replace("GripperTouch-v0", "MyReach-v0").replace("max_episode_steps = 50", "max_episode_steps = 40"),
+    )
+    .unwrap();
     let err = format!("{:#}", train(&tiny(env, 3), &run, true, &mut quiet).unwrap_err());
     assert!(err.contains("has changed since the run started") && err.contains("max_episode_steps"), "{err}");
 

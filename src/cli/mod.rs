@@ -436,11 +436,11 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
         }
     }
     let report = crate::check::check(&a.file, a.samples, a.seed)?;
-    let task = registry::task(&a.file)?;
+    let task = &report.task;
     println!(
         "{}: task {} is valid: {} objects, levels 0-{}, distributions: {}",
         a.file,
-        report.id,
+        task.id(),
         task.spec.objects.len(),
         task.max_level(),
         if task.distribution_names().is_empty() { "none".to_owned() } else { task.distribution_names().join(", ") }
@@ -449,11 +449,10 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
         println!("{}", l.line());
     }
     if let Some(out) = &a.render {
-        let config = registry::config(&a.file)?;
         let mut frames = Vec::new();
-        let mut env = BlockEnv::new(config)?;
+        let mut env = BlockEnv::new(crate::env::EnvConfig::new(task.clone()))?;
         let mut renderer = crate::render::Renderer::new(env.scene().model.as_ref(), &a.view.view())?;
-        for (label, level, distribution) in crate::check::settings(&task) {
+        for (label, level, distribution) in crate::check::settings(task) {
             env.set_level(level)?;
             env.set_distribution(distribution.as_deref())?;
             if env.reset(Some(a.seed)).is_err() {
@@ -461,7 +460,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
             }
             let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
             renderer.colour_objects(env.scene(), &colours)?;
-            frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", report.id), ""))));
+            frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", task.id()), ""))));
         }
         let n = frames.len();
         crate::render::output::filmstrip(out, &frames, n)?;

@@ -15,7 +15,6 @@ pub mod registry;
 pub use config::{EnvConfig, EnvError};
 pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
-// ResetStats is defined below.
 
 use crate::mj::{Data, ObjType, Warning};
 use crate::rules::{Colour, ContactMatrix, Outcome, Rules, Touching};

@@ -52,9 +52,7 @@ pub fn is_path(arg: &str) -> bool {
 pub fn task(id: &str) -> Result<Task, EnvError> {
     if let Some(r) = REGISTRY.iter().find(|r| r.id == id) {
         let origin = format!("tasks/{id}.toml (built in)");
-        let mut t = Task::parse(r.toml, &origin, None)?;
-        t.source.path = None;
-        return Ok(t);
+        return Ok(Task::parse(r.toml, &origin, None)?);
     }
     if is_path(id) {
         return Ok(Task::from_file(Path::new(id))?);

@@ -4,8 +4,8 @@
 
 use super::{output, Renderer, View};
 use crate::env::{registry, BlockEnv, EnvConfig};
-use crate::rules::Colour;
 use crate::rollout::EpisodeRecord;
+use crate::rules::Colour;
 use anyhow::{bail, Result};
 use image::RgbImage;
 use std::path::Path;

@@ -209,11 +209,17 @@ impl Task {
             return Err(c.err(None, "curriculum.success_threshold must be in [0, 1]"));
         }
         let p = &spec.placement;
-        if !(p.min_separation >= 0.0 && p.table_margin.is_finite() && p.settle_seconds >= 0.0 && p.settle_tolerance > 0.0)
-            || !p.min_separation.is_finite()
-            || !p.settle_seconds.is_finite()
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !(non_negative(p.min_separation)
+            && p.table_margin.is_finite()
+            && non_negative(p.settle_seconds)
+            && positive(p.settle_tolerance))
         {
-            return Err(c.err(None, "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite"));
+            return Err(c.err(
+                None,
+                "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite",
+            ));
         }
         if p.max_attempts == 0 || p.max_reset_attempts == 0 {
             return Err(c.err(None, "placement: max_attempts and max_reset_attempts must be at least 1"));
@@ -233,7 +239,10 @@ impl Task {
         for (i, o) in spec.objects.iter().enumerate() {
             let (span, o) = (Some(o.span()), o.get_ref());
             if o.name.trim().is_empty() || RESERVED_NAMES.contains(&o.name.as_str()) {
-                return Err(c.err(span, format!("object name {:?} is empty or reserved (gripper, table, floor): choose another", o.name)));
+                return Err(c.err(
+                    span,
+                    format!("object name {:?} is empty or reserved (gripper, table, floor): choose another", o.name),
+                ));
             }
             if names[..i].contains(&o.name.as_str()) {
                 return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
@@ -271,7 +280,12 @@ impl Task {
         }
         for (level, vals) in values.iter().enumerate() {
             for (i, s) in starts.iter().enumerate() {
-                s.check(&c, &scope(&names_all, vals, level, cur.max_level), &spec.objects[i], &format!("at level {level}"))?;
+                s.check(
+                    &c,
+                    &scope(&names_all, vals, level, cur.max_level),
+                    &spec.objects[i],
+                    &format!("at level {level}"),
+                )?;
             }
         }
 
@@ -281,7 +295,10 @@ impl Task {
             let span = key_span(text, &format!("distributions.{name}"));
             let level = d.level.unwrap_or(cur.max_level);
             if level > cur.max_level {
-                return Err(c.err(span, format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level)));
+                return Err(c.err(
+                    span,
+                    format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level),
+                ));
             }
             for key in d.params.keys() {
                 if !cur.params.contains_key(key) {
@@ -292,12 +309,23 @@ impl Task {
             let mut dstarts = starts.clone();
             for (obj, start) in &d.starts {
                 let Some(i) = names.iter().position(|n| n == obj) else {
-                    return Err(c.err(span, format!("distribution {name:?} gives a start for {obj:?}, which is not an object (objects: {})", names.join(", "))));
+                    return Err(c.err(
+                        span,
+                        format!(
+                            "distribution {name:?} gives a start for {obj:?}, which is not an object (objects: {})",
+                            names.join(", ")
+                        ),
+                    ));
                 };
                 dstarts[i] = sampler::Placement::compile(&c, &spec, i, start, span.clone())?;
             }
             for (i, s) in dstarts.iter().enumerate() {
-                s.check(&c, &scope(&names_all, &vals, level, cur.max_level), &spec.objects[i], &format!("in distribution {name:?}"))?;
+                s.check(
+                    &c,
+                    &scope(&names_all, &vals, level, cur.max_level),
+                    &spec.objects[i],
+                    &format!("in distribution {name:?}"),
+                )?;
             }
             distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts });
         }
@@ -308,7 +336,10 @@ impl Task {
             let mut idx = Vec::new();
             for n in group {
                 let Some(i) = names.iter().position(|m| m == n) else {
-                    return Err(c.err(None, format!("shuffle names {n:?}, which is not an object (objects: {})", names.join(", "))));
+                    return Err(c.err(
+                        None,
+                        format!("shuffle names {n:?}, which is not an object (objects: {})", names.join(", ")),
+                    ));
                 };
                 if seen.contains(&i) {
                     return Err(c.err(None, format!("object {n:?} is in two shuffle groups (or twice in one)")));
@@ -440,12 +471,20 @@ fn param_order(c: &Checker, params: &BTreeMap<String, Spanned<Value>>) -> Result
     let mut pending: Vec<(String, Expr, std::ops::Range<usize>)> = Vec::new();
     for (name, v) in params {
         if ["level", "max_level", "pi"].contains(&name.as_str()) {
-            return Err(c.err(Some(v.span()), format!("parameter {name:?} shadows a built-in name (level, max_level, pi): rename it")));
+            return Err(c.err(
+                Some(v.span()),
+                format!("parameter {name:?} shadows a built-in name (level, max_level, pi): rename it"),
+            ));
         }
         let e = parse_value(c, Some(v.span()), &format!("curriculum.params.{name}"), v.get_ref())?;
         for n in e.names() {
             if !["level", "max_level", "pi"].contains(&n) && !params.contains_key(n) {
-                return Err(c.err(Some(v.span()), format!("curriculum.params.{name} reads {n:?}, which is neither a parameter nor level, max_level or pi")));
+                return Err(c.err(
+                    Some(v.span()),
+                    format!(
+                        "curriculum.params.{name} reads {n:?}, which is neither a parameter nor level, max_level or pi"
+                    ),
+                ));
             }
         }
         pending.push((name.clone(), e, v.span()));
@@ -457,7 +496,10 @@ fn param_order(c: &Checker, params: &BTreeMap<String, Spanned<Value>>) -> Result
         });
         let Some(i) = ready else {
             let (name, _, span) = &pending[0];
-            return Err(c.err(Some(span.clone()), format!("curriculum.params.{name} depends on itself through other parameters: break the cycle")));
+            return Err(c.err(
+                Some(span.clone()),
+                format!("curriculum.params.{name} depends on itself through other parameters: break the cycle"),
+            ));
         };
         let (name, e, _) = pending.remove(i);
         order.push((name, e));

@@ -82,7 +82,10 @@ impl Placement {
             if spec.objects.iter().any(|o| o.get_ref().name == n) {
                 return Err(err(format!("start.{field} names {n:?}, which comes later in the file; objects are placed in file order, so move {n:?} above {name:?}")));
             }
-            Err(err(format!("start.{field} names {n:?}, which is not an object (objects: {})", spec.objects.iter().map(|o| o.get_ref().name.clone()).collect::<Vec<_>>().join(", "))))
+            Err(err(format!(
+                "start.{field} names {n:?}, which is not an object (objects: {})",
+                spec.objects.iter().map(|o| o.get_ref().name.clone()).collect::<Vec<_>>().join(", ")
+            )))
         };
         let reference = |n: &str, field: &str| -> Result<Ref, TaskError> {
             match n {
@@ -100,7 +103,9 @@ impl Placement {
                 .transpose()
         };
         if s.at.is_some() && (s.around.is_some() || s.on.is_some() || s.distance.is_some() || s.rectangle.is_some()) {
-            return Err(err("start.at places the object absolutely: drop around, on, distance and rectangle, or drop at".into()));
+            return Err(err(
+                "start.at places the object absolutely: drop around, on, distance and rectangle, or drop at".into(),
+            ));
         }
         if s.on.is_some() && s.around.is_some() {
             return Err(err("start.on and start.around both give the anchor: keep one".into()));
@@ -126,7 +131,9 @@ impl Placement {
         let towards = s.towards.as_deref().map(|n| reference(n, "towards")).transpose()?;
         let yaw = match &s.yaw {
             None => None,
-            Some(Yaw::Fixed(v)) => Some((parse_value(c, span.clone(), &format!("object {name:?}: start.yaw"), v)?, None)),
+            Some(Yaw::Fixed(v)) => {
+                Some((parse_value(c, span.clone(), &format!("object {name:?}: start.yaw"), v)?, None))
+            }
             Some(Yaw::Range(r)) => {
                 let [a, b] = pair(&Some(r.clone()), "yaw")?.expect("a range was given");
                 Some((a, Some(b)))
@@ -170,7 +177,9 @@ impl Placement {
                 .eval(&|n| scope.lookup(n))
                 .map_err(|m| c.err(span.clone(), format!("object {name:?}: start.{field}: {m} {when}")))?;
             if !v.is_finite() {
-                return Err(c.err(span.clone(), format!("object {name:?}: start.{field} is {v} {when}: it must stay finite")));
+                return Err(
+                    c.err(span.clone(), format!("object {name:?}: start.{field} is {v} {when}: it must stay finite"))
+                );
             }
             Ok(v)
         };
@@ -180,17 +189,24 @@ impl Placement {
         if let Some(([lo, hi], _)) = &self.distance {
             let (lo, hi) = (eval("distance", lo)?, eval("distance", hi)?);
             if lo < 0.0 || lo > hi {
-                return Err(c.err(span, format!("object {name:?}: start.distance = [{lo}, {hi}] {when}: needs 0 ≤ lo ≤ hi")));
+                return Err(
+                    c.err(span, format!("object {name:?}: start.distance = [{lo}, {hi}] {when}: needs 0 ≤ lo ≤ hi"))
+                );
             }
         }
         for (field, r) in [("angle", &self.angle), ("rectangle", &self.rectangle)] {
             if let Some([lo, hi]) = r {
                 let (lo, hi) = (eval(field, lo)?, eval(field, hi)?);
                 if field == "angle" && lo > hi {
-                    return Err(c.err(span, format!("object {name:?}: start.angle = [{lo}, {hi}] {when}: needs lo ≤ hi")));
+                    return Err(
+                        c.err(span, format!("object {name:?}: start.angle = [{lo}, {hi}] {when}: needs lo ≤ hi"))
+                    );
                 }
                 if field == "rectangle" && (lo < 0.0 || hi < 0.0) {
-                    return Err(c.err(span, format!("object {name:?}: start.rectangle half sides [{lo}, {hi}] {when}: must be ≥ 0")));
+                    return Err(c.err(
+                        span,
+                        format!("object {name:?}: start.rectangle half sides [{lo}, {hi}] {when}: must be ≥ 0"),
+                    ));
                 }
             }
         }
@@ -199,7 +215,9 @@ impl Placement {
 
     fn all_exprs(&self) -> Vec<(&'static str, &Expr)> {
         let mut v: Vec<(&'static str, &Expr)> = Vec::new();
-        for (name, p) in [("at", &self.at), ("angle", &self.angle), ("rectangle", &self.rectangle), ("offset", &self.offset)] {
+        for (name, p) in
+            [("at", &self.at), ("angle", &self.angle), ("rectangle", &self.rectangle), ("offset", &self.offset)]
+        {
             if let Some([a, b]) = p {
                 v.push((name, a));
                 v.push((name, b));
@@ -389,11 +407,8 @@ impl Task {
                 },
             }
         }
-        let reason = reasons
-            .iter()
-            .max_by_key(|(_, n)| *n)
-            .map(|(r, n)| format!("{r} in {n} of them"))
-            .unwrap_or_default();
+        let reason =
+            reasons.iter().max_by_key(|(_, n)| *n).map(|(r, n)| format!("{r} in {n} of them")).unwrap_or_default();
         Err(PlacementError::Exhausted {
             task: self.id().to_owned(),
             attempts: p.max_attempts,
@@ -416,7 +431,8 @@ impl Task {
                 return Some(format!("{:?} off the table", s.name));
             }
         }
-        let resting: Vec<usize> = (0..placed.len()).filter(|&i| free(i) && starts[i].on.is_none() && starts[i].height.is_none()).collect();
+        let resting: Vec<usize> =
+            (0..placed.len()).filter(|&i| free(i) && starts[i].on.is_none() && starts[i].height.is_none()).collect();
         for (k, &i) in resting.iter().enumerate() {
             for &j in &resting[k + 1..] {
                 let (a, b) = (placed[i].xy, placed[j].xy);

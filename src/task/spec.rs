@@ -21,16 +21,6 @@ pub enum Value {
     Expr(String),
 }
 
-impl Value {
-    /// The expression text (a number prints as itself).
-    pub fn text(&self) -> String {
-        match self {
-            Value::Num(v) => format!("{v:?}"),
-            Value::Expr(s) => s.clone(),
-        }
-    }
-}
-
 impl From<f64> for Value {
     fn from(v: f64) -> Self {
         Value::Num(v)

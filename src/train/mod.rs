@@ -431,7 +431,12 @@ fn run_task(config: &TrainConfig, run: &RunDir, resume: bool) -> Result<Task> {
         return Ok(registry::task(&config.env)?);
     };
     if registry::is_path(&config.env) && !Path::new(&config.env).exists() {
-        eprintln!("{} is gone: resuming with the copy of {} recorded in {}", config.env, source.id, run.config().display());
+        eprintln!(
+            "{} is gone: resuming with the copy of {} recorded in {}",
+            config.env,
+            source.id,
+            run.config().display()
+        );
         return Ok(registry::recorded(&source)?);
     }
     let current = registry::task(&config.env)?;
