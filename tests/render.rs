@@ -174,4 +174,30 @@ fn task_check_renders_one_reset_state_per_level_and_a_shuffled_episode_in_its_co
     let (frames, _) = blockpuzzle::render::replay::episode_frames(ep, &view).unwrap();
     let px = frames[0].get_pixel(x, y);
     assert!(greenish(px), "slot 0 drawn green, as dealt this episode: {px:?}");
+
+    // A dump of a task file renders after the file is gone (from the copy in the dump).
+    let file = dir.path().join("gone.toml");
+    let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
+    std::fs::write(&file, source.replace("GripperTouch-v0", "Gone-v0")).unwrap();
+    let traj = dir.path().join("gone.jsonl");
+    let o =
+        bp(&["rollout", "--env", file.to_str().unwrap(), "--episodes", "1", "--out", traj.to_str().unwrap()], false);
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::remove_file(&file).unwrap();
+    let gif = dir.path().join("gone.gif");
+    let o = bp(
+        &[
+            "render",
+            "--traj",
+            traj.to_str().unwrap(),
+            "--out",
+            gif.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+        false,
+    );
+    assert!(o.status.success() && gif.exists(), "{}", text(&o));
 }

@@ -221,3 +221,45 @@ fn a_layout_that_cannot_be_met_names_the_constraint() {
     let msg = err.to_string();
     assert!(msg.contains("200 attempts") && msg.contains("closer than min_separation"), "{msg}");
 }
+
+#[test]
+fn a_coloured_floor_is_a_rule_object_and_the_built_ins_have_none() {
+    use blockpuzzle::task::{SurfaceSpec, TaskSpec};
+    // Blue near the table's edge, green far from it; the gripper pushes blue off the table.
+    let spec = |floor: Option<Colour>| {
+        let mut s = TaskSpec::fixed("floor", &[Colour::Blue, Colour::Green], &[[1.30, 0.44], [1.12, 1.02]]).unwrap();
+        s.floor = floor.map(|colour| SurfaceSpec { colour });
+        BlockEnv::new(EnvConfig::from_spec(s).unwrap()).unwrap()
+    };
+    let push_off = |env: &mut BlockEnv| {
+        env.reset(Some(0)).unwrap();
+        // Behind blue (towards the table's centre), down to the table, then out over the edge.
+        for t in [[1.30, 0.52, 0.55], [1.30, 0.52, 0.425], [1.30, 0.25, 0.425]] {
+            for _ in 0..12 {
+                let g = env.gripper_position();
+                let a: Vec<f32> = (0..3).map(|k| ((t[k] - g[k]) / 0.05).clamp(-1.0, 1.0) as f32).chain([0.0]).collect();
+                let s = env.step(&a).unwrap();
+                if s.terminated || s.truncated {
+                    return s;
+                }
+            }
+        }
+        loop {
+            let s = env.step(&[0.0; 4]).unwrap();
+            if s.terminated || s.truncated {
+                return s;
+            }
+        }
+    };
+    let mut red_floor = spec(Some(Colour::Red));
+    assert_eq!(red_floor.objects().last().unwrap().name, "floor");
+    let s = push_off(&mut red_floor);
+    let floor = red_floor.objects().len() - 1;
+    assert!(s.info.is_failure && s.info.touching.contains(&(2, floor)), "{:?}", s.info);
+    let mut plain = spec(None);
+    let s = push_off(&mut plain);
+    assert!(!s.info.is_failure && s.truncated, "without a floor object, falling off changes nothing: {:?}", s.info);
+    for id in registry::ids() {
+        assert!(registry::task(id).unwrap().spec.floor.is_none(), "{id}");
+    }
+}

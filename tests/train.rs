@@ -323,8 +323,11 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     let err = format!("{:#}", train(&tiny(env, 3), &run, true, &mut quiet).unwrap_err());
     assert!(err.contains("has changed since the run started") && err.contains("max_episode_steps"), "{err}");
 
-    // Moved away: the run goes on with its recorded copy.
+    // Moved away: the run goes on with its recorded copy, and its policy still finds its task.
     std::fs::remove_file(&file).unwrap();
     let rows = train(&tiny(env, 3), &run, true, &mut quiet).unwrap();
     assert_eq!(rows.len(), 3);
+    let saved = blockpuzzle::train::load_policy(&run).unwrap();
+    let task = blockpuzzle::env::registry::recorded(saved.task.as_ref().unwrap()).unwrap();
+    assert_eq!((task.id(), task.spec.max_episode_steps), ("MyReach-v0", 50));
 }
