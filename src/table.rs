@@ -9,7 +9,7 @@ use anyhow::Result;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// The environment of the table.
+/// The environment of the paper's table (the default of `table --env`).
 pub const ENV: &str = "BlocksChoose-v0";
 
 /// One row: a method, where its policy is, the paper's (Normal, Challenge).
@@ -51,14 +51,13 @@ pub enum Outcome {
 }
 
 /// Evaluates one row.
-pub fn evaluate_row(row: &Row, episodes: usize, seed: u64, threads: usize) -> Outcome {
+pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> Outcome {
     let Some(path) = &row.policy else { return Outcome::NotGiven };
     // The policy file is read once; each evaluation gets its own copy.
     let run = || -> Result<(Evaluation, Evaluation, usize)> {
         let saved = load_policy(path)?;
         let epoch = saved.epoch;
-        let task = crate::env::registry::task(ENV)?;
-        let spec = |challenge| EvalSpec { task: &task, challenge, level: None, episodes, seed, threads };
+        let spec = |challenge| EvalSpec { task, challenge, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
         Ok((normal, evaluate(path, saved, &spec(true))?, epoch))
     };
@@ -74,15 +73,19 @@ fn cell(e: &Evaluation, paper: Option<f64>) -> String {
 }
 
 /// The table as Markdown.
-pub fn markdown(rows: &[(Row, Outcome)], episodes: usize, seed: u64) -> String {
+pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "Final evaluation on {ENV}: Normal = the maximum curriculum level, Challenge = the challenge");
+    let _ = writeln!(s, "Final evaluation on {env}: Normal = the maximum curriculum level, Challenge = the challenge");
     let _ = writeln!(
         s,
         "distribution. {episodes} episodes per cell (seeds {seed}–{}), success rate",
         seed + episodes as u64 - 1
     );
-    let _ = writeln!(s, "with its 95% Wilson interval, and the paper's number.\n");
+    if env == ENV {
+        let _ = writeln!(s, "with its 95% Wilson interval, and the paper's number.\n");
+    } else {
+        let _ = writeln!(s, "with its 95% Wilson interval, and the paper's number on {ENV} for comparison.\n");
+    }
     let _ = writeln!(s, "| Method | Normal | Challenge | Policy |");
     let _ = writeln!(s, "|---|---|---|---|");
     for (row, outcome) in rows {

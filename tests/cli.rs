@@ -225,6 +225,14 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
 
+    // The same policies on the shuffled task (a generalisation test); a task without a challenge is refused.
+    let o = bp(&["table", "--env", "BlocksChooseShuffled-v0", "--pggd", pggd.to_str().unwrap(), "--episodes", "3"]);
+    let md = text(&o);
+    assert!(o.status.success() && md.contains("Final evaluation on BlocksChooseShuffled-v0"), "{md}");
+    assert!(md.contains("paper's number on BlocksChoose-v0 for comparison") && md.contains("(epoch 1)"), "{md}");
+    let o = bp(&["table", "--env", "BlocksTouch-v0", "--episodes", "3"]);
+    assert!(!o.status.success() && text(&o).contains("does not define"), "{}", text(&o));
+
     // The runs' finals curves in one figure.
     let png = dir.path().join("overlay.png");
     let o =

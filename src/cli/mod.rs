@@ -104,6 +104,10 @@ struct PlotArgs {
 
 #[derive(Debug, clap::Args)]
 struct TableArgs {
+    /// The task: the paper's BlocksChoose-v0, or another id or task file with a challenge
+    /// distribution (e.g. BlocksChooseShuffled-v0, to test generalisation).
+    #[arg(long, default_value = crate::table::ENV)]
+    env: String,
     /// The 2-block DDPG expert (run directory or policy file); evaluated with grey blocks removed from its view.
     #[arg(long)]
     expert: Option<PathBuf>,
@@ -551,14 +555,18 @@ fn table(a: TableArgs) -> Result<()> {
         bail!("--episodes must be at least 1");
     }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let task = registry::task(&a.env)?;
+    if task.distribution("challenge").is_none() {
+        bail!("the table's second column is the challenge distribution, which {} does not define", a.env);
+    }
     let rows = crate::table::rows(a.expert, a.ddpg, a.pggd, a.pggd_alone);
     let mut done = Vec::new();
     for row in rows {
         eprintln!("evaluating {} ...", row.method);
-        let outcome = crate::table::evaluate_row(&row, a.episodes, a.seed, threads);
+        let outcome = crate::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
         done.push((row, outcome));
     }
-    let md = crate::table::markdown(&done, a.episodes, a.seed);
+    let md = crate::table::markdown(&done, task.id(), a.episodes, a.seed);
     print!("{md}");
     if let Some(out) = &a.out {
         crate::train::write_atomic(out, md.as_bytes())?;
