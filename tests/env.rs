@@ -9,10 +9,17 @@ use common::trajectory;
 
 #[test]
 fn registry_lists_and_builds_every_id() {
-    assert_eq!(ids(), vec!["BlocksTouch-v0", "BlocksChoose-v0", "GripperTouch-v0"]);
-    for (id, dim, nq, max_level) in
-        [("BlocksTouch-v0", 48, 29, 5), ("BlocksChoose-v0", 67, 36, 10), ("GripperTouch-v0", 29, 22, 0)]
-    {
+    let expected = [
+        ("BlocksTouch-v0", 48, 29, 5),
+        ("BlocksChoose-v0", 67, 36, 10),
+        ("GripperTouch-v0", 29, 22, 0),
+        ("BlocksChooseShuffled-v0", 67, 36, 10),
+        ("ReachAvoid-v0", 48, 29, 5),
+        ("ToppleTower-v0", 67, 36, 3),
+        ("BlocksStack-v0", 67, 36, 4),
+    ];
+    assert_eq!(ids(), expected.iter().map(|e| e.0).collect::<Vec<_>>());
+    for (id, dim, nq, max_level) in expected {
         let mut env = make(id).unwrap();
         let (obs, info) = env.reset(Some(0)).unwrap();
         assert_eq!(obs.len(), dim, "{id}");

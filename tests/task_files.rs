@@ -127,3 +127,28 @@ fn tables_may_be_written_any_way_toml_allows() {
     assert_eq!(t.params(0, None), vec![("R".to_owned(), 0.1)]);
     assert_eq!(t.params(0, t.distribution("far")), vec![("R".to_owned(), 0.2)]);
 }
+
+#[test]
+fn lines_count_right_after_non_ascii_comments() {
+    let e = error(&format!("# a comment with ≤, é and —\n{BLUE}{}", GREEN.replace("[0.1, 0.1]", "[0.2, 0.1]")));
+    assert_eq!(e.line, Some(7), "{e}");
+    assert!(e.message.contains("needs 0 ≤ lo ≤ hi"), "{e}");
+}
+
+#[test]
+fn json_task_files_are_read_by_the_same_checks() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml_task = Task::from_toml(&format!("{HEADER}{BLUE}{GREEN}"), None).unwrap();
+    let json = dir.path().join("t.json");
+    std::fs::write(&json, serde_json::to_string_pretty(&toml_task.spec).unwrap()).unwrap();
+    let t = Task::from_file(&json).unwrap();
+    assert_eq!(t.spec, toml_task.spec);
+    assert_eq!(t.source.hash, toml_task.source.hash);
+    std::fs::write(&json, "{\n \"version\": 1,\n \"id\": \"x\",\n").unwrap();
+    let e = Task::from_file(&json).unwrap_err();
+    assert!(e.message.starts_with("not JSON") && e.line.is_some(), "{e}");
+    std::fs::write(&json, r#"{"version": 1, "id": "x", "objects": [{"name": "b", "colour": "blue", "size": 1}]}"#)
+        .unwrap();
+    let e = Task::from_file(&json).unwrap_err();
+    assert!(e.message.contains("unknown field `size`") && e.to_string().contains("t.json"), "{e}");
+}

@@ -68,7 +68,10 @@ fn short_run_writes_every_run_directory_file() {
     assert!(header.starts_with("epoch,curriculum/level,train/success,test/success,finals/success"));
     let cfg: TrainConfig =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
-    assert_eq!(cfg, tiny("BlocksTouch-v0", 2));
+    assert_eq!(TrainConfig { task: None, ..cfg.clone() }, tiny("BlocksTouch-v0", 2));
+    let task = cfg.task.expect("the run records its task");
+    assert_eq!(task.id, "BlocksTouch-v0");
+    assert_eq!(task.hash, blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().source.hash);
     // a second fresh run into the same directory is refused
     let err = train(&tiny("BlocksTouch-v0", 2), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--resume"), "{err}");

@@ -37,10 +37,14 @@ pub fn ids() -> Vec<&'static str> {
     REGISTRY.iter().map(|r| r.id).collect()
 }
 
-/// Whether `arg` names a task file rather than an id: it ends in `.toml`,
-/// has a path separator, or is an existing file.
+/// Whether `arg` names a task file rather than an id: it ends in `.toml` or
+/// `.json`, has a path separator, or is an existing file.
 pub fn is_path(arg: &str) -> bool {
-    arg.ends_with(".toml") || arg.contains('/') || arg.contains('\\') || Path::new(arg).is_file()
+    arg.ends_with(".toml")
+        || arg.ends_with(".json")
+        || arg.contains('/')
+        || arg.contains('\\')
+        || Path::new(arg).is_file()
 }
 
 /// The task registered under `id`, or read from the task file at `id` when

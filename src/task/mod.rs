@@ -110,7 +110,7 @@ fn key_span(text: &str, key: &str) -> Option<std::ops::Range<usize>> {
 
 /// 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].bytes().filter(|&b| b == b'\n').count() + 1
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
 }
 
 /// Checks and compiles a spec; `text` (the file) locates errors.
@@ -142,12 +142,18 @@ impl Task {
     /// # Errors
     /// An unreadable file, or anything [`Task::from_toml`] reports.
     pub fn from_file(path: &Path) -> Result<Task, TaskError> {
-        let text = std::fs::read_to_string(path).map_err(|e| TaskError {
-            origin: path.display().to_string(),
-            line: None,
-            message: format!("cannot read the task file: {e}"),
-        })?;
-        Task::from_toml(&text, Some(path))
+        let origin = path.display().to_string();
+        let err = |line, message| TaskError { origin: origin.clone(), line, message };
+        let text = std::fs::read_to_string(path).map_err(|e| err(None, format!("cannot read the task file: {e}")))?;
+        if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+            return Task::from_toml(&text, Some(path));
+        }
+        // JSON: the same document as a JSON object, checked by the same code through its TOML
+        // form (so later errors carry no line: they would count lines of that form).
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| err(Some(e.line()), format!("not JSON: {e}")))?;
+        let toml = toml::to_string(&value).map_err(|e| err(None, format!("not a task: {e}")))?;
+        Task::parse(&toml, &origin, Some(path)).map_err(|e| TaskError { line: None, ..e })
     }
 
     /// Parses and compiles task-file text; `path` names it in errors (and is recorded).

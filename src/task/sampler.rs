@@ -355,6 +355,9 @@ impl Task {
     ///
     /// # Errors
     /// [`PlacementError::Exhausted`] after `placement.max_attempts` draws, naming the constraint that failed most.
+    ///
+    /// # Panics
+    /// A `distribution` index that [`Task::distribution`] did not give.
     pub fn sample(
         &self,
         level: usize,
