@@ -331,7 +331,7 @@ impl BlockEnv {
     }
     /// The evaluation distribution in use (`None`: the curriculum).
     pub fn distribution_name(&self) -> Option<&str> {
-        self.distribution.map(|d| self.config.task.distribution_names()[d])
+        self.distribution.map(|d| self.config.task.distributions[d].name.as_str())
     }
     /// Uses the named evaluation distribution (or, with `None`, the
     /// curriculum) from the next reset on.

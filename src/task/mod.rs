@@ -68,7 +68,7 @@ pub struct TaskSource {
     pub hash: String,
 }
 
-/// A compiled distribution (the normal curriculum is index 0 of nothing: see [`Task`]).
+/// A compiled named distribution: its level, parameter values and starts.
 #[derive(Debug, Clone)]
 pub(crate) struct Distribution {
     pub name: String,
