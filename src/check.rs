@@ -29,7 +29,7 @@ impl LevelReport {
     }
     /// Share of the layouts the physics checks rejected.
     pub fn physics_rejection(&self) -> f64 {
-        self.stats.rejected.iter().map(|r| r.1).sum::<u64>() as f64 / self.stats.layouts.max(1) as f64
+        self.stats.rejected.total() as f64 / self.stats.layouts.max(1) as f64
     }
     /// One line for the terminal.
     pub fn line(&self) -> String {
@@ -43,7 +43,7 @@ impl LevelReport {
             100.0 * self.physics_rejection(),
             self.stats.layouts
         );
-        for (reason, n) in &self.stats.rejected {
+        for (reason, n) in self.stats.rejected.iter() {
             s.push_str(&format!("\n{:<28}{n} x {reason}", ""));
         }
         if let Some(e) = &self.error {

@@ -19,7 +19,7 @@ pub use registry::{ids, make, REGISTRY};
 use crate::mj::{Data, ObjType, Warning};
 use crate::rules::{Colour, ContactMatrix, Outcome, Rules, Touching};
 use crate::scene::{Scene, SceneObject};
-use crate::task::Placed;
+use crate::task::{Placed, Tally};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -78,16 +78,7 @@ pub struct ResetStats {
     /// Layouts that passed the sampler and went to the physics checks.
     pub layouts: u64,
     /// Layouts the physics checks rejected, by reason.
-    pub rejected: Vec<(String, u64)>,
-}
-
-impl ResetStats {
-    fn reject(&mut self, reason: &str) {
-        match self.rejected.iter_mut().find(|(r, _)| r == reason) {
-            Some(e) => e.1 += 1,
-            None => self.rejected.push((reason.to_owned(), 1)),
-        }
-    }
+    pub rejected: Tally,
 }
 
 /// The result of one step.
@@ -372,7 +363,7 @@ impl BlockEnv {
         let task = &self.config.task;
         let deterministic = task.is_deterministic();
         let attempts = task.spec.placement.max_reset_attempts;
-        let mut reasons: Vec<(String, usize)> = Vec::new();
+        let mut reasons = Tally::default();
         for _ in 0..attempts {
             let Some(reason) = self.try_layout()? else {
                 self.stats.resets += 1;
@@ -388,24 +379,20 @@ impl BlockEnv {
                     blue: self.objects[b].name.clone(),
                 });
             }
-            self.stats.reject(&reason);
-            match reasons.iter_mut().find(|(s, _)| *s == reason) {
-                Some(e) => e.1 += 1,
-                None => reasons.push((reason, 1)),
-            }
+            self.stats.rejected.add(&reason);
+            reasons.add(&reason);
             if deterministic {
                 break;
             }
         }
-        let (reason, n) = reasons.iter().max_by_key(|(_, n)| *n).cloned().unwrap_or_default();
         Err(EnvError::ResetExhausted {
             id: self.id().to_owned(),
-            attempts: reasons.iter().map(|r| r.1).sum(),
+            attempts: reasons.total() as usize,
             level: match self.distribution_name() {
                 Some(d) => format!("distribution {d}"),
                 None => format!("level {}", self.level),
             },
-            reason: format!("{reason} in {n} of them"),
+            reason: reasons.most(),
         })
     }
 
@@ -502,7 +489,7 @@ impl BlockEnv {
         self.data.forward();
         let tol = p.settle_tolerance;
         self.scene.blocks.iter().zip(targets).enumerate().find_map(|(i, (b, t))| {
-            let x = self.data.qpos()[b.qpos..b.qpos + 3].to_vec();
+            let x = &self.data.qpos()[b.qpos..b.qpos + 3];
             let moved = ((x[0] - t[0]).powi(2) + (x[1] - t[1]).powi(2) + (x[2] - t[2]).powi(2)).sqrt();
             (moved > tol || !moved.is_finite()).then(|| {
                 format!(

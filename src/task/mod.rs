@@ -94,11 +94,39 @@ pub struct Task {
     pub(crate) distributions: Vec<Distribution>,
     /// Object indices of each shuffle group.
     pub(crate) shuffle: Vec<Vec<usize>>,
+    /// No random draw and no shuffle: every layout is the same.
+    deterministic: bool,
 }
 
 impl PartialEq for Task {
     fn eq(&self, other: &Self) -> bool {
         self.spec == other.spec
+    }
+}
+
+/// Counts of reasons (why layouts were redrawn), in order of first appearance.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Tally(Vec<(String, u64)>);
+
+impl Tally {
+    /// Counts one more `reason`.
+    pub fn add(&mut self, reason: &str) {
+        match self.0.iter_mut().find(|(r, _)| r == reason) {
+            Some(e) => e.1 += 1,
+            None => self.0.push((reason.to_owned(), 1)),
+        }
+    }
+    /// Every reason and its count.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, u64)> {
+        self.0.iter().map(|(r, n)| (r.as_str(), *n))
+    }
+    /// The sum of the counts.
+    pub fn total(&self) -> u64 {
+        self.0.iter().map(|e| e.1).sum()
+    }
+    /// "REASON in N of them" for the most frequent reason (empty when none).
+    pub fn most(&self) -> String {
+        self.0.iter().max_by_key(|e| e.1).map(|(r, n)| format!("{r} in {n} of them")).unwrap_or_default()
     }
 }
 
@@ -368,7 +396,9 @@ impl Task {
 
         let hash = canonical_hash(&spec);
         let source = TaskSource { id: spec.id.clone(), path: path.map(Path::to_path_buf), toml: text.to_owned(), hash };
-        Ok(Task { spec, source, names: names_all, values, starts, distributions, shuffle })
+        let deterministic = shuffle.is_empty()
+            && starts.iter().chain(distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random());
+        Ok(Task { spec, source, names: names_all, values, starts, distributions, shuffle, deterministic })
     }
 
     /// The id.
@@ -397,9 +427,7 @@ impl Task {
     }
     /// Whether every layout is the same: no random draw, no shuffle.
     pub fn is_deterministic(&self) -> bool {
-        self.shuffle.is_empty()
-            && self.starts.iter().all(|s| !s.is_random())
-            && self.distributions.iter().all(|d| d.starts.iter().all(|s| !s.is_random()))
+        self.deterministic
     }
     /// Parameter values at `level` (or of a distribution), by name.
     pub fn params(&self, level: usize, distribution: Option<usize>) -> Vec<(String, f64)> {

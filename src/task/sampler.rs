@@ -393,7 +393,7 @@ impl Task {
         let scope = Scope { names: &self.names, values, level, max_level: self.max_level() };
         let specs: Vec<&ObjectSpec> = self.objects().collect();
         let p = &self.spec.placement;
-        let mut reasons: Vec<(String, usize)> = Vec::new();
+        let mut reasons = super::Tally::default();
         let mut placed = Vec::with_capacity(specs.len());
         for _ in 0..p.max_attempts {
             *draws += 1;
@@ -404,14 +404,10 @@ impl Task {
             }
             match self.broken_constraint(&placed, starts, &specs) {
                 None => return Ok(placed),
-                Some(r) => match reasons.iter_mut().find(|(s, _)| *s == r) {
-                    Some(e) => e.1 += 1,
-                    None => reasons.push((r, 1)),
-                },
+                Some(r) => reasons.add(&r),
             }
         }
-        let reason =
-            reasons.iter().max_by_key(|(_, n)| *n).map(|(r, n)| format!("{r} in {n} of them")).unwrap_or_default();
+        let reason = reasons.most();
         Err(PlacementError::Exhausted {
             task: self.id().to_owned(),
             attempts: p.max_attempts,

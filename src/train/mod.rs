@@ -201,7 +201,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     });
 
     // The task (checked against the run's recorded copy on resume), then one environment per worker.
-    let task = run_task(config, &run, resume)?;
+    let saved_config = if resume && run.config().exists() { Some(run.read_config()?) } else { None };
+    let task = run_task(config, &run, saved_config.as_ref().and_then(|c| c.task.as_ref()))?;
     let mut config = config.clone();
     config.task = Some(task.source.clone());
     let config = &config;
@@ -216,7 +217,10 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
 
     // Agent, replay buffer, run state: fresh or from the checkpoint.
     let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
-        let saved = run.read_config()?;
+        let saved = match saved_config {
+            Some(c) => c,
+            None => run.read_config()?,
+        };
         if (saved.task.is_none() && saved.env != config.env)
             || saved.algo != config.algo
             || saved.ddpg != config.ddpg
@@ -419,14 +423,13 @@ impl TrainConfig {
     }
 }
 
-/// The task of a run: `--env` resolved; on resume, checked against the copy
-/// recorded in the run's `config.json` (a changed task is an error naming
+/// The task of a run: `--env` resolved; on resume, checked against `recorded`,
+/// the copy in the run's `config.json` (a changed task is an error naming
 /// what changed; a task file that no longer exists is replaced by the copy).
 ///
 /// # Errors
 /// An unknown id or bad task file, or a task that changed since the run started.
-fn run_task(config: &TrainConfig, run: &RunDir, resume: bool) -> Result<Task> {
-    let recorded = if resume && run.config().exists() { run.read_config()?.task } else { None };
+fn run_task(config: &TrainConfig, run: &RunDir, recorded: Option<&crate::task::TaskSource>) -> Result<Task> {
     let Some(source) = recorded else {
         return Ok(registry::task(&config.env)?);
     };
@@ -437,7 +440,7 @@ fn run_task(config: &TrainConfig, run: &RunDir, resume: bool) -> Result<Task> {
             source.id,
             run.config().display()
         );
-        return Ok(registry::recorded(&source)?);
+        return Ok(registry::recorded(source)?);
     }
     let current = registry::task(&config.env)?;
     if current.source.hash != source.hash {
