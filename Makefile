@@ -30,7 +30,7 @@ test: setup
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build
-	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 \
+	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 --snapshot-every 4 \
 		--seed 0 --run-dir $(RUN) $(call resume,$(RUN))
 
 # The paper's results table, one target per row (each resumes its run directory):

@@ -52,19 +52,39 @@ fn best_core() -> Option<&'static str> {
     None
 }
 
-/// If OpenBLAS chose slower kernels than the CPU supports and the user did
-/// not set `OPENBLAS_CORETYPE`, re-executes the current program with it set.
-/// Returns normally when nothing needs doing or the re-execution fails.
-pub fn ensure_fast_kernels() {
-    if std::env::var_os("OPENBLAS_CORETYPE").is_some() {
-        return;
+/// `OMP_WAIT_POLICY`'s value when the user has not set it.
+pub const OMP_WAIT_POLICY: &str = "PASSIVE";
+
+/// The variables the numeric libraries should see and do not yet: every
+/// (name, value) that [`ensure_fast_kernels`] sets. `get` reads the
+/// environment (a parameter so that tests can pass their own).
+pub fn missing_settings(get: impl Fn(&str) -> Option<std::ffi::OsString>) -> Vec<(&'static str, String)> {
+    let mut out = Vec::new();
+    if get("OPENBLAS_CORETYPE").is_none() {
+        if let (Some(core), Some(best)) = (openblas_core(), best_core()) {
+            if !FAST_CORES.iter().any(|c| core.to_lowercase().contains(c)) {
+                out.push(("OPENBLAS_CORETYPE", best.to_owned()));
+            }
+        }
     }
-    let (Some(core), Some(best)) = (openblas_core(), best_core()) else { return };
-    if FAST_CORES.iter().any(|c| core.to_lowercase().contains(c)) {
+    if get("OMP_WAIT_POLICY").map_or(true, |v| v.is_empty()) {
+        out.push(("OMP_WAIT_POLICY", OMP_WAIT_POLICY.to_owned()));
+    }
+    out
+}
+
+/// Sets what [`missing_settings`] finds missing (OpenBLAS kernels slower
+/// than the CPU supports; OpenMP's wait policy) by re-executing the current
+/// program once with those variables set. Variables the user set are left
+/// alone. Returns normally when nothing needs doing or the re-execution fails.
+pub fn ensure_fast_kernels() {
+    let missing = missing_settings(|k| std::env::var_os(k));
+    if missing.is_empty() {
         return;
     }
     let Ok(exe) = std::env::current_exe() else { return };
     use std::os::unix::process::CommandExt;
-    let err = std::process::Command::new(exe).args(std::env::args_os().skip(1)).env("OPENBLAS_CORETYPE", best).exec();
-    eprintln!("note: OpenBLAS uses its {core} kernels; restarting with OPENBLAS_CORETYPE={best} failed ({err}); training will be slower");
+    let err = std::process::Command::new(exe).args(std::env::args_os().skip(1)).envs(missing.iter().cloned()).exec();
+    let names: Vec<String> = missing.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    eprintln!("note: restarting with {} failed ({err}); training may be slower", names.join(" "));
 }

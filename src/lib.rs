@@ -25,3 +25,4 @@ pub mod policy;
 pub mod render;
 pub mod rollout;
 pub mod train;
+pub mod zoo;

@@ -23,20 +23,73 @@ pub struct Row {
     pub paper: (Option<f64>, Option<f64>),
 }
 
-/// The paper's rows for the given policies, in the paper's order, plus PGGD alone.
-pub fn rows(
-    expert: Option<PathBuf>,
-    ddpg: Option<PathBuf>,
-    pggd: Option<PathBuf>,
-    pggd_alone: Option<PathBuf>,
-) -> Vec<Row> {
-    vec![
-        Row { method: "DDPG (2 blocks), grey removed from its view", policy: expert, paper: (Some(0.44), Some(0.24)) },
-        Row { method: "DDPG (3 blocks)", policy: ddpg, paper: (Some(0.97), Some(0.90)) },
-        Row { method: "PGGD + AggreVaTeD", policy: pggd, paper: (Some(0.64), Some(0.40)) },
+/// The policy of each row (a file, run directory or zoo name; None: not given).
+#[derive(Debug, Clone, Default)]
+pub struct Policies {
+    /// DDPG trained on BlocksTouch-v0: "DDPG (2 blocks)", AggreVaTeD's expert.
+    pub expert: Option<PathBuf>,
+    /// DDPG trained on BlocksChoose-v0 with the paper's configuration.
+    pub ddpg: Option<PathBuf>,
+    /// DDPG trained on BlocksChoose-v0 with this project's changes.
+    pub ddpg_ours: Option<PathBuf>,
+    /// PGGD trained by AggreVaTeD.
+    pub pggd: Option<PathBuf>,
+    /// PGGD trained alone.
+    pub pggd_alone: Option<PathBuf>,
+}
+
+impl Policies {
+    /// The shipped zoo's entries for the rows (`table --zoo`).
+    pub fn zoo() -> Self {
+        let name = |n: &str| Some(PathBuf::from(n));
+        Self {
+            expert: name(ZOO_EXPERT),
+            ddpg: name("BlocksChoose-v0-ddpg"),
+            ddpg_ours: name("BlocksChoose-v0-ddpg-ours"),
+            pggd: name("BlocksChoose-v0-pggd-aggrevated"),
+            pggd_alone: name("BlocksChoose-v0-pggd"),
+        }
+    }
+
+    /// Each row's policy from `self`, else from `other`.
+    pub fn or(self, other: Self) -> Self {
+        Self {
+            expert: self.expert.or(other.expert),
+            ddpg: self.ddpg.or(other.ddpg),
+            ddpg_ours: self.ddpg_ours.or(other.ddpg_ours),
+            pggd: self.pggd.or(other.pggd),
+            pggd_alone: self.pggd_alone.or(other.pggd_alone),
+        }
+    }
+}
+
+/// The zoo entry of the 2-block expert (DDPG on BlocksTouch-v0).
+pub const ZOO_EXPERT: &str = "BlocksTouch-v0-ddpg";
+
+/// The paper's rows for the given policies, in the paper's order, this
+/// project's DDPG after the paper's (where given), and PGGD alone.
+pub fn rows(p: Policies) -> Vec<Row> {
+    // This project's row is shown only when it has a policy (it is not the paper's).
+    let ours = p.ddpg_ours.map(|policy| Row {
+        method: "DDPG (3 blocks), ours",
+        policy: Some(policy),
+        paper: (Some(0.97), Some(0.90)),
+    });
+    let mut rows = vec![
+        Row {
+            method: "DDPG (2 blocks), grey removed from its view",
+            policy: p.expert,
+            paper: (Some(0.44), Some(0.24)),
+        },
+        Row { method: "DDPG (3 blocks)", policy: p.ddpg, paper: (Some(0.97), Some(0.90)) },
+        Row { method: "PGGD + AggreVaTeD", policy: p.pggd, paper: (Some(0.64), Some(0.40)) },
         // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
-        Row { method: "PGGD alone", policy: pggd_alone, paper: (None, None) },
-    ]
+        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None) },
+    ];
+    if let Some(ours) = ours {
+        rows.insert(2, ours);
+    }
+    rows
 }
 
 /// A row's outcome.

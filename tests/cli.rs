@@ -225,6 +225,36 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
 
+    // --zoo takes every row from the zoo by its standard name: here a zoo holding only the expert.
+    let zoo = dir.path().join("zoo");
+    let o = bp(&[
+        "zoo",
+        "export",
+        "--from",
+        expert.to_str().unwrap(),
+        "--name",
+        "BlocksTouch-v0-ddpg",
+        "--description",
+        "tiny",
+        "--trained-with",
+        "tests/cli.rs",
+        "--zoo",
+        zoo.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
+        .args(["table", "--zoo", "--episodes", "3"])
+        .env("BLOCKPUZZLE_ZOO", &zoo)
+        .output()
+        .unwrap();
+    let md = text(&o);
+    assert!(o.status.success(), "{md}");
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| Method")).collect();
+    assert_eq!(rows.len(), 5, "{md}");
+    assert!(rows[0].contains("| BlocksTouch-v0-ddpg (epoch 1, grey removed) |"), "{md}");
+    assert!(rows[1].contains("no policy file or zoo entry named \"BlocksChoose-v0-ddpg\""), "{md}");
+    assert!(rows[2].starts_with("| DDPG (3 blocks), ours | missing"), "{md}");
+
     // The same policies on the shuffled task (a generalisation test); a task without a challenge is refused.
     let o = bp(&["table", "--env", "BlocksChooseShuffled-v0", "--pggd", pggd.to_str().unwrap(), "--episodes", "3"]);
     let md = text(&o);
@@ -299,4 +329,25 @@ fn bad_dumps_are_named_read_and_decode_errors() {
     let o = bp(&["render", "--traj", bad.to_str().unwrap(), "--out", dir.path().join("x.gif").to_str().unwrap()]);
     let t = text(&o);
     assert!(t.contains("bad.jsonl line 2 is not an episode record") && !t.contains("encode"), "{t}");
+}
+
+#[test]
+fn the_openmp_wait_policy_is_passive_unless_the_user_set_it() {
+    let info = |value: Option<&str>| {
+        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
+        c.arg("info");
+        match value {
+            Some(v) => c.env("OMP_WAIT_POLICY", v),
+            None => c.env_remove("OMP_WAIT_POLICY"),
+        };
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    assert!(info(None).contains("\nOMP_WAIT_POLICY=PASSIVE\n"), "{}", info(None));
+    assert!(info(Some("active")).contains("\nOMP_WAIT_POLICY=active\n"));
+    let missing = blockpuzzle::blas::missing_settings(|k| (k == "OMP_WAIT_POLICY").then(|| "ACTIVE".into()));
+    assert!(missing.iter().all(|(k, _)| *k != "OMP_WAIT_POLICY"), "{missing:?}");
+    let missing = blockpuzzle::blas::missing_settings(|_| None);
+    assert!(missing.contains(&("OMP_WAIT_POLICY", "PASSIVE".to_owned())), "{missing:?}");
 }

@@ -105,6 +105,31 @@ fn gif_and_filmstrip_decode_with_the_expected_frames() {
     assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
     let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
     assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
+
+    // A zoo policy plays one seeded episode and renders it, as its dump would.
+    let policy_strip = path("policy.png");
+    let o = bp(
+        &[
+            "render",
+            "--policy",
+            "ReachAvoid-v0-ddpg",
+            "--seed",
+            "5",
+            "--filmstrip",
+            "2",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--out",
+            &policy_strip,
+        ],
+        false,
+    );
+    assert!(o.status.success() && text(&o).contains("seed 5 ("), "{}", text(&o));
+    assert_eq!(image::open(&policy_strip).unwrap().to_rgb8().dimensions(), (2 * 40, 30));
+    let o = bp(&["render", "--out", &path("y.gif")], false);
+    assert!(!o.status.success() && text(&o).contains("--traj"), "{}", text(&o));
 }
 
 #[test]

@@ -22,6 +22,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         success_threshold: None,
         seed: 7,
         torch_threads: 1,
+        snapshot_every: 1,
         ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
         algo: Algo::Ddpg,
         pggd: Default::default(),
@@ -60,6 +61,12 @@ fn short_run_writes_every_run_directory_file() {
     }
     let progress = read_progress(&dir.path().join("progress.csv")).unwrap();
     assert_eq!(comparable(&progress), comparable(&rows));
+    // --snapshot-every 1 keeps each epoch's policy; the last is the latest policy.
+    let first = load_policy(&dir.path().join("snapshots/epoch-0001.json")).unwrap();
+    let last = load_policy(&dir.path().join("snapshots/epoch-0002.json")).unwrap();
+    assert_eq!((first.epoch, last.epoch), (1, 2));
+    assert_eq!(last, load_policy(&dir.path().join("policy.json")).unwrap());
+    assert_ne!(first.policy, last.policy);
     assert!(rows[1].env_steps > rows[0].env_steps && rows[1].env_steps <= 2 * 3 * 2 * 50, "{rows:?}");
     assert_eq!(rows[1].updates, 2 * 3 * 5);
     // The actor's time is a part of the collection time.

@@ -49,6 +49,38 @@ pub struct TanhMlp {
 }
 
 impl TanhMlp {
+    /// Whether the network is whole and sane: layers chain from `n_in`
+    /// inputs to `n_out` outputs, every weight and bias is finite and at
+    /// most `max_abs` in size.
+    ///
+    /// # Errors
+    /// The first problem, naming the layer (counted from the input, 0-based).
+    pub fn check(&self, n_in: usize, n_out: usize, max_abs: f32) -> Result<(), String> {
+        if self.layers.is_empty() {
+            return Err("the network has no layers".into());
+        }
+        let mut width = n_in;
+        for (i, l) in self.layers.iter().enumerate() {
+            if l.n_in != width || l.b.is_empty() || l.w.len() != l.b.len() * l.n_in {
+                return Err(format!(
+                    "layer {i} has {} weights, {} biases and {} inputs where {width} inputs were expected",
+                    l.w.len(),
+                    l.b.len(),
+                    l.n_in
+                ));
+            }
+            if let Some(k) = l.w.iter().chain(&l.b).position(|v| !v.is_finite() || v.abs() > max_abs) {
+                let v = if k < l.w.len() { l.w[k] } else { l.b[k - l.w.len()] };
+                return Err(format!("layer {i} holds {v} (value {k}): weights must be finite and at most {max_abs:e}"));
+            }
+            width = l.b.len();
+        }
+        if width != n_out {
+            return Err(format!("the network has {width} outputs, {n_out} expected"));
+        }
+        Ok(())
+    }
+
     /// Output for one (already normalised) input.
     pub fn forward(&self, x: &[f32]) -> Vec<f32> {
         let (mut a, mut b) = (x.to_vec(), Vec::new());

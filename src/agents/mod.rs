@@ -11,6 +11,11 @@ pub mod replay;
 
 use serde::{Deserialize, Serialize};
 
+/// The largest weight, bias or normaliser statistic a loaded policy may hold
+/// (trained ones stay far below; larger values mean a damaged or diverged
+/// file, which would act on overflowed numbers).
+pub const MAX_ABS_WEIGHT: f32 = 1e6;
+
 /// A trained policy of either algorithm, as saved in `policy.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -36,6 +41,33 @@ impl AnyPolicy {
             Self::Pggd(p) => p.norm.dim(),
             Self::Ddpg(p) => p.norm.dim(),
         }
+    }
+
+    /// Whether the policy can act: [`MAX_ABS_WEIGHT`] bounds every weight and
+    /// normaliser statistic, the network maps the normaliser's size to the
+    /// action size (PGGD: twice that, for μ and σ), σ's floor is sane.
+    ///
+    /// # Errors
+    /// The first problem, named.
+    pub fn check(&self) -> Result<(), String> {
+        let (net, norm, outputs) = match self {
+            Self::Ddpg(p) => (&p.net, &p.norm, crate::env::ACTION_DIM),
+            Self::Pggd(p) => {
+                if p.act_dim != crate::env::ACTION_DIM {
+                    return Err(format!(
+                        "the policy has {} actions, the environments {}",
+                        p.act_dim,
+                        crate::env::ACTION_DIM
+                    ));
+                }
+                if !p.sigma_min.is_finite() || p.sigma_min < 0.0 || p.sigma_min > 1e3 {
+                    return Err(format!("sigma_min is {}", p.sigma_min));
+                }
+                (&p.net, &p.norm, 2 * p.act_dim)
+            }
+        };
+        norm.check(MAX_ABS_WEIGHT)?;
+        net.check(norm.dim(), outputs, MAX_ABS_WEIGHT).map_err(|e| format!("actor: {e}"))
     }
 
     /// "ddpg" or "pggd".

@@ -30,6 +30,48 @@ impl Normalizer {
         }
     }
 
+    /// A normaliser with the given statistics (as read from a saved policy):
+    /// the running sums are rebuilt from mean, std and count, so that it
+    /// normalises exactly as the one saved.
+    pub fn from_stats(mean: Vec<f32>, std: Vec<f32>, count: u64, eps: f64, clip: f32) -> Self {
+        let n = count as f64;
+        let sum = mean.iter().map(|&m| f64::from(m) * n).collect();
+        let sumsq = mean.iter().zip(&std).map(|(&m, &s)| (f64::from(s).powi(2) + f64::from(m).powi(2)) * n).collect();
+        Self { sum, sumsq, count, mean, std, eps, clip }
+    }
+
+    /// The clip range of normalised values.
+    pub fn clip(&self) -> f32 {
+        self.clip
+    }
+
+    /// The floor of the standard deviation.
+    pub fn eps(&self) -> f64 {
+        self.eps
+    }
+
+    /// Whether the statistics can normalise: sizes agree, means finite and
+    /// at most `max_abs`, standard deviations positive and finite, the clip
+    /// range positive and finite. The error says which value is wrong.
+    ///
+    /// # Errors
+    /// The first bad value, named.
+    pub fn check(&self, max_abs: f32) -> Result<(), String> {
+        if self.mean.len() != self.std.len() {
+            return Err(format!("normaliser has {} means and {} standard deviations", self.mean.len(), self.std.len()));
+        }
+        if let Some(k) = self.mean.iter().position(|m| !m.is_finite() || m.abs() > max_abs) {
+            return Err(format!("normaliser mean {k} is {}", self.mean[k]));
+        }
+        if let Some(k) = self.std.iter().position(|s| !s.is_finite() || *s <= 0.0 || *s > max_abs) {
+            return Err(format!("normaliser standard deviation {k} is {}", self.std[k]));
+        }
+        if !self.clip.is_finite() || self.clip <= 0.0 {
+            return Err(format!("normaliser clip range is {}", self.clip));
+        }
+        Ok(())
+    }
+
     /// Number of components.
     pub fn dim(&self) -> usize {
         self.mean.len()

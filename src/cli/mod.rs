@@ -20,6 +20,9 @@ pub struct Cli {
 enum Command {
     /// List the registered environment ids.
     Envs,
+    /// The engine and numeric libraries this process runs with (MuJoCo
+    /// version, OpenBLAS kernels, OpenMP wait policy, cores, bf16 support).
+    Info,
     /// Roll out a policy and write a trajectory dump (JSON Lines, one episode per line).
     Rollout(RolloutArgs),
     /// Measure environment steps/s and raw mj_step/s.
@@ -38,6 +41,9 @@ enum Command {
     /// Task files: `task check FILE` validates a task and samples its layouts.
     #[command(subcommand)]
     Task(TaskCommand),
+    /// The model zoo (trained policies shipped in zoo/): list, check, export.
+    #[command(subcommand)]
+    Zoo(ZooCommand),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -54,6 +60,60 @@ enum TaskCommand {
     /// layouts were redrawn and why; --render writes a filmstrip of one reset
     /// state per level and distribution.
     Check(TaskCheckArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum ZooCommand {
+    /// The entries: name, task, algorithm, epoch, environment steps, evaluations.
+    List {
+        /// The zoo folder (default: $BLOCKPUZZLE_ZOO, else zoo/ of this repository).
+        #[arg(long)]
+        zoo: Option<PathBuf>,
+    },
+    /// Load every entry (or the named ones) and check checksums, layouts and values.
+    Check {
+        /// Entries to check (default: all).
+        names: Vec<String>,
+        /// The zoo folder.
+        #[arg(long)]
+        zoo: Option<PathBuf>,
+    },
+    /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
+    Export(ZooExportArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct ZooExportArgs {
+    /// The policy: a policy file, a snapshot, or a run directory.
+    #[arg(long)]
+    from: PathBuf,
+    /// The entry's name (file stem), e.g. BlocksChoose-v0-ddpg.
+    #[arg(long)]
+    name: String,
+    /// One line on what it is.
+    #[arg(long)]
+    description: String,
+    /// The command that trained it (recorded as given).
+    #[arg(long)]
+    trained_with: String,
+    /// Evaluation results (JSON written by `blockpuzzle eval`) to record with it.
+    #[arg(long = "eval")]
+    evals: Vec<PathBuf>,
+    /// Evaluate it first on this many episodes (seeds 1,000,000 on) at the
+    /// maximum level and, where the task has one, in the challenge distribution,
+    /// and record the results (0: no evaluation).
+    #[arg(long, default_value_t = 0)]
+    evaluate: usize,
+    /// The task to evaluate on (default: the one it was trained on; e.g.
+    /// BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
+    #[arg(long)]
+    evaluate_env: Option<String>,
+    /// Keep DDPG's critic too (for AggreVaTeD's --pg-weight expert-advantage).
+    #[arg(long)]
+    critic: bool,
+    /// The zoo folder.
+    #[arg(long)]
+    zoo: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -120,6 +180,12 @@ struct TableArgs {
     /// PGGD trained alone on BlocksChoose-v0.
     #[arg(long)]
     pggd_alone: Option<PathBuf>,
+    /// DDPG on BlocksChoose-v0 with this project's changes (the row "DDPG (3 blocks), ours").
+    #[arg(long)]
+    ddpg_ours: Option<PathBuf>,
+    /// Every row from the shipped zoo (its standard entry names); --expert etc. override single rows.
+    #[arg(long)]
+    zoo: bool,
     /// Episodes per cell.
     #[arg(long, default_value_t = 1000)]
     episodes: usize,
@@ -235,13 +301,26 @@ impl ViewArgs {
 }
 
 #[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("source").required(true).args(["traj", "policy"])))]
 struct RenderArgs {
     /// Trajectory dump written by `rollout` (JSON Lines).
     #[arg(long)]
-    traj: PathBuf,
+    traj: Option<PathBuf>,
     /// Which episode of the dump (0-based).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, requires = "traj")]
     episode: usize,
+    /// Or play one episode of a trained policy (file, run directory or zoo name) and render it.
+    #[arg(long)]
+    policy: Option<PathBuf>,
+    /// With --policy: the task (default: the one the policy was trained on).
+    #[arg(long, requires = "policy")]
+    env: Option<String>,
+    /// With --policy: the episode's seed.
+    #[arg(long, default_value_t = 1_000_000, requires = "policy")]
+    seed: u64,
+    /// With --policy: the challenge distribution.
+    #[arg(long, requires = "policy")]
+    challenge: bool,
     /// Output: FILE.gif (animation), FILE.png with --filmstrip N, or a folder (one PNG per frame).
     #[arg(long)]
     out: PathBuf,
@@ -310,21 +389,22 @@ pub fn main() -> Result<()> {
             }
             Ok(())
         }
+        Command::Info => {
+            let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
+            println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
+            println!("MuJoCo {}", crate::mj::version());
+            println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
+            println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
+            println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
+            println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
+            println!("bf16 updates {}", if crate::agents::ddpg::Precision::bf16_supported() { "yes" } else { "no" });
+            Ok(())
+        }
         Command::Rollout(a) => rollout(a),
         Command::Train(a) => train(a),
         Command::Eval(a) => eval(a),
-        Command::Render(a) => {
-            let kind = crate::render::replay::Output::for_path(&a.out, a.view.filmstrip, a.view.fps)?;
-            let (frames, fps) = crate::render::replay::render_dump(&a.traj, a.episode, &a.view.view(), &a.out, &kind)?;
-            println!(
-                "rendered {frames} frames of episode {} at {}x{} ({fps:.1} frames/s) -> {}",
-                a.episode,
-                a.view.width,
-                a.view.height,
-                a.out.display()
-            );
-            Ok(())
-        }
+        Command::Render(a) => render(a),
+        Command::Zoo(c) => zoo(c),
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
@@ -550,6 +630,178 @@ fn plot(a: PlotArgs) -> Result<()> {
     Ok(())
 }
 
+fn render(a: RenderArgs) -> Result<()> {
+    let kind = crate::render::replay::Output::for_path(&a.out, a.view.filmstrip, a.view.fps)?;
+    let view = a.view.view();
+    let (frames, fps, what) = match (&a.traj, &a.policy) {
+        (Some(traj), _) => {
+            let (frames, fps) = crate::render::replay::render_dump(traj, a.episode, &view, &a.out, &kind)?;
+            (frames, fps, format!("episode {}", a.episode))
+        }
+        (None, Some(path)) => {
+            let saved = crate::train::load_policy(path)?;
+            let task = policy_task(a.env.as_deref(), &saved)?;
+            let mut env = BlockEnv::new(crate::env::EnvConfig::new(task))?;
+            env.set_distribution(a.challenge.then_some("challenge"))?;
+            let level = env.max_level();
+            env.set_level(level)?;
+            let mut policy = crate::evaluate::trained_policy(path, saved, &env)?;
+            let ep = run_episode(&mut env, &mut policy, a.seed)?;
+            let (frames, seconds) = crate::render::replay::episode_frames(&ep, &view)?;
+            kind.write(&a.out, &frames)?;
+            let outcome = if ep.success {
+                "success"
+            } else if ep.failure {
+                "failure"
+            } else {
+                "neither"
+            };
+            (frames.len(), frames.len() as f64 / seconds.max(1e-9), format!("seed {} ({outcome})", a.seed))
+        }
+        (None, None) => bail!("give --traj DUMP or --policy POLICY"),
+    };
+    println!(
+        "rendered {frames} frames of {what} at {}x{} ({fps:.1} frames/s) -> {}",
+        a.view.width,
+        a.view.height,
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// The task to run a policy on: the one named, else the one it was trained
+/// on (its recorded copy if the file moved or changed).
+fn policy_task(env: Option<&str>, saved: &crate::train::SavedPolicy) -> Result<crate::task::Task> {
+    Ok(match (env, &saved.task) {
+        (Some(env), _) => registry::task(env)?,
+        (None, Some(source)) => registry::recorded(source)?,
+        (None, None) => registry::task(&saved.env_id)?,
+    })
+}
+
+fn zoo(c: ZooCommand) -> Result<()> {
+    let folder = |z: Option<PathBuf>| z.unwrap_or_else(crate::zoo::dir);
+    match c {
+        ZooCommand::List { zoo } => {
+            let zoo = folder(zoo);
+            for name in crate::zoo::names(&zoo) {
+                let meta = crate::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
+                let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
+                println!("{name:<36} {:<24} {} epoch {:>3}, {steps} env steps", meta.task.id, meta.algo, meta.epoch);
+                println!("    {}", meta.description);
+                for e in &meta.evaluations {
+                    println!(
+                        "    {} {}{}: {:.3} ({:.3}-{:.3}), {} episodes from seed {}",
+                        e.env,
+                        e.distribution,
+                        if e.grey_blind { ", grey removed" } else { "" },
+                        e.success_rate,
+                        e.ci95.0,
+                        e.ci95.1,
+                        e.episodes,
+                        e.seed
+                    );
+                }
+            }
+            Ok(())
+        }
+        ZooCommand::Check { names, zoo } => {
+            let zoo = folder(zoo);
+            let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
+            if names.is_empty() {
+                bail!("no zoo entries in {}", zoo.display());
+            }
+            for name in &names {
+                let (meta, _) = crate::zoo::load(&crate::zoo::find(&zoo, name)?)?;
+                println!("{name}: ok ({} {}, epoch {})", meta.task.id, meta.algo, meta.epoch);
+            }
+            Ok(())
+        }
+        ZooCommand::Export(a) => {
+            let saved = crate::train::load_policy(&a.from)?;
+            let mut evaluations = Vec::new();
+            for path in &a.evals {
+                evaluations.push(read_eval(path)?);
+            }
+            if a.evaluate > 0 {
+                let task = policy_task(a.evaluate_env.as_deref(), &saved)?;
+                let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+                let has_challenge = task.distribution("challenge").is_some();
+                for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
+                    let spec = crate::evaluate::EvalSpec {
+                        task: &task,
+                        challenge,
+                        level: None,
+                        episodes: a.evaluate,
+                        seed: 1_000_000,
+                        threads,
+                    };
+                    let r = crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
+                    eprintln!("{} {}: {:.3}", r.env, if challenge { "challenge" } else { "normal" }, r.success_rate);
+                    evaluations.push(crate::zoo::ZooEvaluation {
+                        env: r.env,
+                        distribution: if challenge { "challenge" } else { "normal" }.into(),
+                        grey_blind: r.grey_blind,
+                        episodes: r.episodes,
+                        seed: r.seed,
+                        success_rate: r.success_rate,
+                        ci95: r.ci95,
+                    });
+                }
+            }
+            let info = crate::zoo::ExportInfo {
+                name: a.name.clone(),
+                description: a.description,
+                trained_with: a.trained_with,
+                exported_from: a.from.display().to_string(),
+                env_steps: env_steps_of(&a.from, saved.epoch),
+                evaluations,
+                keep_critic: a.critic,
+            };
+            let out = crate::zoo::export(&folder(a.zoo), &saved, &info)?;
+            let size = std::fs::metadata(&out).map_or(0, |m| m.len());
+            println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
+            Ok(())
+        }
+    }
+}
+
+/// An evaluation written by `blockpuzzle eval`, as a zoo record.
+fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
+    #[derive(serde::Deserialize)]
+    struct Written {
+        env: String,
+        challenge: bool,
+        episodes: usize,
+        seed: u64,
+        success_rate: f64,
+        ci95: (f64, f64),
+        grey_blind: bool,
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read evaluation {}", path.display()))?;
+    let w: Written = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not an evaluation written by `blockpuzzle eval`", path.display()))?;
+    Ok(crate::zoo::ZooEvaluation {
+        env: w.env,
+        distribution: if w.challenge { "challenge" } else { "normal" }.into(),
+        grey_blind: w.grey_blind,
+        episodes: w.episodes,
+        seed: w.seed,
+        success_rate: w.success_rate,
+        ci95: w.ci95,
+    })
+}
+
+/// Environment steps behind a policy of `epoch` epochs: from the
+/// `progress.csv` of its run (the policy's folder, or the run of a snapshot).
+fn env_steps_of(policy: &Path, epoch: usize) -> Option<u64> {
+    let dir = if policy.is_dir() { policy.to_path_buf() } else { policy.parent()?.to_path_buf() };
+    [dir.clone(), dir.parent()?.to_path_buf()].into_iter().find_map(|d| {
+        let rows = crate::train::read_progress(&d.join("progress.csv")).ok()?;
+        rows.iter().find(|r| r.epoch + 1 == epoch).map(|r| r.env_steps)
+    })
+}
+
 fn table(a: TableArgs) -> Result<()> {
     if a.episodes == 0 {
         bail!("--episodes must be at least 1");
@@ -559,7 +811,14 @@ fn table(a: TableArgs) -> Result<()> {
     if task.distribution("challenge").is_none() {
         bail!("the table's second column is the challenge distribution, which {} does not define", a.env);
     }
-    let rows = crate::table::rows(a.expert, a.ddpg, a.pggd, a.pggd_alone);
+    let given = crate::table::Policies {
+        expert: a.expert,
+        ddpg: a.ddpg,
+        ddpg_ours: a.ddpg_ours,
+        pggd: a.pggd,
+        pggd_alone: a.pggd_alone,
+    };
+    let rows = crate::table::rows(if a.zoo { given.or(crate::table::Policies::zoo()) } else { given });
     let mut done = Vec::new();
     for row in rows {
         eprintln!("evaluating {} ...", row.method);
@@ -576,12 +835,7 @@ fn table(a: TableArgs) -> Result<()> {
 
 fn eval(a: EvalArgs) -> Result<()> {
     let saved = crate::train::load_policy(&a.checkpoint)?;
-    // The task named, else the one the policy was trained on (its recorded copy if the file moved or changed).
-    let task = match (&a.env, &saved.task) {
-        (Some(env), _) => registry::task(env)?,
-        (None, Some(source)) => registry::recorded(source)?,
-        (None, None) => registry::task(&saved.env_id)?,
-    };
+    let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
     let spec = crate::evaluate::EvalSpec {

@@ -16,7 +16,8 @@
 //! `checkpoint.bin` (everything, written atomically every epoch),
 //! `policy.json` (latest actor + normaliser), `best_policy.json` (best
 //! finals success), `success.png` (the success curves) and, for AggreVaTeD,
-//! `expert_policy.json` (the run's copy of its expert).
+//! `expert_policy.json` (the run's copy of its expert); with `--snapshot-every
+//! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
 
 pub mod checkpoint;
 mod learner;
@@ -88,6 +89,11 @@ pub struct TrainConfig {
     /// Threads libtorch may use for updates (0: all cores).
     #[arg(long, default_value_t = 0)]
     pub torch_threads: usize,
+    /// Also keep the policy of every Nth epoch as `snapshots/epoch-NNNN.json`
+    /// (0: never); earlier policies for AggreVaTeD experts or learning-curve studies.
+    #[arg(long, default_value_t = 0)]
+    #[serde(default)]
+    pub snapshot_every: usize,
     /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
     #[command(flatten)]
     pub ddpg: DdpgConfig,
@@ -377,6 +383,12 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             critic: learner.agent.critic(),
         };
         write_json_atomic(&run.policy(), &saved)?;
+        if config.snapshot_every > 0 && state.epoch % config.snapshot_every == 0 {
+            let path = run.snapshot(state.epoch);
+            std::fs::create_dir_all(run.snapshots())
+                .with_context(|| format!("cannot create {}", run.snapshots().display()))?;
+            write_json_atomic(&path, &saved)?;
+        }
         // Ties go to the newer policy: same finals score, more training.
         if row.finals_success >= state.best_finals {
             state.best_finals = row.finals_success;

@@ -38,6 +38,14 @@ impl RunDir {
     pub fn best_policy(&self) -> PathBuf {
         self.dir.join("best_policy.json")
     }
+    /// `snapshots/`: policies kept with `--snapshot-every`.
+    pub fn snapshots(&self) -> PathBuf {
+        self.dir.join("snapshots")
+    }
+    /// `snapshots/epoch-NNNN.json`: the policy after `epoch` epochs.
+    pub fn snapshot(&self, epoch: usize) -> PathBuf {
+        self.snapshots().join(format!("epoch-{epoch:04}.json"))
+    }
     /// The run's `config.json`.
     ///
     /// # Errors
@@ -76,6 +84,22 @@ pub struct SavedPolicy {
     pub critic: Option<TanhMlp>,
 }
 
+impl SavedPolicy {
+    /// Whether the policy (and critic, if kept) can act: see
+    /// [`AnyPolicy::check`]; the critic maps observation and action to one value.
+    ///
+    /// # Errors
+    /// The first problem, named.
+    pub fn check(&self) -> Result<(), String> {
+        self.policy.check()?;
+        if let Some(c) = &self.critic {
+            let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
+            c.check(n_in, 1, crate::agents::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
 /// Writes `bytes` to `path` through a temporary file `path.EXT.tmp`.
 ///
 /// # Errors
@@ -97,12 +121,22 @@ pub fn write_json_atomic(path: &Path, value: &impl Serialize) -> Result<()> {
     write_atomic(path, &serde_json::to_vec_pretty(value)?)
 }
 
-/// Loads a policy from a file, or from a run directory (`best_policy.json`,
-/// else `policy.json`).
+/// Loads a policy from a file (`policy.json` of a run, or a zoo entry's
+/// `.safetensors`/`.json`), a run directory (`best_policy.json`, else
+/// `policy.json`), or a zoo entry by name (see [`crate::zoo`]). The policy is
+/// checked before it is returned: non-finite or absurd weights, or layers
+/// that do not fit together, are an error naming the file.
 ///
 /// # Errors
-/// A clear message for a missing or malformed file.
+/// A clear message for a missing, malformed or damaged file.
 pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
+    if crate::zoo::is_name(path) {
+        let file = crate::zoo::find(&crate::zoo::dir(), &path.to_string_lossy())?;
+        return Ok(crate::zoo::load(&file)?.1);
+    }
+    if crate::zoo::is_zoo_file(path) {
+        return Ok(crate::zoo::load(path)?.1);
+    }
     let file = if path.is_dir() {
         let run = RunDir { dir: path.to_owned() };
         if run.best_policy().exists() {
@@ -115,7 +149,10 @@ pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
     };
     let text = std::fs::read_to_string(&file)
         .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))
+    let saved: SavedPolicy =
+        serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;
+    saved.check().map_err(|e| anyhow::anyhow!("policy {} is not usable: {e}", file.display()))?;
+    Ok(saved)
 }
 
 pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {

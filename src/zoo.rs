@@ -1,0 +1,426 @@
+//! The model zoo: trained policies shipped in the repository, so that every
+//! row of `results/table.md` can be checked in minutes without training.
+//!
+//! An entry is two files in `zoo/` (or `$BLOCKPUZZLE_ZOO`):
+//!
+//! * `NAME.safetensors`: the tensors, float32, in the `safetensors` format
+//!   (readable with `safetensors.numpy.load_file` in Python):
+//!   `actor.{i}.weight` (`out × in`), `actor.{i}.bias` (`out`) for each dense
+//!   layer, input first; the same under `critic.` where the entry keeps
+//!   DDPG's critic (AggreVaTeD's expert-advantage weights need it); and
+//!   `obs_norm.mean`, `obs_norm.std` (the observation normaliser).
+//!   Its `__metadata__` holds `format` and `name`.
+//! * `NAME.json`: [`ZooMeta`], what the tensors are and where they came from:
+//!   task (id, text, content hash), algorithm, epoch, environment steps,
+//!   the normaliser's clip range, the network's layout, the command that
+//!   trained it, its evaluations, and the SHA-256 of the tensors file.
+//!
+//! The policy acts as: `x = clip((obs − mean) / std, ±clip)`; hidden layers
+//! `ReLU(W x + b)`; the last layer `tanh` (DDPG: the action) or linear
+//! (PGGD: `[μ | σ pre-activation]`, the action `clip(μ, ±1)`).
+//!
+//! Every consumer of policies (`eval`, `rollout --policy`, `render
+//! --policy`, `table`, AggreVaTeD's `--expert`) takes a zoo name as well as
+//! a file or run directory: [`crate::train::load_policy`].
+
+use crate::agents::ddpg::DdpgPolicy;
+use crate::agents::mlp::{Dense, TanhMlp};
+use crate::agents::normalizer::Normalizer;
+use crate::agents::pggd::PggdPolicy;
+use crate::agents::AnyPolicy;
+use crate::task::TaskSource;
+use crate::train::SavedPolicy;
+use safetensors::tensor::{Dtype, SafeTensors, TensorView};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The format tag in every entry's metadata.
+pub const FORMAT: &str = "blockpuzzle-zoo/1";
+
+/// Zoo errors: each names the file and what to do.
+#[derive(Debug, Error)]
+pub enum ZooError {
+    /// Reading or writing failed.
+    #[error("zoo entry {path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+    /// The files are damaged, do not belong together, or hold impossible values.
+    #[error("zoo entry {path} is not usable: {reason}")]
+    Corrupt { path: PathBuf, reason: String },
+    /// A name that is neither a file nor an entry of the zoo.
+    #[error("no policy file or zoo entry named {name:?} (the zoo in {zoo} has: {known}); pass a policy file, a run directory or one of those names")]
+    Unknown { name: String, zoo: PathBuf, known: String },
+}
+
+/// The network layout of one net: layer sizes (input first) and output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NetLayout {
+    /// Sizes from input to output, e.g. `[31, 256, 256, 256, 4]`.
+    pub sizes: Vec<usize>,
+    /// Whether the output goes through tanh (DDPG's actor) or is linear.
+    pub tanh_out: bool,
+}
+
+/// One evaluation of the entry (a cell of the table, or a `blockpuzzle eval`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZooEvaluation {
+    /// The task evaluated on.
+    pub env: String,
+    /// Which distribution: `normal` (the maximum level) or `challenge`.
+    pub distribution: String,
+    /// Whether grey blocks were removed from the policy's view.
+    pub grey_blind: bool,
+    /// Episodes and the seed of the first (episode k: seed + k).
+    pub episodes: usize,
+    /// Seed of the first episode.
+    pub seed: u64,
+    /// Success rate.
+    pub success_rate: f64,
+    /// Its Wilson 95% interval.
+    pub ci95: (f64, f64),
+}
+
+/// `NAME.json`: everything about an entry but its tensors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZooMeta {
+    /// [`FORMAT`].
+    pub format: String,
+    /// The entry's name (its file stem).
+    pub name: String,
+    /// One line on what it is (e.g. the table row it stands for).
+    pub description: String,
+    /// `ddpg` or `pggd`.
+    pub algo: String,
+    /// The task it was trained on, by content.
+    pub task: TaskSource,
+    /// Epochs of training behind it.
+    pub epoch: usize,
+    /// Environment steps of training behind it, where known.
+    pub env_steps: Option<u64>,
+    /// Its finals success in training when saved.
+    pub finals_success: f64,
+    /// The observation normaliser's clip range (mean and std are tensors).
+    pub norm_clip: f32,
+    /// The normaliser's standard-deviation floor.
+    pub norm_eps: f64,
+    /// Observations the normaliser had seen.
+    pub norm_count: u64,
+    /// The actor's layout.
+    pub actor: NetLayout,
+    /// The critic's layout, where the entry keeps one (DDPG).
+    pub critic: Option<NetLayout>,
+    /// PGGD: σ's floor (the network outputs μ and σ's pre-activation).
+    pub sigma_min: Option<f64>,
+    /// The command that trained it.
+    pub trained_with: String,
+    /// The file it was exported from, for the record.
+    pub exported_from: String,
+    /// Its evaluations, best recorded with `zoo export --eval`.
+    pub evaluations: Vec<ZooEvaluation>,
+    /// The source policy's actions on a few observations (reset states of its
+    /// task), recorded at export: the entry must act exactly so.
+    pub probes: Vec<Probe>,
+    /// `sha256:` of `NAME.safetensors`: the tensors belong to this metadata.
+    pub tensors_sha256: String,
+}
+
+/// An observation and the action the exported policy took on it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    /// The observation (the policy's own view).
+    pub obs: Vec<f32>,
+    /// Its deterministic action.
+    pub action: Vec<f32>,
+}
+
+/// Reset observations of seeds 0, 1, 2 of the policy's task at its maximum
+/// level, and the policy's actions on them.
+///
+/// # Errors
+/// A task that cannot be built.
+pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
+    let fail = |reason: String| ZooError::Corrupt { path: PathBuf::from(&saved.env_id), reason };
+    let task = match &saved.task {
+        Some(source) => crate::env::registry::recorded(source).map_err(|e| fail(e.to_string()))?,
+        None => return Err(fail("the policy does not record its task".into())),
+    };
+    let mut env = crate::env::BlockEnv::new(crate::env::EnvConfig::new(task)).map_err(|e| fail(e.to_string()))?;
+    let level = env.max_level();
+    env.set_level(level).map_err(|e| fail(e.to_string()))?;
+    (0..3)
+        .map(|seed| {
+            let (obs, _) = env.reset(Some(seed)).map_err(|e| fail(e.to_string()))?;
+            let obs = obs.to_vec();
+            Ok(Probe { action: saved.policy.act(&obs), obs })
+        })
+        .collect()
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> ZooError + '_ {
+    move |source| ZooError::Io { path: path.to_owned(), source }
+}
+
+/// The zoo folder: `$BLOCKPUZZLE_ZOO`, else `zoo/` of this repository.
+pub fn dir() -> PathBuf {
+    match std::env::var_os("BLOCKPUZZLE_ZOO") {
+        Some(d) if !d.is_empty() => PathBuf::from(d),
+        _ => Path::new(env!("CARGO_MANIFEST_DIR")).join("zoo"),
+    }
+}
+
+/// The entries' names in `zoo`, sorted.
+pub fn names(zoo: &Path) -> Vec<String> {
+    let Ok(rd) = std::fs::read_dir(zoo) else { return Vec::new() };
+    let mut v: Vec<String> = rd
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "safetensors"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    v.sort();
+    v
+}
+
+/// A policy argument that names a zoo entry rather than a file: no such
+/// file, no path separator, no extension.
+pub fn is_name(arg: &Path) -> bool {
+    !arg.exists() && arg.components().count() == 1 && arg.extension().is_none()
+}
+
+/// The tensors file of the entry `name` in `zoo`, if it exists.
+///
+/// # Errors
+/// [`ZooError::Unknown`] listing the entries there are.
+pub fn find(zoo: &Path, name: &str) -> Result<PathBuf, ZooError> {
+    let path = zoo.join(format!("{name}.safetensors"));
+    if path.exists() {
+        return Ok(path);
+    }
+    let known = names(zoo);
+    Err(ZooError::Unknown {
+        name: name.to_owned(),
+        zoo: zoo.to_owned(),
+        known: if known.is_empty() { "no entries".into() } else { known.join(", ") },
+    })
+}
+
+/// Whether `path` is a zoo file: `X.safetensors`, or the `X.json` beside one.
+pub fn is_zoo_file(path: &Path) -> bool {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("safetensors") => true,
+        Some("json") => path.with_extension("safetensors").exists(),
+        _ => false,
+    }
+}
+
+fn sha256(bytes: &[u8]) -> String {
+    format!("sha256:{:x}", Sha256::digest(bytes))
+}
+
+fn layout(net: &TanhMlp) -> NetLayout {
+    let mut sizes: Vec<usize> = net.layers.first().map(|l| vec![l.n_in]).unwrap_or_default();
+    sizes.extend(net.layers.iter().map(|l| l.b.len()));
+    NetLayout { sizes, tanh_out: net.tanh_out }
+}
+
+fn le_bytes(v: &[f32]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// What [`export`] records besides the policy.
+#[derive(Debug, Clone, Default)]
+pub struct ExportInfo {
+    /// The entry's name (file stem).
+    pub name: String,
+    /// One line on what it is.
+    pub description: String,
+    /// The command that trained it.
+    pub trained_with: String,
+    /// Where it came from.
+    pub exported_from: String,
+    /// Environment steps behind it, where known.
+    pub env_steps: Option<u64>,
+    /// Its evaluations.
+    pub evaluations: Vec<ZooEvaluation>,
+    /// Keep DDPG's critic (needed by AggreVaTeD's expert-advantage weights).
+    pub keep_critic: bool,
+}
+
+/// Writes `saved` as the entry `info.name` in `zoo` (both files atomically;
+/// the tensors first, so the metadata never names tensors that are not there).
+///
+/// # Errors
+/// A policy without a recorded task, bad values, I/O.
+pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<PathBuf, ZooError> {
+    let tensors_path = zoo.join(format!("{}.safetensors", info.name));
+    let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
+    if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
+        return Err(corrupt(format!("name {:?}: use letters, digits, '-', '_' and '.'", info.name)));
+    }
+    saved.check().map_err(&corrupt)?;
+    let task = saved
+        .task
+        .clone()
+        .ok_or_else(|| corrupt("the policy does not record its task (saved before tasks were files)".into()))?;
+    let (net, norm, sigma_min) = match &saved.policy {
+        AnyPolicy::Ddpg(p) => (&p.net, &p.norm, None),
+        AnyPolicy::Pggd(p) => (&p.net, &p.norm, Some(p.sigma_min)),
+    };
+    let critic = if info.keep_critic { saved.critic.as_ref() } else { None };
+    let mut arrays: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
+    let mut add_net = |prefix: &str, net: &TanhMlp| {
+        for (i, l) in net.layers.iter().enumerate() {
+            arrays.push((format!("{prefix}.{i}.weight"), vec![l.b.len(), l.n_in], le_bytes(&l.w)));
+            arrays.push((format!("{prefix}.{i}.bias"), vec![l.b.len()], le_bytes(&l.b)));
+        }
+    };
+    add_net("actor", net);
+    if let Some(c) = critic {
+        add_net("critic", c);
+    }
+    arrays.push(("obs_norm.mean".into(), vec![norm.dim()], le_bytes(norm.mean())));
+    arrays.push(("obs_norm.std".into(), vec![norm.dim()], le_bytes(norm.std())));
+    let views: Vec<(String, TensorView)> = arrays
+        .iter()
+        .map(|(n, shape, bytes)| {
+            TensorView::new(Dtype::F32, shape.clone(), bytes)
+                .map(|v| (n.clone(), v))
+                .map_err(|e| corrupt(e.to_string()))
+        })
+        .collect::<Result<_, _>>()?;
+    let header: HashMap<String, String> =
+        [("format".to_owned(), FORMAT.to_owned()), ("name".to_owned(), info.name.clone())].into_iter().collect();
+    let bytes = safetensors::tensor::serialize(views, Some(header)).map_err(|e| corrupt(e.to_string()))?;
+    let meta = ZooMeta {
+        format: FORMAT.into(),
+        name: info.name.clone(),
+        description: info.description.clone(),
+        algo: saved.policy.algo().into(),
+        task,
+        epoch: saved.epoch,
+        env_steps: info.env_steps,
+        finals_success: saved.finals_success,
+        norm_clip: norm.clip(),
+        norm_eps: norm.eps(),
+        norm_count: norm.count(),
+        actor: layout(net),
+        critic: critic.map(layout),
+        sigma_min,
+        trained_with: info.trained_with.clone(),
+        exported_from: info.exported_from.clone(),
+        evaluations: info.evaluations.clone(),
+        probes: probes(saved)?,
+        tensors_sha256: sha256(&bytes),
+    };
+    std::fs::create_dir_all(zoo).map_err(io(zoo))?;
+    crate::train::write_atomic(&tensors_path, &bytes).map_err(|e| corrupt(format!("{e:#}")))?;
+    let json = serde_json::to_vec_pretty(&meta).map_err(|e| corrupt(e.to_string()))?;
+    crate::train::write_atomic(&tensors_path.with_extension("json"), &json).map_err(|e| corrupt(format!("{e:#}")))?;
+    Ok(tensors_path)
+}
+
+/// Reads an entry's metadata (`X.json`, or the one beside `X.safetensors`).
+///
+/// # Errors
+/// A missing or malformed file.
+pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
+    let json_path = path.with_extension("json");
+    let text = std::fs::read_to_string(&json_path).map_err(io(&json_path))?;
+    let meta: ZooMeta = serde_json::from_str(&text)
+        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("bad metadata: {e}") })?;
+    if meta.format != FORMAT {
+        return Err(ZooError::Corrupt {
+            path: json_path,
+            reason: format!("format {:?}, this blockpuzzle reads {FORMAT:?}", meta.format),
+        });
+    }
+    Ok(meta)
+}
+
+/// Loads a zoo entry (`X.safetensors` or `X.json`) as a [`SavedPolicy`]: the
+/// tensors must match the metadata's checksum and layout, and every value
+/// must be finite and of a sane size ([`SavedPolicy::check`]).
+///
+/// # Errors
+/// [`ZooError::Corrupt`] naming what does not fit.
+pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
+    let meta = read_meta(path)?;
+    let tensors_path = path.with_extension("safetensors");
+    let bytes = std::fs::read(&tensors_path).map_err(io(&tensors_path))?;
+    let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
+    if sha256(&bytes) != meta.tensors_sha256 {
+        return Err(corrupt(format!(
+            "its checksum does not match {} (damaged, or the tensors of another entry); restore both files of the entry together",
+            tensors_path.with_extension("json").display()
+        )));
+    }
+    let st = SafeTensors::deserialize(&bytes).map_err(|e| corrupt(format!("not a safetensors file: {e}")))?;
+    let read = |name: &str, shape: &[usize]| -> Result<Vec<f32>, ZooError> {
+        let t = st.tensor(name).map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
+        if t.dtype() != Dtype::F32 || t.shape() != shape {
+            return Err(corrupt(format!(
+                "tensor {name} is {:?} {:?}, the metadata says F32 {shape:?}",
+                t.dtype(),
+                t.shape()
+            )));
+        }
+        Ok(t.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    };
+    let read_net = |prefix: &str, l: &NetLayout| -> Result<TanhMlp, ZooError> {
+        if l.sizes.len() < 2 {
+            return Err(corrupt(format!("{prefix} has {} layer sizes, at least 2 needed", l.sizes.len())));
+        }
+        let layers = l
+            .sizes
+            .windows(2)
+            .enumerate()
+            .map(|(i, s)| {
+                Ok(Dense {
+                    w: read(&format!("{prefix}.{i}.weight"), &[s[1], s[0]])?,
+                    b: read(&format!("{prefix}.{i}.bias"), &[s[1]])?,
+                    n_in: s[0],
+                })
+            })
+            .collect::<Result<_, ZooError>>()?;
+        Ok(TanhMlp { layers, tanh_out: l.tanh_out })
+    };
+    let net = read_net("actor", &meta.actor)?;
+    let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;
+    let dim = meta.actor.sizes[0];
+    let norm = Normalizer::from_stats(
+        read("obs_norm.mean", &[dim])?,
+        read("obs_norm.std", &[dim])?,
+        meta.norm_count,
+        meta.norm_eps,
+        meta.norm_clip,
+    );
+    let out = *meta.actor.sizes.last().unwrap_or(&0);
+    let policy = match (meta.algo.as_str(), meta.sigma_min) {
+        ("ddpg", None) => AnyPolicy::Ddpg(DdpgPolicy { net, norm }),
+        ("pggd", Some(sigma_min)) => AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min }),
+        (algo, s) => {
+            return Err(corrupt(format!("algorithm {algo:?} with sigma_min {s:?} is not a known policy kind")))
+        }
+    };
+    let saved = SavedPolicy {
+        env_id: meta.task.id.clone(),
+        task: Some(meta.task.clone()),
+        epoch: meta.epoch,
+        finals_success: meta.finals_success,
+        policy,
+        critic,
+    };
+    saved.check().map_err(&corrupt)?;
+    for (k, p) in meta.probes.iter().enumerate() {
+        if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {
+            return Err(corrupt(format!("it does not act as the exported policy did on probe {k}")));
+        }
+    }
+    Ok((meta, saved))
+}

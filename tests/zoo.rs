@@ -1,0 +1,251 @@
+//! The model zoo: entries round-trip exactly, damaged or mismatched files and
+//! absurd weights are clear errors, and the shipped entries act as the
+//! policies they were exported from.
+
+use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::agents::pggd::{Pggd, PggdConfig};
+use blockpuzzle::agents::AnyPolicy;
+use blockpuzzle::env::registry;
+use blockpuzzle::train::{load_policy, SavedPolicy};
+use blockpuzzle::zoo::{self, ExportInfo};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::path::Path;
+use std::process::Command;
+
+const ENV: &str = "BlocksTouch-v0";
+
+fn obs_dim() -> usize {
+    registry::make(ENV).unwrap().observation_space().dim()
+}
+
+fn random_obs(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
+    (0..n).map(|_| rng.gen_range(-2.0f32..2.0)).collect()
+}
+
+/// A DDPG policy with a fitted normaliser and its critic, recorded on BlocksTouch-v0.
+fn ddpg_saved(seed: u64) -> SavedPolicy {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let d = obs_dim();
+    let mut a = Ddpg::new(d, 4, DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() }, &mut rng);
+    let rows = random_obs(&mut rng, 50 * d);
+    a.norm.update(&rows);
+    SavedPolicy {
+        env_id: ENV.into(),
+        task: Some(registry::task(ENV).unwrap().source),
+        epoch: 12,
+        finals_success: 0.5,
+        policy: AnyPolicy::Ddpg(a.policy()),
+        critic: Some(a.critic.to_plain()),
+    }
+}
+
+fn info(name: &str) -> ExportInfo {
+    ExportInfo {
+        name: name.into(),
+        description: "a test entry".into(),
+        trained_with: "none (made by tests/zoo.rs)".into(),
+        exported_from: "tests/zoo.rs".into(),
+        keep_critic: true,
+        ..ExportInfo::default()
+    }
+}
+
+fn err_text(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+#[test]
+fn ddpg_entry_round_trips_and_acts_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    let saved = ddpg_saved(1);
+    let path = zoo::export(dir.path(), &saved, &info("ddpg-test")).unwrap();
+    assert_eq!(path, dir.path().join("ddpg-test.safetensors"));
+    let (meta, loaded) = zoo::load(&path).unwrap();
+    assert_eq!((meta.algo.as_str(), meta.epoch, meta.task.id.as_str()), ("ddpg", 12, ENV));
+    assert_eq!(meta.actor.sizes, vec![obs_dim(), 32, 32, 4]);
+    assert_eq!(meta.critic.as_ref().unwrap().sizes, vec![obs_dim() + 4, 32, 32, 1]);
+    assert_eq!(meta.probes.len(), 3);
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    for _ in 0..20 {
+        let obs = random_obs(&mut rng, obs_dim());
+        assert_eq!(loaded.policy.act(&obs), saved.policy.act(&obs));
+        let mut sa = obs.clone();
+        sa.extend([0.1, -0.2, 0.3, 0.9]);
+        assert_eq!(loaded.critic.as_ref().unwrap().forward(&sa), saved.critic.as_ref().unwrap().forward(&sa));
+    }
+    // The .json names the same entry; loading by name goes through the zoo folder.
+    assert_eq!(zoo::load(&dir.path().join("ddpg-test.json")).unwrap().1, loaded);
+    assert_eq!(zoo::names(dir.path()), vec!["ddpg-test".to_owned()]);
+    // Without --critic the entry keeps the actor only.
+    let lean = zoo::export(dir.path(), &saved, &ExportInfo { keep_critic: false, ..info("lean") }).unwrap();
+    let (meta, loaded) = zoo::load(&lean).unwrap();
+    assert!(meta.critic.is_none() && loaded.critic.is_none());
+    assert!(std::fs::metadata(&lean).unwrap().len() < std::fs::metadata(&path).unwrap().len());
+}
+
+#[test]
+fn pggd_entry_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let d = obs_dim();
+    let mut p = Pggd::new(d, 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
+    p.norm.update(&random_obs(&mut rng, 20 * d));
+    let saved = SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, ..ddpg_saved(1) };
+    let path = zoo::export(dir.path(), &saved, &info("pggd-test")).unwrap();
+    let (meta, loaded) = zoo::load(&path).unwrap();
+    assert_eq!(meta.algo, "pggd");
+    assert!(meta.sigma_min.is_some() && !meta.actor.tanh_out);
+    let obs = random_obs(&mut rng, d);
+    assert_eq!(loaded.policy.act(&obs), saved.policy.act(&obs));
+    let (AnyPolicy::Pggd(a), AnyPolicy::Pggd(b)) = (&loaded.policy, &saved.policy) else { panic!("not PGGD") };
+    assert_eq!(a.distribution(&obs), b.distribution(&obs));
+}
+
+#[test]
+fn damaged_or_mismatched_entries_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = zoo::export(dir.path(), &ddpg_saved(1), &info("a")).unwrap();
+    let b = zoo::export(dir.path(), &ddpg_saved(2), &info("b")).unwrap();
+    // A flipped byte in the tensors.
+    let mut bytes = std::fs::read(&a).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0x40;
+    std::fs::write(&a, &bytes).unwrap();
+    let e = err_text(zoo::load(&a).unwrap_err());
+    assert!(e.contains("checksum") && e.contains("a.safetensors"), "{e}");
+    // The tensors of another entry under this entry's metadata.
+    std::fs::copy(&b, &a).unwrap();
+    let e = err_text(zoo::load(&a).unwrap_err());
+    assert!(e.contains("tensors of another entry"), "{e}");
+    // Truncated metadata.
+    let json = b.with_extension("json");
+    let text = std::fs::read_to_string(&json).unwrap();
+    std::fs::write(&json, &text[..text.len() / 2]).unwrap();
+    let e = err_text(zoo::load(&b).unwrap_err());
+    assert!(e.contains("bad metadata") && e.contains("b.json"), "{e}");
+    // Not a zoo name, not a file: the error lists what the zoo has.
+    let e = err_text(zoo::find(dir.path(), "c").unwrap_err());
+    assert!(e.contains("\"c\"") && e.contains("a, b"), "{e}");
+}
+
+/// Rewrites the entry's first weight to `value` and fixes the checksum, so
+/// that only the value check can refuse it.
+fn poison_first_weight(entry: &Path, value: f32) {
+    use sha2::Digest;
+    let mut bytes = std::fs::read(entry).unwrap();
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + header_len]).unwrap();
+    let start = header["actor.0.weight"]["data_offsets"][0].as_u64().unwrap() as usize + 8 + header_len;
+    bytes[start..start + 4].copy_from_slice(&value.to_le_bytes());
+    std::fs::write(entry, &bytes).unwrap();
+    let json = entry.with_extension("json");
+    let mut meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    meta["tensors_sha256"] = format!("sha256:{:x}", sha2::Sha256::digest(&bytes)).into();
+    std::fs::write(&json, serde_json::to_vec(&meta).unwrap()).unwrap();
+}
+
+#[test]
+fn absurd_or_non_finite_weights_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // A zoo entry holding an infinite weight (checksum made to match).
+    let entry = zoo::export(dir.path(), &ddpg_saved(1), &info("inf")).unwrap();
+    poison_first_weight(&entry, f32::INFINITY);
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(e.contains("layer 0 holds inf"), "{e}");
+    let entry = zoo::export(dir.path(), &ddpg_saved(1), &info("huge")).unwrap();
+    poison_first_weight(&entry, 1e30);
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(e.contains("layer 0 holds 1000000000000000000000000000000"), "{e}");
+
+    // A policy.json whose first layer is all 1e308 (infinite as f32) and one with 1e9.
+    let saved = ddpg_saved(1);
+    for (value, shown) in [("1e308", "inf"), ("1e9", "1000000000")] {
+        let mut v = serde_json::to_value(&saved).unwrap();
+        let w = v["policy"]["net"]["layers"][0]["w"].as_array_mut().unwrap();
+        for x in w.iter_mut() {
+            *x = serde_json::from_str(value).unwrap();
+        }
+        let file = dir.path().join(format!("policy-{value}.json"));
+        std::fs::write(&file, serde_json::to_vec(&v).unwrap()).unwrap();
+        let e = format!("{:#}", load_policy(&file).unwrap_err());
+        assert!(e.contains("is not usable") && e.contains(&format!("layer 0 holds {shown}")), "{e}");
+    }
+    // A normaliser with a zero standard deviation, and a critic of the wrong shape.
+    let mut v = serde_json::to_value(&saved).unwrap();
+    v["policy"]["norm"]["std"][3] = 0.0.into();
+    let file = dir.path().join("std.json");
+    std::fs::write(&file, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = format!("{:#}", load_policy(&file).unwrap_err());
+    assert!(e.contains("normaliser standard deviation 3 is 0"), "{e}");
+    let mut bad = saved.clone();
+    bad.critic.as_mut().unwrap().layers.pop();
+    assert!(bad.check().unwrap_err().contains("critic: the network has 32 outputs, 1 expected"));
+    // Export refuses them too.
+    let e = err_text(zoo::export(dir.path(), &bad, &info("bad")).unwrap_err());
+    assert!(e.contains("critic"), "{e}");
+    let e = err_text(zoo::export(dir.path(), &saved, &info("no/slash")).unwrap_err());
+    assert!(e.contains("letters, digits"), "{e}");
+}
+
+#[test]
+fn an_entry_on_another_task_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let entry = zoo::export(dir.path(), &ddpg_saved(1), &info("touch")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
+        .args(["eval", "--checkpoint", entry.to_str().unwrap(), "--env", "GripperTouch-v0", "--episodes", "2"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(text.contains("expects 48-dimensional") && text.contains("GripperTouch-v0"), "{text}");
+}
+
+#[test]
+fn shipped_entries_load_and_act_as_their_source() {
+    // zoo::load replays each entry's probes: the exported policy's actions
+    // on reset states of its task, recorded at export, must come out exactly.
+    let names = zoo::names(&zoo::dir());
+    assert!(names.len() >= 4, "{names:?}");
+    for name in &names {
+        let (meta, saved) = zoo::load(&zoo::find(&zoo::dir(), name).unwrap()).unwrap();
+        assert_eq!(meta.name, *name);
+        assert!(!meta.probes.is_empty() && !meta.trained_with.is_empty(), "{name}");
+        // The probes are reset observations of the recorded task.
+        let task = registry::recorded(&meta.task).unwrap();
+        let mut env = blockpuzzle::BlockEnv::new(blockpuzzle::EnvConfig::new(task)).unwrap();
+        let level = env.max_level();
+        env.set_level(level).unwrap();
+        assert_eq!(env.reset(Some(0)).unwrap().0.to_vec(), meta.probes[0].obs, "{name}");
+        assert_eq!(saved.policy.act(&meta.probes[0].obs), meta.probes[0].action, "{name}");
+    }
+}
+
+#[test]
+fn cli_takes_zoo_names() {
+    let bp = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("eval.json");
+    let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "4", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["env"], "ReachAvoid-v0");
+    let dump = dir.path().join("r.jsonl");
+    let o = bp(&[
+        "rollout",
+        "--env",
+        "ReachAvoid-v0",
+        "--policy",
+        "ReachAvoid-v0-ddpg",
+        "--episodes",
+        "2",
+        "--out",
+        dump.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bp(&["zoo", "list"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ReachAvoid-v0-ddpg"));
+    let o = bp(&["eval", "--checkpoint", "NoSuchEntry", "--episodes", "2"]);
+    let text = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && text.contains("NoSuchEntry") && text.contains("ReachAvoid-v0-ddpg"), "{text}");
+}
