@@ -16,7 +16,7 @@ fn main() {
     for _ in 0..20_000 {
         let o: Vec<f32> = (0..48).map(|_| rng.gen_range(-1.0..1.0)).collect();
         let a: Vec<f32> = (0..4).map(|_| rng.gen_range(-1.0..1.0)).collect();
-        buf.push(&o, &a, -1.0, &o, rng.gen_bool(0.05), 0.0);
+        buf.push(&o, &a, -1.0, &o, rng.gen_bool(0.05), 0.0, 0.98);
     }
     agent.norm.update(&buf.sample(5000, &mut rng).obs);
     for _ in 0..20 {

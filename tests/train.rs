@@ -4,7 +4,7 @@
 use blockpuzzle::agents::ddpg::DdpgConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::train::{
-    checkpoint, load_policy, read_progress, train, AggrevatedConfig, Algo, EpochRow, PgWeight, TrainConfig,
+    checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, TrainConfig,
 };
 use std::path::Path;
 
@@ -23,6 +23,8 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         seed: 7,
         torch_threads: 1,
         snapshot_every: 1,
+        level_replay: 0.0,
+        challenge_share: 0.0,
         ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
         algo: Algo::Ddpg,
         pggd: Default::default(),
@@ -99,6 +101,69 @@ fn resume_restores_the_exact_state() {
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
 }
 
+/// This project's options: TD3, 3-step returns, lower levels replayed.
+fn tiny_ours(env: &str, epochs: usize) -> TrainConfig {
+    let mut c = tiny(env, epochs);
+    c.ddpg.td3 = true;
+    c.ddpg.n_step = 3;
+    c.level_replay = 0.5;
+    c.success_threshold = Some(0.0); // climb a level each epoch, so that lower levels exist
+    c
+}
+
+#[test]
+fn td3_n_step_and_level_replay_resume_exactly() {
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&tiny_ours("BlocksTouch-v0", 3), straight.path(), false, &mut quiet).unwrap();
+    let split = tempfile::tempdir().unwrap();
+    train(&tiny_ours("BlocksTouch-v0", 2), split.path(), false, &mut quiet).unwrap();
+    let b = train(&tiny_ours("BlocksTouch-v0", 3), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), vec![0, 1, 2]);
+    let ckpt = |d: &Path| checkpoint::load(&d.join("checkpoint.bin"), "BlocksTouch-v0", 48, 4).unwrap();
+    let (la, lb) = (ckpt(straight.path()), ckpt(split.path()));
+    let (Agent::Ddpg(x), Agent::Ddpg(y)) = (&la.agent, &lb.agent) else { panic!("DDPG agents") };
+    let (tx, ty) = (x.twin.as_ref().expect("TD3 twin critic"), y.twin.as_ref().unwrap());
+    assert_eq!(tx.critic.to_vecs(), ty.critic.to_vecs(), "second critic resumed exactly");
+    assert_eq!(tx.noise_seed, ty.noise_seed);
+    assert_eq!(x.actor.to_vecs(), y.actor.to_vecs());
+    assert_eq!(la.replay.parts().0, lb.replay.parts().0);
+    // 3-step returns: some transitions bootstrap with γ² or γ³ (episode ends), most with γ³.
+    let g = 0.98f32;
+    let disc = &la.replay.parts().0.discount;
+    assert!(disc.iter().all(|&d| d == g || d == g * g || d == g * g * g), "{:?}", &disc[..10]);
+    assert!(disc.iter().filter(|&&d| d == g * g * g).count() > disc.len() / 2);
+    // The actor is updated on every other update only.
+    assert_eq!((x.actor_opt.t, x.critic_opt.t), (23, 45)); // updates 0, 2, ..., 44 of 45
+}
+
+#[test]
+fn bad_settings_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    type Change = Box<dyn Fn(&mut TrainConfig)>;
+    let bad: Vec<(&str, Change)> = vec![
+        ("--lr-actor", Box::new(|c| c.ddpg.lr_actor = f64::NAN)),
+        ("--lr-actor", Box::new(|c| c.ddpg.lr_actor = -1.0)),
+        ("--lr-critic", Box::new(|c| c.ddpg.lr_critic = f64::INFINITY)),
+        ("--polyak", Box::new(|c| c.ddpg.polyak = 1.5)),
+        ("--random-eps", Box::new(|c| c.ddpg.random_eps = f64::NAN)),
+        ("--n-step", Box::new(|c| c.ddpg.n_step = 0)),
+        ("--policy-delay", Box::new(|c| c.ddpg.policy_delay = 0)),
+        ("--level-replay", Box::new(|c| c.level_replay = 2.0)),
+        ("--pg-lr", Box::new(|c| c.pggd.lr = 0.0)),
+        ("--t0", Box::new(|c| c.aggrevated.t0 = f64::NAN)),
+        ("--challenge-share", Box::new(|c| c.challenge_share = 0.5)),
+    ];
+    for (flag, set) in bad {
+        let mut c = tiny("BlocksTouch-v0", 1);
+        set(&mut c);
+        let err = format!("{:#}", train(&c, &run, false, &mut quiet).unwrap_err());
+        assert!(err.contains(flag) || (flag == "--challenge-share" && err.contains("no challenge")), "{flag}: {err}");
+        assert!(!run.join("config.json").exists(), "{flag}: nothing written");
+    }
+}
+
 #[test]
 fn saved_policy_acts_like_the_trained_one() {
     let dir = tempfile::tempdir().unwrap();
@@ -139,8 +204,18 @@ fn resume_with_other_settings_is_refused() {
     train(&tiny("GripperTouch-v0", 1), dir.path(), false, &mut quiet).unwrap();
     let mut other = tiny("GripperTouch-v0", 2);
     other.ddpg.gamma = 0.9;
-    let err = train(&other, dir.path(), true, &mut quiet).unwrap_err();
-    assert!(err.to_string().contains("different settings"), "{err}");
+    other.seed = 8;
+    other.batch_size = 64;
+    let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("differ from") && err.contains("--gamma"), "{err}");
+    assert!(err.contains("--seed") && err.contains("--batch-size") && !err.contains("--epochs"), "{err}");
+    let mut other = tiny("GripperTouch-v0", 2);
+    other.ddpg.td3 = true;
+    let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--td3"), "{err}");
+    // --epochs and thread counts may change.
+    let more = TrainConfig { torch_threads: 2, snapshot_every: 0, ..tiny("GripperTouch-v0", 2) };
+    assert_eq!(train(&more, dir.path(), true, &mut quiet).unwrap().len(), 2);
     let err = train(&tiny("GripperTouch-v0", 2), Path::new("/nonexistent/run"), true, &mut quiet).unwrap_err();
     assert!(!err.to_string().is_empty());
 }
@@ -159,7 +234,7 @@ fn pggd_resume_restores_the_exact_state() {
     assert!(a.iter().all(|r| r.critic_loss == 0.0 && r.beta == 0.0 && r.expert_share == 0.0));
     // A DDPG resume of a PGGD run is refused.
     let err = train(&tiny("GripperTouch-v0", 4), split.path(), true, &mut quiet).unwrap_err();
-    assert!(err.to_string().contains("different settings"), "{err}");
+    assert!(err.to_string().contains("--algo"), "{err}");
 }
 
 /// A tiny DDPG expert on BlocksTouch-v0 in `dir`.

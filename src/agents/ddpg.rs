@@ -10,6 +10,18 @@
 //! * targets follow with polyak averaging after each cycle's batches;
 //! * exploration: with probability 0.3 a uniform random action, otherwise
 //!   π(s) + N(0, 0.2²), clipped to [−1, 1].
+//!
+//! Options beyond the paper (all off by default), studied for the headline
+//! row (`results/headline.md`):
+//!
+//! * `--n-step N`: the reward is the discounted sum of the next m = min(N,
+//!   steps left) rewards and the bootstrap is γᵐ Q'(s̄ₜ₊ₘ, ·) (no off-policy
+//!   correction, as in Rainbow and D4PG);
+//! * `--td3` (Fujimoto et al. 2018): two critics, the target takes the
+//!   smaller of the two target critics (clipped double Q) at a smoothed
+//!   target action clip(π'(s̄') + clip(N(0, σ²), ±c), ±1), and the actor and
+//!   the target networks' schedule stay as above except that the actor is
+//!   updated on every `policy_delay`-th critic update only.
 
 use super::mlp::TanhMlp;
 use super::nets::{grads, Adam, Net};
@@ -61,6 +73,39 @@ pub struct DdpgConfig {
     #[arg(long, value_enum, default_value = "f32")]
     #[serde(default)]
     pub precision: Precision,
+    /// Steps of reward summed before bootstrapping (1: the paper's one-step target).
+    #[arg(long, default_value_t = 1)]
+    #[serde(default = "one")]
+    pub n_step: usize,
+    /// TD3's changes: twin critics (clipped double Q), target policy smoothing, delayed actor updates.
+    #[arg(long)]
+    #[serde(default)]
+    pub td3: bool,
+    /// TD3: standard deviation of the target action's smoothing noise.
+    #[arg(long, default_value_t = 0.2)]
+    #[serde(default = "target_noise")]
+    pub target_noise: f64,
+    /// TD3: the smoothing noise is clipped to ±this.
+    #[arg(long, default_value_t = 0.5)]
+    #[serde(default = "target_noise_clip")]
+    pub target_noise_clip: f64,
+    /// TD3: the actor is updated on every this-many critic updates.
+    #[arg(long, default_value_t = 2)]
+    #[serde(default = "policy_delay")]
+    pub policy_delay: usize,
+}
+
+fn one() -> usize {
+    1
+}
+fn target_noise() -> f64 {
+    0.2
+}
+fn target_noise_clip() -> f64 {
+    0.5
+}
+fn policy_delay() -> usize {
+    2
 }
 
 /// Arithmetic of the networks' hidden-layer products during updates.
@@ -98,6 +143,49 @@ impl Default for DdpgConfig {
             norm_eps: 0.01,
             norm_clip: 5.0,
             precision: Precision::F32,
+            n_step: one(),
+            td3: false,
+            target_noise: target_noise(),
+            target_noise_clip: target_noise_clip(),
+            policy_delay: policy_delay(),
+        }
+    }
+}
+
+impl DdpgConfig {
+    /// Whether every setting is in range; the error names the flag.
+    ///
+    /// # Errors
+    /// The first setting out of range.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
+        let checks: [(bool, &str); 13] = [
+            (self.layers >= 1, "--layers must be at least 1"),
+            (self.hidden >= 1, "--hidden must be at least 1"),
+            (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
+            (finite_pos(self.lr_critic), "--lr-critic must be a positive number"),
+            ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
+            ((0.0..=1.0).contains(&self.polyak), "--polyak must be in [0, 1]"),
+            (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
+            ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
+            (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
+            (
+                finite_pos(self.norm_eps) && self.norm_clip.is_finite() && self.norm_clip > 0.0,
+                "--norm-eps and --norm-clip must be positive numbers",
+            ),
+            ((1..=50).contains(&self.n_step), "--n-step must be in 1..=50"),
+            (
+                self.target_noise.is_finite()
+                    && self.target_noise >= 0.0
+                    && self.target_noise_clip.is_finite()
+                    && self.target_noise_clip >= 0.0,
+                "--target-noise and --target-noise-clip must be numbers ≥ 0",
+            ),
+            (self.policy_delay >= 1, "--policy-delay must be at least 1"),
+        ];
+        match checks.iter().find(|(ok, _)| !ok) {
+            Some((_, msg)) => Err((*msg).to_owned()),
+            None => Ok(()),
         }
     }
 }
@@ -131,9 +219,25 @@ pub struct Ddpg {
     pub actor_opt: Adam,
     /// Critic optimiser.
     pub critic_opt: Adam,
+    /// TD3's second critic (None for DDPG).
+    pub twin: Option<Twin>,
     obs_dim: usize,
     act_dim: usize,
     last_targets: Vec<f32>,
+}
+
+/// TD3's second critic, its target and optimiser, and the seed of the
+/// target-smoothing noise (update k draws its noise from a stream of
+/// (seed, k), so a resumed run draws the same noise).
+pub struct Twin {
+    /// Second critic Q₂.
+    pub critic: Net,
+    /// Its target Q₂'.
+    pub target: Net,
+    /// Its optimiser.
+    pub opt: Adam,
+    /// Seed of the smoothing noise.
+    pub noise_seed: u64,
 }
 
 fn sizes(input: usize, hidden: usize, layers: usize, output: usize) -> Vec<usize> {
@@ -150,7 +254,15 @@ impl Ddpg {
         let actor_opt = Adam::new(&actor.params, config.lr_actor);
         let critic_opt = Adam::new(&critic.params, config.lr_critic);
         let norm = Normalizer::new(obs_dim, config.norm_eps, config.norm_clip);
+        // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
+        let twin = config.td3.then(|| {
+            let critic =
+                Net::new(&sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
+            let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, config.lr_critic));
+            Twin { critic, target, opt, noise_seed: rng.gen() }
+        });
         Self {
+            twin,
             config,
             norm,
             actor,
@@ -186,7 +298,23 @@ impl Ddpg {
         net.forward(&Tensor::cat(&[obs, act], 1))
     }
 
-    /// One gradient step of actor and critic on `batch`.
+    /// The smoothed target actions clip(π'(s̄') + clip(ε, ±c), ±1), ε ~ N(0, σ²)
+    /// from the stream of update `k`.
+    fn smoothed(&self, next_act: Tensor, noise_seed: u64, k: u64) -> Tensor {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(noise_seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let c = self.config.target_noise_clip as f32;
+        let noise: Vec<f32> = (0..next_act.numel())
+            .map(|_| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                ((self.config.target_noise * z) as f32).clamp(-c, c)
+            })
+            .collect();
+        let noise = Tensor::of_slice(&noise).view_as(&next_act);
+        (next_act + noise).clamp(-1.0, 1.0)
+    }
+
+    /// One gradient step of the critic(s) and (unless TD3 delays it) the actor on `batch`.
     pub fn update(&mut self, batch: &Batch) -> UpdateStats {
         let n = batch.len() as i64;
         let obs = self.obs_tensor(&batch.obs);
@@ -194,36 +322,65 @@ impl Ddpg {
         let act = Tensor::of_slice(&batch.act).view([n, self.act_dim as i64]);
         let rew = Tensor::of_slice(&batch.rew).view([n, 1]);
         let not_done = 1.0 - Tensor::of_slice(&batch.done).view([n, 1]);
+        let discount = Tensor::of_slice(&batch.discount).view([n, 1]);
         let clip_return = 1.0 / (1.0 - self.config.gamma);
+        let k = self.critic_opt.t;
 
         let target = tch::no_grad(|| {
-            let next_q = Self::q(&self.critic_target, &next_obs, &self.actor_target.forward(&next_obs));
-            let y: Tensor = rew + not_done * next_q * self.config.gamma;
+            let next_act = self.actor_target.forward(&next_obs);
+            let next_q = match &self.twin {
+                None => Self::q(&self.critic_target, &next_obs, &next_act),
+                Some(t) => {
+                    let next_act = self.smoothed(next_act, t.noise_seed, k);
+                    let q1 = Self::q(&self.critic_target, &next_obs, &next_act);
+                    q1.minimum(&Self::q(&t.target, &next_obs, &next_act))
+                }
+            };
+            let y: Tensor = rew + not_done * next_q * discount;
             y.clamp(-clip_return, 0.0)
         });
         self.last_targets = super::nets::tensor_to_vec(&target);
         let q = Self::q(&self.critic, &obs, &act);
-        let critic_loss = (&q - &target).square().mean(tch::Kind::Float);
+        let mut critic_loss = (&q - &target).square().mean(tch::Kind::Float);
+        if let Some(t) = &self.twin {
+            critic_loss += (Self::q(&t.critic, &obs, &act) - &target).square().mean(tch::Kind::Float);
+        }
 
         // The actor's loss goes through the critic with its parameters
         // detached: gradients reach the actor only, and both losses see the
-        // same (pre-update) parameters, as in baselines.
-        let pi = self.actor.forward(&obs);
-        let frozen_critic = self.critic.detached_view();
-        let actor_loss = -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
-            + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
+        // same (pre-update) parameters, as in baselines. TD3 updates the
+        // actor on every `policy_delay`-th update only.
+        let actor_step = self.twin.is_none() || k % self.config.policy_delay as u64 == 0;
+        let actor_loss = actor_step.then(|| {
+            let pi = self.actor.forward(&obs);
+            let frozen_critic = self.critic.detached_view();
+            -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
+                + pi.square().mean(tch::Kind::Float) * self.config.action_l2
+        });
 
         self.critic.zero_grad();
         self.actor.zero_grad();
+        if let Some(t) = &mut self.twin {
+            t.critic.zero_grad();
+        }
         critic_loss.backward();
-        actor_loss.backward();
-        let (critic_grads, actor_grads) = (grads(&self.critic.params), grads(&self.actor.params));
+        if let Some(l) = &actor_loss {
+            l.backward();
+        }
+        let critic_grads = grads(&self.critic.params);
         self.critic_opt.step(&mut self.critic.params, &critic_grads);
-        self.actor_opt.step(&mut self.actor.params, &actor_grads);
+        if let Some(t) = &mut self.twin {
+            let g = grads(&t.critic.params);
+            t.opt.step(&mut t.critic.params, &g);
+        }
+        if actor_loss.is_some() {
+            let actor_grads = grads(&self.actor.params);
+            self.actor_opt.step(&mut self.actor.params, &actor_grads);
+        }
 
         UpdateStats {
             critic_loss: critic_loss.double_value(&[]),
-            actor_loss: actor_loss.double_value(&[]),
+            actor_loss: actor_loss.map_or(f64::NAN, |l| l.double_value(&[])),
             mean_q: q.mean(tch::Kind::Float).double_value(&[]),
         }
     }
@@ -238,6 +395,9 @@ impl Ddpg {
         let p = self.config.polyak;
         self.actor_target.polyak_from(&self.actor, p);
         self.critic_target.polyak_from(&self.critic, p);
+        if let Some(t) = &mut self.twin {
+            t.target.polyak_from(&t.critic, p);
+        }
     }
 
     /// A self-contained policy for rollouts (weights and normaliser frozen).
@@ -294,6 +454,7 @@ mod tests {
             b.next_obs.extend((0..obs_dim).map(|_| rng.gen_range(-1.0..1.0)));
             b.done.push(if i % 5 == 0 { 1.0 } else { 0.0 });
             b.extra.push(0.0);
+            b.discount.push(0.98);
         }
         b
     }
@@ -361,6 +522,91 @@ mod tests {
         assert!(y[3..].iter().any(|&v| v != -1.0), "non-terminal targets bootstrap");
     }
 
+    fn td3() -> DdpgConfig {
+        DdpgConfig { td3: true, ..small() }
+    }
+
+    #[test]
+    fn td3_updates_both_critics_and_lowers_their_loss() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut agent = Ddpg::new(6, 4, td3(), &mut rng);
+        let b = batch(256, 6, &mut rng);
+        agent.norm.update(&b.obs);
+        let twin_before = agent.twin.as_ref().unwrap().critic.to_vecs();
+        assert_ne!(twin_before, agent.critic.to_vecs(), "the critics start apart");
+        let first = agent.update(&b);
+        assert_ne!(agent.twin.as_ref().unwrap().critic.to_vecs(), twin_before);
+        let mut last = first;
+        for _ in 0..50 {
+            last = agent.update(&b);
+        }
+        assert!(last.critic_loss < first.critic_loss * 0.5, "{first:?} -> {last:?}");
+        // A DDPG agent of the same seed has the same actor and first critic: TD3 draws after them.
+        let ddpg = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(5));
+        let twin = Ddpg::new(6, 4, td3(), &mut ChaCha8Rng::seed_from_u64(5));
+        assert_eq!((ddpg.actor.to_vecs(), ddpg.critic.to_vecs()), (twin.actor.to_vecs(), twin.critic.to_vecs()));
+    }
+
+    #[test]
+    fn td3_targets_take_the_smaller_target_critic_and_mask_terminals() {
+        let mut rng = ChaCha8Rng::seed_from_u64(6);
+        // No smoothing noise: the target action is π'(s̄') itself.
+        let mut agent = Ddpg::new(6, 4, DdpgConfig { target_noise: 0.0, ..td3() }, &mut rng);
+        let mut b = batch(8, 6, &mut rng);
+        b.rew = vec![-1.0; 8];
+        b.done = vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        b.discount = vec![0.98, 0.98, 0.5, 0.5, 0.98, 0.98, 0.98, 0.98];
+        let next = agent.obs_tensor(&b.next_obs);
+        let want: Vec<f32> = tch::no_grad(|| {
+            let a = agent.actor_target.forward(&next);
+            let q1 = Ddpg::q(&agent.critic_target, &next, &a);
+            let q2 = Ddpg::q(&agent.twin.as_ref().unwrap().target, &next, &a);
+            super::super::nets::tensor_to_vec(&q1.minimum(&q2))
+        });
+        agent.update(&b);
+        let y = agent.last_targets().to_vec();
+        assert_eq!(y[0], -1.0, "terminal: the reward alone");
+        for i in 1..8 {
+            let expect = (-1.0 + b.discount[i] * want[i]).clamp(-50.0, 0.0);
+            assert!((y[i] - expect).abs() < 1e-5, "{i}: {} vs {expect}", y[i]);
+        }
+        // With noise, the targets move (smoothed actions), deterministically for the update number.
+        let mut noisy = Ddpg::new(6, 4, td3(), &mut ChaCha8Rng::seed_from_u64(6));
+        noisy.update(&b);
+        assert_ne!(noisy.last_targets(), &y[..]);
+    }
+
+    #[test]
+    fn the_discount_column_scales_the_bootstrap() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let agent = Ddpg::new(6, 4, small(), &mut rng);
+        let mut b = batch(4, 6, &mut rng);
+        b.rew = vec![-1.0; 4];
+        b.done = vec![0.0; 4];
+        let mut one = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(7));
+        let mut three = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(7));
+        drop(agent);
+        one.update(&b);
+        b.discount = vec![0.98f32.powi(3); 4];
+        three.update(&b);
+        // y = r + d Q': the same Q', so (y - r) scales with d.
+        for (y1, y3) in one.last_targets().iter().zip(three.last_targets()) {
+            assert!(((y3 + 1.0) - (y1 + 1.0) * 0.98f32.powi(2)).abs() < 1e-5, "{y1} {y3}");
+        }
+    }
+
+    #[test]
+    fn settings_out_of_range_name_their_flag() {
+        assert!(DdpgConfig::default().validate().is_ok());
+        let bad = |c: DdpgConfig, flag: &str| assert!(c.validate().unwrap_err().contains(flag), "{flag}");
+        bad(DdpgConfig { lr_actor: f64::NAN, ..small() }, "--lr-actor");
+        bad(DdpgConfig { lr_critic: -1.0, ..small() }, "--lr-critic");
+        bad(DdpgConfig { gamma: 1.0, ..small() }, "--gamma");
+        bad(DdpgConfig { n_step: 0, ..small() }, "--n-step");
+        bad(DdpgConfig { target_noise: f64::INFINITY, ..small() }, "--target-noise");
+        bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
+    }
+
     #[test]
     fn polyak_moves_targets_towards_the_learned_nets() {
         let mut rng = ChaCha8Rng::seed_from_u64(2);
@@ -372,6 +618,14 @@ mod tests {
         let t1 = agent.actor_target.to_vecs();
         let (x0, x, x1) = (t0[0][0], a[0][0], t1[0][0]);
         assert!((x1 - (0.95 * x0 + 0.05 * x)).abs() < 1e-6);
+        // TD3's second target critic follows its critic the same way.
+        let mut agent = Ddpg::new(6, 4, td3(), &mut rng);
+        agent.update(&b);
+        let twin = agent.twin.as_ref().unwrap();
+        let (t0, c) = (twin.target.to_vecs(), twin.critic.to_vecs());
+        agent.update_targets();
+        let t1 = agent.twin.as_ref().unwrap().target.to_vecs();
+        assert!((t1[0][0] - (0.95 * t0[0][0] + 0.05 * c[0][0])).abs() < 1e-6);
     }
 
     #[test]

@@ -233,7 +233,15 @@ mod tests {
 
     fn batch_of(obs: Vec<f32>, act: Vec<f32>) -> Batch {
         let n = act.len() / 4;
-        Batch { next_obs: obs.clone(), obs, act, rew: vec![0.0; n], done: vec![0.0; n], extra: vec![0.0; n] }
+        Batch {
+            next_obs: obs.clone(),
+            obs,
+            act,
+            rew: vec![0.0; n],
+            done: vec![0.0; n],
+            extra: vec![0.0; n],
+            discount: vec![0.98; n],
+        }
     }
 
     #[test]

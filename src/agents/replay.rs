@@ -19,6 +19,9 @@ pub struct Batch {
     pub done: Vec<f32>,
     /// Extra per-transition value (e.g. the discounted return-to-go), `n`.
     pub extra: Vec<f32>,
+    /// The bootstrap discount of each transition: γᵐ for an m-step return
+    /// (γ for one step), applied to Q' of `next_obs` unless `done`.
+    pub discount: Vec<f32>,
 }
 
 impl Batch {
@@ -66,7 +69,17 @@ impl ReplayBuffer {
     }
 
     /// Stores one transition, overwriting the oldest when full.
-    pub fn push(&mut self, obs: &[f32], act: &[f32], rew: f32, next_obs: &[f32], done: bool, extra: f32) {
+    #[allow(clippy::too_many_arguments)]
+    pub fn push(
+        &mut self,
+        obs: &[f32],
+        act: &[f32],
+        rew: f32,
+        next_obs: &[f32],
+        done: bool,
+        extra: f32,
+        discount: f32,
+    ) {
         debug_assert_eq!(obs.len(), self.obs_dim);
         debug_assert_eq!(act.len(), self.act_dim);
         let (o, a) = (self.obs_dim, self.act_dim);
@@ -77,6 +90,7 @@ impl ReplayBuffer {
             self.data.next_obs.extend_from_slice(next_obs);
             self.data.done.push(f32::from(u8::from(done)));
             self.data.extra.push(extra);
+            self.data.discount.push(discount);
             self.len += 1;
         } else {
             let i = self.next;
@@ -86,6 +100,7 @@ impl ReplayBuffer {
             self.data.next_obs[i * o..(i + 1) * o].copy_from_slice(next_obs);
             self.data.done[i] = f32::from(u8::from(done));
             self.data.extra[i] = extra;
+            self.data.discount[i] = discount;
         }
         self.next = (self.next + 1) % self.capacity;
     }
@@ -106,6 +121,7 @@ impl ReplayBuffer {
             b.next_obs.extend_from_slice(&self.data.next_obs[i * o..(i + 1) * o]);
             b.done.push(self.data.done[i]);
             b.extra.push(self.data.extra[i]);
+            b.discount.push(self.data.discount[i]);
         }
         b
     }
@@ -135,6 +151,7 @@ impl ReplayBuffer {
             && data.act.len() == n * act_dim
             && data.done.len() == n
             && data.extra.len() == n
+            && data.discount.len() == n
             && (n == capacity.max(1) || next == n);
         if !ok {
             return Err(format!("replay arrays do not fit {n} transitions of {obs_dim}+{act_dim} values"));
@@ -151,7 +168,7 @@ mod tests {
 
     fn push(buf: &mut ReplayBuffer, k: usize) {
         let v = k as f32;
-        buf.push(&[v, v], &[v], v, &[v + 1.0, v + 1.0], k % 2 == 0, -v);
+        buf.push(&[v, v], &[v], v, &[v + 1.0, v + 1.0], k % 2 == 0, -v, 0.5 * v);
     }
 
     #[test]

@@ -114,12 +114,12 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         while steps < target {
             let policy = agent.policy();
             let explore = Behaviour::DdpgExplore { policy: &policy, random_eps, noise_eps };
-            let eps = play_all(&mut envs, &explore, 1, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
+            let eps = play_all(&mut envs, &explore, 1, None, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
             round += 1;
             for ep in &eps {
                 steps += ep.len();
                 forward += ep.forward_seconds;
-                ep.store(replay, &mut agent.norm, gamma);
+                ep.store(replay, &mut agent.norm, gamma, 1);
             }
         }
         Ok((steps, t.elapsed().as_secs_f64(), forward / c.workers as f64))

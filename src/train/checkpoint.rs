@@ -69,6 +69,9 @@ struct Header {
     normalizer: Normalizer,
     actor_adam_t: u64,
     critic_adam_t: u64,
+    /// TD3: the second critic's Adam step count and the smoothing noise's seed.
+    #[serde(default)]
+    twin: Option<(u64, u64)>,
     replay_capacity: usize,
     replay_next: usize,
     blobs: Vec<(String, usize)>,
@@ -98,6 +101,7 @@ pub fn save(
             blobs.push((format!("{prefix}.{i}"), v));
         }
     };
+    let mut twin = None;
     let (normalizer, actor_adam_t, critic_adam_t, pggd) = match agent {
         Agent::Ddpg(a) => {
             add("actor", a.actor.to_vecs());
@@ -106,6 +110,12 @@ pub fn save(
             add("critic_target", a.critic_target.to_vecs());
             add("actor_adam", a.actor_opt.to_vecs());
             add("critic_adam", a.critic_opt.to_vecs());
+            if let Some(t) = &a.twin {
+                add("critic2", t.critic.to_vecs());
+                add("critic2_target", t.target.to_vecs());
+                add("critic2_adam", t.opt.to_vecs());
+                twin = Some((t.opt.t, t.noise_seed));
+            }
             (a.norm.clone(), a.actor_opt.t, a.critic_opt.t, PggdConfig::default())
         }
         Agent::Pggd(a) => {
@@ -117,7 +127,15 @@ pub fn save(
     let (r, replay_next) = replay.parts();
     add(
         "replay",
-        vec![r.obs.clone(), r.act.clone(), r.rew.clone(), r.next_obs.clone(), r.done.clone(), r.extra.clone()],
+        vec![
+            r.obs.clone(),
+            r.act.clone(),
+            r.rew.clone(),
+            r.next_obs.clone(),
+            r.done.clone(),
+            r.extra.clone(),
+            r.discount.clone(),
+        ],
     );
 
     let mut payload = Vec::with_capacity(blobs.iter().map(|b| 4 * b.1.len()).sum());
@@ -134,6 +152,7 @@ pub fn save(
         normalizer,
         actor_adam_t,
         critic_adam_t,
+        twin,
         replay_capacity: replay.capacity(),
         replay_next,
         blobs: blobs.iter().map(|(n, v)| (n.clone(), v.len())).collect(),
@@ -233,6 +252,16 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
             fill(a.critic_target.load_vecs(&take("critic_target")))?;
             fill(a.actor_opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
             fill(a.critic_opt.load_vecs(&take("critic_adam"), header.critic_adam_t))?;
+            match (&mut a.twin, header.twin) {
+                (Some(t), Some((adam_t, noise_seed))) => {
+                    fill(t.critic.load_vecs(&take("critic2")))?;
+                    fill(t.target.load_vecs(&take("critic2_target")))?;
+                    fill(t.opt.load_vecs(&take("critic2_adam"), adam_t))?;
+                    t.noise_seed = noise_seed;
+                }
+                (None, None) => {}
+                _ => return Err(corrupt("the TD3 critic and the --td3 setting disagree")),
+            }
             a.norm = header.normalizer;
             Agent::Ddpg(a)
         }
@@ -247,12 +276,24 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
     };
 
     let r = take("replay");
-    if r.len() != 6 {
+    if r.len() != 6 && r.len() != 7 {
         return Err(corrupt("replay buffer missing"));
     }
     let mut r = r.into_iter();
     let mut next = || r.next().unwrap_or_default();
-    let data = Batch { obs: next(), act: next(), rew: next(), next_obs: next(), done: next(), extra: next() };
+    let mut data = Batch {
+        obs: next(),
+        act: next(),
+        rew: next(),
+        next_obs: next(),
+        done: next(),
+        extra: next(),
+        discount: next(),
+    };
+    // Checkpoints from before n-step returns: every transition is one step.
+    if data.discount.is_empty() {
+        data.discount = vec![d.gamma as f32; data.rew.len()];
+    }
     let replay = ReplayBuffer::from_parts(obs_dim, act_dim, header.replay_capacity, data, header.replay_next)
         .map_err(|e| corrupt(&e))?;
     Ok(Loaded { state: header.state, agent, replay })

@@ -26,7 +26,7 @@ mod rollouts;
 mod rundir;
 
 pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
-pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
+pub(crate) use rollouts::{play_all, stream_seed, Behaviour, Draw};
 pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, RunDir, SavedPolicy};
 
 use crate::agents::ddpg::{DdpgConfig, Precision, UpdateStats};
@@ -89,6 +89,16 @@ pub struct TrainConfig {
     /// Threads libtorch may use for updates (0: all cores).
     #[arg(long, default_value_t = 0)]
     pub torch_threads: usize,
+    /// Probability that an exploration episode plays a uniformly drawn lower
+    /// level instead of the current one (0: the paper's curriculum).
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub level_replay: f64,
+    /// At the maximum level, probability that an exploration episode plays the
+    /// task's challenge distribution (0: the paper's curriculum).
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub challenge_share: f64,
     /// Also keep the policy of every Nth epoch as `snapshots/epoch-NNNN.json`
     /// (0: never); earlier policies for AggreVaTeD experts or learning-curve studies.
     #[arg(long, default_value_t = 0)]
@@ -180,11 +190,16 @@ pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
 /// # Errors
 /// Bad configuration, environment errors, I/O and checkpoint errors.
 pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpoch) -> Result<Vec<EpochRow>> {
+    // Every setting is checked before anything is written.
     if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
         bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
     }
-    if !(0.0..1.0).contains(&config.ddpg.gamma) {
-        bail!("--gamma must be in [0, 1)");
+    config.ddpg.validate().map_err(anyhow::Error::msg)?;
+    if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
+        bail!("--level-replay and --challenge-share must be in [0, 1]");
+    }
+    if config.algo == Algo::Pggd && (config.ddpg.n_step != 1 || config.ddpg.td3) {
+        bail!("--n-step and --td3 are DDPG options; PGGD uses the return-to-go");
     }
     if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
@@ -195,7 +210,12 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
         bail!("--pg-weight is for --algo pggd");
     }
-    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || config.aggrevated.t0 < 0.0 {
+    let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
+    if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
+        bail!("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0");
+    }
+    let t0 = config.aggrevated.t0;
+    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
         bail!("--beta0 must be in [0, 1] and --t0 at least 0");
     }
     let run = RunDir { dir: run_dir.to_owned() };
@@ -220,6 +240,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     let max_level = envs[0].max_level();
+    if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
+        bail!("--challenge-share: the task {} has no challenge distribution", task.id());
+    }
 
     // Agent, replay buffer, run state: fresh or from the checkpoint.
     let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
@@ -227,16 +250,12 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             Some(c) => c,
             None => run.read_config()?,
         };
-        if (saved.task.is_none() && saved.env != config.env)
-            || saved.algo != config.algo
-            || saved.ddpg != config.ddpg
-            || saved.pggd != config.pggd
-            || saved.aggrevated != config.aggrevated
-            || saved.workers != config.workers
-        {
+        let changed = computation_differences(&saved, config);
+        if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
             bail!(
-                "--resume with different settings than {} (env, algorithm, workers, expert or hyperparameters differ)",
-                run.config().display()
+                "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
+                run.config().display(),
+                if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
             );
         }
         let loaded = checkpoint::load(&run.checkpoint(), task.id(), obs_dim, act_dim)?;
@@ -292,7 +311,14 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             let policy = learner.agent.policy();
             let behaviour = learner.behaviour(&policy, epoch, config);
             let base = state.episodes_per_worker;
-            let eps = play_all(&mut envs, &behaviour, config.rollouts, |w, k| {
+            let draw = Draw {
+                level: state.level.min(max_level),
+                max_level,
+                level_replay: config.level_replay,
+                challenge_share: config.challenge_share,
+            };
+            let draw = (draw.level_replay > 0.0 || draw.challenge_share > 0.0).then_some(draw);
+            let eps = play_all(&mut envs, &behaviour, config.rollouts, draw.as_ref(), |w, k| {
                 stream_seed(config.seed, &[1, w as u64, base + k as u64])
             })?;
             state.episodes_per_worker += config.rollouts as u64;
@@ -304,7 +330,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
                 expert_steps += ep.expert_steps;
                 state.env_steps += ep.len() as u64;
                 forward_seconds += ep.forward_seconds / config.workers as f64;
-                ep.store(&mut replay, learner.agent.norm_mut(), config.ddpg.gamma);
+                ep.store(&mut replay, learner.agent.norm_mut(), config.ddpg.gamma, config.ddpg.n_step);
             }
             // Learn.
             let t = Instant::now();
@@ -323,23 +349,29 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
         let t = Instant::now();
         let policy = learner.agent.policy();
         let greedy = Behaviour::Greedy(&policy);
-        let test = play_all(&mut envs, &greedy, config.test_episodes, |w, k| {
+        for env in &mut envs {
+            env.set_level(state.level.min(max_level))?;
+            env.set_distribution(None)?;
+        }
+        let test = play_all(&mut envs, &greedy, config.test_episodes, None, |w, k| {
             stream_seed(config.seed, &[3, epoch as u64, w as u64, k as u64])
         })?;
         for env in &mut envs {
             env.set_level(max_level)?;
         }
-        let finals = play_all(&mut envs, &greedy, config.test_episodes, |w, k| {
+        let finals = play_all(&mut envs, &greedy, config.test_episodes, None, |w, k| {
             stream_seed(config.seed, &[4, epoch as u64, w as u64, k as u64])
         })?;
         env_seconds += t.elapsed().as_secs_f64();
         forward_seconds += test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / config.workers as f64;
 
+        // The mean over the epoch's updates; the actor's over the updates that stepped it (TD3 skips some).
         let mean = |f: fn(&UpdateStats) -> f64| {
-            if stats.is_empty() {
+            let v: Vec<f64> = stats.iter().map(f).filter(|x| !x.is_nan()).collect();
+            if v.is_empty() {
                 0.0
             } else {
-                stats.iter().map(f).sum::<f64>() / stats.len() as f64
+                v.iter().sum::<f64>() / v.len() as f64
             }
         };
         let epoch_wall = started.elapsed().as_secs_f64();
@@ -432,6 +464,47 @@ impl TrainConfig {
     /// The default run directory, `runs/TASK-METHOD-sSEED`.
     pub fn default_run_dir(&self) -> std::path::PathBuf {
         format!("runs/{}-{}-s{}", self.task_id(), self.method().1, self.seed).into()
+    }
+}
+
+/// The settings that change what a run computes (all but `--epochs`, the
+/// thread count, snapshots and the task, which is checked by content) and
+/// differ between `a` and `b`, by flag name.
+fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cmp = |name: &str, same: bool| {
+        if !same {
+            out.push(format!("--{name}"));
+        }
+    };
+    cmp("algo", a.algo == b.algo);
+    cmp("workers", a.workers == b.workers);
+    cmp("cycles", a.cycles == b.cycles);
+    cmp("rollouts", a.rollouts == b.rollouts);
+    cmp("batches", a.batches == b.batches);
+    cmp("batch-size", a.batch_size == b.batch_size);
+    cmp("buffer-size", a.buffer_size == b.buffer_size);
+    cmp("test-episodes", a.test_episodes == b.test_episodes);
+    cmp("success-threshold", a.success_threshold == b.success_threshold);
+    cmp("seed", a.seed == b.seed);
+    cmp("level-replay", a.level_replay == b.level_replay);
+    cmp("challenge-share", a.challenge_share == b.challenge_share);
+    // Nested configurations: each differing field by its flag name.
+    differing_fields("", &a.ddpg, &b.ddpg, &mut out);
+    differing_fields("pg-", &a.pggd, &b.pggd, &mut out);
+    differing_fields("", &a.aggrevated, &b.aggrevated, &mut out);
+    out
+}
+
+/// The fields of two configurations that differ, as `--PREFIXfield-name`.
+fn differing_fields<T: Serialize>(prefix: &str, a: &T, b: &T, out: &mut Vec<String>) {
+    let (a, b) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
+    if let (serde_json::Value::Object(a), serde_json::Value::Object(b)) = (a, b) {
+        for (k, v) in &a {
+            if b.get(k) != Some(v) {
+                out.push(format!("--{prefix}{}", k.replace('_', "-")));
+            }
+        }
     }
 }
 

@@ -65,20 +65,30 @@ impl Episode {
         self.rew.len()
     }
 
-    /// Appends the transitions to `replay` (with each step's discounted
-    /// return-to-go as the extra column) and feeds the observations to the
-    /// normaliser.
-    pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64) {
+    /// Appends the transitions to `replay` and feeds the observations to the
+    /// normaliser. Transition t holds the `n_step`-step return (m = min(n_step,
+    /// steps left) rewards, discounted), the observation m steps later, done
+    /// when that is the terminal state, the bootstrap discount γᵐ, and the
+    /// discounted return-to-go as the extra column (PGGD's weight).
+    pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64, n_step: usize) {
         let n = self.rew.len();
+        let g32 = gamma as f32;
         let mut ret = vec![0.0f32; n];
         let mut g = 0.0;
         for t in (0..n).rev() {
-            g = self.rew[t] + gamma as f32 * g;
+            g = self.rew[t] + g32 * g;
             ret[t] = g;
         }
         for (t, ret_t) in ret.iter().enumerate() {
-            let done = self.terminated && t + 1 == n;
-            replay.push(&self.obs[t], &self.act[t], self.rew[t], &self.obs[t + 1], done, *ret_t);
+            let m = n_step.max(1).min(n - t);
+            // One step: the reward itself, as the paper's target has it.
+            let (mut rew, mut discount) = (self.rew[t], g32);
+            for k in 1..m {
+                rew += discount * self.rew[t + k];
+                discount *= g32;
+            }
+            let done = self.terminated && t + m == n;
+            replay.push(&self.obs[t], &self.act[t], rew, &self.obs[t + m], done, *ret_t, discount);
         }
         norm.update(&self.obs.concat());
     }
@@ -97,8 +107,46 @@ pub(crate) fn stream_seed(seed: u64, parts: &[u64]) -> u64 {
     z
 }
 
-/// Plays one episode with `behaviour` from the layout of `seed`.
-fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64) -> Result<Episode, EnvError> {
+/// Which level and distribution each exploration episode plays. The
+/// paper's curriculum plays the current level only (`level_replay` and
+/// `challenge_share` 0); these options are this project's, for the headline study.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Draw {
+    /// The curriculum's current level.
+    pub(crate) level: usize,
+    /// The task's maximum level.
+    pub(crate) max_level: usize,
+    /// Probability that an episode plays a uniformly drawn lower level instead.
+    pub(crate) level_replay: f64,
+    /// At the maximum level: probability that an episode plays the challenge distribution.
+    pub(crate) challenge_share: f64,
+}
+
+impl Draw {
+    /// (level, challenge) of the episode of `seed`, from a stream of its own.
+    pub(crate) fn pick(&self, seed: u64) -> (usize, bool) {
+        use rand::Rng;
+        let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[6]));
+        let (u, v): (f64, f64) = (rng.gen(), rng.gen());
+        if self.level == self.max_level && u < self.challenge_share {
+            (self.level, true)
+        } else if self.level > 0 && v < self.level_replay {
+            (rng.gen_range(0..self.level), false)
+        } else {
+            (self.level, false)
+        }
+    }
+}
+
+/// Plays one episode with `behaviour` from the layout of `seed`; with a
+/// `draw`, at the level and in the distribution it picks for that seed
+/// (without, at the environment's current settings).
+fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw>) -> Result<Episode, EnvError> {
+    if let Some(d) = draw {
+        let (level, challenge) = d.pick(seed);
+        env.set_level(level)?;
+        env.set_challenge(challenge)?;
+    }
     // The layout comes from `seed`; the exploration noise from a stream derived from it.
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
     let (mut obs, _) = env.reset(Some(seed))?;
@@ -131,11 +179,13 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64) -> Result<Episode,
     }
 }
 
-/// Runs `per_worker` episodes on every worker's environment in parallel.
+/// Runs `per_worker` episodes on every worker's environment in parallel
+/// (each at the level and distribution `draw` picks, if given).
 pub(crate) fn play_all(
     envs: &mut [BlockEnv],
     behaviour: &Behaviour,
     per_worker: usize,
+    draw: Option<&Draw>,
     seed_of: impl Fn(usize, usize) -> u64 + Sync,
 ) -> Result<Vec<Episode>> {
     let results: Vec<Result<Vec<Episode>, EnvError>> = std::thread::scope(|s| {
@@ -144,7 +194,7 @@ pub(crate) fn play_all(
             .enumerate()
             .map(|(w, env)| {
                 let seed_of = &seed_of;
-                s.spawn(move || (0..per_worker).map(|k| play(env, behaviour, seed_of(w, k))).collect())
+                s.spawn(move || (0..per_worker).map(|k| play(env, behaviour, seed_of(w, k), draw)).collect())
             })
             .collect();
         handles
@@ -165,4 +215,58 @@ pub(crate) fn success_rate(eps: &[Episode]) -> f64 {
         return 0.0;
     }
     eps.iter().filter(|e| e.success).count() as f64 / eps.len() as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn episode(rew: Vec<f32>, terminated: bool) -> Episode {
+        let n = rew.len();
+        Episode {
+            obs: (0..=n).map(|t| vec![t as f32, 0.0]).collect(),
+            act: (0..n).map(|t| vec![t as f32]).collect(),
+            rew,
+            terminated,
+            success: false,
+            expert_steps: 0,
+            forward_seconds: 0.0,
+        }
+    }
+
+    #[test]
+    fn n_step_transitions_sum_rewards_and_bootstrap_m_steps_later() {
+        let g = 0.5f32;
+        let ep = episode(vec![-1.0, -2.0, -4.0, -8.0, 0.0], true);
+        let mut replay = ReplayBuffer::new(2, 1, 100);
+        ep.store(&mut replay, &mut Normalizer::new(2, 0.01, 5.0), 0.5, 3);
+        let (d, _) = replay.parts();
+        assert_eq!(d.rew, vec![-1.0 - 1.0 - 1.0, -2.0 - 2.0 - 2.0, -4.0 - 4.0, -8.0, 0.0]);
+        let next: Vec<f32> = d.next_obs.chunks(2).map(|o| o[0]).collect();
+        assert_eq!(next, vec![3.0, 4.0, 5.0, 5.0, 5.0]);
+        assert_eq!(d.discount, vec![g * g * g, g * g * g, g * g * g, g * g, g]);
+        assert_eq!(d.done, vec![0.0, 0.0, 1.0, 1.0, 1.0], "the terminal state ends the last three returns");
+        assert_eq!(d.extra[3], -8.0, "return-to-go");
+        // One step: the paper's transitions.
+        let mut replay = ReplayBuffer::new(2, 1, 100);
+        episode(vec![-1.0, -2.0], false).store(&mut replay, &mut Normalizer::new(2, 0.01, 5.0), 0.5, 1);
+        let (d, _) = replay.parts();
+        assert_eq!((d.rew.clone(), d.discount.clone(), d.done.clone()), (vec![-1.0, -2.0], vec![g, g], vec![0.0, 0.0]));
+    }
+
+    #[test]
+    fn draws_replay_lower_levels_and_the_challenge_at_the_stated_rates() {
+        let draw = Draw { level: 4, max_level: 10, level_replay: 0.25, challenge_share: 0.5 };
+        let picks: Vec<(usize, bool)> = (0..4000).map(|s| draw.pick(s)).collect();
+        assert_eq!(picks, (0..4000).map(|s| draw.pick(s)).collect::<Vec<_>>(), "seeded");
+        let lower = picks.iter().filter(|p| p.0 < 4).count() as f64 / 4000.0;
+        assert!((lower - 0.25).abs() < 0.03 && picks.iter().all(|p| !p.1 && p.0 <= 4), "{lower}");
+        let top = Draw { level: 10, ..draw };
+        let picks: Vec<(usize, bool)> = (0..4000).map(|s| top.pick(s)).collect();
+        let challenge = picks.iter().filter(|p| p.1).count() as f64 / 4000.0;
+        let lower = picks.iter().filter(|p| p.0 < 10).count() as f64 / 4000.0;
+        assert!((challenge - 0.5).abs() < 0.03 && (lower - 0.125).abs() < 0.03, "{challenge} {lower}");
+        let paper = Draw { level_replay: 0.0, challenge_share: 0.0, ..top };
+        assert!((0..100).all(|s| paper.pick(s) == (10, false)));
+    }
 }
