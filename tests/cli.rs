@@ -225,6 +225,15 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
 
+    // The time to a result of the two runs.
+    let o = bp(&["report", expert.to_str().unwrap(), pggd.to_str().unwrap(), "--target", "0.5"]);
+    let t = text(&o);
+    assert!(
+        o.status.success() && t.contains("DDPG on BlocksTouch-v0 (2 workers") && t.contains("PGGD + AggreVaTeD on"),
+        "{t}"
+    );
+    assert!(t.contains("seconds per epoch") && t.contains("updates"), "{t}");
+
     // --zoo takes every row from the zoo by its standard name: here a zoo holding only the expert.
     let zoo = dir.path().join("zoo");
     let o = bp(&[

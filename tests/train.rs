@@ -47,6 +47,8 @@ fn comparable(rows: &[EpochRow]) -> Vec<EpochRow> {
             env_seconds: 0.0,
             forward_seconds: 0.0,
             update_seconds: 0.0,
+            eval_seconds: 0.0,
+            persist_seconds: 0.0,
             cpu_utilisation: 0.0,
             ..r.clone()
         })
@@ -73,6 +75,9 @@ fn short_run_writes_every_run_directory_file() {
     assert_eq!(rows[1].updates, 2 * 3 * 5);
     // The actor's time is a part of the collection time.
     assert!(rows.iter().all(|r| r.forward_seconds > 0.0 && r.forward_seconds < r.env_seconds), "{rows:?}");
+    // Evaluation is a part of the episodes' time; the second epoch counts the first one's file writing.
+    assert!(rows.iter().all(|r| r.eval_seconds > 0.0 && r.eval_seconds < r.env_seconds), "{rows:?}");
+    assert!(rows[0].persist_seconds == 0.0 && rows[1].persist_seconds > 0.0, "{rows:?}");
     let header = std::fs::read_to_string(dir.path().join("progress.csv")).unwrap();
     assert!(header.starts_with("epoch,curriculum/level,train/success,test/success,finals/success"));
     let cfg: TrainConfig =

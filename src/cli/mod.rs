@@ -39,6 +39,16 @@ enum Command {
     /// Redraw a run's success curves (success.png) from its progress.csv, or
     /// overlay the finals success of several runs (--overlay) in one PNG.
     Plot(PlotArgs),
+    /// The time to a result of a run: when test and finals success first
+    /// reached --target (epoch, env steps, hours) and the epoch's time split.
+    Report {
+        /// Run directories.
+        #[arg(required = true)]
+        run_dirs: Vec<PathBuf>,
+        /// Success to report the first epoch of.
+        #[arg(long, default_value_t = 0.95)]
+        target: f64,
+    },
     /// Task files: `task check FILE` validates a task and samples its layouts.
     #[command(subcommand)]
     Task(TaskCommand),
@@ -406,6 +416,14 @@ pub fn main() -> Result<()> {
         Command::Eval(a) => eval(a),
         Command::Render(a) => render(a),
         Command::Zoo(c) => zoo(c),
+        Command::Report { run_dirs, target } => {
+            for dir in &run_dirs {
+                let (config, rows) = read_run(dir)?;
+                let title = format!("{} ({} workers, {})", config.title(), config.workers, dir.display());
+                print!("{}", crate::train::report::text(&title, &rows, run_max_level(&config)?, target));
+            }
+            Ok(())
+        }
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
@@ -602,6 +620,14 @@ fn train(a: TrainArgs) -> Result<()> {
 }
 
 /// A run directory's config and progress rows.
+/// The maximum curriculum level of a run's task (its recorded copy, else its id).
+fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
+    Ok(match &config.task {
+        Some(source) => registry::recorded(source)?.max_level(),
+        None => registry::task(&config.env)?.max_level(),
+    })
+}
+
 fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
     let run = crate::train::RunDir { dir: dir.to_owned() };
     Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
@@ -610,10 +636,7 @@ fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::
 fn plot(a: PlotArgs) -> Result<()> {
     if let Some(dir) = a.run_dir {
         let (config, rows) = read_run(&dir)?;
-        let max_level = match &config.task {
-            Some(source) => registry::recorded(source)?.max_level(),
-            None => registry::task(&config.env)?.max_level(),
-        };
+        let max_level = run_max_level(&config)?;
         let run = crate::train::RunDir { dir };
         crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());

@@ -22,6 +22,7 @@
 pub mod checkpoint;
 mod learner;
 pub mod plot;
+pub mod report;
 mod rollouts;
 mod rundir;
 
@@ -156,6 +157,13 @@ pub struct EpochRow {
     /// Wall seconds of gradient updates and target updates.
     #[serde(rename = "time/update_seconds")]
     pub update_seconds: f64,
+    /// Wall seconds of the test and finals episodes (a part of `env_seconds`).
+    #[serde(rename = "time/eval_seconds", default)]
+    pub eval_seconds: f64,
+    /// Wall seconds spent writing the previous epoch's files (progress, plot,
+    /// policies, checkpoint); `wall_seconds` includes it.
+    #[serde(rename = "time/persist_seconds", default)]
+    pub persist_seconds: f64,
     /// AggreVaTeD: probability that the expert acts in this epoch's roll-ins (0 without an expert).
     #[serde(rename = "aggrevated/beta", default)]
     pub beta: f64,
@@ -295,6 +303,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
     let mut learner = Learner { agent, expert };
     write_json_atomic(&run.config(), config)?;
 
+    let mut persist_seconds = 0.0;
     while state.epoch < config.epochs {
         let epoch = state.epoch;
         let started = Instant::now();
@@ -374,6 +383,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
                 v.iter().sum::<f64>() / v.len() as f64
             }
         };
+        let eval_seconds = t.elapsed().as_secs_f64();
         let epoch_wall = started.elapsed().as_secs_f64();
         state.wall_seconds += epoch_wall;
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
@@ -392,6 +402,8 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             env_seconds,
             forward_seconds,
             update_seconds,
+            eval_seconds,
+            persist_seconds,
             beta: learner.beta(epoch, config).unwrap_or(0.0),
             expert_share: if train_steps == 0 { 0.0 } else { expert_steps as f64 / train_steps as f64 },
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
@@ -403,6 +415,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
 
         // Persist: progress, policies, then the checkpoint (last, so that a
         // crash before it repeats at most this epoch).
+        let persist_started = Instant::now();
         rows.push(row.clone());
         write_progress(&run.progress(), &rows)?;
         plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
@@ -427,6 +440,9 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             write_json_atomic(&run.best_policy(), &saved)?;
         }
         checkpoint::save(&run.checkpoint(), &state, &learner.agent, &config.ddpg, &replay)?;
+        // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
+        persist_seconds = persist_started.elapsed().as_secs_f64();
+        state.wall_seconds += persist_seconds;
         on_epoch(&row, config);
     }
     Ok(rows)
