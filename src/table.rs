@@ -99,23 +99,24 @@ pub enum Outcome {
     NotGiven,
     /// The policy could not be loaded or evaluated (the message says why).
     Missing(String),
-    /// Evaluated: (Normal, Challenge) and the policy's epoch.
-    Done { normal: Evaluation, challenge: Evaluation, epoch: usize },
+    /// Evaluated: (Normal, Challenge), the policy's epoch and env steps (where recorded).
+    Done { normal: Evaluation, challenge: Evaluation, epoch: usize, env_steps: Option<u64> },
 }
 
 /// Evaluates one row.
 pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> Outcome {
     let Some(path) = &row.policy else { return Outcome::NotGiven };
     // The policy file is read once; each evaluation gets its own copy.
-    let run = || -> Result<(Evaluation, Evaluation, usize)> {
+    let run = || -> Result<Outcome> {
         let saved = load_policy(path)?;
-        let epoch = saved.epoch;
+        let (epoch, env_steps) = (saved.epoch, saved.env_steps);
         let spec = |challenge| EvalSpec { task, challenge, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
-        Ok((normal, evaluate(path, saved, &spec(true))?, epoch))
+        let challenge = evaluate(path, saved, &spec(true))?;
+        Ok(Outcome::Done { normal, challenge, epoch, env_steps })
     };
     match run() {
-        Ok((normal, challenge, epoch)) => Outcome::Done { normal, challenge, epoch },
+        Ok(done) => done,
         Err(e) => Outcome::Missing(format!("{e:#}")),
     }
 }
@@ -165,10 +166,11 @@ pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) 
                     why.replace('|', "/").replace('\n', " ")
                 );
             }
-            Outcome::Done { normal, challenge, epoch } => {
+            Outcome::Done { normal, challenge, epoch, env_steps } => {
+                let steps = env_steps.map_or(String::new(), |n| format!(", {:.2} M env steps", n as f64 / 1e6));
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {} (epoch {epoch}{}) |",
+                    "| {} | {} | {} | {} (epoch {epoch}{steps}{}) |",
                     row.method,
                     cell(normal, row.paper.0),
                     cell(challenge, row.paper.1),

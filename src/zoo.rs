@@ -412,6 +412,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         env_id: meta.task.id.clone(),
         task: Some(meta.task.clone()),
         epoch: meta.epoch,
+        env_steps: meta.env_steps,
         finals_success: meta.finals_success,
         policy,
         critic,

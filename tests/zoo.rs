@@ -34,6 +34,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         env_id: ENV.into(),
         task: Some(registry::task(ENV).unwrap().source),
         epoch: 12,
+        env_steps: Some(34_000),
         finals_success: 0.5,
         policy: AnyPolicy::Ddpg(a.policy()),
         critic: Some(a.critic.to_plain()),

@@ -778,7 +778,7 @@ fn zoo(c: ZooCommand) -> Result<()> {
                 description: a.description,
                 trained_with: a.trained_with,
                 exported_from: a.from.display().to_string(),
-                env_steps: env_steps_of(&a.from, saved.epoch),
+                env_steps: saved.env_steps.or_else(|| env_steps_of(&a.from, saved.epoch)),
                 evaluations,
                 keep_critic: a.critic,
             };

@@ -423,6 +423,7 @@ pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpo
             env_id: task.id().to_owned(),
             task: Some(task.source.clone()),
             epoch: state.epoch,
+            env_steps: Some(state.env_steps),
             finals_success: row.finals_success,
             policy,
             critic: learner.agent.critic(),

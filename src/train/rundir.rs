@@ -72,6 +72,9 @@ pub struct SavedPolicy {
     pub task: Option<crate::task::TaskSource>,
     /// Epochs of training behind it.
     pub epoch: usize,
+    /// Environment steps of training behind it (absent in policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env_steps: Option<u64>,
     /// Its finals success when saved.
     pub finals_success: f64,
     /// The policy.
