@@ -10,7 +10,7 @@ EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study
 
 setup:
 	bash scripts/setup.sh
@@ -38,8 +38,26 @@ train: build
 #   DDPG (2 blocks) = `make train` above, its policy the AggreVaTeD expert ($(EXPERT));
 #   DDPG (3 blocks) on BlocksChoose-v0;
 ddpg3: build
-	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 \
+	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 --snapshot-every 10 \
 		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
+#   The headline study (results/headline.md): DDPG variants on BlocksChoose-v0, 2 workers,
+#   `make study VARIANT=ours EPOCHS=100 SEED=0` (each resumes runs/study-VARIANT-sSEED). The
+#   baseline is the paper's configuration: seed 0 is `make ddpg3` itself (its first epochs).
+VARIANT ?= ours
+EPOCHS ?= 100
+SEED ?= 0
+study_paper =
+study_bf16 = --precision bf16
+study_nstep = --precision bf16 --n-step 3
+study_td3 = --precision bf16 --td3
+study_curriculum = --precision bf16 --level-replay 0.2 --challenge-share 0.25
+study_ours = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
+study: build
+	@test -n "$(filter $(VARIANT),paper bf16 nstep td3 curriculum ours)" || \
+		{ echo "VARIANT must be one of: paper bf16 nstep td3 curriculum ours"; exit 2; }
+	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
+		--snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
+		$(call resume,runs/study-$(VARIANT)-s$(SEED))
 #   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
 aggrevated: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \

@@ -473,9 +473,37 @@ impl TrainConfig {
         }
     }
 
-    /// Plot title: method and environment, e.g. "PGGD + AggreVaTeD on BlocksChoose-v0".
+    /// This project's options in use beyond the paper's DDPG, e.g. "TD3, 3-step, bf16" (empty: none).
+    pub fn options(&self) -> String {
+        let d = &self.ddpg;
+        let mut v = Vec::new();
+        if d.td3 {
+            v.push("TD3".to_owned());
+        }
+        if d.n_step > 1 {
+            v.push(format!("{}-step", d.n_step));
+        }
+        if self.level_replay > 0.0 {
+            v.push(format!("level replay {}", self.level_replay));
+        }
+        if self.challenge_share > 0.0 {
+            v.push(format!("challenge share {}", self.challenge_share));
+        }
+        if d.precision == Precision::Bf16 {
+            v.push("bf16".to_owned());
+        }
+        v.join(", ")
+    }
+
+    /// Plot title: method, options and environment, e.g. "PGGD + AggreVaTeD on
+    /// BlocksChoose-v0" or "DDPG (TD3, 3-step) on BlocksChoose-v0".
     pub fn title(&self) -> String {
-        format!("{} on {}", self.method().0, self.task_id())
+        let options = self.options();
+        if options.is_empty() {
+            format!("{} on {}", self.method().0, self.task_id())
+        } else {
+            format!("{} ({options}) on {}", self.method().0, self.task_id())
+        }
     }
 
     /// The default run directory, `runs/TASK-METHOD-sSEED`.
