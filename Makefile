@@ -10,7 +10,7 @@ EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots
 
 setup:
 	bash scripts/setup.sh
@@ -62,6 +62,14 @@ study: build
 aggrevated: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
 		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
+#   the snapshots of the BlocksTouch-v0 run as experts: each one's grey-removed success on
+#   BlocksChoose-v0 on validation seeds (200 episodes from 2,000,000; the test seeds stay unused),
+#   to pick the earlier expert whose success is near the paper's 0.44 (results/aggrevated-weak.md);
+expert-snapshots: build
+	mkdir -p $(OUT)/expert-snapshots
+	for f in $(RUN)/snapshots/epoch-*.json; do \
+		$(BP) eval --checkpoint $$f --env BlocksChoose-v0 --episodes 200 --seed 2000000 \
+			--out $(OUT)/expert-snapshots/$$(basename $$f); done
 #   the same with the paper's descent direction, the expert critic's advantage (not a table row);
 aggrevated-adv: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --pg-weight expert-advantage --workers 2 \

@@ -6,10 +6,12 @@
 //!   virtual machines (this project's CI among them) it fails to recognise
 //!   the processor and falls back to the Prescott (SSE3) kernels, which makes
 //!   libtorch's matrix products 3–4× slower: `OPENBLAS_CORETYPE` fixes that.
-//! * libtorch's OpenMP threads spin while they wait for each other; when
-//!   another process holds a core, two spinning threads on two cores slow
-//!   updates down 6× (measured). `OMP_WAIT_POLICY=PASSIVE` avoids that
-//!   collapse for 10–15% of idle-machine speed.
+//!
+//! OpenMP's wait policy is left to libgomp's default (threads spin a while
+//! before they sleep): on an idle machine `OMP_WAIT_POLICY=PASSIVE` halves
+//! the update rate (results/ddpg.md), while with another process on a core the
+//! spinning threads slow updates down several times; there `--torch-threads
+//! 1` (or `OMP_WAIT_POLICY=PASSIVE`, set by the user) is the remedy.
 //!
 //! Variables the user has set are left alone.
 
@@ -52,9 +54,6 @@ fn best_core() -> Option<&'static str> {
     None
 }
 
-/// `OMP_WAIT_POLICY`'s value when the user has not set it.
-pub const OMP_WAIT_POLICY: &str = "PASSIVE";
-
 /// The variables the numeric libraries should see and do not yet: every
 /// (name, value) that [`ensure_fast_kernels`] sets. `get` reads the
 /// environment (a parameter so that tests can pass their own).
@@ -67,16 +66,13 @@ pub fn missing_settings(get: impl Fn(&str) -> Option<std::ffi::OsString>) -> Vec
             }
         }
     }
-    if get("OMP_WAIT_POLICY").map_or(true, |v| v.is_empty()) {
-        out.push(("OMP_WAIT_POLICY", OMP_WAIT_POLICY.to_owned()));
-    }
     out
 }
 
 /// Sets what [`missing_settings`] finds missing (OpenBLAS kernels slower
-/// than the CPU supports; OpenMP's wait policy) by re-executing the current
-/// program once with those variables set. Variables the user set are left
-/// alone. Returns normally when nothing needs doing or the re-execution fails.
+/// than the CPU supports) by re-executing the current program once with
+/// those variables set. Variables the user set are left alone. Returns
+/// normally when nothing needs doing or the re-execution fails.
 pub fn ensure_fast_kernels() {
     let missing = missing_settings(|k| std::env::var_os(k));
     if missing.is_empty() {

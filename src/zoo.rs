@@ -260,8 +260,9 @@ pub struct ExportInfo {
 pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<PathBuf, ZooError> {
     let tensors_path = zoo.join(format!("{}.safetensors", info.name));
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
-    if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
-        return Err(corrupt(format!("name {:?}: use letters, digits, '-', '_' and '.'", info.name)));
+    // No dots: a bare name without an extension is what `load_policy` looks up in the zoo.
+    if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)) {
+        return Err(corrupt(format!("name {:?}: use letters, digits, '-' and '_'", info.name)));
     }
     saved.check().map_err(&corrupt)?;
     let task = saved

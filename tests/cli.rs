@@ -341,7 +341,9 @@ fn bad_dumps_are_named_read_and_decode_errors() {
 }
 
 #[test]
-fn the_openmp_wait_policy_is_passive_unless_the_user_set_it() {
+fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
+    // blockpuzzle does not set OMP_WAIT_POLICY (PASSIVE halves the update rate on an idle
+    // machine, results/ddpg.md); a value the user set reaches the process unchanged.
     let info = |value: Option<&str>| {
         let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
         c.arg("info");
@@ -353,10 +355,10 @@ fn the_openmp_wait_policy_is_passive_unless_the_user_set_it() {
         assert!(o.status.success(), "{}", text(&o));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
-    assert!(info(None).contains("\nOMP_WAIT_POLICY=PASSIVE\n"), "{}", info(None));
-    assert!(info(Some("active")).contains("\nOMP_WAIT_POLICY=active\n"));
-    let missing = blockpuzzle::blas::missing_settings(|k| (k == "OMP_WAIT_POLICY").then(|| "ACTIVE".into()));
-    assert!(missing.iter().all(|(k, _)| *k != "OMP_WAIT_POLICY"), "{missing:?}");
+    assert!(info(None).contains("\nOMP_WAIT_POLICY=(unset)\n"), "{}", info(None));
+    assert!(info(Some("PASSIVE")).contains("\nOMP_WAIT_POLICY=PASSIVE\n"));
     let missing = blockpuzzle::blas::missing_settings(|_| None);
-    assert!(missing.contains(&("OMP_WAIT_POLICY", "PASSIVE".to_owned())), "{missing:?}");
+    assert!(missing.iter().all(|(k, _)| *k == "OPENBLAS_CORETYPE"), "{missing:?}");
+    let set = blockpuzzle::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
+    assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
 }
