@@ -10,7 +10,7 @@ EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip
 
 setup:
 	bash scripts/setup.sh
@@ -39,6 +39,7 @@ train: build
 #   DDPG (3 blocks) on BlocksChoose-v0;
 ddpg3: build
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 --snapshot-every 10 \
+		--torch-threads $(TORCH_THREADS) \
 		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
 #   The headline study (results/headline.md): DDPG variants on BlocksChoose-v0, 2 workers,
 #   `make study VARIANT=ours EPOCHS=100 SEED=0` (each resumes runs/study-VARIANT-sSEED). The
@@ -46,6 +47,8 @@ ddpg3: build
 VARIANT ?= ours
 EPOCHS ?= 100
 SEED ?= 0
+# 0: all cores; 1 when two runs share the machine (libgomp's spinning threads collapse under contention).
+TORCH_THREADS ?= 0
 study_paper =
 study_bf16 = --precision bf16
 study_nstep = --precision bf16 --n-step 3
@@ -56,7 +59,7 @@ study: build
 	@test -n "$(filter $(VARIANT),paper bf16 nstep td3 curriculum ours)" || \
 		{ echo "VARIANT must be one of: paper bf16 nstep td3 curriculum ours"; exit 2; }
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
-		--snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
+		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
 		$(call resume,runs/study-$(VARIANT)-s$(SEED))
 #   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
 aggrevated: build
@@ -84,6 +87,15 @@ table: build
 	$(BP) table --expert $(EXPERT) --ddpg runs/BlocksChoose-v0-ddpg-s0 \
 		--pggd runs/BlocksChoose-v0-pggd-aggrevated-s0 --pggd-alone runs/BlocksChoose-v0-pggd-s0 \
 		--episodes $(EPISODES) --out results/table.md
+
+# A filmstrip of a policy (zoo name, file or run directory) in the challenge distribution:
+# `make filmstrip POLICY=BlocksChoose-v0-ddpg-ours EPISODE=1000000` -> $(OUT)/filmstrip-POLICY.png
+POLICY ?= BlocksChoose-v0-ddpg
+EPISODE ?= 1000000
+filmstrip: build
+	mkdir -p $(OUT)
+	$(BP) render --policy $(POLICY) --env BlocksChoose-v0 --challenge --seed $(EPISODE) --filmstrip 6 \
+		--out $(OUT)/filmstrip-$(notdir $(POLICY)).png
 
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
