@@ -221,7 +221,9 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     assert!(rows[0].contains("paper 0.24"), "{md}");
     assert!(rows[1].contains("not trained (paper 0.97)"), "{md}");
     assert!(
-        rows[2].starts_with("| PGGD + AggreVaTeD") && rows[2].contains("paper 0.64") && rows[2].contains("(epoch 1, 0.00 M env steps)")
+        rows[2].starts_with("| PGGD + AggreVaTeD")
+            && rows[2].contains("paper 0.64")
+            && rows[2].contains("(epoch 1, 0.00 M env steps)")
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
 
@@ -268,7 +270,10 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     let o = bp(&["table", "--env", "BlocksChooseShuffled-v0", "--pggd", pggd.to_str().unwrap(), "--episodes", "3"]);
     let md = text(&o);
     assert!(o.status.success() && md.contains("Final evaluation on BlocksChooseShuffled-v0"), "{md}");
-    assert!(md.contains("paper's number on BlocksChoose-v0 for comparison") && md.contains("(epoch 1, 0.00 M env steps)"), "{md}");
+    assert!(
+        md.contains("paper's number on BlocksChoose-v0 for comparison") && md.contains("(epoch 1, 0.00 M env steps)"),
+        "{md}"
+    );
     let o = bp(&["table", "--env", "BlocksTouch-v0", "--episodes", "3"]);
     assert!(!o.status.success() && text(&o).contains("does not define"), "{}", text(&o));
 

@@ -115,10 +115,10 @@ struct ZooExportArgs {
     /// and record the results (0: no evaluation).
     #[arg(long, default_value_t = 0)]
     evaluate: usize,
-    /// The task to evaluate on (default: the one it was trained on; e.g.
-    /// BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
-    #[arg(long)]
-    evaluate_env: Option<String>,
+    /// The tasks to evaluate on, repeatable (default: the one it was trained on;
+    /// e.g. BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
+    #[arg(long = "evaluate-env")]
+    evaluate_envs: Vec<String>,
     /// Keep DDPG's critic too (for AggreVaTeD's --pg-weight expert-advantage).
     #[arg(long)]
     critic: bool,
@@ -747,8 +747,13 @@ fn zoo(c: ZooCommand) -> Result<()> {
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);
             }
-            if a.evaluate > 0 {
-                let task = policy_task(a.evaluate_env.as_deref(), &saved)?;
+            let envs: Vec<Option<&str>> = if a.evaluate_envs.is_empty() {
+                vec![None]
+            } else {
+                a.evaluate_envs.iter().map(|e| Some(e.as_str())).collect()
+            };
+            for env in envs.into_iter().filter(|_| a.evaluate > 0) {
+                let task = policy_task(env, &saved)?;
                 let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
                 let has_challenge = task.distribution("challenge").is_some();
                 for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
