@@ -5,12 +5,13 @@ CARGO ?= cargo
 OUT ?= out
 
 RUN ?= runs/BlocksTouch-v0-ddpg-s0
-EXPERT ?= $(RUN)/policy.json
+# The AggreVaTeD expert: the zoo's 2-block DDPG (or a run's policy, e.g. EXPERT=$(RUN)/policy.json).
+EXPERT ?= BlocksTouch-v0-ddpg
 EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip
+.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
 
 setup:
 	bash scripts/setup.sh
@@ -35,7 +36,7 @@ train: build
 		--seed 0 --run-dir $(RUN) $(call resume,$(RUN))
 
 # The paper's results table, one target per row (each resumes its run directory):
-#   DDPG (2 blocks) = `make train` above, its policy the AggreVaTeD expert ($(EXPERT));
+#   DDPG (2 blocks) = `make train` above, shipped in the zoo as the AggreVaTeD expert ($(EXPERT));
 #   DDPG (3 blocks) on BlocksChoose-v0;
 ddpg3: build
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 --snapshot-every 10 \
@@ -73,6 +74,12 @@ expert-snapshots: build
 	for f in $(RUN)/snapshots/epoch-*.json; do \
 		$(BP) eval --checkpoint $$f --env BlocksChoose-v0 --episodes 200 --seed 2000000 \
 			--out $(OUT)/expert-snapshots/$$(basename $$f); done
+#   PGGD + AggreVaTeD from that weaker expert (zoo: BlocksTouch-v0-ddpg-epoch60), to see whether
+#   the learner overtakes a weaker expert as the paper's did;
+aggrevated-weak: build
+	$(BP) train --algo pggd --env BlocksChoose-v0 --expert BlocksTouch-v0-ddpg-epoch60 --workers 2 --epochs 300 \
+		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-weak-s0 \
+		$(call resume,runs/BlocksChoose-v0-pggd-aggrevated-weak-s0)
 #   the same with the paper's descent direction, the expert critic's advantage (not a table row);
 aggrevated-adv: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --pg-weight expert-advantage --workers 2 \

@@ -244,6 +244,31 @@ fn cli_takes_zoo_names() {
         dump.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // AggreVaTeD's expert by zoo name: the run keeps its own copy.
+    let run = dir.path().join("aggrevated");
+    let o = bp(&[
+        "train",
+        "--algo",
+        "pggd",
+        "--env",
+        "BlocksChoose-v0",
+        "--expert",
+        "BlocksTouch-v0-ddpg",
+        "--epochs",
+        "1",
+        "--cycles",
+        "1",
+        "--batches",
+        "2",
+        "--test-episodes",
+        "1",
+        "--hidden",
+        "16",
+        "--run-dir",
+        run.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(run.join("expert_policy.json").exists());
     let o = bp(&["zoo", "list"]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("ReachAvoid-v0-ddpg"));
     let o = bp(&["eval", "--checkpoint", "NoSuchEntry", "--episodes", "2"]);
