@@ -84,6 +84,20 @@ pub struct ZooEvaluation {
     pub ci95: (f64, f64),
 }
 
+impl From<crate::evaluate::Evaluation> for ZooEvaluation {
+    fn from(e: crate::evaluate::Evaluation) -> Self {
+        Self {
+            env: e.env,
+            distribution: if e.challenge { "challenge" } else { "normal" }.into(),
+            grey_blind: e.grey_blind,
+            episodes: e.episodes,
+            seed: e.seed,
+            success_rate: e.success_rate,
+            ci95: e.ci95,
+        }
+    }
+}
+
 /// `NAME.json`: everything about an entry but its tensors.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

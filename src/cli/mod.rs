@@ -742,6 +742,9 @@ fn zoo(c: ZooCommand) -> Result<()> {
             Ok(())
         }
         ZooCommand::Export(a) => {
+            if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
+                bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
+            }
             let saved = crate::train::load_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {
@@ -765,17 +768,9 @@ fn zoo(c: ZooCommand) -> Result<()> {
                         seed: 1_000_000,
                         threads,
                     };
-                    let r = crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
-                    eprintln!("{} {}: {:.3}", r.env, if challenge { "challenge" } else { "normal" }, r.success_rate);
-                    evaluations.push(crate::zoo::ZooEvaluation {
-                        env: r.env,
-                        distribution: if challenge { "challenge" } else { "normal" }.into(),
-                        grey_blind: r.grey_blind,
-                        episodes: r.episodes,
-                        seed: r.seed,
-                        success_rate: r.success_rate,
-                        ci95: r.ci95,
-                    });
+                    let r = crate::zoo::ZooEvaluation::from(crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?);
+                    eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
+                    evaluations.push(r);
                 }
             }
             let info = crate::zoo::ExportInfo {
