@@ -512,43 +512,35 @@ impl TrainConfig {
     }
 }
 
-/// The settings that change what a run computes (all but `--epochs`, the
-/// thread count, snapshots and the task, which is checked by content) and
-/// differ between `a` and `b`, by flag name.
+/// The settings that change what a run computes and differ between `a`
+/// and `b`, by flag name: every field of the configuration (nested ones
+/// included, so a new setting is compared without being listed here) but
+/// those in [`RESUMABLE_CHANGES`].
 fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
     let mut out = Vec::new();
-    let mut cmp = |name: &str, same: bool| {
-        if !same {
-            out.push(format!("--{name}"));
-        }
-    };
-    cmp("algo", a.algo == b.algo);
-    cmp("workers", a.workers == b.workers);
-    cmp("cycles", a.cycles == b.cycles);
-    cmp("rollouts", a.rollouts == b.rollouts);
-    cmp("batches", a.batches == b.batches);
-    cmp("batch-size", a.batch_size == b.batch_size);
-    cmp("buffer-size", a.buffer_size == b.buffer_size);
-    cmp("test-episodes", a.test_episodes == b.test_episodes);
-    cmp("success-threshold", a.success_threshold == b.success_threshold);
-    cmp("seed", a.seed == b.seed);
-    cmp("level-replay", a.level_replay == b.level_replay);
-    cmp("challenge-share", a.challenge_share == b.challenge_share);
-    // Nested configurations: each differing field by its flag name.
-    differing_fields("", &a.ddpg, &b.ddpg, &mut out);
-    differing_fields("pg-", &a.pggd, &b.pggd, &mut out);
-    differing_fields("", &a.aggrevated, &b.aggrevated, &mut out);
+    differing_fields("", &a, &b, &mut out);
     out
 }
 
-/// The fields of two configurations that differ, as `--PREFIXfield-name`.
+/// Fields that may change on `--resume`: the epoch target, thread count and
+/// snapshots, and the task and its id (checked by content in [`run_task`]).
+const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env"];
+
+/// The fields of two configurations that differ, as `--PREFIXfield-name`;
+/// nested configurations are compared field by field (PGGD's flags carry `pg-`).
 fn differing_fields<T: Serialize>(prefix: &str, a: &T, b: &T, out: &mut Vec<String>) {
     let (a, b) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
-    if let (serde_json::Value::Object(a), serde_json::Value::Object(b)) = (a, b) {
-        for (k, v) in &a {
-            if b.get(k) != Some(v) {
-                out.push(format!("--{prefix}{}", k.replace('_', "-")));
+    let (serde_json::Value::Object(a), serde_json::Value::Object(b)) = (a, b) else { return };
+    for (k, v) in &a {
+        if RESUMABLE_CHANGES.contains(&k.as_str()) {
+            continue;
+        }
+        match (v, b.get(k)) {
+            (serde_json::Value::Object(_), Some(w @ serde_json::Value::Object(_))) => {
+                differing_fields(if k == "pggd" { "pg-" } else { prefix }, v, w, out)
             }
+            (v, w) if w == Some(v) => {}
+            _ => out.push(format!("--{prefix}{}", k.replace('_', "-"))),
         }
     }
 }
