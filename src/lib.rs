@@ -7,6 +7,7 @@
 
 pub mod env;
 pub mod evaluate;
+pub mod io;
 pub mod math;
 pub mod mj;
 pub mod rules;

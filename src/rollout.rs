@@ -188,8 +188,7 @@ impl DumpWriter {
     /// # Errors
     /// [`RolloutError::Io`] if the folder does not exist or is not writable.
     pub fn create(path: &Path) -> Result<Self, RolloutError> {
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "dump".into());
-        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let tmp = crate::io::temp_path(path);
         let io = |source| RolloutError::Io { path: path.to_owned(), source };
         if path.is_dir() {
             return Err(io(std::io::Error::other("it is a directory")));
@@ -223,8 +222,7 @@ impl DumpWriter {
             return Err(io(std::io::Error::other("writer already finished")));
         };
         f.flush().map_err(io)?;
-        f.get_ref().sync_all().map_err(io)?;
-        std::fs::rename(&self.tmp, &self.path).map_err(io)?;
+        crate::io::commit(&self.tmp, &self.path).map_err(io)?;
         self.file = None; // in place: nothing for Drop to clean up
         Ok(())
     }

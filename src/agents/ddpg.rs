@@ -24,7 +24,7 @@
 //!   updated on every `policy_delay`-th critic update only.
 
 use super::mlp::TanhMlp;
-use super::nets::{grads, Adam, Net};
+use super::nets::{append_grads, take_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use rand::Rng;
@@ -316,6 +316,23 @@ impl Ddpg {
 
     /// One gradient step of the critic(s) and (unless TD3 delays it) the actor on `batch`.
     pub fn update(&mut self, batch: &Batch) -> UpdateStats {
+        let (gradient, stats) = self.gradient(batch, 0);
+        self.apply_gradient(&gradient);
+        stats
+    }
+
+    /// Whether the next update steps the actor (TD3 delays it to every
+    /// `policy_delay`-th critic update).
+    fn actor_steps(&self) -> bool {
+        self.twin.is_none() || self.critic_opt.t % self.config.policy_delay as u64 == 0
+    }
+
+    /// The gradients of the next update on `batch`, flattened (critic, TD3's
+    /// second critic, then the actor when it steps), and the update's
+    /// statistics; nothing is changed. `shard` (0, 1, …) picks TD3's
+    /// smoothing noise when several batches' gradients are averaged into one
+    /// update (shard 0 draws the stream a single batch draws).
+    pub fn gradient(&mut self, batch: &Batch, shard: u64) -> (Vec<f32>, UpdateStats) {
         let n = batch.len() as i64;
         let obs = self.obs_tensor(&batch.obs);
         let next_obs = self.obs_tensor(&batch.next_obs);
@@ -331,7 +348,8 @@ impl Ddpg {
             let next_q = match &self.twin {
                 None => Self::q(&self.critic_target, &next_obs, &next_act),
                 Some(t) => {
-                    let next_act = self.smoothed(next_act, t.noise_seed, k);
+                    let seed = if shard == 0 { t.noise_seed } else { shard_seed(t.noise_seed, shard) };
+                    let next_act = self.smoothed(next_act, seed, k);
                     let q1 = Self::q(&self.critic_target, &next_obs, &next_act);
                     q1.minimum(&Self::q(&t.target, &next_obs, &next_act))
                 }
@@ -348,10 +366,8 @@ impl Ddpg {
 
         // The actor's loss goes through the critic with its parameters
         // detached: gradients reach the actor only, and both losses see the
-        // same (pre-update) parameters, as in baselines. TD3 updates the
-        // actor on every `policy_delay`-th update only.
-        let actor_step = self.twin.is_none() || k % self.config.policy_delay as u64 == 0;
-        let actor_loss = actor_step.then(|| {
+        // same (pre-update) parameters, as in baselines.
+        let actor_loss = self.actor_steps().then(|| {
             let pi = self.actor.forward(&obs);
             let frozen_critic = self.critic.detached_view();
             -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
@@ -367,22 +383,41 @@ impl Ddpg {
         if let Some(l) = &actor_loss {
             l.backward();
         }
-        let critic_grads = grads(&self.critic.params);
-        self.critic_opt.step(&mut self.critic.params, &critic_grads);
-        if let Some(t) = &mut self.twin {
-            let g = grads(&t.critic.params);
-            t.opt.step(&mut t.critic.params, &g);
+        let mut flat = Vec::new();
+        append_grads(&self.critic.params, &mut flat);
+        if let Some(t) = &self.twin {
+            append_grads(&t.critic.params, &mut flat);
         }
         if actor_loss.is_some() {
-            let actor_grads = grads(&self.actor.params);
-            self.actor_opt.step(&mut self.actor.params, &actor_grads);
+            append_grads(&self.actor.params, &mut flat);
         }
-
-        UpdateStats {
+        let stats = UpdateStats {
             critic_loss: critic_loss.double_value(&[]),
             actor_loss: actor_loss.map_or(f64::NAN, |l| l.double_value(&[])),
             mean_q: q.mean(tch::Kind::Float).double_value(&[]),
+        };
+        (flat, stats)
+    }
+
+    /// One Adam step of each network with a gradient laid out as
+    /// [`Ddpg::gradient`] returns it (e.g. the mean of several).
+    ///
+    /// # Panics
+    /// If `gradient` does not have that layout.
+    pub fn apply_gradient(&mut self, gradient: &[f32]) {
+        let actor_step = self.actor_steps();
+        let mut off = 0;
+        let g = take_grads(&self.critic.params, gradient, &mut off);
+        self.critic_opt.step(&mut self.critic.params, &g);
+        if let Some(t) = &mut self.twin {
+            let g = take_grads(&t.critic.params, gradient, &mut off);
+            t.opt.step(&mut t.critic.params, &g);
         }
+        if actor_step {
+            let g = take_grads(&self.actor.params, gradient, &mut off);
+            self.actor_opt.step(&mut self.actor.params, &g);
+        }
+        assert_eq!(off, gradient.len(), "a gradient of another layout");
     }
 
     /// The critic targets y of the last update, one per transition.
@@ -437,6 +472,13 @@ impl DdpgPolicy {
             })
             .collect()
     }
+}
+
+/// The smoothing-noise seed of shard `shard` > 0 of an averaged update.
+fn shard_seed(seed: u64, shard: u64) -> u64 {
+    let mut z = seed ^ shard.wrapping_mul(0xD6E8_FEB8_6659_FD93);
+    z = (z ^ (z >> 32)).wrapping_mul(0xD6E8_FEB8_6659_FD93);
+    z ^ (z >> 32)
 }
 
 #[cfg(test)]

@@ -251,6 +251,32 @@ impl Adam {
     }
 }
 
+/// Appends the current gradients of `params` (zeros where none was
+/// computed) to `out`, flattened in parameter order.
+pub fn append_grads(params: &[Tensor], out: &mut Vec<f32>) {
+    for g in grads(params) {
+        out.extend(tensor_to_vec(&g));
+    }
+}
+
+/// Splits a flat gradient written by [`append_grads`] back into tensors
+/// shaped like `params`, starting at `*offset` (advanced past them).
+///
+/// # Panics
+/// If `flat` is shorter than the parameters (a caller's bug: gradients are
+/// only ever produced for the same networks).
+pub fn take_grads(params: &[Tensor], flat: &[f32], offset: &mut usize) -> Vec<Tensor> {
+    params
+        .iter()
+        .map(|p| {
+            let n = p.numel();
+            let t = Tensor::of_slice(&flat[*offset..*offset + n]).view(p.size().as_slice());
+            *offset += n;
+            t
+        })
+        .collect()
+}
+
 /// The current gradients of `params` (zeros where none was computed).
 pub fn grads(params: &[Tensor]) -> Vec<Tensor> {
     params

@@ -15,7 +15,7 @@
 
 use super::ddpg::UpdateStats;
 use super::mlp::TanhMlp;
-use super::nets::{grads, Adam, Net};
+use super::nets::{append_grads, take_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use rand::Rng;
@@ -128,6 +128,14 @@ impl Pggd {
 
     /// One gradient step on `batch` with per-transition `weights`.
     pub fn update(&mut self, batch: &Batch, weights: &[f32]) -> UpdateStats {
+        let (gradient, stats) = self.gradient(batch, weights);
+        self.apply_gradient(&gradient);
+        stats
+    }
+
+    /// The flattened gradient of the policy network on `batch` with
+    /// per-transition `weights`, and the update's statistics; nothing changes.
+    pub fn gradient(&mut self, batch: &Batch, weights: &[f32]) -> (Vec<f32>, UpdateStats) {
         let n = batch.len() as i64;
         let raw = Tensor::of_slice(weights).view([n, 1]);
         let w = match self.config.normalize {
@@ -148,13 +156,25 @@ impl Pggd {
         let loss = -(w.view([-1]) * &log_prob).mean(tch::Kind::Float);
         self.net.zero_grad();
         loss.backward();
-        let g = grads(&self.net.params);
-        self.opt.step(&mut self.net.params, &g);
-        UpdateStats {
+        let mut flat = Vec::new();
+        append_grads(&self.net.params, &mut flat);
+        let stats = UpdateStats {
             critic_loss: 0.0,
             actor_loss: loss.double_value(&[]),
             mean_q: raw.mean(tch::Kind::Float).double_value(&[]),
-        }
+        };
+        (flat, stats)
+    }
+
+    /// One Adam step with a gradient laid out as [`Pggd::gradient`] returns it.
+    ///
+    /// # Panics
+    /// If `gradient` does not have that layout.
+    pub fn apply_gradient(&mut self, gradient: &[f32]) {
+        let mut off = 0;
+        let g = take_grads(&self.net.params, gradient, &mut off);
+        assert_eq!(off, gradient.len(), "a gradient of another layout");
+        self.opt.step(&mut self.net.params, &g);
     }
 
     /// A self-contained policy for rollouts (weights and normaliser frozen).

@@ -576,9 +576,32 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
 }
 
 fn train(a: TrainArgs) -> Result<()> {
+    if !crate::train::comm::Comm::launched_by_mpirun() {
+        return train_in(&crate::train::comm::Comm::local(), a);
+    }
+    #[cfg(feature = "mpi")]
+    {
+        // Only this thread talks to MPI (the workers are plain threads).
+        let Some((universe, _)) = mpi::initialize_with_threading(mpi::Threading::Funneled) else {
+            bail!("MPI was initialised twice");
+        };
+        let comm = crate::train::comm::Comm::mpi(universe.world());
+        if let Err(e) = train_in(&comm, a) {
+            // Other ranks may wait in a collective: stop the whole job.
+            eprintln!("error (rank {} of {}): {e:#}", comm.rank(), comm.size());
+            comm.abort(1);
+        }
+        Ok(())
+    }
+    #[cfg(not(feature = "mpi"))]
+    bail!("started by mpirun, but this blockpuzzle was built without the `mpi` feature; rebuild with --features mpi")
+}
+
+fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
     let c = &a.config;
     let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
-    let bar = indicatif::ProgressBar::new(c.epochs as u64);
+    let bar =
+        if comm.is_root() { indicatif::ProgressBar::new(c.epochs as u64) } else { indicatif::ProgressBar::hidden() };
     bar.set_style(
         indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
@@ -602,7 +625,7 @@ fn train(a: TrainArgs) -> Result<()> {
         ));
         last = Some(row.clone());
     };
-    let rows = crate::train::train(c, &run_dir, a.resume, &mut on_epoch)?;
+    let rows = crate::train::train_ranks(comm, c, &run_dir, a.resume, &mut on_epoch)?;
     bar.finish();
     if let Some(r) = rows.last() {
         println!(

@@ -53,6 +53,16 @@ pub struct RunState {
     pub wall_seconds: f64,
     /// Best finals success so far.
     pub best_finals: f64,
+    /// Ranks of the job that wrote it (1: one process; `mpirun -np P`: P).
+    #[serde(default = "one")]
+    pub ranks: usize,
+    /// The rank that wrote it.
+    #[serde(default)]
+    pub rank: usize,
+}
+
+fn one() -> usize {
+    1
 }
 
 #[derive(Serialize, Deserialize)]
@@ -72,8 +82,12 @@ struct Header {
     /// TD3: the second critic's Adam step count and the smoothing noise's seed.
     #[serde(default)]
     twin: Option<(u64, u64)>,
+    /// The first replay buffer's capacity and next write position.
     replay_capacity: usize,
     replay_next: usize,
+    /// The same for each further buffer (one per worker with `--replay per-worker`).
+    #[serde(default)]
+    more_replays: Vec<(usize, usize)>,
     blobs: Vec<(String, usize)>,
     payload_crc32: u32,
 }
@@ -93,7 +107,7 @@ pub fn save(
     state: &RunState,
     agent: &Agent,
     ddpg: &DdpgConfig,
-    replay: &ReplayBuffer,
+    replays: &[ReplayBuffer],
 ) -> Result<(), CheckpointError> {
     let mut blobs: Vec<(String, Vec<f32>)> = Vec::new();
     let mut add = |prefix: &str, vecs: Vec<Vec<f32>>| {
@@ -124,19 +138,23 @@ pub fn save(
             (a.norm.clone(), a.opt.t, 0, a.config.clone())
         }
     };
-    let (r, replay_next) = replay.parts();
-    add(
-        "replay",
-        vec![
-            r.obs.clone(),
-            r.act.clone(),
-            r.rew.clone(),
-            r.next_obs.clone(),
-            r.done.clone(),
-            r.extra.clone(),
-            r.discount.clone(),
-        ],
-    );
+    for (i, replay) in replays.iter().enumerate() {
+        let (r, _) = replay.parts();
+        add(
+            &replay_prefix(i),
+            vec![
+                r.obs.clone(),
+                r.act.clone(),
+                r.rew.clone(),
+                r.next_obs.clone(),
+                r.done.clone(),
+                r.extra.clone(),
+                r.discount.clone(),
+            ],
+        );
+    }
+    let positions: Vec<(usize, usize)> = replays.iter().map(|r| (r.capacity(), r.parts().1)).collect();
+    let (replay_capacity, replay_next) = positions.first().copied().unwrap_or((1, 0));
 
     let mut payload = Vec::with_capacity(blobs.iter().map(|b| 4 * b.1.len()).sum());
     for (_, v) in &blobs {
@@ -153,28 +171,60 @@ pub fn save(
         actor_adam_t,
         critic_adam_t,
         twin,
-        replay_capacity: replay.capacity(),
+        replay_capacity,
         replay_next,
+        more_replays: positions.get(1..).unwrap_or_default().to_vec(),
         blobs: blobs.iter().map(|(n, v)| (n.clone(), v.len())).collect(),
         payload_crc32: crc32fast::hash(&payload),
     };
     let json = serde_json::to_vec(&header).map_err(|e| io(path)(std::io::Error::other(e)))?;
 
-    let tmp = path.with_extension("tmp");
-    let result = (|| {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-        f.write_all(MAGIC)?;
-        f.write_all(&(json.len() as u64).to_le_bytes())?;
-        f.write_all(&json)?;
-        f.write_all(&payload)?;
-        let f = f.into_inner().map_err(|e| e.into_error())?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    let mut bytes = Vec::with_capacity(16 + json.len() + payload.len());
+    bytes.extend_from_slice(MAGIC);
+    bytes.extend_from_slice(&(json.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(&json);
+    bytes.extend_from_slice(&payload);
+    // A job of several ranks keeps the previous checkpoint too: a rank that
+    // stopped before writing this epoch's leaves the others one epoch ahead,
+    // and a resume goes back to the epoch every rank has.
+    if state.ranks > 1 && path.exists() {
+        std::fs::rename(path, previous(path)).map_err(io(path))?;
     }
-    result.map_err(io(path))
+    crate::io::write_atomic(path, |f| f.write_all(&bytes)).map_err(io(path))
+}
+
+/// `checkpoint.prev.bin` beside `checkpoint.bin`: the one before it (jobs of several ranks).
+pub fn previous(path: &Path) -> PathBuf {
+    path.with_extension("prev.bin")
+}
+
+/// The blob name prefix of replay buffer `i` (the first keeps the name of one-buffer checkpoints).
+fn replay_prefix(i: usize) -> String {
+    if i == 0 {
+        "replay".to_owned()
+    } else {
+        format!("replay-{i}")
+    }
+}
+
+/// The run state of a checkpoint, read from its header only (the payload is not checked).
+///
+/// # Errors
+/// [`CheckpointError::Io`] or [`CheckpointError::Corrupt`].
+pub fn peek_state(path: &Path) -> Result<RunState, CheckpointError> {
+    use std::io::Read;
+    let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
+    let mut f = std::fs::File::open(path).map_err(io(path))?;
+    let mut head = [0u8; 16];
+    f.read_exact(&mut head).map_err(|_| corrupt("truncated"))?;
+    if &head[..8] != MAGIC {
+        return Err(corrupt("not a blockpuzzle checkpoint"));
+    }
+    let hlen = u64::from_le_bytes(head[8..16].try_into().map_err(|_| corrupt("truncated"))?);
+    let mut json = Vec::new();
+    f.take(hlen).read_to_end(&mut json).map_err(io(path))?;
+    let header: Header = serde_json::from_slice(&json).map_err(|e| corrupt(&format!("bad header: {e}")))?;
+    Ok(header.state)
 }
 
 /// What [`load`] returns.
@@ -183,8 +233,8 @@ pub struct Loaded {
     pub state: RunState,
     /// The agent, exactly as saved.
     pub agent: Agent,
-    /// The replay buffer, exactly as saved.
-    pub replay: ReplayBuffer,
+    /// The replay buffers, exactly as saved.
+    pub replays: Vec<ReplayBuffer>,
 }
 
 /// Loads a checkpoint and checks it against the expected environment and sizes.
@@ -275,26 +325,31 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         }
     };
 
-    let r = take("replay");
-    if r.len() != 6 && r.len() != 7 {
-        return Err(corrupt("replay buffer missing"));
+    let positions: Vec<(usize, usize)> = std::iter::once((header.replay_capacity, header.replay_next))
+        .chain(header.more_replays.iter().copied())
+        .collect();
+    let mut replays = Vec::new();
+    for (i, (capacity, next)) in positions.into_iter().enumerate() {
+        let r = take(&replay_prefix(i));
+        if r.len() != 6 && r.len() != 7 {
+            return Err(corrupt("replay buffer missing"));
+        }
+        let mut r = r.into_iter();
+        let mut next_array = || r.next().unwrap_or_default();
+        let mut data = Batch {
+            obs: next_array(),
+            act: next_array(),
+            rew: next_array(),
+            next_obs: next_array(),
+            done: next_array(),
+            extra: next_array(),
+            discount: next_array(),
+        };
+        // Checkpoints from before n-step returns: every transition is one step.
+        if data.discount.is_empty() {
+            data.discount = vec![d.gamma as f32; data.rew.len()];
+        }
+        replays.push(ReplayBuffer::from_parts(obs_dim, act_dim, capacity, data, next).map_err(|e| corrupt(&e))?);
     }
-    let mut r = r.into_iter();
-    let mut next = || r.next().unwrap_or_default();
-    let mut data = Batch {
-        obs: next(),
-        act: next(),
-        rew: next(),
-        next_obs: next(),
-        done: next(),
-        extra: next(),
-        discount: next(),
-    };
-    // Checkpoints from before n-step returns: every transition is one step.
-    if data.discount.is_empty() {
-        data.discount = vec![d.gamma as f32; data.rew.len()];
-    }
-    let replay = ReplayBuffer::from_parts(obs_dim, act_dim, header.replay_capacity, data, header.replay_next)
-        .map_err(|e| corrupt(&e))?;
-    Ok(Loaded { state: header.state, agent, replay })
+    Ok(Loaded { state: header.state, agent, replays })
 }

@@ -1,5 +1,6 @@
 //! The learner being trained (DDPG or PGGD) and, for AggreVaTeD, the expert.
 
+use super::comm::Comm;
 use super::rollouts::Behaviour;
 use super::rundir::SavedPolicy;
 use super::{load_policy, write_json_atomic, TrainConfig};
@@ -228,15 +229,36 @@ pub(crate) struct Learner {
 }
 
 impl Learner {
-    /// One gradient step.
-    pub(crate) fn update(&mut self, batch: &Batch, obs_dim: usize) -> UpdateStats {
-        match &mut self.agent {
-            Agent::Ddpg(a) => a.update(batch),
-            Agent::Pggd(a) => match self.expert.as_ref().and_then(|e| e.advantage(batch, obs_dim)) {
-                Some(adv) => a.update(batch, &adv),
-                None => a.update(batch, &batch.extra),
-            },
+    /// One gradient step from one batch per shard of this rank: each
+    /// shard's gradient, the mean over every rank's shards (in global shard
+    /// order, `first_shard` being this rank's first), one optimiser step.
+    /// Returns each local shard's statistics.
+    pub(crate) fn update(
+        &mut self,
+        batches: &[Batch],
+        first_shard: usize,
+        comm: &Comm,
+        obs_dim: usize,
+    ) -> Vec<UpdateStats> {
+        let mut gradients = Vec::with_capacity(batches.len());
+        let mut stats = Vec::with_capacity(batches.len());
+        for (i, batch) in batches.iter().enumerate() {
+            let (g, s) = match &mut self.agent {
+                Agent::Ddpg(a) => a.gradient(batch, (first_shard + i) as u64),
+                Agent::Pggd(a) => match self.expert.as_ref().and_then(|e| e.advantage(batch, obs_dim)) {
+                    Some(adv) => a.gradient(batch, &adv),
+                    None => a.gradient(batch, &batch.extra),
+                },
+            };
+            gradients.push(g);
+            stats.push(s);
         }
+        let mean = comm.shard_mean(&gradients);
+        match &mut self.agent {
+            Agent::Ddpg(a) => a.apply_gradient(&mean),
+            Agent::Pggd(a) => a.apply_gradient(&mean),
+        }
+        stats
     }
 
     /// End of a cycle: DDPG's target networks follow.

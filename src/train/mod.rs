@@ -20,31 +20,26 @@
 //! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
 
 pub mod checkpoint;
+pub mod comm;
 mod learner;
 pub mod plot;
 pub mod report;
 mod rollouts;
 mod rundir;
+mod trainer;
 
 pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
-pub(crate) use rollouts::{play_all, stream_seed, Behaviour, Draw};
+pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, RunDir, SavedPolicy};
+pub use trainer::{train, train_ranks, OnEpoch};
 
-use crate::agents::ddpg::{DdpgConfig, Precision, UpdateStats};
+use crate::agents::ddpg::{DdpgConfig, Precision};
 use crate::agents::pggd::PggdConfig;
-use crate::agents::replay::ReplayBuffer;
-use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::env::registry;
 use crate::task::Task;
-use anyhow::{bail, Context, Result};
-use checkpoint::RunState;
-use learner::{Expert, Learner};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rollouts::success_rate;
-use rundir::write_progress;
+use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::time::Instant;
 
 /// Training hyperparameters (defaults: the paper's set-up).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
@@ -74,9 +69,17 @@ pub struct TrainConfig {
     /// Transitions per batch and worker.
     #[arg(long, default_value_t = 256)]
     pub batch_size: usize,
-    /// Replay buffer capacity in transitions.
+    /// Replay buffer capacity in transitions, per worker (`--replay shared`: per process).
     #[arg(long, default_value_t = 1_000_000)]
     pub buffer_size: usize,
+    /// How workers share replay: `per-worker` (the paper's MPI workers: each
+    /// worker keeps its buffer, samples its batch and computes its gradient,
+    /// and the update is the mean of the workers' gradients, whatever the
+    /// split into processes) or `shared` (one buffer per process, one batch
+    /// of batch-size × workers; runs started before per-worker replay).
+    #[arg(long, value_enum, default_value = "per-worker")]
+    #[serde(default = "ReplayLayout::legacy")]
+    pub replay: ReplayLayout,
     /// Test and finals episodes per worker per epoch.
     #[arg(long, default_value_t = 10)]
     pub test_episodes: usize,
@@ -121,6 +124,23 @@ pub struct TrainConfig {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub task: Option<crate::task::TaskSource>,
+}
+
+/// How the workers of a process share replay (see [`TrainConfig::replay`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReplayLayout {
+    /// One buffer, batch and gradient per worker; the update averages them.
+    PerWorker,
+    /// One buffer per process; one batch of `batch_size × workers`.
+    Shared,
+}
+
+impl ReplayLayout {
+    /// The layout of runs whose `config.json` predates the setting.
+    fn legacy() -> Self {
+        Self::Shared
+    }
 }
 
 /// One row of `progress.csv`.
@@ -173,280 +193,6 @@ pub struct EpochRow {
     /// CPU time of the process over the epoch / (wall time × cores).
     #[serde(rename = "time/cpu_utilisation", default)]
     pub cpu_utilisation: f64,
-}
-
-/// User + system CPU seconds of this process so far.
-fn cpu_seconds() -> f64 {
-    // SAFETY: getrusage writes one rusage struct into the zeroed value we
-    // pass; RUSAGE_SELF is always valid.
-    let usage = unsafe {
-        let mut u: libc::rusage = std::mem::zeroed();
-        if libc::getrusage(libc::RUSAGE_SELF, &mut u) != 0 {
-            return 0.0;
-        }
-        u
-    };
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    secs(usage.ru_utime) + secs(usage.ru_stime)
-}
-
-/// Per-epoch callback for progress reporting.
-pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
-
-/// Trains DDPG; with `resume`, continues from the run directory's checkpoint.
-///
-/// # Errors
-/// Bad configuration, environment errors, I/O and checkpoint errors.
-pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpoch) -> Result<Vec<EpochRow>> {
-    // Every setting is checked before anything is written.
-    if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
-        bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
-    }
-    config.ddpg.validate().map_err(anyhow::Error::msg)?;
-    if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
-        bail!("--level-replay and --challenge-share must be in [0, 1]");
-    }
-    if config.algo == Algo::Pggd && (config.ddpg.n_step != 1 || config.ddpg.td3) {
-        bail!("--n-step and --td3 are DDPG options; PGGD uses the return-to-go");
-    }
-    if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
-        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
-    }
-    if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
-        bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
-    }
-    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
-        bail!("--pg-weight is for --algo pggd");
-    }
-    let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
-    if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
-        bail!("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0");
-    }
-    let t0 = config.aggrevated.t0;
-    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
-        bail!("--beta0 must be in [0, 1] and --t0 at least 0");
-    }
-    let run = RunDir { dir: run_dir.to_owned() };
-    std::fs::create_dir_all(&run.dir).with_context(|| format!("cannot create run directory {}", run.dir.display()))?;
-    tch::set_num_threads(if config.torch_threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get()) as i32
-    } else {
-        config.torch_threads as i32
-    });
-
-    // The task (checked against the run's recorded copy on resume), then one environment per worker.
-    let saved_config = if resume && run.config().exists() { Some(run.read_config()?) } else { None };
-    let task = run_task(config, &run, saved_config.as_ref().and_then(|c| c.task.as_ref()))?;
-    let mut config = config.clone();
-    config.task = Some(task.source.clone());
-    let config = &config;
-    let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
-    if !(0.0..=1.0).contains(&threshold) {
-        bail!("--success-threshold must be in [0, 1]");
-    }
-    let mut envs: Vec<BlockEnv> =
-        (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
-    let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
-    let max_level = envs[0].max_level();
-    if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
-        bail!("--challenge-share: the task {} has no challenge distribution", task.id());
-    }
-
-    // Agent, replay buffer, run state: fresh or from the checkpoint.
-    let (agent, mut replay, mut state, mut rows) = if resume && run.checkpoint().exists() {
-        let saved = match saved_config {
-            Some(c) => c,
-            None => run.read_config()?,
-        };
-        let changed = computation_differences(&saved, config);
-        if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
-            bail!(
-                "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
-                run.config().display(),
-                if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
-            );
-        }
-        let loaded = checkpoint::load(&run.checkpoint(), task.id(), obs_dim, act_dim)?;
-        let rows = read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < loaded.state.epoch).collect();
-        (loaded.agent, loaded.replay, loaded.state, rows)
-    } else {
-        if resume {
-            bail!("--resume: no checkpoint in {}", run.dir.display());
-        }
-        if run.checkpoint().exists() {
-            bail!(
-                "{} already holds a run; pass --resume to continue it or choose another --run-dir",
-                run.dir.display()
-            );
-        }
-        let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-        let agent = Agent::new(config, obs_dim, act_dim, &mut rng);
-        let state = RunState {
-            env_id: task.id().to_owned(),
-            obs_dim,
-            act_dim,
-            epoch: 0,
-            level: 0,
-            env_steps: 0,
-            updates: 0,
-            episodes_per_worker: 0,
-            wall_seconds: 0.0,
-            best_finals: -1.0,
-        };
-        (agent, ReplayBuffer::new(obs_dim, act_dim, config.buffer_size), state, Vec::new())
-    };
-    if agent.algo() != config.algo {
-        bail!("{} holds a {:?} agent, not {:?}", run.checkpoint().display(), agent.algo(), config.algo);
-    }
-    let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
-    let expert = Expert::load(&config.aggrevated, seen, &run.expert_policy(), resume)?;
-    let mut learner = Learner { agent, expert };
-    write_json_atomic(&run.config(), config)?;
-
-    let mut persist_seconds = 0.0;
-    while state.epoch < config.epochs {
-        let epoch = state.epoch;
-        let started = Instant::now();
-        let cpu_started = cpu_seconds();
-        for env in &mut envs {
-            env.set_level(state.level.min(max_level))?;
-        }
-        let (mut env_seconds, mut update_seconds, mut forward_seconds) = (0.0, 0.0, 0.0);
-        let (mut train_eps, mut train_wins, mut train_steps, mut expert_steps) = (0usize, 0usize, 0usize, 0usize);
-        let mut stats = Vec::new();
-        for cycle in 0..config.cycles {
-            // Collect.
-            let t = Instant::now();
-            let policy = learner.agent.policy();
-            let behaviour = learner.behaviour(&policy, epoch, config);
-            let base = state.episodes_per_worker;
-            let draw = Draw {
-                level: state.level.min(max_level),
-                max_level,
-                level_replay: config.level_replay,
-                challenge_share: config.challenge_share,
-            };
-            let draw = (draw.level_replay > 0.0 || draw.challenge_share > 0.0).then_some(draw);
-            let eps = play_all(&mut envs, &behaviour, config.rollouts, draw.as_ref(), |w, k| {
-                stream_seed(config.seed, &[1, w as u64, base + k as u64])
-            })?;
-            state.episodes_per_worker += config.rollouts as u64;
-            env_seconds += t.elapsed().as_secs_f64();
-            for ep in &eps {
-                train_eps += 1;
-                train_wins += ep.success as usize;
-                train_steps += ep.len();
-                expert_steps += ep.expert_steps;
-                state.env_steps += ep.len() as u64;
-                forward_seconds += ep.forward_seconds / config.workers as f64;
-                ep.store(&mut replay, learner.agent.norm_mut(), config.ddpg.gamma, config.ddpg.n_step);
-            }
-            // Learn.
-            let t = Instant::now();
-            let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, epoch as u64, cycle as u64]));
-            for _ in 0..config.batches {
-                let batch = replay.sample(config.batch_size * config.workers, &mut rng);
-                stats.push(learner.update(&batch, obs_dim));
-                state.updates += 1;
-            }
-            learner.end_cycle();
-            update_seconds += t.elapsed().as_secs_f64();
-        }
-
-        // Test at the current level, finals at the maximum level, both with
-        // the deterministic policy.
-        let t = Instant::now();
-        let policy = learner.agent.policy();
-        let greedy = Behaviour::Greedy(&policy);
-        for env in &mut envs {
-            env.set_level(state.level.min(max_level))?;
-            env.set_distribution(None)?;
-        }
-        let test = play_all(&mut envs, &greedy, config.test_episodes, None, |w, k| {
-            stream_seed(config.seed, &[3, epoch as u64, w as u64, k as u64])
-        })?;
-        for env in &mut envs {
-            env.set_level(max_level)?;
-        }
-        let finals = play_all(&mut envs, &greedy, config.test_episodes, None, |w, k| {
-            stream_seed(config.seed, &[4, epoch as u64, w as u64, k as u64])
-        })?;
-        env_seconds += t.elapsed().as_secs_f64();
-        forward_seconds += test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / config.workers as f64;
-
-        // The mean over the epoch's updates; the actor's over the updates that stepped it (TD3 skips some).
-        let mean = |f: fn(&UpdateStats) -> f64| {
-            let v: Vec<f64> = stats.iter().map(f).filter(|x| !x.is_nan()).collect();
-            if v.is_empty() {
-                0.0
-            } else {
-                v.iter().sum::<f64>() / v.len() as f64
-            }
-        };
-        let eval_seconds = t.elapsed().as_secs_f64();
-        let epoch_wall = started.elapsed().as_secs_f64();
-        state.wall_seconds += epoch_wall;
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-        let row = EpochRow {
-            epoch,
-            level: state.level,
-            train_success: if train_eps == 0 { 0.0 } else { train_wins as f64 / train_eps as f64 },
-            test_success: success_rate(&test),
-            finals_success: success_rate(&finals),
-            mean_q: mean(|s| s.mean_q),
-            critic_loss: mean(|s| s.critic_loss),
-            actor_loss: mean(|s| s.actor_loss),
-            env_steps: state.env_steps,
-            updates: state.updates,
-            wall_seconds: state.wall_seconds,
-            env_seconds,
-            forward_seconds,
-            update_seconds,
-            eval_seconds,
-            persist_seconds,
-            beta: learner.beta(epoch, config).unwrap_or(0.0),
-            expert_share: if train_steps == 0 { 0.0 } else { expert_steps as f64 / train_steps as f64 },
-            cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
-        };
-        if row.test_success >= threshold && state.level < max_level {
-            state.level += 1;
-        }
-        state.epoch += 1;
-
-        // Persist: progress, policies, then the checkpoint (last, so that a
-        // crash before it repeats at most this epoch).
-        let persist_started = Instant::now();
-        rows.push(row.clone());
-        write_progress(&run.progress(), &rows)?;
-        plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
-        let saved = SavedPolicy {
-            env_id: task.id().to_owned(),
-            task: Some(task.source.clone()),
-            epoch: state.epoch,
-            env_steps: Some(state.env_steps),
-            finals_success: row.finals_success,
-            policy,
-            critic: learner.agent.critic(),
-        };
-        write_json_atomic(&run.policy(), &saved)?;
-        if config.snapshot_every > 0 && state.epoch % config.snapshot_every == 0 {
-            let path = run.snapshot(state.epoch);
-            std::fs::create_dir_all(run.snapshots())
-                .with_context(|| format!("cannot create {}", run.snapshots().display()))?;
-            write_json_atomic(&path, &saved)?;
-        }
-        // Ties go to the newer policy: same finals score, more training.
-        if row.finals_success >= state.best_finals {
-            state.best_finals = row.finals_success;
-            write_json_atomic(&run.best_policy(), &saved)?;
-        }
-        checkpoint::save(&run.checkpoint(), &state, &learner.agent, &config.ddpg, &replay)?;
-        // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
-        persist_seconds = persist_started.elapsed().as_secs_f64();
-        state.wall_seconds += persist_seconds;
-        on_epoch(&row, config);
-    }
-    Ok(rows)
 }
 
 impl TrainConfig {

@@ -72,7 +72,12 @@ where
 /// millions of environment steps (right).
 fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
     register_font()?;
-    let root = BitMapBackend::new(path, (1400, 540)).into_drawing_area();
+    crate::io::write_atomic_via(path, |tmp| two_panels_to(tmp, path, title, curves))
+}
+
+/// [`two_panels`] drawn into the file `tmp`.
+fn two_panels_to(tmp: &Path, path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
+    let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
     let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
     root.fill(&WHITE).map_err(draw)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;

@@ -71,6 +71,13 @@ impl Episode {
     /// when that is the terminal state, the bootstrap discount γᵐ, and the
     /// discounted return-to-go as the extra column (PGGD's weight).
     pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64, n_step: usize) {
+        self.store_transitions(replay, gamma, n_step);
+        norm.update(&self.obs.concat());
+    }
+
+    /// Stores the episode's transitions (n-step where `n_step` > 1); the
+    /// normaliser is updated by the caller, from every rank's observations.
+    pub(crate) fn store_transitions(&self, replay: &mut ReplayBuffer, gamma: f64, n_step: usize) {
         let n = self.rew.len();
         let g32 = gamma as f32;
         let mut ret = vec![0.0f32; n];
@@ -90,7 +97,6 @@ impl Episode {
             let done = self.terminated && t + m == n;
             replay.push(&self.obs[t], &self.act[t], rew, &self.obs[t + m], done, *ret_t, discount);
         }
-        norm.update(&self.obs.concat());
     }
 }
 

@@ -108,12 +108,8 @@ impl SavedPolicy {
 /// # Errors
 /// I/O errors with the path.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = match path.extension() {
-        Some(ext) => path.with_extension(format!("{}.tmp", ext.to_string_lossy())),
-        None => path.with_extension("tmp"),
-    };
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    use std::io::Write;
+    crate::io::write_atomic(path, |f| f.write_all(bytes)).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes `value` as JSON to `path` through a temporary file.
@@ -159,14 +155,14 @@ pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
 }
 
 pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
-    let tmp = path.with_extension("csv.tmp");
-    let mut w = csv::Writer::from_path(&tmp).with_context(|| format!("writing {}", tmp.display()))?;
-    for r in rows {
-        w.serialize(r)?;
-    }
-    w.flush()?;
-    drop(w);
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    crate::io::write_atomic_via(path, |tmp| {
+        let mut w = csv::Writer::from_path(tmp)?;
+        for r in rows {
+            w.serialize(r)?;
+        }
+        w.flush()?;
+        Ok(())
+    })
 }
 
 /// Reads `progress.csv`.

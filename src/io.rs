@@ -1,0 +1,115 @@
+//! The one way this crate writes a file: into a temporary file beside it,
+//! flushed to disk, renamed over the target, and the folder's entry flushed
+//! too. A reader sees the old file or the new one, never a part; after a
+//! crash or power loss the file is one of the two. A failed write leaves no
+//! temporary file behind.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The temporary file for `path`: `.STEM.tmp-PID.EXT` in the same folder
+/// (the rename stays on one file system, two processes never share one, and
+/// libraries that pick a format by extension still see it).
+pub fn temp_path(path: &Path) -> PathBuf {
+    let stem = path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let pid = std::process::id();
+    match path.extension() {
+        Some(ext) => path.with_file_name(format!(".{stem}.tmp-{pid}.{}", ext.to_string_lossy())),
+        None => path.with_file_name(format!(".{stem}.tmp-{pid}")),
+    }
+}
+
+/// Moves the finished temporary file `tmp` onto `path` durably: flushes
+/// `tmp`'s data, renames it, and flushes the folder's entry.
+///
+/// # Errors
+/// The first I/O error (`tmp` is then removed).
+pub fn commit(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    let result = (|| {
+        File::open(tmp)?.sync_all()?;
+        std::fs::rename(tmp, path)?;
+        sync_dir(path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(tmp);
+    }
+    result
+}
+
+/// Flushes the entry of `path` in its folder (where the platform allows it).
+fn sync_dir(path: &Path) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    match File::open(dir) {
+        Ok(d) => d.sync_all().or(Ok(())),
+        Err(_) => Ok(()),
+    }
+}
+
+/// Writes `path` atomically with `write`, which fills a buffered writer.
+///
+/// # Errors
+/// The first I/O error; `path` is then unchanged.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let tmp = temp_path(path);
+    let result = (|| {
+        let mut f = BufWriter::new(File::create(&tmp)?);
+        write(&mut f)?;
+        f.flush()?;
+        Ok(())
+    })();
+    match result {
+        Ok(()) => commit(&tmp, path),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// Writes `path` atomically through a library that writes to a path of its
+/// own choosing (images, plots, CSV): `write` gets the temporary path.
+///
+/// # Errors
+/// `write`'s error or an I/O error, naming `path`; `path` is then unchanged.
+pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let tmp = temp_path(path);
+    let result = write(&tmp).and_then(|()| Ok(commit(&tmp, path)?));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_whole_files_and_leaves_nothing_on_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.txt");
+        write_atomic(&path, |f| f.write_all(b"one")).unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"one");
+        let err = write_atomic(&path, |f| {
+            f.write_all(b"half")?;
+            Err(std::io::Error::other("disk full"))
+        });
+        assert!(err.is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"one", "a failed write keeps the old file");
+        let err = write_atomic_via(&path, |tmp| {
+            std::fs::write(tmp, b"x")?;
+            anyhow::bail!("encoder failed")
+        });
+        assert!(format!("{:#}", err.unwrap_err()).contains("a.txt"));
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("a.txt")], "no temporary file is left");
+    }
+}

@@ -1,0 +1,590 @@
+//! The training loop, one epoch as four steps: `collect` (exploration
+//! episodes into replay), `learn` (gradient steps), `evaluate` (test and
+//! finals), `persist` (files and checkpoint). What ranks exchange is in
+//! these steps only, through [`Comm`]; rank 0 alone writes the run's shared
+//! files, and every rank writes its own checkpoint.
+
+use super::checkpoint::{self, RunState};
+use super::comm::Comm;
+use super::learner::{Agent, Expert, Learner};
+use super::rollouts::{play_all, stream_seed, success_rate, Behaviour, Draw, Episode};
+use super::rundir::{read_progress, write_json_atomic, write_progress, RunDir, SavedPolicy};
+use super::{computation_differences, plot, run_task, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig};
+use crate::agents::ddpg::{Precision, UpdateStats};
+use crate::agents::replay::{Batch, ReplayBuffer};
+use crate::agents::AnyPolicy;
+use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::task::Task;
+use anyhow::{bail, Context, Result};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Per-epoch callback for progress reporting (called on rank 0 only).
+pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
+
+/// Trains in this process; with `resume`, continues from the run directory's checkpoint.
+///
+/// # Errors
+/// Bad configuration, environment errors, I/O and checkpoint errors.
+pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpoch) -> Result<Vec<EpochRow>> {
+    train_ranks(&Comm::local(), config, run_dir, resume, on_epoch)
+}
+
+/// Trains as one rank of `comm`'s job (every rank calls it with the same
+/// arguments). Returns the progress rows on rank 0, none elsewhere.
+///
+/// # Errors
+/// As [`train`]; under MPI the caller aborts the job on an error.
+pub fn train_ranks(
+    comm: &Comm,
+    config: &TrainConfig,
+    run_dir: &Path,
+    resume: bool,
+    on_epoch: OnEpoch,
+) -> Result<Vec<EpochRow>> {
+    let mut trainer = Trainer::start(comm, config, run_dir, resume)?;
+    while trainer.state.epoch < trainer.config.epochs {
+        let row = trainer.epoch()?;
+        if comm.is_root() {
+            on_epoch(&row, &trainer.config);
+        }
+    }
+    Ok(trainer.rows)
+}
+
+/// Checks every setting before anything is written.
+fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
+    if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
+        bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
+    }
+    config.ddpg.validate().map_err(anyhow::Error::msg)?;
+    if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
+        bail!("--level-replay and --challenge-share must be in [0, 1]");
+    }
+    if config.algo == Algo::Pggd && (config.ddpg.n_step != 1 || config.ddpg.td3) {
+        bail!("--n-step and --td3 are DDPG options; PGGD uses the return-to-go");
+    }
+    if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
+        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
+    }
+    if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
+        bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
+    }
+    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
+        bail!("--pg-weight is for --algo pggd");
+    }
+    let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
+    if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
+        bail!("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0");
+    }
+    let t0 = config.aggrevated.t0;
+    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
+        bail!("--beta0 must be in [0, 1] and --t0 at least 0");
+    }
+    if let Some(t) = config.success_threshold {
+        if !(0.0..=1.0).contains(&t) {
+            bail!("--success-threshold must be in [0, 1]");
+        }
+    }
+    if comm.size() > 1 && config.replay == ReplayLayout::Shared {
+        bail!(
+            "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
+             computes; use --replay per-worker (the default) under mpirun",
+            comm.size()
+        );
+    }
+    Ok(())
+}
+
+/// The folder of rank `rank`'s own files: the run directory for rank 0,
+/// `rank-R/` inside it for the others.
+pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
+    if rank == 0 {
+        RunDir { dir: run.dir.clone() }
+    } else {
+        RunDir { dir: run.dir.join(format!("rank-{rank}")) }
+    }
+}
+
+/// Everything a run holds between epochs.
+struct Trainer<'a> {
+    comm: &'a Comm,
+    config: TrainConfig,
+    /// The run directory (rank 0 writes its shared files).
+    run: RunDir,
+    /// This rank's own files (checkpoint, expert copy).
+    mine: RunDir,
+    task: Task,
+    /// One environment per worker of this rank.
+    envs: Vec<BlockEnv>,
+    learner: Learner,
+    /// One buffer per worker (`per-worker`) or one (`shared`).
+    replays: Vec<ReplayBuffer>,
+    state: RunState,
+    /// progress.csv's rows (rank 0).
+    rows: Vec<EpochRow>,
+    threshold: f64,
+    max_level: usize,
+    obs_dim: usize,
+    /// Seconds spent persisting the previous epoch (reported in the next row).
+    persist_seconds: f64,
+}
+
+/// What one epoch's collection and learning measured on this rank.
+#[derive(Default)]
+struct Tally {
+    env_seconds: f64,
+    update_seconds: f64,
+    forward_seconds: f64,
+    episodes: usize,
+    wins: usize,
+    steps: usize,
+    expert_steps: usize,
+    stats: Vec<UpdateStats>,
+}
+
+impl<'a> Trainer<'a> {
+    /// Validates, resolves the task, builds environments and the agent
+    /// (fresh, or from this rank's checkpoint).
+    fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, resume: bool) -> Result<Self> {
+        validate(config, comm)?;
+        let run = RunDir { dir: run_dir.to_owned() };
+        let mine = rank_dir(&run, comm.rank());
+        std::fs::create_dir_all(&mine.dir)
+            .with_context(|| format!("cannot create run directory {}", mine.dir.display()))?;
+        tch::set_num_threads(if config.torch_threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get()) as i32
+        } else {
+            config.torch_threads as i32
+        });
+
+        // The task: rank 0 resolves it (checked against the run's recorded
+        // copy on resume) and every other rank builds the same one from it.
+        let saved_config =
+            if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
+        let task = shared_task(comm, config, &run, saved_config.as_ref())?;
+        let mut config = config.clone();
+        config.task = Some(task.source.clone());
+        let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
+        let envs: Vec<BlockEnv> =
+            (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
+        let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
+        let max_level = envs[0].max_level();
+        if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
+            bail!("--challenge-share: the task {} has no challenge distribution", task.id());
+        }
+
+        let (agent, replays, state, rows) = if resume {
+            let path = resume_checkpoint(comm, &mine.checkpoint(), &run)?;
+            if comm.is_root() {
+                let saved = match saved_config {
+                    Some(c) => c,
+                    None => run.read_config()?,
+                };
+                let changed = computation_differences(&saved, &config);
+                if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
+                    bail!(
+                        "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
+                        run.config().display(),
+                        if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
+                    );
+                }
+            }
+            let loaded = checkpoint::load(&path, task.id(), obs_dim, act_dim)?;
+            let s = &loaded.state;
+            if s.ranks != comm.size() {
+                bail!(
+                    "{} was written by a job of {} rank(s), this one has {}; resume with mpirun -np {} (or without \
+                     mpirun for 1)",
+                    path.display(),
+                    s.ranks,
+                    comm.size(),
+                    s.ranks
+                );
+            }
+            let rows = if comm.is_root() {
+                read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < s.epoch).collect()
+            } else {
+                Vec::new()
+            };
+            (loaded.agent, loaded.replays, loaded.state, rows)
+        } else {
+            if mine.checkpoint().exists() || run.checkpoint().exists() {
+                bail!(
+                    "{} already holds a run; pass --resume to continue it or choose another --run-dir",
+                    run.dir.display()
+                );
+            }
+            // Every rank draws the same initial weights from the run seed.
+            let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
+            let agent = Agent::new(&config, obs_dim, act_dim, &mut rng);
+            let state = RunState {
+                env_id: task.id().to_owned(),
+                obs_dim,
+                act_dim,
+                epoch: 0,
+                level: 0,
+                env_steps: 0,
+                updates: 0,
+                episodes_per_worker: 0,
+                wall_seconds: 0.0,
+                best_finals: -1.0,
+                ranks: comm.size(),
+                rank: comm.rank(),
+            };
+            let shards = match config.replay {
+                ReplayLayout::PerWorker => config.workers,
+                ReplayLayout::Shared => 1,
+            };
+            let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
+            (agent, replays, state, Vec::new())
+        };
+        if agent.algo() != config.algo {
+            bail!("{} holds a {:?} agent, not {:?}", mine.checkpoint().display(), agent.algo(), config.algo);
+        }
+        let expected = if config.replay == ReplayLayout::PerWorker { config.workers } else { 1 };
+        if replays.len() != expected {
+            bail!(
+                "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
+                mine.checkpoint().display(),
+                replays.len(),
+                config.workers,
+                config.replay
+            );
+        }
+        let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
+        let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
+        if comm.is_root() {
+            write_json_atomic(&run.config(), &config)?;
+        }
+        Ok(Self {
+            comm,
+            config,
+            run,
+            mine,
+            task,
+            envs,
+            learner: Learner { agent, expert },
+            replays,
+            state,
+            rows,
+            threshold,
+            max_level,
+            obs_dim,
+            persist_seconds: 0.0,
+        })
+    }
+
+    /// The global index of this rank's worker `w` (it keys the worker's random streams).
+    fn shard(&self, w: usize) -> usize {
+        self.comm.rank() * self.config.workers + w
+    }
+
+    /// One epoch: cycles of collect + learn, then evaluate, then persist.
+    fn epoch(&mut self) -> Result<EpochRow> {
+        let epoch = self.state.epoch;
+        let started = Instant::now();
+        let cpu_started = cpu_seconds();
+        let level = self.state.level.min(self.max_level);
+        for env in &mut self.envs {
+            env.set_level(level)?;
+        }
+        let mut tally = Tally::default();
+        for cycle in 0..self.config.cycles {
+            self.collect(epoch, &mut tally)?;
+            self.learn(epoch, cycle, &mut tally);
+        }
+        let eval_started = Instant::now();
+        let (policy, test, finals) = self.evaluate(epoch)?;
+        let eval_seconds = eval_started.elapsed().as_secs_f64();
+        tally.env_seconds += eval_seconds;
+        tally.forward_seconds +=
+            test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / self.config.workers as f64;
+        let row = self.row(epoch, &tally, &test, &finals, eval_seconds, started, cpu_started);
+        if row.test_success >= self.threshold && self.state.level < self.max_level {
+            self.state.level += 1;
+        }
+        self.state.epoch += 1;
+        self.persist(&row, policy)?;
+        Ok(row)
+    }
+
+    /// Every worker plays `rollouts` exploration episodes; their transitions
+    /// go to the worker's buffer, and every rank's observations (in global
+    /// shard order) to the normaliser.
+    fn collect(&mut self, epoch: usize, tally: &mut Tally) -> Result<()> {
+        let t = Instant::now();
+        let config = &self.config;
+        let policy = self.learner.agent.policy();
+        let behaviour = self.learner.behaviour(&policy, epoch, config);
+        let base = self.state.episodes_per_worker;
+        let draw = Draw {
+            level: self.state.level.min(self.max_level),
+            max_level: self.max_level,
+            level_replay: config.level_replay,
+            challenge_share: config.challenge_share,
+        };
+        let draw = (draw.level_replay > 0.0 || draw.challenge_share > 0.0).then_some(draw);
+        let first = self.shard(0);
+        let eps = play_all(&mut self.envs, &behaviour, config.rollouts, draw.as_ref(), |w, k| {
+            stream_seed(config.seed, &[1, (first + w) as u64, base + k as u64])
+        })?;
+        self.state.episodes_per_worker += config.rollouts as u64;
+        tally.env_seconds += t.elapsed().as_secs_f64();
+        let mut rows = Vec::new();
+        for (i, ep) in eps.iter().enumerate() {
+            tally.episodes += 1;
+            tally.wins += ep.success as usize;
+            tally.steps += ep.len();
+            tally.expert_steps += ep.expert_steps;
+            tally.forward_seconds += ep.forward_seconds / config.workers as f64;
+            let replay = match config.replay {
+                ReplayLayout::PerWorker => &mut self.replays[i / config.rollouts],
+                ReplayLayout::Shared => &mut self.replays[0],
+            };
+            ep.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
+            rows.extend(ep.obs.iter().flatten());
+        }
+        let all = self.comm.gather_f32(&rows);
+        self.learner.agent.norm_mut().update(&all);
+        Ok(())
+    }
+
+    /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
+    fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut Tally) {
+        let t = Instant::now();
+        let config = &self.config;
+        let (e, c) = (epoch as u64, cycle as u64);
+        let first = self.shard(0);
+        match config.replay {
+            // One batch of batch_size × workers from the process's buffer.
+            ReplayLayout::Shared => {
+                let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
+                for _ in 0..config.batches {
+                    let batch = self.replays[0].sample(config.batch_size * config.workers, &mut rng);
+                    tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
+                    self.state.updates += 1;
+                }
+            }
+            // One batch per worker, each from its own buffer and stream.
+            ReplayLayout::PerWorker => {
+                let mut rngs: Vec<ChaCha8Rng> = (0..config.workers)
+                    .map(|w| ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[5, e, c, (first + w) as u64])))
+                    .collect();
+                for _ in 0..config.batches {
+                    let batches: Vec<Batch> =
+                        self.replays.iter().zip(&mut rngs).map(|(r, rng)| r.sample(config.batch_size, rng)).collect();
+                    tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));
+                    self.state.updates += 1;
+                }
+            }
+        }
+        self.learner.end_cycle();
+        tally.update_seconds += t.elapsed().as_secs_f64();
+    }
+
+    /// The deterministic policy's test episodes at the current level and
+    /// finals at the maximum level.
+    fn evaluate(&mut self, epoch: usize) -> Result<(AnyPolicy, Vec<Episode>, Vec<Episode>)> {
+        let (seed, first, n) = (self.config.seed, self.shard(0), self.config.test_episodes);
+        let policy = self.learner.agent.policy();
+        let greedy = Behaviour::Greedy(&policy);
+        for env in &mut self.envs {
+            env.set_level(self.state.level.min(self.max_level))?;
+            env.set_distribution(None)?;
+        }
+        let test = play_all(&mut self.envs, &greedy, n, None, |w, k| {
+            stream_seed(seed, &[3, epoch as u64, (first + w) as u64, k as u64])
+        })?;
+        for env in &mut self.envs {
+            env.set_level(self.max_level)?;
+        }
+        let finals = play_all(&mut self.envs, &greedy, n, None, |w, k| {
+            stream_seed(seed, &[4, epoch as u64, (first + w) as u64, k as u64])
+        })?;
+        Ok((policy, test, finals))
+    }
+
+    /// The epoch's row: counts and success summed over ranks (one exchange),
+    /// times measured on this rank.
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &mut self,
+        epoch: usize,
+        tally: &Tally,
+        test: &[Episode],
+        finals: &[Episode],
+        eval_seconds: f64,
+        started: Instant,
+        cpu_started: f64,
+    ) -> EpochRow {
+        let wins = |eps: &[Episode]| eps.iter().filter(|e| e.success).count() as f64;
+        let sum_of = |f: fn(&UpdateStats) -> f64| {
+            let v: Vec<f64> = tally.stats.iter().map(f).filter(|x| !x.is_nan()).collect();
+            (v.iter().sum::<f64>(), v.len() as f64)
+        };
+        let (q, cl, al) = (sum_of(|s| s.mean_q), sum_of(|s| s.critic_loss), sum_of(|s| s.actor_loss));
+        let local = [
+            tally.episodes as f64,
+            tally.wins as f64,
+            tally.steps as f64,
+            tally.expert_steps as f64,
+            wins(test),
+            test.len() as f64,
+            wins(finals),
+            finals.len() as f64,
+            q.0,
+            q.1,
+            cl.0,
+            cl.1,
+            al.0,
+            al.1,
+        ];
+        let per_rank = self.comm.gather_f64(&local);
+        let total = |i: usize| -> f64 {
+            if per_rank.len() == 1 {
+                per_rank[0][i]
+            } else {
+                per_rank.iter().map(|r| r[i]).sum()
+            }
+        };
+        let ratio = |a: usize, b: usize| if total(b) == 0.0 { 0.0 } else { total(a) / total(b) };
+        debug_assert_eq!(success_rate(test), if test.is_empty() { 0.0 } else { wins(test) / test.len() as f64 });
+        self.state.env_steps += total(2) as u64;
+        let epoch_wall = started.elapsed().as_secs_f64();
+        self.state.wall_seconds += epoch_wall;
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        EpochRow {
+            epoch,
+            level: self.state.level,
+            train_success: ratio(1, 0),
+            test_success: ratio(4, 5),
+            finals_success: ratio(6, 7),
+            mean_q: ratio(8, 9),
+            critic_loss: ratio(10, 11),
+            actor_loss: ratio(12, 13),
+            env_steps: self.state.env_steps,
+            updates: self.state.updates,
+            wall_seconds: self.state.wall_seconds,
+            env_seconds: tally.env_seconds,
+            forward_seconds: tally.forward_seconds,
+            update_seconds: tally.update_seconds,
+            eval_seconds,
+            persist_seconds: self.persist_seconds,
+            beta: self.learner.beta(epoch, &self.config).unwrap_or(0.0),
+            expert_share: ratio(3, 2),
+            cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
+        }
+    }
+
+    /// Rank 0 writes progress, plot and policies; then every rank its
+    /// checkpoint (last, so that a crash before it repeats at most this epoch).
+    fn persist(&mut self, row: &EpochRow, policy: AnyPolicy) -> Result<()> {
+        let started = Instant::now();
+        if self.comm.is_root() {
+            let (run, state) = (&self.run, &mut self.state);
+            self.rows.push(row.clone());
+            write_progress(&run.progress(), &self.rows)?;
+            plot::success_curves(&run.plot(), &self.config.title(), &self.rows, self.max_level)?;
+            let saved = SavedPolicy {
+                env_id: self.task.id().to_owned(),
+                task: Some(self.task.source.clone()),
+                epoch: state.epoch,
+                env_steps: Some(state.env_steps),
+                finals_success: row.finals_success,
+                policy,
+                critic: self.learner.agent.critic(),
+            };
+            write_json_atomic(&run.policy(), &saved)?;
+            if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
+                std::fs::create_dir_all(run.snapshots())
+                    .with_context(|| format!("cannot create {}", run.snapshots().display()))?;
+                write_json_atomic(&run.snapshot(state.epoch), &saved)?;
+            }
+            // Ties go to the newer policy: same finals score, more training.
+            if row.finals_success >= state.best_finals {
+                write_json_atomic(&run.best_policy(), &saved)?;
+            }
+        }
+        self.state.best_finals = self.state.best_finals.max(row.finals_success);
+        checkpoint::save(&self.mine.checkpoint(), &self.state, &self.learner.agent, &self.config.ddpg, &self.replays)?;
+        // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
+        self.persist_seconds = started.elapsed().as_secs_f64();
+        self.state.wall_seconds += self.persist_seconds;
+        Ok(())
+    }
+}
+
+/// The run's task on every rank: rank 0 resolves it (see [`run_task`]) and
+/// sends its recorded form to the others, so all ranks build the same task
+/// even when their hosts' task files differ.
+fn shared_task(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Task> {
+    if comm.size() == 1 {
+        return run_task(config, run, saved.and_then(|c| c.task.as_ref()));
+    }
+    let mut bytes = Vec::new();
+    let task = if comm.is_root() {
+        let task = run_task(config, run, saved.and_then(|c| c.task.as_ref()))?;
+        bytes = serde_json::to_vec(&task.source)?;
+        Some(task)
+    } else {
+        None
+    };
+    comm.broadcast_bytes(&mut bytes);
+    match task {
+        Some(t) => Ok(t),
+        None => {
+            let source: crate::task::TaskSource = serde_json::from_slice(&bytes).context("the task sent by rank 0")?;
+            Ok(registry::recorded(&source)?)
+        }
+    }
+}
+
+/// The checkpoint this rank resumes from: its latest, or under MPI the
+/// previous one when another rank stopped before writing the latest epoch
+/// (every rank resumes from the last epoch all of them completed).
+fn resume_checkpoint(comm: &Comm, path: &Path, run: &RunDir) -> Result<PathBuf> {
+    if !path.exists() {
+        bail!(
+            "--resume: no checkpoint for rank {} in {} ({}); start a new run without --resume",
+            comm.rank(),
+            run.dir.display(),
+            path.display()
+        );
+    }
+    if comm.size() == 1 {
+        return Ok(path.to_owned());
+    }
+    let latest = checkpoint::peek_state(path)?.epoch as u64;
+    let epoch = comm.gather_u64(latest).into_iter().min().unwrap_or(latest);
+    if epoch == latest {
+        return Ok(path.to_owned());
+    }
+    let prev = checkpoint::previous(path);
+    match checkpoint::peek_state(&prev) {
+        Ok(s) if s.epoch as u64 == epoch => Ok(prev),
+        _ => bail!(
+            "--resume: rank {} has no checkpoint of epoch {epoch}, the last epoch every rank completed ({} is of \
+             epoch {latest}); the run cannot continue exactly",
+            comm.rank(),
+            path.display()
+        ),
+    }
+}
+
+/// User + system CPU seconds of this process so far.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes one rusage struct into the zeroed value we
+    // pass; RUSAGE_SELF is always valid.
+    let usage = unsafe {
+        let mut u: libc::rusage = std::mem::zeroed();
+        if libc::getrusage(libc::RUSAGE_SELF, &mut u) != 0 {
+            return 0.0;
+        }
+        u
+    };
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(usage.ru_utime) + secs(usage.ru_stime)
+}
