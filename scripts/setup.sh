@@ -21,7 +21,7 @@ WHEEL_SHA256="a1743530431cb377e6b3b956d284bc96436fc68bac1648ef205054c178e7dc4b"
 ASSETS_DIR="$ROOT/models/gymnasium_robotics"
 CACHE_DIR="${BLOCKPUZZLE_CACHE:-$HOME/.cache/blockpuzzle}"
 APT_PACKAGES=(libmujoco-dev libclang-dev libtorch-dev libopenblas0-openmp fonts-dejavu-core
-    libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv)
+    libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv openmpi-bin libopenmpi-dev)
 
 log() { printf '[setup] %s\n' "$*"; }
 

@@ -1,0 +1,184 @@
+//! Training under `mpirun` (Open MPI): ranks learn bit for bit what threads
+//! learn, resume exactly, refuse another rank count, and a killed rank stops
+//! the job without corrupting any checkpoint.
+#![cfg(feature = "mpi")]
+
+use blockpuzzle::train::checkpoint;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BP: &str = env!("CARGO_BIN_EXE_blockpuzzle");
+
+/// A small DDPG run (TD3 and 3-step returns, so the per-shard noise streams are covered).
+fn args(run: &Path, workers: usize, epochs: usize) -> Vec<String> {
+    let s = format!(
+        "train --algo ddpg --td3 --n-step 3 --env BlocksTouch-v0 --epochs {epochs} --cycles 3 --batches 4 \
+         --batch-size 32 --test-episodes 2 --torch-threads 1 --seed 5 --workers {workers} --run-dir"
+    );
+    s.split_whitespace().map(str::to_owned).chain([run.display().to_string()]).collect()
+}
+
+fn mpirun(np: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    // Root in containers and CI; more ranks than cores on small machines.
+    c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+    c.args(["--oversubscribe", "-np", &np.to_string(), BP]);
+    c
+}
+
+fn ok(out: Output) -> Output {
+    assert!(out.status.success(), "failed: {}\n{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    out
+}
+
+fn text(out: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))
+}
+
+/// progress.csv without the columns that measure time.
+fn progress(run: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(run.join("progress.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|l| {
+            l.split(',')
+                .zip(&header)
+                .filter(|(_, h)| !h.starts_with("time/") || **h == "time/env_steps" || **h == "time/updates")
+                .map(|(v, _)| v.to_owned())
+                .collect()
+        })
+        .collect()
+}
+
+fn policy_weights(run: &Path) -> serde_json::Value {
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(run.join("policy.json")).unwrap()).unwrap();
+    v["policy"].clone()
+}
+
+#[test]
+fn two_ranks_of_one_worker_learn_exactly_what_one_process_of_two_workers_learns() {
+    let dir = tempfile::tempdir().unwrap();
+    let (threads, ranks) = (dir.path().join("threads"), dir.path().join("ranks"));
+    ok(Command::new(BP).args(args(&threads, 2, 2)).output().unwrap());
+    ok(mpirun(2).args(args(&ranks, 1, 2)).output().unwrap());
+    assert_eq!(progress(&threads), progress(&ranks), "per-epoch success, losses, steps");
+    assert_eq!(policy_weights(&threads), policy_weights(&ranks), "the same weights, bit for bit");
+    // Rank 0 writes the run's files; rank 1 only its own checkpoint.
+    assert!(ranks.join("rank-1/checkpoint.bin").exists());
+    assert!(!ranks.join("rank-1/progress.csv").exists() && !ranks.join("rank-1/policy.json").exists());
+    let s = checkpoint::peek_state(&ranks.join("rank-1/checkpoint.bin")).unwrap();
+    assert_eq!((s.ranks, s.rank, s.epoch), (2, 1, 2));
+}
+
+#[test]
+fn mpi_resume_is_exact_and_another_rank_count_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, split) = (dir.path().join("whole"), dir.path().join("split"));
+    ok(mpirun(2).args(args(&whole, 1, 2)).output().unwrap());
+    ok(mpirun(2).args(args(&split, 1, 1)).output().unwrap());
+    ok(mpirun(2).args(args(&split, 1, 2)).arg("--resume").output().unwrap());
+    assert_eq!(progress(&whole), progress(&split));
+    assert_eq!(policy_weights(&whole), policy_weights(&split));
+
+    // One process cannot continue a two-rank run, nor can three ranks.
+    let out = Command::new(BP).args(args(&split, 1, 3)).arg("--resume").output().unwrap();
+    assert!(!out.status.success());
+    assert!(text(&out).contains("mpirun -np 2"), "{}", text(&out));
+    let out = mpirun(3).args(args(&split, 1, 3)).arg("--resume").output().unwrap();
+    assert!(!out.status.success());
+    assert!(text(&out).contains("rank"), "{}", text(&out));
+}
+
+#[test]
+fn shared_replay_under_mpirun_is_refused_and_stops_every_rank() {
+    let dir = tempfile::tempdir().unwrap();
+    let started = Instant::now();
+    let out = mpirun(2).args(args(&dir.path().join("r"), 1, 1)).args(["--replay", "shared"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(text(&out).contains("--replay per-worker"), "{}", text(&out));
+    assert!(started.elapsed() < Duration::from_secs(60));
+}
+
+/// The rank processes started by `mpirun` (children carrying OMPI_COMM_WORLD_RANK).
+fn rank_pid(mpirun_pid: u32, rank: usize) -> Option<i32> {
+    let want = format!("OMPI_COMM_WORLD_RANK={rank}");
+    let mut stack = vec![mpirun_pid as i32];
+    while let Some(p) = stack.pop() {
+        let Ok(children) = std::fs::read_to_string(format!("/proc/{p}/task/{p}/children")) else { continue };
+        for c in children.split_whitespace().filter_map(|c| c.parse::<i32>().ok()) {
+            let env = std::fs::read(format!("/proc/{c}/environ")).unwrap_or_default();
+            if env.split(|&b| b == 0).any(|kv| kv == want.as_bytes()) {
+                return Some(c);
+            }
+            stack.push(c);
+        }
+    }
+    None
+}
+
+fn wait_timeout(child: &mut Child, limit: Duration) -> Option<std::process::ExitStatus> {
+    let started = Instant::now();
+    while started.elapsed() < limit {
+        if let Some(s) = child.try_wait().unwrap() {
+            return Some(s);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
+}
+
+#[test]
+fn a_killed_rank_stops_the_job_leaves_valid_checkpoints_and_resume_continues() {
+    let dir = tempfile::tempdir().unwrap();
+    let (run, whole) = (dir.path().join("killed"), dir.path().join("whole"));
+    let mut job = mpirun(2).args(args(&run, 1, 5)).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    // Once the first epoch is on disk, kill rank 1 in the middle of a later one.
+    let started = Instant::now();
+    while !run.join("rank-1/checkpoint.bin").exists() {
+        assert!(started.elapsed() < Duration::from_secs(120), "the job never finished an epoch");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let pid = rank_pid(job.id(), 1).expect("rank 1's process");
+    // SAFETY: kill(2) with a pid we just read and SIGKILL; no memory is involved.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGKILL) }, 0);
+    let status = wait_timeout(&mut job, Duration::from_secs(60)).expect("the job stops within 60 s of a rank's death");
+    assert!(!status.success());
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(job.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+    assert!(stderr.contains("signal 9") || stderr.contains("Killed") || stderr.contains("killed"), "{stderr}");
+
+    // Every checkpoint left behind is whole (the previous ones too).
+    let mut epochs = Vec::new();
+    for f in [run.join("checkpoint.bin"), run.join("rank-1/checkpoint.bin")] {
+        for path in [f.clone(), checkpoint::previous(&f)].into_iter().filter(|p| p.exists()) {
+            let loaded = checkpoint::load(&path, "BlocksTouch-v0", 0, 0);
+            assert!(!matches!(loaded, Err(checkpoint::CheckpointError::Corrupt { .. })), "{}", path.display());
+        }
+        epochs.push(checkpoint::peek_state(&f).unwrap().epoch);
+    }
+    assert!(epochs.iter().max().unwrap() - epochs.iter().min().unwrap() <= 1, "{epochs:?}");
+
+    // --resume continues from the last epoch every rank completed, exactly.
+    ok(mpirun(2).args(args(&run, 1, 5)).arg("--resume").output().unwrap());
+    ok(mpirun(2).args(args(&whole, 1, 5)).output().unwrap());
+    assert_eq!(progress(&whole), progress(&run));
+    assert_eq!(policy_weights(&whole), policy_weights(&run));
+}
+
+/// A rank that fails alone (its checkpoint is gone) stops the job with its reason instead of hanging.
+#[test]
+fn one_rank_failing_alone_stops_the_job_with_its_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let run: PathBuf = dir.path().join("r");
+    ok(mpirun(2).args(args(&run, 1, 1)).output().unwrap());
+    std::fs::remove_file(run.join("rank-1/checkpoint.bin")).unwrap();
+    let mut job = mpirun(2).args(args(&run, 1, 2)).arg("--resume").stderr(Stdio::piped()).stdout(Stdio::null()).spawn().unwrap();
+    let status = wait_timeout(&mut job, Duration::from_secs(60)).expect("no hang");
+    assert!(!status.success());
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(job.stderr.as_mut().unwrap(), &mut stderr).unwrap();
+    assert!(stderr.contains("no checkpoint for rank 1"), "{stderr}");
+}
