@@ -28,7 +28,12 @@ fn mpirun(np: usize) -> Command {
 }
 
 fn ok(out: Output) -> Output {
-    assert!(out.status.success(), "failed: {}\n{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "failed: {}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
     out
 }
 
@@ -175,7 +180,8 @@ fn one_rank_failing_alone_stops_the_job_with_its_reason() {
     let run: PathBuf = dir.path().join("r");
     ok(mpirun(2).args(args(&run, 1, 1)).output().unwrap());
     std::fs::remove_file(run.join("rank-1/checkpoint.bin")).unwrap();
-    let mut job = mpirun(2).args(args(&run, 1, 2)).arg("--resume").stderr(Stdio::piped()).stdout(Stdio::null()).spawn().unwrap();
+    let mut job =
+        mpirun(2).args(args(&run, 1, 2)).arg("--resume").stderr(Stdio::piped()).stdout(Stdio::null()).spawn().unwrap();
     let status = wait_timeout(&mut job, Duration::from_secs(60)).expect("no hang");
     assert!(!status.success());
     let mut stderr = String::new();

@@ -4,7 +4,8 @@
 use blockpuzzle::agents::ddpg::DdpgConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::train::{
-    checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, TrainConfig,
+    checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout,
+    TrainConfig,
 };
 use std::path::Path;
 
@@ -18,6 +19,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         batches: 5,
         batch_size: 32,
         buffer_size: 10_000,
+        replay: Some(ReplayLayout::PerWorker),
         test_episodes: 2,
         success_threshold: None,
         seed: 7,
@@ -132,10 +134,13 @@ fn td3_n_step_and_level_replay_resume_exactly() {
     assert_eq!(tx.critic.to_vecs(), ty.critic.to_vecs(), "second critic resumed exactly");
     assert_eq!(tx.noise_seed, ty.noise_seed);
     assert_eq!(x.actor.to_vecs(), y.actor.to_vecs());
-    assert_eq!(la.replay.parts().0, lb.replay.parts().0);
+    assert_eq!(la.replays.len(), 2, "one buffer per worker");
+    for (ra, rb) in la.replays.iter().zip(&lb.replays) {
+        assert_eq!(ra.parts(), rb.parts());
+    }
     // 3-step returns: some transitions bootstrap with γ² or γ³ (episode ends), most with γ³.
     let g = 0.98f32;
-    let disc = &la.replay.parts().0.discount;
+    let disc = &la.replays[0].parts().0.discount;
     assert!(disc.iter().all(|&d| d == g || d == g * g || d == g * g * g), "{:?}", &disc[..10]);
     assert!(disc.iter().filter(|&&d| d == g * g * g).count() > disc.len() / 2);
     // The actor is updated on every other update only.

@@ -45,12 +45,16 @@ pub struct ReplayBuffer {
     data: Batch,
     next: usize,
     len: usize,
+    /// Index of the next transition in the buffer's whole history (the
+    /// oldest stored one is `pushed - len`; transition i sits in slot i mod
+    /// capacity). Checkpoints append the transitions since the last one.
+    pushed: u64,
 }
 
 impl ReplayBuffer {
     /// An empty buffer for `capacity` transitions (memory is allocated as it fills).
     pub fn new(obs_dim: usize, act_dim: usize, capacity: usize) -> Self {
-        Self { obs_dim, act_dim, capacity: capacity.max(1), data: Batch::default(), next: 0, len: 0 }
+        Self { obs_dim, act_dim, capacity: capacity.max(1), data: Batch::default(), next: 0, len: 0, pushed: 0 }
     }
 
     /// Stored transitions.
@@ -103,6 +107,85 @@ impl ReplayBuffer {
             self.data.discount[i] = discount;
         }
         self.next = (self.next + 1) % self.capacity;
+        self.pushed += 1;
+    }
+
+    /// Index of the next transition in the buffer's history (see the field).
+    pub fn pushed(&self) -> u64 {
+        self.pushed
+    }
+
+    /// Transitions `from..to` of the buffer's history, oldest first; `None`
+    /// unless all of them are still stored.
+    pub fn history(&self, from: u64, to: u64) -> Option<Batch> {
+        if from > to || to > self.pushed || from < self.pushed - self.len as u64 {
+            return None;
+        }
+        let (o, a, c) = (self.obs_dim, self.act_dim, self.capacity as u64);
+        let mut b = Batch::default();
+        for i in from..to {
+            let j = (i % c) as usize;
+            b.obs.extend_from_slice(&self.data.obs[j * o..(j + 1) * o]);
+            b.act.extend_from_slice(&self.data.act[j * a..(j + 1) * a]);
+            b.rew.push(self.data.rew[j]);
+            b.next_obs.extend_from_slice(&self.data.next_obs[j * o..(j + 1) * o]);
+            b.done.push(self.data.done[j]);
+            b.extra.push(self.data.extra[j]);
+            b.discount.push(self.data.discount[j]);
+        }
+        Some(b)
+    }
+
+    /// The buffer whose history ends at `pushed` and whose stored
+    /// transitions are `data` (oldest first): what [`ReplayBuffer::history`]
+    /// of all stored transitions returned, so the rebuilt buffer is exact.
+    ///
+    /// # Errors
+    /// A message if the arrays do not fit the sizes or the capacity.
+    pub fn from_history(
+        obs_dim: usize,
+        act_dim: usize,
+        capacity: usize,
+        pushed: u64,
+        data: Batch,
+    ) -> Result<Self, String> {
+        let n = data.rew.len();
+        let capacity = capacity.max(1);
+        let fits = data.obs.len() == n * obs_dim
+            && data.next_obs.len() == n * obs_dim
+            && data.act.len() == n * act_dim
+            && [data.done.len(), data.extra.len(), data.discount.len()] == [n; 3]
+            && n as u64 <= pushed
+            && (n == capacity || n as u64 == pushed);
+        if !fits {
+            return Err(format!(
+                "replay history of {n} transitions does not fit {obs_dim}+{act_dim} values, capacity {capacity} and \
+                 {pushed} pushed"
+            ));
+        }
+        let mut buf = Self::new(obs_dim, act_dim, capacity);
+        // Push in history order from the slot the oldest one occupies.
+        let first = pushed - n as u64;
+        buf.next = (first % capacity as u64) as usize;
+        if n == capacity {
+            buf.data = data.clone();
+            buf.len = n;
+            // Rotate so that transition i sits in slot i mod capacity.
+            let shift = buf.next;
+            let (o, a) = (obs_dim, act_dim);
+            buf.data.obs.rotate_right(shift * o);
+            buf.data.next_obs.rotate_right(shift * o);
+            buf.data.act.rotate_right(shift * a);
+            for v in [&mut buf.data.rew, &mut buf.data.done, &mut buf.data.extra, &mut buf.data.discount] {
+                v.rotate_right(shift);
+            }
+        } else {
+            buf.data = data;
+            buf.len = n;
+            buf.next = n % capacity;
+        }
+        buf.pushed = pushed;
+        Ok(buf)
     }
 
     /// `n` transitions drawn uniformly with replacement from all stored ones.
@@ -156,7 +239,9 @@ impl ReplayBuffer {
         if !ok {
             return Err(format!("replay arrays do not fit {n} transitions of {obs_dim}+{act_dim} values"));
         }
-        Ok(Self { obs_dim, act_dim, capacity: capacity.max(1), data, next, len: n })
+        // The history index is virtual: any value that puts transition i in slot i mod capacity.
+        let pushed = if n == capacity.max(1) { (capacity.max(1) + next) as u64 } else { n as u64 };
+        Ok(Self { obs_dim, act_dim, capacity: capacity.max(1), data, next, len: n, pushed })
     }
 }
 
@@ -185,6 +270,39 @@ mod tests {
         push(&mut copy, 5);
         assert_eq!(buf.parts().0, copy.parts().0);
         assert!(ReplayBuffer::from_parts(2, 1, 3, Batch { rew: vec![1.0], ..Batch::default() }, 1).is_err());
+    }
+
+    #[test]
+    fn history_round_trips_at_every_fill_and_wrap() {
+        for (capacity, total) in [(5, 3), (5, 5), (5, 7), (5, 10), (5, 13), (1, 4)] {
+            let mut buf = ReplayBuffer::new(2, 1, capacity);
+            for k in 0..total {
+                push(&mut buf, k);
+            }
+            let start = buf.pushed() - buf.len() as u64;
+            let data = buf.history(start, buf.pushed()).unwrap();
+            assert_eq!(data.rew.first().copied(), Some(start as f32), "oldest first");
+            let copy = ReplayBuffer::from_history(2, 1, capacity, buf.pushed(), data).unwrap();
+            assert_eq!((copy.parts().0, copy.parts().1, copy.len()), (buf.parts().0, buf.parts().1, buf.len()));
+            let mut a = buf.clone();
+            let mut b = copy;
+            for k in total..total + 3 {
+                push(&mut a, k);
+                push(&mut b, k);
+            }
+            assert_eq!(a.parts(), b.parts(), "capacity {capacity}, {total} pushed");
+            assert!(buf.history(0, buf.pushed() + 1).is_none());
+        }
+        // Parts of an old checkpoint give a history index that keeps slots.
+        let mut buf = ReplayBuffer::new(2, 1, 3);
+        for k in 0..5 {
+            push(&mut buf, k);
+        }
+        let (data, next) = buf.parts();
+        let old = ReplayBuffer::from_parts(2, 1, 3, data.clone(), next).unwrap();
+        let h = old.history(old.pushed() - 3, old.pushed()).unwrap();
+        assert_eq!(h.rew, vec![2.0, 3.0, 4.0]);
+        assert!(ReplayBuffer::from_history(2, 1, 3, 2, h).is_err(), "more stored than pushed");
     }
 
     #[test]

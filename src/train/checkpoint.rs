@@ -1,8 +1,17 @@
 //! Training checkpoints: one binary file holding a JSON header (run state,
-//! hyperparameters, normaliser) and a payload of little-endian f32 arrays
-//! (networks, optimiser moments, replay buffer), guarded by a CRC-32.
-//! Written to a temporary file and renamed, so a crash never leaves a
+//! hyperparameters, normaliser, the replay log) and a payload of
+//! little-endian f32 arrays (networks, optimiser moments), guarded by a
+//! CRC-32, written atomically (`crate::io`), so a crash never leaves a
 //! half-written checkpoint.
+//!
+//! Replay buffers are kept as an append-only log beside it: every
+//! checkpoint writes one segment per buffer, `replay/wS-FIRST.bin`, holding
+//! the transitions stored since the previous one (written before the
+//! checkpoint that lists it), and deletes segments no longer stored in the
+//! buffer. An epoch writes megabytes instead of the whole buffer (about
+//! 560 MB at a million BlocksChoose-v0 transitions), and the buffer is rebuilt
+//! exactly. Checkpoints written before the log hold the buffers inline;
+//! they load, and their next save starts the log.
 
 use super::learner::{Agent, Algo};
 use crate::agents::ddpg::{Ddpg, DdpgConfig};
@@ -88,8 +97,179 @@ struct Header {
     /// The same for each further buffer (one per worker with `--replay per-worker`).
     #[serde(default)]
     more_replays: Vec<(usize, usize)>,
+    /// The replay log, one per buffer (empty: buffers inline, an older checkpoint).
+    #[serde(default)]
+    replay_log: Vec<ShardLog>,
     blobs: Vec<(String, usize)>,
     payload_crc32: u32,
+}
+
+/// One buffer's log: its capacity, history length, and the segments that
+/// hold its stored transitions.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShardLog {
+    capacity: usize,
+    /// History index of the next transition (see `ReplayBuffer::pushed`).
+    pushed: u64,
+    /// Transitions stored.
+    len: usize,
+    segments: Vec<Segment>,
+    /// Where the previous checkpoint's stored transitions began: segments
+    /// before it are deleted (under MPI the previous checkpoint stays usable).
+    #[serde(skip)]
+    kept_from: u64,
+}
+
+/// A file of the replay log: transitions `first..first + count` of one buffer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct Segment {
+    file: String,
+    first: u64,
+    count: u64,
+    crc32: u32,
+}
+
+/// The replay logs of a run's buffers, carried from one save to the next.
+#[derive(Debug, Clone, Default)]
+pub struct ReplayLog {
+    shards: Vec<ShardLog>,
+}
+
+const SEGMENT_MAGIC: &[u8; 8] = b"BPRLOG01";
+
+/// The widths of a transition's seven arrays in file order (obs, act, rew,
+/// next_obs, done, extra, discount).
+fn widths(obs_dim: usize, act_dim: usize) -> [usize; 7] {
+    [obs_dim, act_dim, 1, obs_dim, 1, 1, 1]
+}
+
+/// Appends the transitions each buffer stored since the last save to the
+/// log in `dir`, returning the logs to record (old segments are deleted by
+/// [`prune_log`] once the checkpoint that no longer needs them is written).
+fn append_log(dir: &Path, replays: &[ReplayBuffer], log: &mut ReplayLog) -> Result<Vec<ShardLog>, CheckpointError> {
+    let folder = dir.join("replay");
+    std::fs::create_dir_all(&folder).map_err(io(&folder))?;
+    log.shards.resize_with(replays.len(), ShardLog::default);
+    for (w, (replay, shard)) in replays.iter().zip(&mut log.shards).enumerate() {
+        let start = replay.pushed() - replay.len() as u64;
+        let logged = shard.segments.last().map_or(0, |g| g.first + g.count);
+        // Nothing logged yet, or a gap (a buffer loaded from an older checkpoint): log everything stored.
+        if shard.segments.is_empty() || logged < start || logged > replay.pushed() {
+            shard.segments.clear();
+            shard.kept_from = start;
+        }
+        let from = shard.segments.last().map_or(start, |g| g.first + g.count);
+        let to = replay.pushed();
+        if to > from {
+            let b = replay.history(from, to).unwrap_or_default();
+            let mut payload = Vec::with_capacity(4 * (b.obs.len() * 2 + b.act.len() + 4 * b.rew.len()));
+            for column in [&b.obs, &b.act, &b.rew, &b.next_obs, &b.done, &b.extra, &b.discount] {
+                for x in column {
+                    payload.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            let file = format!("w{w}-{from:012}.bin");
+            let path = folder.join(&file);
+            let count = to - from;
+            crate::io::write_atomic(&path, |f| {
+                f.write_all(SEGMENT_MAGIC)?;
+                f.write_all(&count.to_le_bytes())?;
+                f.write_all(&payload)
+            })
+            .map_err(io(&path))?;
+            shard.segments.push(Segment { file, first: from, count, crc32: crc32fast::hash(&payload) });
+        }
+        shard.capacity = replay.capacity();
+        shard.pushed = to;
+        shard.len = replay.len();
+    }
+    // What this checkpoint records: the segments holding its stored transitions.
+    Ok(log
+        .shards
+        .iter()
+        .map(|s| {
+            let start = s.pushed - s.len as u64;
+            let segments = s.segments.iter().filter(|g| g.first + g.count > start).cloned().collect();
+            ShardLog { segments, ..s.clone() }
+        })
+        .collect())
+}
+
+/// Deletes the segments that neither this checkpoint nor (under MPI, where
+/// a resume may go back one epoch) the previous one needs.
+fn prune_log(dir: &Path, log: &mut ReplayLog, keep_previous: bool) {
+    for shard in &mut log.shards {
+        let start = shard.pushed - shard.len as u64;
+        let keep_from = if keep_previous { shard.kept_from.min(start) } else { start };
+        shard.segments.retain(|g| {
+            let needed = g.first + g.count > keep_from;
+            if !needed {
+                let _ = std::fs::remove_file(dir.join("replay").join(&g.file));
+            }
+            needed
+        });
+        shard.kept_from = start;
+    }
+}
+
+/// Rebuilds the buffers from the log in `dir`.
+fn read_log(
+    dir: &Path,
+    logs: &[ShardLog],
+    obs_dim: usize,
+    act_dim: usize,
+    corrupt: &dyn Fn(&str) -> CheckpointError,
+) -> Result<Vec<ReplayBuffer>, CheckpointError> {
+    let widths = widths(obs_dim, act_dim);
+    let row: usize = widths.iter().sum();
+    let mut out = Vec::new();
+    for shard in logs {
+        let start = shard.pushed - shard.len as u64;
+        let mut data = Batch::default();
+        let mut next = start;
+        for g in shard.segments.iter().filter(|g| g.first + g.count > start) {
+            let path = dir.join("replay").join(&g.file);
+            let bytes = std::fs::read(&path).map_err(io(&path))?;
+            let bad = |r: &str| corrupt(&format!("replay segment {}: {r}", path.display()));
+            let count = g.count as usize;
+            if bytes.len() != 16 + 4 * row * count || &bytes[..8] != SEGMENT_MAGIC {
+                return Err(bad("wrong size or not a replay segment"));
+            }
+            let payload = &bytes[16..];
+            if crc32fast::hash(payload) != g.crc32 {
+                return Err(bad("checksum mismatch"));
+            }
+            if g.first > next {
+                return Err(bad("the segment before it is missing"));
+            }
+            let values: Vec<f32> =
+                payload.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+            // Only the transitions this checkpoint stores (the first segment may begin earlier).
+            let skip = (next - g.first) as usize;
+            let end = (shard.pushed.min(g.first + g.count) - g.first) as usize;
+            let dst = [
+                &mut data.obs,
+                &mut data.act,
+                &mut data.rew,
+                &mut data.next_obs,
+                &mut data.done,
+                &mut data.extra,
+                &mut data.discount,
+            ];
+            let mut off = 0;
+            for (d, w) in dst.into_iter().zip(widths) {
+                d.extend_from_slice(&values[off + skip * w..off + end * w]);
+                off += w * count;
+            }
+            next = g.first + end as u64;
+        }
+        if next != shard.pushed {
+            return Err(corrupt("the replay log ends before the buffer's last transition"));
+        }
+        let buffer = ReplayBuffer::from_history(obs_dim, act_dim, shard.capacity, shard.pushed, data);
+        out.push(buffer.map_err(|e| corrupt(&e))?);
+    }
+    Ok(out)
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> CheckpointError + '_ {
@@ -108,6 +288,7 @@ pub fn save(
     agent: &Agent,
     ddpg: &DdpgConfig,
     replays: &[ReplayBuffer],
+    log: &mut ReplayLog,
 ) -> Result<(), CheckpointError> {
     let mut blobs: Vec<(String, Vec<f32>)> = Vec::new();
     let mut add = |prefix: &str, vecs: Vec<Vec<f32>>| {
@@ -138,21 +319,6 @@ pub fn save(
             (a.norm.clone(), a.opt.t, 0, a.config.clone())
         }
     };
-    for (i, replay) in replays.iter().enumerate() {
-        let (r, _) = replay.parts();
-        add(
-            &replay_prefix(i),
-            vec![
-                r.obs.clone(),
-                r.act.clone(),
-                r.rew.clone(),
-                r.next_obs.clone(),
-                r.done.clone(),
-                r.extra.clone(),
-                r.discount.clone(),
-            ],
-        );
-    }
     let positions: Vec<(usize, usize)> = replays.iter().map(|r| (r.capacity(), r.parts().1)).collect();
     let (replay_capacity, replay_next) = positions.first().copied().unwrap_or((1, 0));
 
@@ -162,6 +328,8 @@ pub fn save(
             payload.extend_from_slice(&x.to_le_bytes());
         }
     }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let replay_log = append_log(dir, replays, log)?;
     let header = Header {
         state: state.clone(),
         algo: agent.algo(),
@@ -174,6 +342,7 @@ pub fn save(
         replay_capacity,
         replay_next,
         more_replays: positions.get(1..).unwrap_or_default().to_vec(),
+        replay_log,
         blobs: blobs.iter().map(|(n, v)| (n.clone(), v.len())).collect(),
         payload_crc32: crc32fast::hash(&payload),
     };
@@ -190,7 +359,9 @@ pub fn save(
     if state.ranks > 1 && path.exists() {
         std::fs::rename(path, previous(path)).map_err(io(path))?;
     }
-    crate::io::write_atomic(path, |f| f.write_all(&bytes)).map_err(io(path))
+    crate::io::write_atomic(path, |f| f.write_all(&bytes)).map_err(io(path))?;
+    prune_log(dir, log, state.ranks > 1);
+    Ok(())
 }
 
 /// `checkpoint.prev.bin` beside `checkpoint.bin`: the one before it (jobs of several ranks).
@@ -235,6 +406,8 @@ pub struct Loaded {
     pub agent: Agent,
     /// The replay buffers, exactly as saved.
     pub replays: Vec<ReplayBuffer>,
+    /// Their log, for the next [`save`].
+    pub log: ReplayLog,
 }
 
 /// Loads a checkpoint and checks it against the expected environment and sizes.
@@ -325,6 +498,12 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         }
     };
 
+    if !header.replay_log.is_empty() {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let replays = read_log(dir, &header.replay_log, obs_dim, act_dim, &corrupt)?;
+        let shards = header.replay_log.iter().map(|s| ShardLog { kept_from: s.pushed - s.len as u64, ..s.clone() });
+        return Ok(Loaded { state: header.state, agent, replays, log: ReplayLog { shards: shards.collect() } });
+    }
     let positions: Vec<(usize, usize)> = std::iter::once((header.replay_capacity, header.replay_next))
         .chain(header.more_replays.iter().copied())
         .collect();
@@ -351,5 +530,5 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         }
         replays.push(ReplayBuffer::from_parts(obs_dim, act_dim, capacity, data, next).map_err(|e| corrupt(&e))?);
     }
-    Ok(Loaded { state: header.state, agent, replays })
+    Ok(Loaded { state: header.state, agent, replays, log: ReplayLog::default() })
 }

@@ -77,9 +77,10 @@ pub struct TrainConfig {
     /// and the update is the mean of the workers' gradients, whatever the
     /// split into processes) or `shared` (one buffer per process, one batch
     /// of batch-size × workers; runs started before per-worker replay).
-    #[arg(long, value_enum, default_value = "per-worker")]
-    #[serde(default = "ReplayLayout::legacy")]
-    pub replay: ReplayLayout,
+    /// Default: per-worker for a new run; a resumed run keeps its own.
+    #[arg(long, value_enum)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayLayout>,
     /// Test and finals episodes per worker per epoch.
     #[arg(long, default_value_t = 10)]
     pub test_episodes: usize,
@@ -136,13 +137,6 @@ pub enum ReplayLayout {
     Shared,
 }
 
-impl ReplayLayout {
-    /// The layout of runs whose `config.json` predates the setting.
-    fn legacy() -> Self {
-        Self::Shared
-    }
-}
-
 /// One row of `progress.csv`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct EpochRow {
@@ -196,6 +190,12 @@ pub struct EpochRow {
 }
 
 impl TrainConfig {
+    /// The replay layout of a run's recorded configuration (one recorded
+    /// before the setting existed shared its replay).
+    pub fn replay_layout(&self) -> ReplayLayout {
+        self.replay.unwrap_or(ReplayLayout::Shared)
+    }
+
     /// The method as (display name, short name): DDPG, PGGD, or PGGD + AggreVaTeD.
     fn method(&self) -> (&'static str, &'static str) {
         match (self.algo, &self.aggrevated.expert) {

@@ -88,7 +88,7 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
             bail!("--success-threshold must be in [0, 1]");
         }
     }
-    if comm.size() > 1 && config.replay == ReplayLayout::Shared {
+    if comm.size() > 1 && config.replay == Some(ReplayLayout::Shared) {
         bail!(
             "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
              computes; use --replay per-worker (the default) under mpirun",
@@ -122,6 +122,8 @@ struct Trainer<'a> {
     learner: Learner,
     /// One buffer per worker (`per-worker`) or one (`shared`).
     replays: Vec<ReplayBuffer>,
+    /// The replay buffers' log on disk (appended by every checkpoint).
+    replay_log: checkpoint::ReplayLog,
     state: RunState,
     /// progress.csv's rows (rank 0).
     rows: Vec<EpochRow>,
@@ -167,6 +169,16 @@ impl<'a> Trainer<'a> {
         let task = shared_task(comm, config, &run, saved_config.as_ref())?;
         let mut config = config.clone();
         config.task = Some(task.source.clone());
+        // Replay: as given; else a resumed run's own; else per worker.
+        let recorded = saved_config.as_ref().map(TrainConfig::replay_layout);
+        config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
+        let layout = config.replay_layout();
+        if comm.size() > 1 && layout == ReplayLayout::Shared {
+            bail!(
+                "{} shares replay per process (it predates per-worker replay); it cannot continue under mpirun",
+                run.dir.display()
+            );
+        }
         let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
         let envs: Vec<BlockEnv> =
             (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
@@ -176,13 +188,14 @@ impl<'a> Trainer<'a> {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
         }
 
-        let (agent, replays, state, rows) = if resume {
+        let (agent, replays, replay_log, state, rows) = if resume {
             let path = resume_checkpoint(comm, &mine.checkpoint(), &run)?;
             if comm.is_root() {
-                let saved = match saved_config {
+                let mut saved = match saved_config {
                     Some(c) => c,
                     None => run.read_config()?,
                 };
+                saved.replay = Some(saved.replay_layout());
                 let changed = computation_differences(&saved, &config);
                 if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
                     bail!(
@@ -209,7 +222,7 @@ impl<'a> Trainer<'a> {
             } else {
                 Vec::new()
             };
-            (loaded.agent, loaded.replays, loaded.state, rows)
+            (loaded.agent, loaded.replays, loaded.log, loaded.state, rows)
         } else {
             if mine.checkpoint().exists() || run.checkpoint().exists() {
                 bail!(
@@ -234,24 +247,24 @@ impl<'a> Trainer<'a> {
                 ranks: comm.size(),
                 rank: comm.rank(),
             };
-            let shards = match config.replay {
+            let shards = match layout {
                 ReplayLayout::PerWorker => config.workers,
                 ReplayLayout::Shared => 1,
             };
             let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
-            (agent, replays, state, Vec::new())
+            (agent, replays, checkpoint::ReplayLog::default(), state, Vec::new())
         };
         if agent.algo() != config.algo {
             bail!("{} holds a {:?} agent, not {:?}", mine.checkpoint().display(), agent.algo(), config.algo);
         }
-        let expected = if config.replay == ReplayLayout::PerWorker { config.workers } else { 1 };
+        let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
         if replays.len() != expected {
             bail!(
                 "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
                 mine.checkpoint().display(),
                 replays.len(),
                 config.workers,
-                config.replay
+                layout
             );
         }
         let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
@@ -268,6 +281,7 @@ impl<'a> Trainer<'a> {
             envs,
             learner: Learner { agent, expert },
             replays,
+            replay_log,
             state,
             rows,
             threshold,
@@ -340,7 +354,7 @@ impl<'a> Trainer<'a> {
             tally.steps += ep.len();
             tally.expert_steps += ep.expert_steps;
             tally.forward_seconds += ep.forward_seconds / config.workers as f64;
-            let replay = match config.replay {
+            let replay = match config.replay_layout() {
                 ReplayLayout::PerWorker => &mut self.replays[i / config.rollouts],
                 ReplayLayout::Shared => &mut self.replays[0],
             };
@@ -358,7 +372,7 @@ impl<'a> Trainer<'a> {
         let config = &self.config;
         let (e, c) = (epoch as u64, cycle as u64);
         let first = self.shard(0);
-        match config.replay {
+        match config.replay_layout() {
             // One batch of batch_size × workers from the process's buffer.
             ReplayLayout::Shared => {
                 let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
@@ -509,7 +523,8 @@ impl<'a> Trainer<'a> {
             }
         }
         self.state.best_finals = self.state.best_finals.max(row.finals_success);
-        checkpoint::save(&self.mine.checkpoint(), &self.state, &self.learner.agent, &self.config.ddpg, &self.replays)?;
+        let (agent, ddpg) = (&self.learner.agent, &self.config.ddpg);
+        checkpoint::save(&self.mine.checkpoint(), &self.state, agent, ddpg, &self.replays, &mut self.replay_log)?;
         // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
         self.persist_seconds = started.elapsed().as_secs_f64();
         self.state.wall_seconds += self.persist_seconds;
