@@ -108,6 +108,45 @@ fn resume_restores_the_exact_state() {
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
 }
 
+/// The replay log: each checkpoint appends the epoch's transitions, segments
+/// the buffer no longer holds are deleted, the buffer is rebuilt exactly
+/// past a full ring, and a damaged segment is a clear error.
+#[test]
+fn replay_log_appends_prunes_and_rebuilds_the_buffer_exactly() {
+    let small = |epochs| TrainConfig { buffer_size: 200, ..tiny("GripperTouch-v0", epochs) };
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&small(5), straight.path(), false, &mut quiet).unwrap();
+    let split = tempfile::tempdir().unwrap();
+    train(&small(3), split.path(), false, &mut quiet).unwrap();
+    let b = train(&small(5), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    let ckpt = |d: &Path| checkpoint::load(&d.join("checkpoint.bin"), "GripperTouch-v0", 29, 4).unwrap();
+    let (la, lb) = (ckpt(straight.path()), ckpt(split.path()));
+    for (ra, rb) in la.replays.iter().zip(&lb.replays) {
+        assert_eq!(ra.len(), 200, "the ring is full");
+        assert!(ra.pushed() > 400, "and has wrapped");
+        assert_eq!(ra.parts(), rb.parts());
+    }
+    // The checkpoint holds no transitions; the log only what the buffers still hold (plus at most an epoch).
+    let log = straight.path().join("replay");
+    let segments: Vec<_> = std::fs::read_dir(&log).unwrap().map(|e| e.unwrap().path()).collect();
+    let logged: u64 = segments.iter().map(|p| std::fs::metadata(p).unwrap().len()).sum();
+    let row = 4 * (2 * 29 + 4 + 4) as u64;
+    assert!(logged <= 2 * (200 + 200) * row + 64 * segments.len() as u64, "{logged} bytes in {segments:?}");
+    assert!(segments.iter().all(|p| p.file_name().unwrap().to_string_lossy().starts_with('w')));
+    assert!(std::fs::metadata(straight.path().join("checkpoint.bin")).unwrap().len() < 200 * row * 2);
+
+    // A damaged segment is named.
+    let newest = segments.iter().max().unwrap();
+    let mut bytes = std::fs::read(newest).unwrap();
+    let n = bytes.len();
+    bytes[n - 3] ^= 0xff;
+    std::fs::write(newest, &bytes).unwrap();
+    let err = checkpoint::load(&straight.path().join("checkpoint.bin"), "GripperTouch-v0", 29, 4).err().unwrap();
+    let msg = err.to_string();
+    assert!(msg.contains("corrupt") && msg.contains(&*newest.file_name().unwrap().to_string_lossy()), "{msg}");
+}
+
 /// This project's options: TD3, 3-step returns, lower levels replayed.
 fn tiny_ours(env: &str, epochs: usize) -> TrainConfig {
     let mut c = tiny(env, epochs);
