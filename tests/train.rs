@@ -49,6 +49,7 @@ fn comparable(rows: &[EpochRow]) -> Vec<EpochRow> {
             env_seconds: 0.0,
             forward_seconds: 0.0,
             update_seconds: 0.0,
+            reduce_seconds: 0.0,
             eval_seconds: 0.0,
             persist_seconds: 0.0,
             cpu_utilisation: 0.0,

@@ -1,6 +1,7 @@
 //! Learning agents: DDPG and PGGD (with their networks, optimiser,
 //! normaliser and replay buffer), and AggreVaTeD's expert view and mixture.
 
+pub mod agent;
 pub mod ddpg;
 pub mod expert;
 pub mod mlp;

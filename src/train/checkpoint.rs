@@ -13,7 +13,7 @@
 //! exactly. Checkpoints written before the log hold the buffers inline;
 //! they load, and their next save starts the log.
 
-use super::learner::{Agent, Algo};
+use crate::agents::agent::{Agent, Algo};
 use crate::agents::ddpg::{Ddpg, DdpgConfig};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::pggd::{Pggd, PggdConfig};

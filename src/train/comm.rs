@@ -106,38 +106,55 @@ impl Comm {
     }
 
     /// The mean of every shard's vector over all ranks: each rank passes its
-    /// shards' vectors (the same number on every rank, all of one length);
-    /// the sum runs over the global shard order (rank, then shard), one
-    /// addition after another, so it is bit-identical for any split of the
-    /// same shards into ranks.
+    /// shards' vectors (the same number on every rank, all of one length).
+    /// Every element is summed over the global shard order (rank, then
+    /// shard), one addition after another, so the result is bit-identical
+    /// for any split of the same shards into ranks. Under MPI the sum is
+    /// split like a ring all-reduce: rank c receives chunk c of every
+    /// shard's vector (all-to-all), sums it in shard order, and the summed
+    /// chunks are gathered (all-gather); each rank sends and receives about
+    /// twice one shard's vector per local shard, whatever the number of ranks.
     pub fn shard_mean(&self, local: &[Vec<f32>]) -> Vec<f32> {
         let len = local.first().map_or(0, Vec::len);
-        let all: Vec<f32> = match &self.inner {
-            Inner::Local => local.concat(),
+        match &self.inner {
+            Inner::Local => {
+                let slices: Vec<&[f32]> = local.iter().map(Vec::as_slice).collect();
+                mean_in_order(&slices, len)
+            }
             #[cfg(feature = "mpi")]
             Inner::Mpi(w) => {
-                let mine = local.concat();
-                let mut out = vec![0.0f32; mine.len() * self.size()];
-                w.all_gather_into(&mine[..], &mut out[..]);
+                let (p, shards) = (self.size(), local.len());
+                let bounds: Vec<usize> = (0..=p).map(|c| c * len / p).collect();
+                let chunk = |c: usize| bounds[c]..bounds[c + 1];
+                // To rank c: chunk c of each of my shards, shard after shard.
+                let mut send = Vec::with_capacity(shards * len);
+                let mut send_counts = Vec::with_capacity(p);
+                for c in 0..p {
+                    for v in local {
+                        send.extend_from_slice(&v[chunk(c)]);
+                    }
+                    send_counts.push((shards * chunk(c).len()) as i32);
+                }
+                let mine = chunk(self.rank()).len();
+                let recv_counts = vec![(shards * mine) as i32; p];
+                let mut recv = vec![0.0f32; shards * mine * p];
+                {
+                    let send_part =
+                        mpi::datatype::Partition::new(&send[..], &send_counts[..], displacements(&send_counts));
+                    let mut recv_part =
+                        mpi::datatype::PartitionMut::new(&mut recv[..], &recv_counts[..], displacements(&recv_counts));
+                    w.all_to_all_varcount_into(&send_part, &mut recv_part);
+                }
+                // Received rank by rank, each rank's shards in order: the global shard order.
+                let slices: Vec<&[f32]> = recv.chunks_exact(mine.max(1)).take(shards * p).collect();
+                let summed = if mine == 0 { Vec::new() } else { mean_in_order(&slices, mine) };
+                let counts: Vec<i32> = (0..p).map(|c| chunk(c).len() as i32).collect();
+                let mut out = vec![0.0f32; len];
+                let mut part = mpi::datatype::PartitionMut::new(&mut out[..], &counts[..], displacements(&counts));
+                w.all_gather_varcount_into(&summed[..], &mut part);
                 out
             }
-        };
-        let mut shards = all.chunks_exact(len.max(1));
-        let mut sum = shards.next().map(<[f32]>::to_vec).unwrap_or_default();
-        let mut n = 1usize;
-        for s in shards {
-            for (a, b) in sum.iter_mut().zip(s) {
-                *a += b;
-            }
-            n += 1;
         }
-        if n > 1 {
-            let n = n as f32;
-            for a in &mut sum {
-                *a /= n;
-            }
-        }
-        sum
     }
 
     /// Rank 0's bytes on every rank.
@@ -168,6 +185,31 @@ impl Comm {
         w.all_gather_into(&(n as i32), &mut counts[..]);
         counts
     }
+}
+
+/// The element-wise mean of `slices` (each `len` long), summed in order,
+/// one addition after another, and divided once.
+fn mean_in_order(slices: &[&[f32]], len: usize) -> Vec<f32> {
+    let mut it = slices.iter();
+    let mut sum = it.next().map(|s| s[..len].to_vec()).unwrap_or_default();
+    for s in it {
+        for (a, b) in sum.iter_mut().zip(s.iter()) {
+            *a += b;
+        }
+    }
+    if slices.len() > 1 {
+        let n = slices.len() as f32;
+        for a in &mut sum {
+            *a /= n;
+        }
+    }
+    sum
+}
+
+/// Offsets of consecutive blocks of `counts`.
+#[cfg(feature = "mpi")]
+fn displacements(counts: &[i32]) -> Vec<i32> {
+    counts.iter().scan(0, |acc, &c| Some(std::mem::replace(acc, *acc + c))).collect()
 }
 
 #[cfg(test)]

@@ -4,29 +4,15 @@ use super::comm::Comm;
 use super::rollouts::Behaviour;
 use super::rundir::SavedPolicy;
 use super::{load_policy, write_json_atomic, TrainConfig};
-use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
+pub use crate::agents::agent::{Agent, Algo};
+use crate::agents::ddpg::{DdpgPolicy, UpdateStats};
 use crate::agents::expert::{beta, without_grey, ExpertCritic, Mixture};
 use crate::agents::mlp::TanhMlp;
-use crate::agents::normalizer::Normalizer;
-use crate::agents::pggd::Pggd;
 use crate::agents::replay::Batch;
 use crate::agents::AnyPolicy;
 use anyhow::{bail, Context, Result};
-use rand::Rng;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// Training algorithm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Algo {
-    /// Deep deterministic policy gradient (OpenAI baselines' HER DDPG, no HER).
-    #[default]
-    Ddpg,
-    /// Policy gradient with a Gaussian policy (the paper's PGGD); with
-    /// `--expert`, trained by AggreVaTeD.
-    Pggd,
-}
 
 /// The descent direction of PGGD under AggreVaTeD.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
@@ -162,70 +148,12 @@ fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Resu
     }
 }
 
-/// A learner's networks, optimisers and normaliser: what a checkpoint holds.
-/// (One lives per run, so the variants' size difference does not matter.)
-#[allow(clippy::large_enum_variant)]
-pub enum Agent {
-    /// DDPG.
-    Ddpg(Ddpg),
-    /// PGGD.
-    Pggd(Pggd),
-}
-
-impl Agent {
-    /// A fresh agent for `config`.
-    pub(crate) fn new(config: &TrainConfig, obs_dim: usize, act_dim: usize, rng: &mut impl Rng) -> Self {
-        let d = &config.ddpg;
-        match config.algo {
-            Algo::Ddpg => Self::Ddpg(Ddpg::new(obs_dim, act_dim, d.clone(), rng)),
-            Algo::Pggd => Self::Pggd(Pggd::new(
-                obs_dim,
-                act_dim,
-                (d.layers, d.hidden),
-                (d.norm_eps, d.norm_clip),
-                config.pggd.clone(),
-                rng,
-            )),
-        }
-    }
-
-    /// Which algorithm.
-    pub fn algo(&self) -> Algo {
-        match self {
-            Self::Ddpg(_) => Algo::Ddpg,
-            Self::Pggd(_) => Algo::Pggd,
-        }
-    }
-
-    /// The deterministic policy, frozen.
-    pub fn policy(&self) -> AnyPolicy {
-        match self {
-            Self::Ddpg(a) => AnyPolicy::Ddpg(a.policy()),
-            Self::Pggd(a) => AnyPolicy::Pggd(a.policy()),
-        }
-    }
-
-    /// DDPG's critic as a plain network (saved beside the policy); none for PGGD.
-    pub fn critic(&self) -> Option<TanhMlp> {
-        match self {
-            Self::Ddpg(a) => Some(a.critic.to_plain()),
-            Self::Pggd(_) => None,
-        }
-    }
-
-    /// The observation normaliser.
-    pub(crate) fn norm_mut(&mut self) -> &mut Normalizer {
-        match self {
-            Self::Ddpg(a) => &mut a.norm,
-            Self::Pggd(a) => &mut a.norm,
-        }
-    }
-}
-
 /// What the training loop trains: the agent and, for AggreVaTeD, the expert.
 pub(crate) struct Learner {
     pub(crate) agent: Agent,
     pub(crate) expert: Option<Expert>,
+    /// Wall seconds spent averaging gradients (under MPI: exchanging them) since last reset.
+    pub(crate) reduce_seconds: f64,
 }
 
 impl Learner {
@@ -243,29 +171,21 @@ impl Learner {
         let mut gradients = Vec::with_capacity(batches.len());
         let mut stats = Vec::with_capacity(batches.len());
         for (i, batch) in batches.iter().enumerate() {
-            let (g, s) = match &mut self.agent {
-                Agent::Ddpg(a) => a.gradient(batch, (first_shard + i) as u64),
-                Agent::Pggd(a) => match self.expert.as_ref().and_then(|e| e.advantage(batch, obs_dim)) {
-                    Some(adv) => a.gradient(batch, &adv),
-                    None => a.gradient(batch, &batch.extra),
-                },
-            };
+            let weights = self.expert.as_ref().and_then(|e| e.advantage(batch, obs_dim));
+            let (g, s) = self.agent.gradient(batch, (first_shard + i) as u64, weights.as_deref());
             gradients.push(g);
             stats.push(s);
         }
+        let t = std::time::Instant::now();
         let mean = comm.shard_mean(&gradients);
-        match &mut self.agent {
-            Agent::Ddpg(a) => a.apply_gradient(&mean),
-            Agent::Pggd(a) => a.apply_gradient(&mean),
-        }
+        self.reduce_seconds += t.elapsed().as_secs_f64();
+        self.agent.apply_gradient(&mean);
         stats
     }
 
     /// End of a cycle: DDPG's target networks follow.
     pub(crate) fn end_cycle(&mut self) {
-        if let Agent::Ddpg(a) = &mut self.agent {
-            a.update_targets();
-        }
+        self.agent.end_cycle();
     }
 
     /// β of the AggreVaTeD mixture at `epoch` (None without an expert).

@@ -171,6 +171,10 @@ pub struct EpochRow {
     /// Wall seconds of gradient updates and target updates.
     #[serde(rename = "time/update_seconds")]
     pub update_seconds: f64,
+    /// Wall seconds of averaging the workers' gradients, a part of
+    /// `update_seconds` (under MPI: gathering every rank's gradients and summing them).
+    #[serde(rename = "time/reduce_seconds", default)]
+    pub reduce_seconds: f64,
     /// Wall seconds of the test and finals episodes (a part of `env_seconds`).
     #[serde(rename = "time/eval_seconds", default)]
     pub eval_seconds: f64,

@@ -160,6 +160,7 @@ mod tests {
             env_seconds: 3.0,
             forward_seconds: 0.5,
             update_seconds: 5.0,
+            reduce_seconds: 0.1,
             eval_seconds: 1.0,
             persist_seconds: 1.5,
             beta: 0.0,

@@ -232,7 +232,7 @@ impl<'a> Trainer<'a> {
             }
             // Every rank draws the same initial weights from the run seed.
             let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-            let agent = Agent::new(&config, obs_dim, act_dim, &mut rng);
+            let agent = Agent::new(config.algo, &config.ddpg, &config.pggd, obs_dim, act_dim, &mut rng);
             let state = RunState {
                 env_id: task.id().to_owned(),
                 obs_dim,
@@ -272,6 +272,16 @@ impl<'a> Trainer<'a> {
         if comm.is_root() {
             write_json_atomic(&run.config(), &config)?;
         }
+        if comm.is_root() && comm.size() > 1 {
+            let n = agent.gradient_len();
+            eprintln!(
+                "mpirun: {} ranks × {} workers; every update gathers {} gradient values ({} KiB) from each rank",
+                comm.size(),
+                config.workers,
+                n * config.workers,
+                n * config.workers * 4 / 1024
+            );
+        }
         Ok(Self {
             comm,
             config,
@@ -279,7 +289,7 @@ impl<'a> Trainer<'a> {
             mine,
             task,
             envs,
-            learner: Learner { agent, expert },
+            learner: Learner { agent, expert, reduce_seconds: 0.0 },
             replays,
             replay_log,
             state,
@@ -306,6 +316,7 @@ impl<'a> Trainer<'a> {
             env.set_level(level)?;
         }
         let mut tally = Tally::default();
+        self.learner.reduce_seconds = 0.0;
         for cycle in 0..self.config.cycles {
             self.collect(epoch, &mut tally)?;
             self.learn(epoch, cycle, &mut tally);
@@ -485,6 +496,7 @@ impl<'a> Trainer<'a> {
             env_seconds: tally.env_seconds,
             forward_seconds: tally.forward_seconds,
             update_seconds: tally.update_seconds,
+            reduce_seconds: self.learner.reduce_seconds,
             eval_seconds,
             persist_seconds: self.persist_seconds,
             beta: self.learner.beta(epoch, &self.config).unwrap_or(0.0),
