@@ -9,9 +9,13 @@ RUN ?= runs/BlocksTouch-v0-ddpg-s0
 EXPERT ?= BlocksTouch-v0-ddpg
 EPISODES ?= 1000
 BP = $(CARGO) run --release --quiet --
+BIN = target/release/blockpuzzle
+NP ?= 20
+# mpirun as root needs --allow-run-as-root; --oversubscribe lets NP exceed the cores (slowly).
+MPIRUN ?= mpirun $$(test "$$(id -u)" = 0 && echo --allow-run-as-root) --oversubscribe $(MPIFLAGS)
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench train build clean-assets ddpg3 aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
+.PHONY: setup demo test bench bench-mpi train build clean-assets ddpg3 ddpg3-paper aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
 
 setup:
 	bash scripts/setup.sh
@@ -42,6 +46,12 @@ ddpg3: build
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 --snapshot-every 10 \
 		--torch-threads $(TORCH_THREADS) \
 		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
+#   the paper's own configuration, 20 MPI workers (one process each, `make ddpg3-paper NP=20`;
+#   MPIFLAGS="--hostfile examples/mpi/hostfile" spreads it over machines, see the README);
+ddpg3-paper: build
+	$(MPIRUN) -np $(NP) $(BIN) train --algo ddpg --env BlocksChoose-v0 --workers 1 --epochs 500 \
+		--snapshot-every 10 --torch-threads 1 --seed 0 --run-dir runs/BlocksChoose-v0-ddpg-np$(NP)-s0 \
+		$(call resume,runs/BlocksChoose-v0-ddpg-np$(NP)-s0)
 #   The headline study (results/headline.md): DDPG variants on BlocksChoose-v0, 2 workers,
 #   `make study VARIANT=ours EPOCHS=100 SEED=0` (each resumes runs/study-VARIANT-sSEED). The
 #   baseline is the paper's configuration: seed 0 is `make ddpg3` itself (its first epochs).
@@ -107,6 +117,10 @@ filmstrip: build
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
 	bash bench/fetchpush.sh
+
+# Training across MPI ranks against threads, and the 20-rank projection (results/mpi.md).
+bench-mpi: build
+	bash bench/mpi_scaling.sh
 
 clean-assets:
 	rm -rf models/gymnasium_robotics

@@ -4,16 +4,19 @@
 //! An epoch is `cycles` cycles; in a cycle every worker (one environment
 //! each, stepped in its own thread) collects `rollouts` exploration episodes
 //! (DDPG: actor + noise; PGGD: Gaussian samples; AggreVaTeD: per step the
-//! expert with probability β, else the learner), then the learner takes
-//! `batches` gradient steps on batches of `batch_size × workers` transitions
-//! (the average of the workers' gradients, as baselines' MPI Adam computes
-//! it) and DDPG's target networks follow. After
-//! the cycles every worker plays `test_episodes` deterministic episodes at
-//! the current level ("test") and at the maximum level ("finals"); when the
-//! test success reaches `success_threshold` the curriculum moves up a level.
+//! expert with probability β, else the learner) into its own replay buffer,
+//! then the learner takes `batches` gradient steps, each the mean of the
+//! workers' gradients on a batch of `batch_size` from their own buffers (as
+//! the paper's MPI workers and baselines' MPI Adam do), and DDPG's target
+//! networks follow. After the cycles every worker plays `test_episodes`
+//! deterministic episodes at the current level ("test") and at the maximum
+//! level ("finals"); when the test success reaches `success_threshold` the
+//! curriculum moves up a level. Under `mpirun` the workers are spread over
+//! ranks (`comm.rs`); the loop itself is `trainer.rs`.
 //!
 //! The run directory holds `config.json`, `progress.csv` (one row per epoch),
-//! `checkpoint.bin` (everything, written atomically every epoch),
+//! `checkpoint.bin` (everything but the replay buffers, every epoch),
+//! `replay/` (the buffers' append-only log),
 //! `policy.json` (latest actor + normaliser), `best_policy.json` (best
 //! finals success), `success.png` (the success curves) and, for AggreVaTeD,
 //! `expert_policy.json` (the run's copy of its expert); with `--snapshot-every

@@ -273,13 +273,13 @@ impl<'a> Trainer<'a> {
             write_json_atomic(&run.config(), &config)?;
         }
         if comm.is_root() && comm.size() > 1 {
-            let n = agent.gradient_len();
+            let (p, w, bytes) = (comm.size(), config.workers, 4 * agent.gradient_len());
             eprintln!(
-                "mpirun: {} ranks × {} workers; every update gathers {} gradient values ({} KiB) from each rank",
-                comm.size(),
-                config.workers,
-                n * config.workers,
-                n * config.workers * 4 / 1024
+                "mpirun: {p} ranks × {w} workers; each update averages {} gradients of {} KiB: every rank sends and \
+                 receives about {} KiB",
+                p * w,
+                bytes / 1024,
+                2 * (p - 1) * w * bytes / p / 1024
             );
         }
         Ok(Self {
