@@ -4,26 +4,43 @@
 //! grey (neutral); an episode fails when red touches blue and succeeds when
 //! every blue object touches a green one. The environments put coloured blocks
 //! in front of the OpenAI Fetch robot in MuJoCo.
+//!
+//! Without cargo features the crate is the environment core (no libtorch,
+//! EGL or plotting); `render` adds headless rendering, `train` the training
+//! stack and command line, `mpi` training under `mpirun`.
 
+// The environment core.
+pub mod check;
 pub mod env;
-pub mod evaluate;
 pub mod io;
 pub mod math;
 pub mod mj;
+pub mod policy;
+pub mod rollout;
 pub mod rules;
 pub mod scene;
-pub mod table;
 pub mod task;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
-pub mod agents;
-pub mod bench;
-pub mod blas;
-pub mod check;
-pub mod cli;
-pub mod policy;
+
+#[cfg(feature = "render")]
 pub mod render;
-pub mod rollout;
+
+// The training stack.
+#[cfg(feature = "train")]
+pub mod agents;
+#[cfg(feature = "train")]
+pub mod bench;
+#[cfg(feature = "train")]
+pub mod blas;
+#[cfg(feature = "train")]
+pub mod cli;
+#[cfg(feature = "train")]
+pub mod evaluate;
+#[cfg(feature = "train")]
+pub mod table;
+#[cfg(feature = "train")]
 pub mod train;
+#[cfg(feature = "train")]
 pub mod zoo;

@@ -1,6 +1,7 @@
 //! AggreVaTeD's expert view: a BlocksChoose observation with the grey block
 //! removed is, field by field, the BlocksTouch observation of the same
 //! blue and green blocks.
+#![cfg(feature = "train")]
 
 use blockpuzzle::agents::expert::{obs_dim_without_grey, without_grey};
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, BLOCK_OBS, ROBOT_OBS};

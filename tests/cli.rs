@@ -1,4 +1,5 @@
 //! The `blockpuzzle` binary end to end, bad input included.
+#![cfg(feature = "train")]
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -3,6 +3,7 @@
 //! episodes) within a fixed budget of 10 epochs of 10 cycles (at most 20,000
 //! environment steps and 4,000 updates). Runs the `blockpuzzle` binary so that
 //! OpenBLAS gets its fast kernels (see src/blas.rs).
+#![cfg(feature = "train")]
 
 use std::process::Command;
 

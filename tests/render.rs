@@ -1,6 +1,7 @@
 //! Headless rendering (EGL + Mesa's software rasteriser): a known state
 //! shows its blocks where the camera projects them, and the GIF and
 //! filmstrip outputs decode with the expected frames and sizes.
+#![cfg(feature = "train")]
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
 use blockpuzzle::render::{Renderer, View};

@@ -1,5 +1,6 @@
 //! Training end to end (DDPG, PGGD, AggreVaTeD): run directory, resume,
 //! checkpoints, policies.
+#![cfg(feature = "train")]
 
 use blockpuzzle::agents::ddpg::DdpgConfig;
 use blockpuzzle::agents::AnyPolicy;

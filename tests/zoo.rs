@@ -1,6 +1,7 @@
 //! The model zoo: entries round-trip exactly, damaged or mismatched files and
 //! absurd weights are clear errors, and the shipped entries act as the
 //! policies they were exported from.
+#![cfg(feature = "train")]
 
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::pggd::{Pggd, PggdConfig};

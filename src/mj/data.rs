@@ -97,6 +97,7 @@ impl Data {
     }
 
     /// The raw `mjData` (for the renderer).
+    #[cfg(feature = "render")]
     pub(crate) fn as_mut_ptr(&mut self) -> *mut sys::mjData {
         self.ptr.as_ptr()
     }
