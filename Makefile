@@ -33,6 +33,7 @@ demo: build
 test: setup
 	$(CARGO) test --all
 	bash scripts/zoo_python_check.sh
+	bash scripts/python_check.sh
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

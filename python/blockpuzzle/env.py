@@ -1,0 +1,80 @@
+"""The Gymnasium environment around ``blockpuzzle._native.Env``."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from ._native import Env as _NativeEnv
+
+
+class BlockPuzzleEnv(gymnasium.Env):
+    """A BlockPuzzle task on the Fetch robot.
+
+    Observation: float32 vector (gripper, fingers, and per block its position, rotation, velocities
+    and colour one-hot). Action: float32 in [-1, 1]^4 (gripper displacement, finger command).
+    Reward: -1 per step, 0 on success, minus the steps left on failure. ``terminated`` when the
+    colour rules end the episode (success: every blue object touches a green one; failure: red
+    touches blue), ``truncated`` at the task's step limit or on numerical instability.
+
+    ``reset(options=...)`` takes ``level`` (curriculum level), ``challenge`` (bool) and
+    ``distribution`` (a name from the task file); they stay in force for later resets until
+    changed. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
+    ``distribution``, ``touching`` (object index pairs touching during the step),
+    ``contact_matrix`` (int8, 0 never touched, 1 touched before, 2 touching now),
+    ``elapsed_steps`` and ``unstable``; ``env.unwrapped.objects`` names the indices.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}
+
+    def __init__(self, task: str | None = None, render_mode: str | None = None, width: int = 480,
+                 height: int = 480):
+        if task is None:
+            raise ValueError("no task: pass task='BlocksTouch-v0' (an id) or task='path/to/task.toml'")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode {render_mode!r} is not supported; use one of {self.metadata['render_modes']} or None")
+        self._env = _NativeEnv(str(task), width, height)
+        low, high = self._env.observation_bounds()
+        self.observation_space = spaces.Box(low=low, high=high, dtype=np.float32)
+        self.action_space = spaces.Box(low=-1.0, high=1.0, shape=(self._env.act_dim,), dtype=np.float32)
+        self.render_mode = render_mode
+        self.task_id = self._env.id
+        self.objects = [name for name, _ in self._env.objects()]
+        self.max_level = self._env.max_level
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = set(options) - {"level", "challenge", "distribution"}
+        if unknown:
+            raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution")
+        if seed is not None and not (0 <= int(seed) < 2**64):
+            raise ValueError(f"seed {seed} is outside [0, 2**64)")
+        level = options.get("level")
+        if level is not None and (isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0):
+            raise ValueError(f"options['level'] must be an int >= 0, not {level!r}")
+        if "challenge" in options and not isinstance(options["challenge"], (bool, np.bool_)):
+            raise ValueError(f"options['challenge'] must be a bool, not {options['challenge']!r}")
+        obs, info = self._env.reset(
+            None if seed is None else int(seed),
+            options.get("level"),
+            options.get("challenge"),
+            options.get("distribution"),
+        )
+        return obs, info
+
+    def step(self, action):
+        action = np.ascontiguousarray(action, dtype=np.float32).reshape(-1)
+        return self._env.step(action)
+
+    def render(self):
+        if self.render_mode is None:
+            gymnasium.logger.warn("render() without a render_mode: pass render_mode='rgb_array' to gymnasium.make")
+            return None
+        return self._env.render()
+
+    def close(self):
+        self._env.close()

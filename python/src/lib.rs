@@ -1,0 +1,219 @@
+//! `blockpuzzle._native`: the BlockPuzzle environments for Python (PyO3).
+//! The Gymnasium classes around them are in `blockpuzzle/*.py`; this module
+//! holds one environment (`Env`), Rust errors as Python exceptions, and
+//! observations, images and contact matrices as numpy arrays.
+
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError, Info};
+use blockpuzzle::render::{Renderer, View};
+use blockpuzzle::rules::ContactState;
+use blockpuzzle::scene::SceneError;
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
+use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+/// A Rust error as the Python exception a Gymnasium user expects, with the same message.
+fn to_py(e: EnvError) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        EnvError::Scene(SceneError::MissingAssets { .. }) => PyFileNotFoundError::new_err(msg),
+        EnvError::Mujoco(_) | EnvError::Scene(_) | EnvError::NotReset | EnvError::EpisodeOver => {
+            PyRuntimeError::new_err(msg)
+        }
+        EnvError::UnknownId { .. }
+        | EnvError::Task(_)
+        | EnvError::BadAction { .. }
+        | EnvError::LevelOutOfRange { .. }
+        | EnvError::NoChallenge { .. }
+        | EnvError::NoDistribution { .. } => PyValueError::new_err(msg),
+        _ => PyRuntimeError::new_err(msg),
+    }
+}
+
+/// One BlockPuzzle environment: a registered id or a task file.
+#[pyclass(unsendable, module = "blockpuzzle._native")]
+struct Env {
+    env: Option<BlockEnv>,
+    view: View,
+    renderer: Option<Renderer>,
+}
+
+impl Env {
+    fn env(&mut self) -> PyResult<&mut BlockEnv> {
+        self.env.as_mut().ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))
+    }
+}
+
+/// `info` as a dict: success and failure of this step, level, distribution,
+/// the touching pairs (object indices) and the contact matrix (0 never
+/// touched, 1 touched before, 2 touching now).
+fn info_dict<'py>(py: Python<'py>, info: &Info, env: &BlockEnv) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("is_success", info.is_success)?;
+    d.set_item("is_failure", info.is_failure)?;
+    d.set_item("level", info.level)?;
+    d.set_item("challenge", info.challenge)?;
+    d.set_item("distribution", info.distribution.clone())?;
+    d.set_item("touching", PyList::new(py, info.touching.iter().map(|&(a, b)| (a, b)))?)?;
+    d.set_item("elapsed_steps", info.elapsed_steps)?;
+    d.set_item("unstable", info.unstable)?;
+    let n = env.objects().len();
+    let m = env.contact_matrix();
+    let mut cells = Vec::with_capacity(n * n);
+    for a in 0..n {
+        for b in 0..n {
+            cells.push(match m.get(a, b) {
+                ContactState::NeverTouched => 0i8,
+                ContactState::TouchedBefore => 1,
+                ContactState::TouchingNow => 2,
+            });
+        }
+    }
+    d.set_item("contact_matrix", PyArray1::from_vec(py, cells).reshape([n, n])?)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl Env {
+    /// `Env(task, width=480, height=480)`: `task` is a registered id (e.g.
+    /// "BlocksTouch-v0") or the path of a task file; width and height are the
+    /// size of `render()`'s images.
+    #[new]
+    #[pyo3(signature = (task, width = 480, height = 480))]
+    fn new(task: &str, width: usize, height: usize) -> PyResult<Self> {
+        if width == 0 || height == 0 || width > 4096 || height > 4096 {
+            return Err(PyValueError::new_err(format!("render size {width} × {height}: each side must be in 1..=4096")));
+        }
+        let task = registry::task(task).map_err(to_py)?;
+        let env = BlockEnv::new(EnvConfig::new(task)).map_err(to_py)?;
+        Ok(Self { env: Some(env), view: View { width, height, ..View::default() }, renderer: None })
+    }
+
+    /// The task's id.
+    #[getter]
+    fn id(&mut self) -> PyResult<String> {
+        Ok(self.env()?.id().to_owned())
+    }
+
+    /// Observation size.
+    #[getter]
+    fn obs_dim(&mut self) -> PyResult<usize> {
+        Ok(self.env()?.observation_space().dim())
+    }
+
+    /// Action size (4: gripper displacement and finger command).
+    #[getter]
+    fn act_dim(&mut self) -> PyResult<usize> {
+        Ok(self.env()?.action_space().dim())
+    }
+
+    /// The observation space's bounds, (low, high).
+    fn observation_bounds<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let space = self.env()?.observation_space();
+        PyTuple::new(py, [PyArray1::from_vec(py, space.low), PyArray1::from_vec(py, space.high)])
+    }
+
+    /// The highest curriculum level.
+    #[getter]
+    fn max_level(&mut self) -> PyResult<usize> {
+        Ok(self.env()?.max_level())
+    }
+
+    /// The episode length limit.
+    #[getter]
+    fn max_episode_steps(&mut self) -> PyResult<usize> {
+        Ok(self.env()?.config().task.spec.max_episode_steps)
+    }
+
+    /// The objects of the rules, in contact-matrix order, as (name, colour) pairs.
+    fn objects(&mut self) -> PyResult<Vec<(String, String)>> {
+        Ok(self.env()?.objects().iter().map(|o| (o.name.clone(), o.colour.name().to_owned())).collect())
+    }
+
+    /// The names of the task's evaluation distributions (e.g. "challenge").
+    fn distributions(&mut self) -> PyResult<Vec<String>> {
+        Ok(self.env()?.config().task.spec.distributions.keys().cloned().collect())
+    }
+
+    /// `reset(seed=None, level=None, challenge=None, distribution=None)` ->
+    /// (observation, info). A seed makes the episode reproducible; without
+    /// one the environment's own generator continues. `level` sets the
+    /// curriculum level, `challenge` / `distribution` an evaluation distribution
+    /// (kept for later resets until changed).
+    #[pyo3(signature = (seed = None, level = None, challenge = None, distribution = None))]
+    fn reset<'py>(
+        &mut self,
+        py: Python<'py>,
+        seed: Option<u64>,
+        level: Option<usize>,
+        challenge: Option<bool>,
+        distribution: Option<String>,
+    ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyDict>)> {
+        let env = self.env()?;
+        if let Some(l) = level {
+            env.set_level(l).map_err(to_py)?;
+        }
+        if let Some(c) = challenge {
+            env.set_challenge(c).map_err(to_py)?;
+        }
+        if let Some(name) = distribution {
+            env.set_distribution(Some(&name)).map_err(to_py)?;
+        }
+        let (obs, info) = env.reset(seed).map_err(to_py)?;
+        let info = info_dict(py, &info, env)?;
+        Ok((PyArray1::from_vec(py, obs), info))
+    }
+
+    /// `step(action)` -> (observation, reward, terminated, truncated, info);
+    /// `action` is a contiguous float32 array of `act_dim` values in [-1, 1].
+    #[allow(clippy::type_complexity)]
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        action: PyReadonlyArray1<'py, f32>,
+    ) -> PyResult<(Bound<'py, PyArray1<f32>>, f32, bool, bool, Bound<'py, PyDict>)> {
+        let action = action.as_slice().map_err(|e| PyValueError::new_err(format!("invalid action: {e}")))?;
+        let env = self.env()?;
+        let step = env.step(action).map_err(to_py)?;
+        let info = info_dict(py, &step.info, env)?;
+        Ok((PyArray1::from_vec(py, step.obs), step.reward, step.terminated, step.truncated, info))
+    }
+
+    /// The current state as an RGB image, (height, width, 3) uint8, from the
+    /// Fetch viewer's camera (headless: EGL with Mesa's software rasteriser).
+    fn render<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let view = self.view.clone();
+        let env = self.env.as_mut().ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))?;
+        if self.renderer.is_none() {
+            let model = env.data().model().clone();
+            let r = Renderer::new(&model, &view).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            self.renderer = Some(r);
+        }
+        let Some(renderer) = self.renderer.as_mut() else { unreachable!("made above") };
+        // Colours move between episodes when the task shuffles roles.
+        let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
+        renderer.colour_objects(env.scene(), &colours).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let image = renderer.render(env.data_mut(), None);
+        let (w, h) = (image.width() as usize, image.height() as usize);
+        Ok(PyArray1::from_vec(py, image.into_raw()).reshape([h, w, 3])?.into_any())
+    }
+
+    /// Frees the simulation and the renderer; later calls raise RuntimeError.
+    fn close(&mut self) {
+        self.renderer = None;
+        self.env = None;
+    }
+}
+
+/// The registered environment ids.
+#[pyfunction]
+fn env_ids() -> Vec<&'static str> {
+    registry::ids()
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Env>()?;
+    m.add_function(wrap_pyfunction!(env_ids, m)?)?;
+    Ok(())
+}
