@@ -11,6 +11,7 @@ Rust (``blockpuzzle._native``).
     env = gym.make("BlockPuzzle/BlocksTouch-v0", render_mode="rgb_array")
     obs, info = env.reset(seed=0, options={"level": 3})
     env = blockpuzzle.make_task("my-task.toml")           # a task file
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=8, threads=2)   # Rust threads
 
 The Fetch assets are read from ``$BLOCKPUZZLE_MODELS_DIR``, else from the ``models/`` folder of the
 checkout the package was built from (filled by ``make setup``).
@@ -22,8 +23,9 @@ import gymnasium
 
 from ._native import env_ids
 from .env import BlockPuzzleEnv
+from .vector import BlockPuzzleVectorEnv, make_vec
 
-__all__ = ["BlockPuzzleEnv", "env_ids", "make_task", "NAMESPACE"]
+__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "make_task", "make_vec", "NAMESPACE"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"
@@ -42,7 +44,12 @@ def _register() -> None:
         if full in gymnasium.registry:
             continue
         kwargs = {} if env_id == "Task-v0" else {"task": env_id}
-        gymnasium.register(id=full, entry_point="blockpuzzle.env:BlockPuzzleEnv", kwargs=kwargs)
+        gymnasium.register(
+            id=full,
+            entry_point="blockpuzzle.env:BlockPuzzleEnv",
+            vector_entry_point="blockpuzzle.vector:BlockPuzzleVectorEnv",
+            kwargs=kwargs,
+        )
 
 
 _register()

@@ -12,8 +12,10 @@ use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
+mod vector;
+
 /// A Rust error as the Python exception a Gymnasium user expects, with the same message.
-fn to_py(e: EnvError) -> PyErr {
+pub(crate) fn to_py(e: EnvError) -> PyErr {
     let msg = e.to_string();
     match e {
         EnvError::Scene(SceneError::MissingAssets { .. }) => PyFileNotFoundError::new_err(msg),
@@ -214,6 +216,7 @@ fn env_ids() -> Vec<&'static str> {
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
+    m.add_class::<vector::VecEnv>()?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     Ok(())
 }

@@ -1,0 +1,103 @@
+"""The Rust-threaded vector environment: Gymnasium's next-step autoreset, per-env seeds and
+options, and environment i's trajectory bit-identical whatever num_envs and threads are."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+
+import blockpuzzle
+
+
+def actions(num_envs, step):
+    """Each environment's action depends on its index and the step only."""
+    return np.stack([np.random.default_rng([i, step]).uniform(-1, 1, 4) for i in range(num_envs)]).astype(np.float32)
+
+
+def trajectory(num_envs, threads, env_index, steps=130, seed=10):
+    envs = blockpuzzle.make_vec("BlocksChoose-v0", num_envs=num_envs, threads=threads)
+    obs, _ = envs.reset(seed=seed)
+    rows = [obs[env_index]]
+    for t in range(steps):
+        obs, rew, term, trunc, info = envs.step(actions(num_envs, t))
+        rows.append(np.concatenate([obs[env_index], [rew[env_index], term[env_index], trunc[env_index],
+                                                     info["autoreset"][env_index]]]))
+    envs.close()
+    return np.concatenate(rows)
+
+
+def test_env_3_is_the_same_whatever_num_envs_and_threads():
+    a = trajectory(4, 1, 3)
+    b = trajectory(8, 2, 3)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, trajectory(4, 1, 2)), "other environments differ"
+
+
+def test_a_vector_env_plays_what_the_single_env_plays():
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=3, threads=2)
+    single = gym.make("BlockPuzzle/BlocksTouch-v0").unwrapped
+    obs, _ = envs.reset(seed=5)
+    s_obs, _ = single.reset(seed=7)  # environment 2 gets seed 5 + 2
+    assert np.array_equal(obs[2], s_obs)
+    for t in range(40):
+        a = actions(3, t)
+        obs, rew, term, trunc, _ = envs.step(a)
+        s_obs, s_rew, s_term, s_trunc, _ = single.step(a[2])
+        assert np.array_equal(obs[2], s_obs) and rew[2] == s_rew and (term[2], trunc[2]) == (s_term, s_trunc)
+        if s_term or s_trunc:
+            break
+
+
+def test_next_step_autoreset_and_metadata():
+    envs = blockpuzzle.make_vec("GripperTouch-v0", num_envs=2, threads=1)
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    assert envs.observation_space.shape == (2, envs.single_observation_space.shape[0])
+    assert envs.action_space.shape == (2, 4)
+    envs.reset(seed=0)
+    ended_at = None
+    for t in range(200):
+        obs, rew, term, trunc, info = envs.step(actions(2, t))
+        if ended_at is not None:
+            assert info["autoreset"][0] and rew[0] == 0 and not term[0] and not trunc[0]
+            assert info["elapsed_steps"][0] == 0
+            break
+        if term[0] or trunc[0]:
+            ended_at = t
+    assert ended_at is not None
+
+
+def test_gymnasium_make_vec_uses_the_rust_vector_env():
+    envs = gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=3, vectorization_mode="vector_entry_point")
+    assert isinstance(envs, blockpuzzle.BlockPuzzleVectorEnv)
+    obs, info = envs.reset(seed=[1, None, 3])
+    assert obs.shape == (3, envs.single_observation_space.shape[0]) and obs.dtype == np.float32
+    assert info["contact_matrix"].shape[0] == 3 and info["_is_success"].all()
+
+
+def test_reset_mask_and_options_and_bad_input():
+    envs = blockpuzzle.make_vec("BlocksChoose-v0", num_envs=3, threads=2)
+    obs, info = envs.reset(seed=0, options={"level": 4})
+    assert list(info["level"]) == [4, 4, 4]
+    before = obs.copy()
+    obs, info = envs.reset(seed=[9, 9, 9], options={"reset_mask": [False, True, False], "challenge": True})
+    assert np.array_equal(obs[0], before[0]) and np.array_equal(obs[2], before[2])
+    assert not np.array_equal(obs[1], before[1]) and info["challenge"][1] and not info["_level"][0]
+    with pytest.raises(ValueError, match="shape"):
+        envs.step(np.zeros((2, 4), np.float32))
+    bad = np.zeros((3, 4), np.float32)
+    bad[1, 2] = np.nan
+    with pytest.raises(ValueError, match="environment 1"):
+        envs.step(bad)
+    with pytest.raises(ValueError, match="unknown reset options"):
+        envs.reset(options={"lvl": 1})
+    envs.step(np.zeros((3, 4), np.float32))  # still usable
+    envs.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        envs._native.step(np.zeros((3, 4), np.float32), envs._obs, envs._rewards, envs._terminated, envs._truncated)
+
+
+def test_copy_false_returns_the_preallocated_buffers():
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, copy=False)
+    obs, _ = envs.reset(seed=0)
+    obs2, *_ = envs.step(np.zeros((2, 4), np.float32))
+    assert obs is obs2
