@@ -84,7 +84,9 @@ impl Env {
     #[pyo3(signature = (task, width = 480, height = 480))]
     fn new(task: &str, width: usize, height: usize) -> PyResult<Self> {
         if width == 0 || height == 0 || width > 4096 || height > 4096 {
-            return Err(PyValueError::new_err(format!("render size {width} × {height}: each side must be in 1..=4096")));
+            return Err(PyValueError::new_err(format!(
+                "render size {width} × {height}: each side must be in 1..=4096"
+            )));
         }
         let task = registry::task(task).map_err(to_py)?;
         let env = BlockEnv::new(EnvConfig::new(task)).map_err(to_py)?;
@@ -198,6 +200,32 @@ impl Env {
         let image = renderer.render(env.data_mut(), None);
         let (w, h) = (image.width() as usize, image.height() as usize);
         Ok(PyArray1::from_vec(py, image.into_raw()).reshape([h, w, 3])?.into_any())
+    }
+
+    /// Benchmark helper: `steps` steps with uniform random actions (resetting
+    /// when an episode ends) run entirely in Rust, no Python in the loop.
+    /// Returns the seconds taken, to set the binding's per-step cost against.
+    #[pyo3(signature = (steps, seed = 0))]
+    fn bench_steps(&mut self, py: Python<'_>, steps: usize, seed: u64) -> PyResult<f64> {
+        let env = self.env()?;
+        py.allow_threads(|| {
+            env.reset(Some(seed))?;
+            let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let mut uniform = || {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                ((state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+            };
+            let started = std::time::Instant::now();
+            for _ in 0..steps {
+                let action = [uniform(), uniform(), uniform(), uniform()];
+                let s = env.step(&action)?;
+                if s.terminated || s.truncated {
+                    env.reset(None)?;
+                }
+            }
+            Ok(started.elapsed().as_secs_f64())
+        })
+        .map_err(to_py)
     }
 
     /// Frees the simulation and the renderer; later calls raise RuntimeError.

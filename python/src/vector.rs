@@ -103,8 +103,10 @@ impl VecEnv {
             return Err(PyValueError::new_err("threads must be at least 1"));
         }
         let task = registry::task(task).map_err(to_py)?;
-        let envs: Vec<BlockEnv> =
-            (0..num_envs).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>().map_err(to_py)?;
+        let envs: Vec<BlockEnv> = (0..num_envs)
+            .map(|_| BlockEnv::new(EnvConfig::new(task.clone())))
+            .collect::<Result<_, _>>()
+            .map_err(to_py)?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.min(num_envs))
             .build()
@@ -187,7 +189,8 @@ impl VecEnv {
                         let (o, info) = env.reset(seeds[i])?;
                         write_row(row, obs_dim, &o);
                         *ended = false;
-                        *report = Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
+                        *report =
+                            Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
                         Ok(())
                     })
             })
@@ -214,7 +217,9 @@ impl VecEnv {
         let shape = actions.shape().to_vec();
         let act_dim = blockpuzzle::env::ACTION_DIM;
         if shape != [n, act_dim] {
-            return Err(PyValueError::new_err(format!("invalid action: actions must have shape ({n}, {act_dim}), not {shape:?}")));
+            return Err(PyValueError::new_err(format!(
+                "invalid action: actions must have shape ({n}, {act_dim}), not {shape:?}"
+            )));
         }
         let actions = actions.as_slice().map_err(|e| PyValueError::new_err(format!("invalid action: {e}")))?;
         // Checked before any environment moves, so that a bad row leaves all of them as they were.
@@ -246,7 +251,8 @@ impl VecEnv {
                             let (o, info) = env.reset(None)?;
                             write_row(row, obs_dim, &o);
                             *ended = false;
-                            *report = Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
+                            *report =
+                                Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
                         } else {
                             let s = env.step(&actions[i * act_dim..(i + 1) * act_dim])?;
                             write_row(row, obs_dim, &s.obs);
