@@ -21,13 +21,13 @@ fn main() -> anyhow::Result<()> {
     let j = m.id(ObjType::Joint, "object0:joint")?;
     let a = m.jnt_qposadr()[j] as usize;
     d.qpos_mut()[a..a + 7].copy_from_slice(&[1.25, 0.53, 0.4, 1., 0., 0., 0.]);
-    d.forward();
+    d.forward()?;
     let grip = m.id(ObjType::Site, "robot0:grip")?;
     let g = d.site_xpos()[grip];
     d.mocap_pos_mut()[0] = [g[0] - 0.498, g[1] + 0.005, g[2] - 0.431];
     d.mocap_quat_mut()[0] = [1., 0., 1., 0.];
     for _ in 0..200 {
-        d.step();
+        d.step()?;
     }
     let gl = m.id(ObjType::Body, "robot0:gripper_link")?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
@@ -40,7 +40,7 @@ fn main() -> anyhow::Result<()> {
         let y = 0.749 + rng.gen_range(-0.15..0.15);
         d.qpos_mut()[a] = x;
         d.qpos_mut()[a + 1] = y;
-        d.forward();
+        d.forward()?;
         let _ = ep;
         for _ in 0..50 {
             let (p, q) = (d.xpos()[gl], d.xquat()[gl]);
@@ -49,11 +49,11 @@ fn main() -> anyhow::Result<()> {
             d.mocap_quat_mut()[0] = [q[0] + 1., q[1], q[2] + 1., q[3]];
             let t = std::time::Instant::now();
             for _ in 0..20 {
-                d.step();
+                d.step()?;
             }
             phys += t.elapsed().as_secs_f64();
             n += 20;
-            d.forward();
+            d.forward()?;
         }
     }
     println!(

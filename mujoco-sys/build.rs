@@ -35,6 +35,10 @@ fn main() {
     let include_dir = find_dir("MUJOCO_INCLUDE_DIR", INCLUDE_CANDIDATES, "mujoco/mujoco.h");
     let lib_dir = find_dir("MUJOCO_LIB_DIR", LIB_CANDIDATES, "libmujoco.so");
 
+    // Fatal errors that return (guard.c); its archive comes before libmujoco on the link line.
+    println!("cargo:rerun-if-changed=guard.c");
+    println!("cargo:rerun-if-changed=guard.h");
+    cc::Build::new().file("guard.c").include(&include_dir).warnings(true).compile("bpguard");
     println!("cargo:rustc-link-search=native={}", lib_dir.display());
     println!("cargo:rustc-link-lib=dylib=mujoco");
     println!("cargo:include={}", include_dir.display());
@@ -47,6 +51,7 @@ fn main() {
         .header("wrapper.h")
         .clang_arg(format!("-I{}", include_dir.display()))
         .allowlist_function("mj.*")
+        .allowlist_function("bp_.*")
         .allowlist_type("mj.*")
         .allowlist_var("mj.*")
         .rustified_enum("mjt.*")

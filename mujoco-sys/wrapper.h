@@ -1,1 +1,2 @@
 #include <mujoco/mujoco.h>
+#include "guard.h"

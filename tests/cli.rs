@@ -49,7 +49,7 @@ fn rollout_writes_a_replayable_dump() {
     env.reset(Some(0)).unwrap();
     let step = &ep.steps[2];
     env.data_mut().qpos_mut().copy_from_slice(&step.state.qpos);
-    env.data_mut().forward();
+    env.data_mut().forward().unwrap();
     let blocks = env.block_positions();
     for (b, rec) in blocks.iter().zip(&step.state.blocks) {
         assert_eq!(b, &rec.pos);

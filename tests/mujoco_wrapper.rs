@@ -65,21 +65,21 @@ fn bad_xml_carries_mujocos_message() {
 fn stepping_views_contacts_and_velocities() {
     let m = Arc::new(Model::from_xml_string(PENDULUM, Path::new("/tmp/x.xml")).unwrap());
     let mut d = Data::new(m.clone()).unwrap();
-    d.forward();
+    d.forward().unwrap();
     assert_eq!(d.contacts().len(), 0);
     let z0 = d.site_xpos()[0][2];
     for _ in 0..100 {
-        d.step();
+        d.step().unwrap();
     }
-    d.forward();
+    d.forward().unwrap();
     assert!(d.site_xpos()[0][2] < z0, "the ball falls");
     let v = d.object_velocity(ObjType::Site, 0, false).unwrap();
     assert!(v[5] < -0.5, "falling velocity {v:?}");
     assert!(d.object_velocity(ObjType::Site, 5, false).is_err());
     for _ in 0..1000 {
-        d.step();
+        d.step().unwrap();
     }
-    d.forward();
+    d.forward().unwrap();
     let c = d.contacts();
     assert!(!c.is_empty(), "ball rests on the floor");
     let pair = (c[0].geom1().min(c[0].geom2()), c[0].geom1().max(c[0].geom2()));
@@ -95,7 +95,7 @@ fn copy_restores_state_exactly() {
     let snapshot = d.try_clone().unwrap();
     let run = |d: &mut Data| {
         for _ in 0..300 {
-            d.step();
+            d.step().unwrap();
         }
         d.qpos().to_vec()
     };
@@ -113,11 +113,39 @@ fn nan_state_raises_warning_counters() {
     let mut d = Data::new(m).unwrap();
     blockpuzzle::mj::install_handlers();
     d.qvel_mut()[2] = f64::NAN;
-    d.step();
+    d.step().unwrap();
     assert!(d.warning_count(Warning::BadQvel) > 0);
 }
 
 #[test]
 fn version_is_2_2_2() {
     assert_eq!(blockpuzzle::mj::version(), "2.2.2");
+}
+
+/// A fatal MuJoCo error (here: its stack is too small once the ball touches
+/// the floor) makes the call return an error with MuJoCo's message instead of
+/// ending the process; a model that fails to compile leaves the handlers in
+/// place; the process goes on simulating; another thread's errors are its own.
+#[test]
+fn fatal_mujoco_errors_return_instead_of_ending_the_process() {
+    let sized = |n: usize| {
+        PENDULUM.replace("<option timestep=\"0.002\"/>", &format!("<option timestep=\"0.002\"/><size nstack=\"{n}\"/>"))
+    };
+    // Too small even to compile: a load error (and our handlers are back afterwards).
+    let err = Model::from_xml_string(&sized(50), Path::new("/tmp/x.xml")).unwrap_err();
+    assert!(err.to_string().contains("Stack overflow"), "{err}");
+    let m = Arc::new(Model::from_xml_string(&sized(100), Path::new("/tmp/x.xml")).unwrap());
+    let mut d = Data::new(m).unwrap();
+    let err = (0..1000).find_map(|_| d.step().err()).expect("the stack overflows once the ball lands");
+    assert!(matches!(err, MjError::Fatal { .. }), "{err}");
+    assert!(err.to_string().contains("Stack overflow"), "{err}");
+    assert!(d.reset().is_ok(), "reset works on the failed state");
+    let again = std::thread::spawn(move || (0..1000).find_map(|_| d.step().err()).map(|e| e.to_string()));
+    assert!(again.join().unwrap().is_some_and(|e| e.contains("Stack overflow")));
+    // The process is alive and simulates normally.
+    let m = Arc::new(Model::from_xml_string(PENDULUM, Path::new("/tmp/x.xml")).unwrap());
+    let mut ok = Data::new(m).unwrap();
+    for _ in 0..2000 {
+        ok.step().unwrap();
+    }
 }

@@ -235,6 +235,24 @@ impl Env {
     }
 }
 
+/// Self-test of MuJoCo's fatal-error path inside this interpreter: steps a
+/// model whose stack overflows once its ball lands, which raises
+/// RuntimeError with MuJoCo's message (MuJoCo alone would end the process).
+#[pyfunction]
+fn _mujoco_fatal_error_selftest() -> PyResult<()> {
+    use blockpuzzle::mj::{Data, Model};
+    let xml = r#"<mujoco><option timestep="0.002"/><size nstack="100"/><worldbody>
+        <geom type="plane" size="1 1 0.1"/><body pos="0 0 0.5"><joint type="free"/>
+        <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#;
+    let err = |e: blockpuzzle::mj::MjError| PyRuntimeError::new_err(e.to_string());
+    let model = Model::from_xml_string(xml, std::path::Path::new("selftest.xml")).map_err(err)?;
+    let mut data = Data::new(std::sync::Arc::new(model)).map_err(err)?;
+    for _ in 0..1000 {
+        data.step().map_err(err)?;
+    }
+    Ok(())
+}
+
 /// The registered environment ids.
 #[pyfunction]
 fn env_ids() -> Vec<&'static str> {
@@ -246,5 +264,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<vector::VecEnv>()?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
+    m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     Ok(())
 }

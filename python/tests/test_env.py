@@ -149,3 +149,17 @@ def test_errors_leave_the_interpreter_running():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["RuntimeError", "ValueError", "ValueError", "alive"], out.stdout
+
+
+def test_a_fatal_mujoco_error_raises_and_the_interpreter_goes_on():
+    code = (
+        "import numpy as np, gymnasium as gym, blockpuzzle\n"
+        "from blockpuzzle import _native\n"
+        "try: _native._mujoco_fatal_error_selftest()\n"
+        "except RuntimeError as e: print('raised', 'Stack overflow' in str(e))\n"
+        "env = gym.make('BlockPuzzle/BlocksTouch-v0'); env.reset(seed=0); env.step(np.zeros(4, np.float32))\n"
+        "print('alive')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["raised", "True", "alive"], out.stdout + out.stderr

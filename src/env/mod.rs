@@ -165,7 +165,7 @@ impl BlockEnv {
         for (k, &v) in INITIAL_SLIDES.iter().enumerate() {
             data.qpos_mut()[scene.slide_qpos[k]] = v;
         }
-        data.forward();
+        data.forward()?;
         let grip = data.site_xpos()[scene.grip_site];
         let mut target = [0.0; 3];
         for k in 0..3 {
@@ -175,9 +175,9 @@ impl BlockEnv {
         data.mocap_pos_mut()[scene.mocap] = target;
         data.mocap_quat_mut()[scene.mocap] = GRIPPER_ROT;
         for _ in 0..SETTLE_ACTIONS * config.n_substeps {
-            data.step();
+            data.step()?;
         }
-        data.forward();
+        data.forward()?;
         let initial_grip = data.site_xpos()[scene.grip_site];
         let initial = data.try_clone()?;
         let model = scene.model.clone();
@@ -426,8 +426,8 @@ impl BlockEnv {
             targets.push([xy[0], xy[1], q[b.qpos + 2]]);
             self.data.qvel_mut()[b.dof..b.dof + 6].fill(0.0);
         }
-        self.data.forward();
-        let settled = self.settle(&targets);
+        self.data.forward()?;
+        let settled = self.settle(&targets)?;
         self.rules.reset();
         self.scan_contacts();
         if settled.is_some() {
@@ -477,18 +477,18 @@ impl BlockEnv {
 
     /// Runs the task's settling time with the gripper held still; the first
     /// block that moved more than the tolerance from `targets`, in words.
-    fn settle(&mut self, targets: &[[f64; 3]]) -> Option<String> {
+    fn settle(&mut self, targets: &[[f64; 3]]) -> Result<Option<String>, crate::mj::MjError> {
         let p = &self.config.task.spec.placement;
         if p.settle_seconds <= 0.0 {
-            return None;
+            return Ok(None);
         }
         let steps = (p.settle_seconds / self.scene.model.timestep()).round() as usize;
         for _ in 0..steps {
-            self.data.step();
+            self.data.step()?;
         }
-        self.data.forward();
+        self.data.forward()?;
         let tol = p.settle_tolerance;
-        self.scene.blocks.iter().zip(targets).enumerate().find_map(|(i, (b, t))| {
+        Ok(self.scene.blocks.iter().zip(targets).enumerate().find_map(|(i, (b, t))| {
             let x = &self.data.qpos()[b.qpos..b.qpos + 3];
             let moved = ((x[0] - t[0]).powi(2) + (x[1] - t[1]).powi(2) + (x[2] - t[2]).powi(2)).sqrt();
             (moved > tol || !moved.is_finite()).then(|| {
@@ -497,7 +497,7 @@ impl BlockEnv {
                     self.objects[crate::scene::FIRST_BLOCK_OBJECT + i].name
                 )
             })
-        })
+        }))
     }
 
     /// Two rule objects that interpenetrate deeper than [`OVERLAP_TOLERANCE`], in words.
@@ -544,8 +544,13 @@ impl BlockEnv {
         self.step_touching.clear();
         for _ in 0..self.config.n_substeps {
             let t = std::time::Instant::now();
-            self.data.step();
+            let stepped = self.data.step();
             self.physics += t.elapsed();
+            if let Err(e) = stepped {
+                // MuJoCo's state is unspecified now: only a reset continues.
+                self.phase = Phase::NeedsReset;
+                return Err(e.into());
+            }
             self.observe_substep();
         }
         // Blocked gripper: fingers back to closed, then recompute the state.
@@ -554,12 +559,16 @@ impl BlockEnv {
                 self.data.qpos_mut()[a] = 0.0;
             }
         }
-        if self.config.full_forward {
-            self.data.forward();
+        let updated = if self.config.full_forward {
+            self.data.forward()
         } else {
             // Everything the next mj_step needs it recomputes itself from
             // qpos/qvel, so only what the observation and rules read is due.
-            self.data.kinematics(true);
+            self.data.kinematics(true)
+        };
+        if let Err(e) = updated {
+            self.phase = Phase::NeedsReset;
+            return Err(e.into());
         }
         self.observe_substep();
         self.steps += 1;

@@ -76,8 +76,10 @@ impl Data {
     /// # Errors
     /// [`MjError::Alloc`] if MuJoCo cannot allocate it.
     pub fn new(model: Arc<Model>) -> Result<Self, MjError> {
-        // SAFETY: the model is live for as long as `model` (kept in Self).
-        let raw = unsafe { sys::mj_makeData(model.as_ptr()) };
+        let mut raw = std::ptr::null_mut();
+        // SAFETY: the model is live for as long as `model` (kept in Self);
+        // bp_make_data writes the new mjData (or null) into `raw`.
+        super::guarded(unsafe { sys::bp_make_data(model.as_ptr(), &mut raw) })?;
         let ptr = NonNull::new(raw).ok_or(MjError::Alloc)?;
         Ok(Self { ptr, model })
     }
@@ -103,15 +105,22 @@ impl Data {
     }
 
     /// One physics step (`mj_step`).
-    pub fn step(&mut self) {
+    ///
+    /// # Errors
+    /// [`MjError::Fatal`] when MuJoCo stops on an error; the state is then
+    /// unusable until [`Data::reset`] or [`Data::copy_from`].
+    pub fn step(&mut self) -> Result<(), MjError> {
         // SAFETY: model and data are live and belong together (same Arc).
-        unsafe { sys::mj_step(self.m(), self.ptr.as_ptr()) };
+        super::guarded(unsafe { sys::bp_step(self.m(), self.ptr.as_ptr()) })
     }
 
     /// Recomputes every derived quantity from the state (`mj_forward`).
-    pub fn forward(&mut self) {
+    ///
+    /// # Errors
+    /// As [`Data::step`].
+    pub fn forward(&mut self) -> Result<(), MjError> {
         // SAFETY: as in `step`.
-        unsafe { sys::mj_forward(self.m(), self.ptr.as_ptr()) };
+        super::guarded(unsafe { sys::bp_forward(self.m(), self.ptr.as_ptr()) })
     }
 
     /// Position-dependent quantities only: forward kinematics, centres of
@@ -120,24 +129,23 @@ impl Data {
     /// `contacts` is set. Positions, orientations, `mj_objectVelocity` and
     /// (with `contacts`) the contact list are then up to date; forces and
     /// accelerations are not.
-    pub fn kinematics(&mut self, contacts: bool) {
+    ///
+    /// # Errors
+    /// As [`Data::step`].
+    pub fn kinematics(&mut self, contacts: bool) -> Result<(), MjError> {
         let (m, d) = (self.m(), self.ptr.as_ptr());
-        // SAFETY: as in `step`; these are the first stages of mj_forward,
-        // called in the order mj_forward calls them.
-        unsafe {
-            sys::mj_kinematics(m, d);
-            sys::mj_comPos(m, d);
-            if contacts {
-                sys::mj_collision(m, d);
-            }
-            sys::mj_comVel(m, d);
-        }
+        // SAFETY: as in `step`; bp_kinematics calls the first stages of
+        // mj_forward in the order mj_forward calls them.
+        super::guarded(unsafe { sys::bp_kinematics(m, d, i32::from(contacts)) })
     }
 
     /// Resets to the model's reference configuration (`mj_resetData`).
-    pub fn reset(&mut self) {
+    ///
+    /// # Errors
+    /// As [`Data::step`].
+    pub fn reset(&mut self) -> Result<(), MjError> {
         // SAFETY: as in `step`.
-        unsafe { sys::mj_resetData(self.m(), self.ptr.as_ptr()) };
+        super::guarded(unsafe { sys::bp_reset_data(self.m(), self.ptr.as_ptr()) })
     }
 
     /// Copies the whole state of `src` (warm-start and warning counters
@@ -151,8 +159,7 @@ impl Data {
         }
         // SAFETY: both states were made for this very model, so their buffers
         // have the same sizes; `self` is exclusively borrowed.
-        unsafe { sys::mj_copyData(self.ptr.as_ptr(), self.m(), src.ptr.as_ptr()) };
-        Ok(())
+        super::guarded(unsafe { sys::bp_copy_data(self.ptr.as_ptr(), self.m(), src.ptr.as_ptr()) })
     }
 
     /// A deep copy of this state.

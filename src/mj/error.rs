@@ -27,6 +27,10 @@ pub enum MjError {
     /// Two states of different models were mixed.
     #[error("the two mjData belong to different models")]
     ModelMismatch,
+    /// MuJoCo stopped on a fatal error during a simulation call (its message
+    /// kept); the state must be reset before it is used again.
+    #[error("MuJoCo failed: {message}; reset the environment before using it again")]
+    Fatal { message: String },
     /// An index outside a model array.
     #[error("{kind} index {index} out of range (model has {count})")]
     OutOfRange { kind: &'static str, index: usize, count: usize },

@@ -75,34 +75,38 @@ unsafe extern "C" fn quiet_warning(msg: *const std::os::raw::c_char) {
     }
 }
 
-unsafe extern "C" fn fatal_error(msg: *const std::os::raw::c_char) {
-    let text = if msg.is_null() {
-        "(no message)".into()
-    } else {
-        // SAFETY: MuJoCo passes a NUL-terminated message.
-        unsafe { CStr::from_ptr(msg) }.to_string_lossy()
-    };
-    // MuJoCo cannot continue after an error and a panic must not unwind
-    // through its C frames, so end the process as MuJoCo itself would.
-    eprintln!("MuJoCo fatal error: {text}");
-    std::process::exit(2);
+/// The result of a guarded MuJoCo call (`mujoco-sys/guard.c`): a fatal
+/// MuJoCo error, which the guard turned into a return, as [`MjError::Fatal`].
+pub(crate) fn guarded(status: i32) -> Result<(), MjError> {
+    if status == 0 {
+        return Ok(());
+    }
+    // SAFETY: bp_last_error returns this thread's NUL-terminated message buffer.
+    let text = unsafe { CStr::from_ptr(sys::bp_last_error()) }.to_string_lossy().into_owned();
+    Err(MjError::Fatal { message: text })
 }
 
 /// Routes MuJoCo's messages away from its default handlers, which print to
 /// stdout and append to `MUJOCO_LOG.TXT` in the working folder. Warnings are
 /// still counted in [`Data::warning_count`]; set `BLOCKPUZZLE_MUJOCO_WARNINGS=1`
-/// to print them to stderr. Fatal errors are printed to stderr and end the
-/// process (exit code 2). Idempotent.
+/// to print them to stderr. A fatal error inside a guarded call (every
+/// simulation call of [`Data`]) makes that call return [`MjError::Fatal`] with
+/// MuJoCo's message, so a host process (Python) survives it; anywhere else it
+/// is printed to stderr and ends the process (exit code 2). Idempotent.
 pub fn install_handlers() {
     static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // SAFETY: mju_user_warning / mju_user_error are global function
-        // pointers that MuJoCo reads when it warns or fails; they are written
-        // once, before any simulation in this process uses them (Once), with
-        // functions of the right type.
-        unsafe {
-            sys::mju_user_warning = Some(quiet_warning);
-            sys::mju_user_error = Some(fatal_error);
-        }
-    });
+    ONCE.call_once(set_handlers);
+}
+
+/// Points MuJoCo's warning and error handlers at ours.
+pub(crate) fn set_handlers() {
+    // SAFETY: mju_user_warning / mju_user_error are global function pointers
+    // that MuJoCo reads when it warns or fails; they are written with
+    // functions of the right type, at start-up (Once) and after each model
+    // load (serialised by the loader's lock), which is when MuJoCo's compiler
+    // may have replaced them.
+    unsafe {
+        sys::mju_user_warning = Some(quiet_warning);
+        sys::mju_user_error = Some(sys::bp_error_handler);
+    }
 }

@@ -57,10 +57,19 @@ impl Model {
             .map_err(|_| MjError::InvalidName { name: path.display().to_string(), reason: "contains a NUL byte" })?;
         let mut err = vec![0 as std::os::raw::c_char; ERROR_BUF];
         let vfs_ptr = vfs.map_or(std::ptr::null(), Vfs::as_ptr);
-        // SAFETY: `c_path` is NUL-terminated, `vfs_ptr` is null or a live
-        // mjVFS, and `err` has exactly ERROR_BUF writable bytes, which is the
-        // size we pass; MuJoCo NUL-terminates what it writes.
-        let raw = unsafe { sys::mj_loadXML(c_path.as_ptr(), vfs_ptr, err.as_mut_ptr(), ERROR_BUF as i32) };
+        let raw = {
+            // MuJoCo 2.2.2's compiler swaps the global error handlers while it
+            // runs and leaves its own in place when compiling fails: loads are
+            // serialised and ours are put back after each one.
+            static LOADING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+            let _one_at_a_time = LOADING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            // SAFETY: `c_path` is NUL-terminated, `vfs_ptr` is null or a live
+            // mjVFS, and `err` has exactly ERROR_BUF writable bytes, which is the
+            // size we pass; MuJoCo NUL-terminates what it writes.
+            let raw = unsafe { sys::mj_loadXML(c_path.as_ptr(), vfs_ptr, err.as_mut_ptr(), ERROR_BUF as i32) };
+            super::set_handlers();
+            raw
+        };
         match NonNull::new(raw) {
             Some(ptr) => Ok(Self { ptr }),
             None => {

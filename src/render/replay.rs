@@ -45,7 +45,7 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
         }
         let data = env.data_mut();
         data.qpos_mut().copy_from_slice(&state.qpos);
-        data.forward();
+        data.forward()?;
         let reached = if k == n { outcome } else { "" };
         let caption = (format!("{}\nstep\n{reached}", ep.env_id), format!("\n{k}/{n}\n"));
         frames.push(renderer.render(env.data_mut(), Some((&caption.0, &caption.1))));
