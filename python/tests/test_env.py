@@ -136,6 +136,13 @@ def test_missing_fetch_assets_raise_filenotfounderror_naming_the_setup(monkeypat
         gym.make("BlockPuzzle/BlocksTouch-v0")
 
 
+def run_python(code):
+    """Runs `code` in a fresh interpreter; the words it printed (it must exit cleanly)."""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stdout + out.stderr
+    return out.stdout.split()
+
+
 def test_errors_leave_the_interpreter_running():
     code = (
         "import gymnasium as gym, numpy as np, blockpuzzle\n"
@@ -146,9 +153,7 @@ def test_errors_leave_the_interpreter_running():
         "    except Exception as e: print(type(e).__name__)\n"
         "env.reset(seed=0); env.step(np.zeros(4, np.float32)); print('alive')\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.split() == ["RuntimeError", "ValueError", "ValueError", "alive"], out.stdout
+    assert run_python(code) == ["RuntimeError", "ValueError", "ValueError", "alive"]
 
 
 def test_a_fatal_mujoco_error_raises_and_the_interpreter_goes_on():
@@ -160,6 +165,4 @@ def test_a_fatal_mujoco_error_raises_and_the_interpreter_goes_on():
         "env = gym.make('BlockPuzzle/BlocksTouch-v0'); env.reset(seed=0); env.step(np.zeros(4, np.float32))\n"
         "print('alive')\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.split() == ["raised", "True", "alive"], out.stdout + out.stderr
+    assert run_python(code) == ["raised", "True", "alive"]
