@@ -204,3 +204,18 @@ fn one_rank_failing_alone_stops_the_job_with_its_reason() {
     std::io::Read::read_to_string(job.stderr.as_mut().unwrap(), &mut stderr).unwrap();
     assert!(stderr.contains("no checkpoint for rank 1"), "{stderr}");
 }
+
+/// A rank stopped after setting its checkpoint aside and before writing the
+/// next one has only `checkpoint.prev.bin`: the job resumes from it, exactly.
+#[test]
+fn a_checkpoint_set_aside_but_not_yet_replaced_still_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, cut) = (dir.path().join("whole"), dir.path().join("cut"));
+    ok(mpirun(2).args(args(&whole, 1, 2)).output().unwrap());
+    ok(mpirun(2).args(args(&cut, 1, 1)).output().unwrap());
+    let latest = cut.join("rank-1/checkpoint.bin");
+    std::fs::rename(&latest, checkpoint::previous(&latest)).unwrap();
+    ok(mpirun(2).args(args(&cut, 1, 2)).arg("--resume").output().unwrap());
+    assert_eq!(progress(&whole), progress(&cut));
+    assert_eq!(policy_weights(&whole), policy_weights(&cut));
+}

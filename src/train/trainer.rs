@@ -571,30 +571,29 @@ fn shared_task(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&T
 
 /// The checkpoint this rank resumes from: its latest, or under MPI the
 /// previous one when another rank stopped before writing the latest epoch
-/// (every rank resumes from the last epoch all of them completed).
+/// (every rank resumes from the last epoch all of them completed). Both
+/// files are considered, so a rank stopped between setting its latest
+/// checkpoint aside and writing the next one resumes from the one set aside.
 fn resume_checkpoint(comm: &Comm, path: &Path, run: &RunDir) -> Result<PathBuf> {
-    if !path.exists() {
+    let candidates: Vec<(u64, PathBuf)> = [path.to_owned(), checkpoint::previous(path)]
+        .into_iter()
+        .filter(|p| p.exists())
+        .map(|p| Ok((checkpoint::peek_state(&p)?.epoch as u64, p)))
+        .collect::<Result<_, checkpoint::CheckpointError>>()?;
+    let Some(latest) = candidates.iter().map(|c| c.0).max() else {
         bail!(
             "--resume: no checkpoint for rank {} in {} ({}); start a new run without --resume",
             comm.rank(),
             run.dir.display(),
             path.display()
         );
-    }
-    if comm.size() == 1 {
-        return Ok(path.to_owned());
-    }
-    let latest = checkpoint::peek_state(path)?.epoch as u64;
+    };
     let epoch = comm.gather_u64(latest).into_iter().min().unwrap_or(latest);
-    if epoch == latest {
-        return Ok(path.to_owned());
-    }
-    let prev = checkpoint::previous(path);
-    match checkpoint::peek_state(&prev) {
-        Ok(s) if s.epoch as u64 == epoch => Ok(prev),
-        _ => bail!(
-            "--resume: rank {} has no checkpoint of epoch {epoch}, the last epoch every rank completed ({} is of \
-             epoch {latest}); the run cannot continue exactly",
+    match candidates.into_iter().find(|c| c.0 == epoch) {
+        Some((_, p)) => Ok(p),
+        None => bail!(
+            "--resume: rank {} has no checkpoint of epoch {epoch}, the last epoch every rank completed (its latest \
+             is of epoch {latest}, in {}); the run cannot continue exactly",
             comm.rank(),
             path.display()
         ),
