@@ -386,10 +386,13 @@ pub fn peek_state(path: &Path) -> Result<RunState, CheckpointError> {
     use std::io::Read;
     let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
     let mut f = std::fs::File::open(path).map_err(io(path))?;
-    let mut head = [0u8; 16];
-    f.read_exact(&mut head).map_err(|_| corrupt("truncated"))?;
-    if &head[..8] != MAGIC {
+    let mut head = Vec::with_capacity(16);
+    (&mut f).take(16).read_to_end(&mut head).map_err(io(path))?;
+    if head.len() < 8 || &head[..8] != MAGIC {
         return Err(corrupt("not a blockpuzzle checkpoint"));
+    }
+    if head.len() < 16 {
+        return Err(corrupt("truncated"));
     }
     let hlen = u64::from_le_bytes(head[8..16].try_into().map_err(|_| corrupt("truncated"))?);
     let mut json = Vec::new();
