@@ -5,14 +5,21 @@ success rate against environment steps as the Rust trainer's progress.csv does, 
 trainers' curves on the same environment can be drawn side by side.
 
     bash scripts/sb3_check.sh                 # the venv (SB3, torch) with the package built in
-    bench/.venv-sb3/bin/python examples/python/sb3_td3.py --timesteps 600000 --out sb3_td3.csv
+    bench/.venv-sb3/bin/python examples/python/sb3_td3.py --timesteps 600000 --run-dir runs/sb3-td3-s0
+    (again with --resume to continue a stopped run from its last save)
 
 Hyperparameters follow the paper's DDPG where TD3 has them: 3 × 256 ReLU layers, batch 256,
 lr 1e-3, gamma 0.98, tau 0.05, Gaussian action noise 0.2, buffer 1e6; two environments
 (DummyVecEnv), as `blockpuzzle train --workers 2`.
+
+The run directory holds progress.csv and, every --save-every env steps, the model, its replay
+buffer and the curriculum state; --resume continues from them (SB3 does not save every random
+stream, so a resumed run is not bit-identical to an uninterrupted one).
 """
 import argparse
 import csv
+import json
+import os
 
 import gymnasium as gym
 import numpy as np
@@ -61,41 +68,76 @@ def main():
     ap.add_argument("--episodes", type=int, default=20, help="test and finals episodes per evaluation")
     ap.add_argument("--threshold", type=float, default=0.7)
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default="sb3_td3.csv")
+    ap.add_argument("--save-every", type=int, default=50_000, help="env steps between saves (model + replay buffer)")
+    ap.add_argument("--run-dir", default="runs/sb3-td3-s0")
+    ap.add_argument("--resume", action="store_true")
     args = ap.parse_args()
 
-    state = {"level": 0}
+    os.makedirs(args.run_dir, exist_ok=True)
+    paths = {k: os.path.join(args.run_dir, k) for k in ("model.zip", "replay.pkl", "state.json", "progress.csv")}
+    if args.resume and not os.path.exists(paths["state.json"]):
+        ap.error(f"--resume: no saved run in {args.run_dir}")
+    if not args.resume and os.path.exists(paths["progress.csv"]):
+        ap.error(f"{args.run_dir} already holds a run; pass --resume or choose another --run-dir")
+    state = {"level": 0, "epoch": 0, "next_eval": args.eval_every}
+    if args.resume:
+        with open(paths["state.json"]) as f:
+            state.update(json.load(f))
     max_level = gym.make(args.env).unwrapped.max_level
     envs = DummyVecEnv([lambda: Curriculum(gym.make(args.env), state) for _ in range(2)])
-    model = TD3("MlpPolicy", envs, learning_rate=1e-3, buffer_size=1_000_000, batch_size=256, tau=0.05,
-                gamma=0.98, action_noise=NormalActionNoise(np.zeros(4), 0.2 * np.ones(4)),
-                policy_kwargs={"net_arch": [256, 256, 256]}, seed=args.seed, device="cpu")
+    if args.resume:
+        model = TD3.load(paths["model.zip"], env=envs, device="cpu")
+        model.load_replay_buffer(paths["replay.pkl"])
+    else:
+        model = TD3("MlpPolicy", envs, learning_rate=1e-3, buffer_size=1_000_000, batch_size=256, tau=0.05,
+                    gamma=0.98, action_noise=NormalActionNoise(np.zeros(4), 0.2 * np.ones(4)),
+                    policy_kwargs={"net_arch": [256, 256, 256]}, seed=args.seed, device="cpu")
 
-    with open(args.out, "w", newline="") as f:
+    # Rows after the last save are dropped on resume: they will be measured again.
+    rows = []
+    if args.resume and os.path.exists(paths["progress.csv"]):
+        with open(paths["progress.csv"]) as f:
+            rows = [r for r in csv.reader(f)][1:]
+        rows = [r for r in rows if int(r[0]) < state["epoch"]]
+    with open(paths["progress.csv"], "w", newline="") as f:
         out = csv.writer(f)
         out.writerow(["epoch", "curriculum/level", "test/success", "finals/success", "time/env_steps"])
+        out.writerows(rows)
+
+        def save():
+            model.save(paths["model.zip"])
+            model.save_replay_buffer(paths["replay.pkl"])
+            with open(paths["state.json"] + ".tmp", "w") as s:
+                json.dump(state, s)
+            os.replace(paths["state.json"] + ".tmp", paths["state.json"])
 
         class Evaluate(BaseCallback):
             def __init__(self):
                 super().__init__()
-                self.next, self.epoch = args.eval_every, 0
+                self.next_save = model.num_timesteps + args.save_every
 
             def _on_step(self):
-                if self.num_timesteps < self.next:
+                if self.num_timesteps < state["next_eval"]:
                     return True
-                self.next += args.eval_every
-                seed = 3_000_000 + 1000 * self.epoch
+                state["next_eval"] += args.eval_every
+                epoch = state["epoch"]
+                seed = 3_000_000 + 1000 * epoch
                 test = success_rate(self.model, args.env, state["level"], args.episodes, seed)
                 finals = success_rate(self.model, args.env, max_level, args.episodes, seed + 500)
-                out.writerow([self.epoch, state["level"], test, finals, self.num_timesteps])
+                out.writerow([epoch, state["level"], test, finals, self.num_timesteps])
                 f.flush()
-                print(f"epoch {self.epoch} steps {self.num_timesteps} level {state['level']} test {test:.2f} finals {finals:.2f}")
+                print(f"epoch {epoch} steps {self.num_timesteps} level {state['level']} test {test:.2f} finals {finals:.2f}")
                 if test >= args.threshold and state["level"] < max_level:
                     state["level"] += 1
-                self.epoch += 1
+                state["epoch"] += 1
+                if self.num_timesteps >= self.next_save:
+                    self.next_save += args.save_every
+                    save()
                 return True
 
-        model.learn(total_timesteps=args.timesteps, callback=Evaluate())
+        model.learn(total_timesteps=args.timesteps - model.num_timesteps, callback=Evaluate(),
+                    reset_num_timesteps=not args.resume)
+        save()
 
 
 if __name__ == "__main__":
