@@ -62,14 +62,19 @@ fn policy_weights(run: &Path) -> serde_json::Value {
     v["policy"].clone()
 }
 
+/// The same per-epoch numbers (success, losses, steps) and the same weights, bit for bit.
+fn assert_same_run(a: &Path, b: &Path, what: &str) {
+    assert_eq!(progress(a), progress(b), "per-epoch numbers: {what}");
+    assert_eq!(policy_weights(a), policy_weights(b), "weights: {what}");
+}
+
 #[test]
 fn two_ranks_of_one_worker_learn_exactly_what_one_process_of_two_workers_learns() {
     let dir = tempfile::tempdir().unwrap();
     let (threads, ranks) = (dir.path().join("threads"), dir.path().join("ranks"));
     ok(Command::new(BP).args(args(&threads, 2, 2)).output().unwrap());
     ok(mpirun(2).args(args(&ranks, 1, 2)).output().unwrap());
-    assert_eq!(progress(&threads), progress(&ranks), "per-epoch success, losses, steps");
-    assert_eq!(policy_weights(&threads), policy_weights(&ranks), "the same weights, bit for bit");
+    assert_same_run(&threads, &ranks, "2 ranks × 1 worker");
     // Rank 0 writes the run's files; rank 1 only its own checkpoint.
     assert!(ranks.join("rank-1/checkpoint.bin").exists());
     assert!(!ranks.join("rank-1/progress.csv").exists() && !ranks.join("rank-1/policy.json").exists());
@@ -88,8 +93,7 @@ fn any_split_of_the_same_shards_into_ranks_learns_the_same_weights() {
         let ranks = dir.path().join(format!("ranks-{np}x{workers}"));
         ok(Command::new(BP).args(args(&threads, shards, 1)).output().unwrap());
         ok(mpirun(np).args(args(&ranks, workers, 1)).output().unwrap());
-        assert_eq!(progress(&threads), progress(&ranks), "{np} ranks × {workers} workers");
-        assert_eq!(policy_weights(&threads), policy_weights(&ranks), "{np} ranks × {workers} workers");
+        assert_same_run(&threads, &ranks, &format!("{np} ranks × {workers} workers"));
     }
 }
 
@@ -100,8 +104,7 @@ fn mpi_resume_is_exact_and_another_rank_count_is_refused() {
     ok(mpirun(2).args(args(&whole, 1, 2)).output().unwrap());
     ok(mpirun(2).args(args(&split, 1, 1)).output().unwrap());
     ok(mpirun(2).args(args(&split, 1, 2)).arg("--resume").output().unwrap());
-    assert_eq!(progress(&whole), progress(&split));
-    assert_eq!(policy_weights(&whole), policy_weights(&split));
+    assert_same_run(&whole, &split, "resumed");
 
     // One process cannot continue a two-rank run, nor can three ranks.
     let out = Command::new(BP).args(args(&split, 1, 3)).arg("--resume").output().unwrap();
@@ -185,8 +188,7 @@ fn a_killed_rank_stops_the_job_leaves_valid_checkpoints_and_resume_continues() {
     // --resume continues from the last epoch every rank completed, exactly.
     ok(mpirun(2).args(args(&run, 1, 5)).arg("--resume").output().unwrap());
     ok(mpirun(2).args(args(&whole, 1, 5)).output().unwrap());
-    assert_eq!(progress(&whole), progress(&run));
-    assert_eq!(policy_weights(&whole), policy_weights(&run));
+    assert_same_run(&whole, &run, "resumed");
 }
 
 /// A rank that fails alone (its checkpoint is gone) stops the job with its reason instead of hanging.
@@ -216,6 +218,5 @@ fn a_checkpoint_set_aside_but_not_yet_replaced_still_resumes() {
     let latest = cut.join("rank-1/checkpoint.bin");
     std::fs::rename(&latest, checkpoint::previous(&latest)).unwrap();
     ok(mpirun(2).args(args(&cut, 1, 2)).arg("--resume").output().unwrap());
-    assert_eq!(progress(&whole), progress(&cut));
-    assert_eq!(policy_weights(&whole), policy_weights(&cut));
+    assert_same_run(&whole, &cut, "resumed");
 }

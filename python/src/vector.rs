@@ -51,7 +51,29 @@ fn contacts(env: &BlockEnv) -> Vec<i8> {
         .collect()
 }
 
+/// What a vector call does to environment `i`: its environment, report,
+/// ended flag and observation row.
+type PerEnv<'a> = dyn Fn(usize, &mut BlockEnv, &mut Report, &mut bool, &mut [f32]) -> Result<(), EnvError> + Sync + 'a;
+
 impl VecEnv {
+    /// Runs `f` on every environment in the thread pool with the GIL
+    /// released; `out` is the `num_envs × obs_dim` observation buffer.
+    fn par_each(&mut self, py: Python<'_>, out: &mut [f32], f: &PerEnv<'_>) -> PyResult<()> {
+        let (envs, reports, ended, pool) = (&mut self.envs, &mut self.reports, &mut self.ended, &self.pool);
+        let obs_dim = self.obs_dim;
+        py.allow_threads(|| {
+            pool.install(|| {
+                envs.par_iter_mut()
+                    .zip(reports.par_iter_mut())
+                    .zip(ended.par_iter_mut())
+                    .zip(out.par_chunks_mut(obs_dim))
+                    .enumerate()
+                    .try_for_each(|(i, (((env, report), ended), row))| f(i, env, report, ended, row))
+            })
+        })
+        .map_err(to_py)
+    }
+
     fn check_open(&self) -> PyResult<()> {
         if self.closed {
             return Err(PyRuntimeError::new_err("the vector environment is closed"));
@@ -85,9 +107,20 @@ impl VecEnv {
     }
 }
 
-/// Writes environment `i`'s observation into row `i` of `out`.
-fn write_row(out: &mut [f32], obs_dim: usize, obs: &[f32]) {
-    out[..obs_dim].copy_from_slice(&obs[..obs_dim]);
+/// Resets `env` (with `seed`, or its own generator going on), writing its
+/// first observation into `row` and its report.
+fn reset_one(
+    env: &mut BlockEnv,
+    seed: Option<u64>,
+    row: &mut [f32],
+    ended: &mut bool,
+    report: &mut Report,
+) -> Result<(), EnvError> {
+    let (obs, info) = env.reset(seed)?;
+    row.copy_from_slice(&obs);
+    *ended = false;
+    *report = Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
+    Ok(())
 }
 
 #[pymethods]
@@ -164,38 +197,22 @@ impl VecEnv {
         if out.len() != n * obs_dim {
             return Err(PyValueError::new_err(format!("obs buffer must be {n} × {obs_dim} float32")));
         }
-        let (envs, reports, ended, pool) = (&mut self.envs, &mut self.reports, &mut self.ended, &self.pool);
-        let result: Result<(), EnvError> = py.allow_threads(|| {
-            pool.install(|| {
-                envs.par_iter_mut()
-                    .zip(reports.par_iter_mut())
-                    .zip(ended.par_iter_mut())
-                    .zip(out.par_chunks_mut(obs_dim))
-                    .enumerate()
-                    .try_for_each(|(i, (((env, report), ended), row))| {
-                        if !mask[i] {
-                            *report = Report::default();
-                            return Ok(());
-                        }
-                        if let Some(l) = level {
-                            env.set_level(l)?;
-                        }
-                        if let Some(c) = challenge {
-                            env.set_challenge(c)?;
-                        }
-                        if let Some(name) = &distribution {
-                            env.set_distribution(Some(name))?;
-                        }
-                        let (o, info) = env.reset(seeds[i])?;
-                        write_row(row, obs_dim, &o);
-                        *ended = false;
-                        *report =
-                            Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
-                        Ok(())
-                    })
-            })
-        });
-        result.map_err(to_py)?;
+        self.par_each(py, out, &|i, env, report, ended, row| {
+            if !mask[i] {
+                *report = Report::default();
+                return Ok(());
+            }
+            if let Some(l) = level {
+                env.set_level(l)?;
+            }
+            if let Some(c) = challenge {
+                env.set_challenge(c)?;
+            }
+            if let Some(name) = &distribution {
+                env.set_distribution(Some(name))?;
+            }
+            reset_one(env, seeds[i], row, ended, report)
+        })?;
         self.infos(py)
     }
 
@@ -238,39 +255,23 @@ impl VecEnv {
         if out.len() != n * obs_dim || rew.len() != n || term.len() != n || trunc.len() != n {
             return Err(bad("an output"));
         }
-        let (envs, reports, ended, pool) = (&mut self.envs, &mut self.reports, &mut self.ended, &self.pool);
-        let result: Result<(), EnvError> = py.allow_threads(|| {
-            pool.install(|| {
-                envs.par_iter_mut()
-                    .zip(reports.par_iter_mut())
-                    .zip(ended.par_iter_mut())
-                    .zip(out.par_chunks_mut(obs_dim))
-                    .enumerate()
-                    .try_for_each(|(i, (((env, report), ended), row))| {
-                        if *ended {
-                            let (o, info) = env.reset(None)?;
-                            write_row(row, obs_dim, &o);
-                            *ended = false;
-                            *report =
-                                Report { reset: true, contacts: contacts(env), info: Some(info), ..Report::default() };
-                        } else {
-                            let s = env.step(&actions[i * act_dim..(i + 1) * act_dim])?;
-                            write_row(row, obs_dim, &s.obs);
-                            *ended = s.terminated || s.truncated;
-                            *report = Report {
-                                reward: s.reward,
-                                terminated: s.terminated,
-                                truncated: s.truncated,
-                                reset: false,
-                                contacts: contacts(env),
-                                info: Some(s.info),
-                            };
-                        }
-                        Ok(())
-                    })
-            })
-        });
-        result.map_err(to_py)?;
+        self.par_each(py, out, &|i, env, report, ended, row| {
+            if *ended {
+                return reset_one(env, None, row, ended, report);
+            }
+            let s = env.step(&actions[i * act_dim..(i + 1) * act_dim])?;
+            row.copy_from_slice(&s.obs);
+            *ended = s.terminated || s.truncated;
+            *report = Report {
+                reward: s.reward,
+                terminated: s.terminated,
+                truncated: s.truncated,
+                reset: false,
+                contacts: contacts(env),
+                info: Some(s.info),
+            };
+            Ok(())
+        })?;
         for (i, r) in self.reports.iter().enumerate() {
             rew[i] = r.reward;
             term[i] = r.terminated;

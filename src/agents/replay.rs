@@ -121,17 +121,9 @@ impl ReplayBuffer {
         if from > to || to > self.pushed || from < self.pushed - self.len as u64 {
             return None;
         }
-        let (o, a, c) = (self.obs_dim, self.act_dim, self.capacity as u64);
         let mut b = Batch::default();
         for i in from..to {
-            let j = (i % c) as usize;
-            b.obs.extend_from_slice(&self.data.obs[j * o..(j + 1) * o]);
-            b.act.extend_from_slice(&self.data.act[j * a..(j + 1) * a]);
-            b.rew.push(self.data.rew[j]);
-            b.next_obs.extend_from_slice(&self.data.next_obs[j * o..(j + 1) * o]);
-            b.done.push(self.data.done[j]);
-            b.extra.push(self.data.extra[j]);
-            b.discount.push(self.data.discount[j]);
+            self.append_slot((i % self.capacity as u64) as usize, &mut b);
         }
         Some(b)
     }
@@ -195,18 +187,23 @@ impl ReplayBuffer {
         if self.len == 0 {
             return b;
         }
-        let (o, a) = (self.obs_dim, self.act_dim);
         for _ in 0..n {
-            let i = rng.gen_range(0..self.len);
-            b.obs.extend_from_slice(&self.data.obs[i * o..(i + 1) * o]);
-            b.act.extend_from_slice(&self.data.act[i * a..(i + 1) * a]);
-            b.rew.push(self.data.rew[i]);
-            b.next_obs.extend_from_slice(&self.data.next_obs[i * o..(i + 1) * o]);
-            b.done.push(self.data.done[i]);
-            b.extra.push(self.data.extra[i]);
-            b.discount.push(self.data.discount[i]);
+            self.append_slot(rng.gen_range(0..self.len), &mut b);
         }
         b
+    }
+
+    /// Appends the transition stored in slot `j` to `b`.
+    #[inline]
+    fn append_slot(&self, j: usize, b: &mut Batch) {
+        let (o, a) = (self.obs_dim, self.act_dim);
+        b.obs.extend_from_slice(&self.data.obs[j * o..(j + 1) * o]);
+        b.act.extend_from_slice(&self.data.act[j * a..(j + 1) * a]);
+        b.rew.push(self.data.rew[j]);
+        b.next_obs.extend_from_slice(&self.data.next_obs[j * o..(j + 1) * o]);
+        b.done.push(self.data.done[j]);
+        b.extra.push(self.data.extra[j]);
+        b.discount.push(self.data.discount[j]);
     }
 
     /// The stored arrays in storage order and the next write position (for

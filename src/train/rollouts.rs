@@ -215,14 +215,6 @@ pub(crate) fn play_all(
     Ok(out)
 }
 
-/// Share of successful episodes (0 for none).
-pub(crate) fn success_rate(eps: &[Episode]) -> f64 {
-    if eps.is_empty() {
-        return 0.0;
-    }
-    eps.iter().filter(|e| e.success).count() as f64 / eps.len() as f64
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
