@@ -15,7 +15,7 @@ NP ?= 20
 MPIRUN ?= mpirun $$(test "$$(id -u)" = 0 && echo --allow-run-as-root) --oversubscribe $(MPIFLAGS)
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup demo test bench bench-mpi train build clean-assets ddpg3 ddpg3-paper aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
+.PHONY: setup setup-mujoco3 test-mujoco3 demo test bench bench-mpi train build clean-assets ddpg3 ddpg3-paper aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
 
 setup:
 	bash scripts/setup.sh
@@ -34,6 +34,16 @@ test: setup
 	$(CARGO) test --all
 	bash scripts/zoo_python_check.sh
 	bash scripts/python_check.sh
+	$(MAKE) test-mujoco3
+
+# The opt-in second engine, MuJoCo 3.11.0 from its PyPI wheel (engines/mujoco-3.11.0, sha256-pinned):
+# `cargo build --release --features mujoco3` (its own target folder keeps the two builds apart).
+setup-mujoco3: setup
+	bash scripts/setup_mujoco3.sh
+M3 = --release --no-default-features --features mujoco3,render --target-dir target/mujoco3
+# The environment core, its tests and the renderer's on MuJoCo 3.11 (the training stack is engine-agnostic).
+test-mujoco3: setup-mujoco3
+	$(CARGO) test $(M3) --lib --tests
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

@@ -4,6 +4,12 @@
 //! library are searched for in the usual places. Override with
 //! `MUJOCO_INCLUDE_DIR` (the folder that holds `mujoco/mujoco.h`) and
 //! `MUJOCO_LIB_DIR` (the folder that holds `libmujoco.so`).
+//!
+//! With the `mujoco3` feature the bindings are made from MuJoCo 3.11.0 instead:
+//! `MUJOCO_DIR` (default: `engines/mujoco-3.11.0` of this checkout, filled by
+//! `make setup-mujoco3`) holds `include/mujoco/mujoco.h` and `lib/libmujoco.so`.
+//! The library folder is passed on as `DEP_MUJOCO_LIB_DIR` so that the crates
+//! that link binaries can give them an rpath to it.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -31,9 +37,40 @@ fn find_dir(var: &str, candidates: &[&str], probe: &str) -> PathBuf {
         .unwrap_or_else(|| panic!("MuJoCo not found: no {probe} under {candidates:?}; {SETUP_HINT}"))
 }
 
+const MUJOCO3_VERSION: &str = "3.11.0";
+
+/// The MuJoCo 3 engine folder: `MUJOCO_DIR`, or the one `make setup-mujoco3` fills.
+fn mujoco3_dirs() -> (PathBuf, PathBuf) {
+    println!("cargo:rerun-if-env-changed=MUJOCO_DIR");
+    let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    let (dir, from_env) = match env::var_os("MUJOCO_DIR") {
+        Some(d) => (PathBuf::from(d), true),
+        None => (manifest.join("..").join("engines").join(format!("mujoco-{MUJOCO3_VERSION}")), false),
+    };
+    let dir = dir.canonicalize().unwrap_or(dir);
+    let (include, lib) = (dir.join("include"), dir.join("lib"));
+    let header = include.join("mujoco/mujoco.h");
+    println!("cargo:rerun-if-changed={}", header.display());
+    if !header.exists() || !lib.join("libmujoco.so").exists() {
+        let hint = if from_env {
+            format!("MUJOCO_DIR={} must hold include/mujoco/mujoco.h and lib/libmujoco.so", dir.display())
+        } else {
+            format!("run `make setup-mujoco3` (bash scripts/setup_mujoco3.sh) to fetch MuJoCo {MUJOCO3_VERSION}, or set MUJOCO_DIR")
+        };
+        panic!("the `mujoco3` feature needs MuJoCo 3 but {} has none: {hint}", dir.display());
+    }
+    (include, lib)
+}
+
 fn main() {
-    let include_dir = find_dir("MUJOCO_INCLUDE_DIR", INCLUDE_CANDIDATES, "mujoco/mujoco.h");
-    let lib_dir = find_dir("MUJOCO_LIB_DIR", LIB_CANDIDATES, "libmujoco.so");
+    let (include_dir, lib_dir) = if env::var_os("CARGO_FEATURE_MUJOCO3").is_some() {
+        mujoco3_dirs()
+    } else {
+        (
+            find_dir("MUJOCO_INCLUDE_DIR", INCLUDE_CANDIDATES, "mujoco/mujoco.h"),
+            find_dir("MUJOCO_LIB_DIR", LIB_CANDIDATES, "libmujoco.so"),
+        )
+    };
 
     // Fatal errors that return (guard.c); its archive comes before libmujoco on the link line.
     println!("cargo:rerun-if-changed=guard.c");
@@ -42,6 +79,7 @@ fn main() {
     println!("cargo:rustc-link-search=native={}", lib_dir.display());
     println!("cargo:rustc-link-lib=dylib=mujoco");
     println!("cargo:include={}", include_dir.display());
+    println!("cargo:lib_dir={}", lib_dir.display());
     println!("cargo:rerun-if-changed=wrapper.h");
 
     let header = include_dir.join("mujoco/mujoco.h");

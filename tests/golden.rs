@@ -31,6 +31,7 @@ const CASES: &[(&str, &str, usize, bool, u64)] = &[
 ];
 
 /// Recorded at commit bb154a3, before the built-ins became task files.
+#[cfg(not(feature = "mujoco3"))]
 const GOLDEN: &[&str] = &[
     "b481516c8754462f43a536194c2cc6410dc643aee01e8b858eb84fd6fe351766",
     "852af3041a9ed49d9c8f22c56a0f4ee853c1d6adacd1daab6da7d747592abf65",
@@ -45,6 +46,25 @@ const GOLDEN: &[&str] = &[
     "4fc7a0fe302e93e84075aa3b605c280ab23e9bb830815174093500ab8221d242",
     "ca2f8b1a5eeb1da28c96b68a4bc9dcc51ca6951722bf0a213fba164681796082",
     "9da5e7c5c1b80fde8f0873f1a17cfd1af63e5d958c194eb9a9251928ae001608",
+];
+
+/// The same cases on MuJoCo 3.11.0 (the `mujoco3` feature), recorded when that
+/// engine was added: another engine, other trajectories, each as reproducible.
+#[cfg(feature = "mujoco3")]
+const GOLDEN: &[&str] = &[
+    "92bb762b86e5cbca84b16ab32df313a31ef999338437be46a5832ad6f3a73033",
+    "e2fc3ab2ff1af6c4a8d8ae5e838919caee10b28624fd316051f32c8c1f627eae",
+    "98df2056f915c2be7139826e0de3b8f610b6c872f37d6f111234c3c115288448",
+    "6e5b0a4bf6d533e1715a5fdb8dc8b46fca5d17e3e3eb43b0dc8372974558dded",
+    "075752a86e25fb56d0b1041c06ddf729a67f807a1324fd5a2bf89d81ad8ed908",
+    "2ef844d3478e285b315bf3c3e624914f5324eaa00d7a6802d2ce41fd8c295479",
+    "44cf87e68e4554e22f868a04171c7eaf5b14eaf130264ced05dd977a5d94abb9",
+    "b93b057beecaee06ced94e824db3ac0c592d3de34f71be8cd7b5bb17372753fc",
+    "a76dc1a588caa0d26ad732337ccd8acdd3aea3edb222e4e48a8846fc6486a4e4",
+    "8952a368d7e662a75837d27ac7605d7595083cf866a9a54776b5e05660ede405",
+    "6444d786f8fc1ca6170003f34425d16b7b06c9533d0a03be5634c837796c07ac",
+    "b139c601ad6da57842d2f4ab128c1d50cb771ad1df55ba0e6a0154c057fa8d3c",
+    "28d2c31fd3c3d603071de171c1a40fa03da513b445201645899d4f2fc7bb1f5a",
 ];
 
 fn absorb(h: &mut Sha256, ep: &EpisodeRecord) {
@@ -75,6 +95,7 @@ const NEW_CASES: &[(&str, &str, usize, bool, u64)] = &[
     ("BlocksStack-v0", "random", 1, false, 270),
 ];
 
+#[cfg(not(feature = "mujoco3"))]
 const NEW_GOLDEN: &[&str] = &[
     "6112c80f1072d3025d1616a82f1eff6baff2be634cca39350689675a557ba1e4",
     "6ea200eecf90d4faa784c0a7871abd1f5a8c927383d3014c5690f84015799aad",
@@ -84,6 +105,18 @@ const NEW_GOLDEN: &[&str] = &[
     "ca5f6994374c715bae5bedd37b3a9039d9ba14c0f403989246146b9d63634cbb",
     "ba7c165de8eef8cb9c6d210e12889e7dabf7b10688caaffbb253c564d3f40d7a",
     "1b627df8da36b403f961d4f3cab9008b913fa6241720f23b10db93ed23912dca",
+];
+
+#[cfg(feature = "mujoco3")]
+const NEW_GOLDEN: &[&str] = &[
+    "577995fc20a6bb46c1b37ce7d03fee278a268e045ecd25e37b9d2070bdf1b4d4",
+    "89247ab4a51d4033cf1b18f9224c8bb84158e0a6eb090b7149625f17663d25a3",
+    "6dd48df3f1000af3bfef2b2d2dae59345dec871696bb30ff4df2225427054303",
+    "66cb74a1b3c0967ced9e63d1b8eb48693da7dd72b7c7b2c82d8c6d7251720aa3",
+    "deaabda3273ff4ba42151135710b50edd63ee30582c158e33096c6483a64264e",
+    "4f8a90d5d2d5ad62211b3f7922cf8f98a3e729750632cbd31613d4f7f3320db4",
+    "c901ebf0d3fcd92883b87b98be5e2d0a192f170ab5ee81b6d78bd4511578dea7",
+    "da1fa35b93b276061b1609103284510ce2e03375085dde3d62a2ca5ba26e5c0a",
 ];
 
 fn digest(&(id, policy, level, challenge, seed): &(&str, &str, usize, bool, u64)) -> String {

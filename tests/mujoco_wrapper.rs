@@ -118,8 +118,10 @@ fn nan_state_raises_warning_counters() {
 }
 
 #[test]
-fn version_is_2_2_2() {
-    assert_eq!(blockpuzzle::mj::version(), "2.2.2");
+fn version_is_the_engine_built_for() {
+    let want = if cfg!(feature = "mujoco3") { "3.11.0" } else { "2.2.2" };
+    assert_eq!(blockpuzzle::mj::version(), want);
+    assert_eq!(blockpuzzle::mj::header_version(), want);
 }
 
 /// A fatal MuJoCo error (here: its stack is too small once the ball touches
@@ -128,20 +130,28 @@ fn version_is_2_2_2() {
 /// place; the process goes on simulating; another thread's errors are its own.
 #[test]
 fn fatal_mujoco_errors_return_instead_of_ending_the_process() {
-    let sized = |n: usize| {
-        PENDULUM.replace("<option timestep=\"0.002\"/>", &format!("<option timestep=\"0.002\"/><size nstack=\"{n}\"/>"))
+    // 2.2.2 sizes the stack in mjtNums (`nstack`), 3.x its arena in bytes (`memory`).
+    let sized = |small: bool| {
+        let size = match (cfg!(feature = "mujoco3"), small) {
+            (false, true) => "nstack=\"50\"",
+            (false, false) => "nstack=\"100\"",
+            (true, true) => "memory=\"100\"",
+            (true, false) => "memory=\"4K\"",
+        };
+        PENDULUM.replace("<option timestep=\"0.002\"/>", &format!("<option timestep=\"0.002\"/><size {size}/>"))
     };
+    let overflow = |e: &str| e.to_lowercase().contains("stack overflow");
     // Too small even to compile: a load error (and our handlers are back afterwards).
-    let err = Model::from_xml_string(&sized(50), Path::new("/tmp/x.xml")).unwrap_err();
-    assert!(err.to_string().contains("Stack overflow"), "{err}");
-    let m = Arc::new(Model::from_xml_string(&sized(100), Path::new("/tmp/x.xml")).unwrap());
+    let err = Model::from_xml_string(&sized(true), Path::new("/tmp/x.xml")).unwrap_err();
+    assert!(overflow(&err.to_string()), "{err}");
+    let m = Arc::new(Model::from_xml_string(&sized(false), Path::new("/tmp/x.xml")).unwrap());
     let mut d = Data::new(m).unwrap();
     let err = (0..1000).find_map(|_| d.step().err()).expect("the stack overflows once the ball lands");
     assert!(matches!(err, MjError::Fatal { .. }), "{err}");
-    assert!(err.to_string().contains("Stack overflow"), "{err}");
+    assert!(overflow(&err.to_string()), "{err}");
     assert!(d.reset().is_ok(), "reset works on the failed state");
     let again = std::thread::spawn(move || (0..1000).find_map(|_| d.step().err()).map(|e| e.to_string()));
-    assert!(again.join().unwrap().is_some_and(|e| e.contains("Stack overflow")));
+    assert!(again.join().unwrap().is_some_and(|e| overflow(&e)));
     // The process is alive and simulates normally.
     let m = Arc::new(Model::from_xml_string(PENDULUM, Path::new("/tmp/x.xml")).unwrap());
     let mut ok = Data::new(m).unwrap();

@@ -1,13 +1,13 @@
 //! Headless rendering (EGL + Mesa's software rasteriser): a known state
 //! shows its blocks where the camera projects them, and the GIF and
 //! filmstrip outputs decode with the expected frames and sizes.
-#![cfg(feature = "train")]
+//! The command-line tests need the `train` feature (the binary); the
+//! renderer's own test runs wherever `render` is on (with either engine).
+#![cfg(feature = "render")]
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
 use blockpuzzle::render::{Renderer, View};
-use blockpuzzle::rules::Colour;
-use image::{AnimationDecoder, Rgb};
-use std::process::Command;
+use image::Rgb;
 
 const BLUE_AT: [f64; 2] = [1.30, 0.70];
 const GREEN_AT: [f64; 2] = [1.40, 0.82];
@@ -50,180 +50,195 @@ fn blocks_appear_where_the_camera_projects_them() {
     assert!(!blueish(p) && !greenish(p), "table pixel {p:?}");
 }
 
-fn bp(args: &[&str], no_egl: bool) -> std::process::Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
-    cmd.args(args);
-    if no_egl {
-        cmd.env(blockpuzzle::render::egl::DISABLE_VAR, "1");
-    } else {
-        cmd.env_remove(blockpuzzle::render::egl::DISABLE_VAR);
-    }
-    cmd.output().unwrap()
-}
+/// Through the command line (the binary needs the `train` feature).
+#[cfg(feature = "train")]
+mod cli {
+    use super::*;
+    use blockpuzzle::rules::Colour;
+    use image::AnimationDecoder;
+    use std::process::Command;
 
-fn text(o: &std::process::Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
-
-#[test]
-fn gif_and_filmstrip_decode_with_the_expected_frames() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
-    let (traj, gif, strip) = (path("r.jsonl"), path("r.gif"), path("strip.png"));
-    let o = bp(
-        &[
-            "rollout",
-            "--env",
-            "GripperTouch-v0",
-            "--policy",
-            "scripted",
-            "--episodes",
-            "1",
-            "--out",
-            &traj,
-            "--render",
-            &gif,
-            "--width",
-            "64",
-            "--height",
-            "48",
-        ],
-        false,
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let steps = blockpuzzle::rollout::read_dump(std::path::Path::new(&traj)).unwrap()[0].steps.len();
-    let decoder = image::codecs::gif::GifDecoder::new(std::fs::File::open(&gif).unwrap()).unwrap();
-    let frames = decoder.into_frames().collect_frames().unwrap();
-    assert_eq!(frames.len(), steps + 1, "reset state + one frame per step");
-    assert!(frames.iter().all(|f| f.buffer().dimensions() == (64, 48)));
-
-    let o =
-        bp(&["render", "--traj", &traj, "--filmstrip", "3", "--width", "40", "--height", "30", "--out", &strip], false);
-    assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(image::open(&strip).unwrap().to_rgb8().dimensions(), (3 * 40, 30));
-
-    let o = bp(&["render", "--traj", &traj, "--episode", "5", "--out", &path("x.gif")], false);
-    assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
-    let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
-    assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
-
-    // A zoo policy plays one seeded episode and renders it, as its dump would.
-    let policy_strip = path("policy.png");
-    let o = bp(
-        &[
-            "render",
-            "--policy",
-            "ReachAvoid-v0-ddpg",
-            "--seed",
-            "5",
-            "--filmstrip",
-            "2",
-            "--width",
-            "40",
-            "--height",
-            "30",
-            "--out",
-            &policy_strip,
-        ],
-        false,
-    );
-    assert!(o.status.success() && text(&o).contains("seed 5 ("), "{}", text(&o));
-    assert_eq!(image::open(&policy_strip).unwrap().to_rgb8().dimensions(), (2 * 40, 30));
-    let o = bp(&["render", "--out", &path("y.gif")], false);
-    assert!(!o.status.success() && text(&o).contains("--traj"), "{}", text(&o));
-}
-
-#[test]
-fn without_egl_rendering_fails_clearly_and_the_rest_works() {
-    let dir = tempfile::tempdir().unwrap();
-    let traj = dir.path().join("r.jsonl");
-    let traj = traj.to_str().unwrap();
-    let o =
-        bp(&["rollout", "--env", "GripperTouch-v0", "--policy", "scripted", "--episodes", "1", "--out", traj], true);
-    assert!(o.status.success(), "{}", text(&o));
-    let gif = dir.path().join("r.gif");
-    let o = bp(&["render", "--traj", traj, "--out", gif.to_str().unwrap()], true);
-    assert!(!o.status.success());
-    let t = text(&o);
-    assert!(t.contains("needs EGL") && t.contains("libegl1") && t.contains("make setup"), "{t}");
-    assert!(!gif.exists(), "nothing written");
-    assert!(bp(&["envs"], true).status.success());
-}
-
-#[test]
-fn task_check_renders_one_reset_state_per_level_and_a_shuffled_episode_in_its_colours() {
-    let dir = tempfile::tempdir().unwrap();
-    let strip = dir.path().join("resets.png");
-    let o = bp(
-        &[
-            "task",
-            "check",
-            "ToppleTower-v0",
-            "--samples",
-            "2",
-            "--render",
-            strip.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-        ],
-        false,
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let img = image::open(&strip).unwrap();
-    assert_eq!((img.width(), img.height()), (4 * 64, 48), "levels 0-3, one frame each");
-
-    // A shuffled episode replays with the episode's colours, not the task file's: find a
-    // seed that deals the green role to slot 0 (blue in the file) where the camera sees it.
-    let view = View { width: 320, height: 240, distance: 1.2, ..View::default() };
-    let mut env = registry::make("BlocksChooseShuffled-v0").unwrap();
-    env.set_level(env.max_level()).unwrap();
-    let model = env.data().model().clone();
-    let mut probe = Renderer::new(&model, &view).unwrap();
-    let found = (0..200).find_map(|seed| {
-        env.reset(Some(seed)).unwrap();
-        if env.block_colours()[0] != Colour::Green {
-            return None;
+    fn bp(args: &[&str], no_egl: bool) -> std::process::Output {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
+        cmd.args(args);
+        if no_egl {
+            cmd.env(blockpuzzle::render::egl::DISABLE_VAR, "1");
+        } else {
+            cmd.env_remove(blockpuzzle::render::egl::DISABLE_VAR);
         }
-        let file_colours = probe.render(env.data_mut(), None);
-        let (x, y) = probe.project(env.block_positions()[0])?;
-        blueish(file_colours.get_pixel(x as u32, y as u32)).then_some((seed, x as u32, y as u32))
-    });
-    let (seed, x, y) = found.expect("a seed with slot 0 green and in view");
-    let traj = dir.path().join("s.jsonl");
-    let args = format!("rollout --env BlocksChooseShuffled-v0 --policy random --episodes 1 --seed {seed} --out");
-    let o = bp(&args.split(' ').chain([traj.to_str().unwrap()]).collect::<Vec<_>>(), false);
-    assert!(o.status.success(), "{}", text(&o));
-    let ep = &blockpuzzle::rollout::read_dump(&traj).unwrap()[0];
-    assert_eq!(ep.objects[2].colour, Colour::Green);
-    let (frames, _) = blockpuzzle::render::replay::episode_frames(ep, &view).unwrap();
-    let px = frames[0].get_pixel(x, y);
-    assert!(greenish(px), "slot 0 drawn green, as dealt this episode: {px:?}");
+        cmd.output().unwrap()
+    }
 
-    // A dump of a task file renders after the file is gone (from the copy in the dump).
-    let file = dir.path().join("gone.toml");
-    let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
-    std::fs::write(&file, source.replace("GripperTouch-v0", "Gone-v0")).unwrap();
-    let traj = dir.path().join("gone.jsonl");
-    let o =
-        bp(&["rollout", "--env", file.to_str().unwrap(), "--episodes", "1", "--out", traj.to_str().unwrap()], false);
-    assert!(o.status.success(), "{}", text(&o));
-    std::fs::remove_file(&file).unwrap();
-    let gif = dir.path().join("gone.gif");
-    let o = bp(
-        &[
-            "render",
-            "--traj",
-            traj.to_str().unwrap(),
-            "--out",
-            gif.to_str().unwrap(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-        ],
-        false,
-    );
-    assert!(o.status.success() && gif.exists(), "{}", text(&o));
+    fn text(o: &std::process::Output) -> String {
+        format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    }
+
+    #[test]
+    fn gif_and_filmstrip_decode_with_the_expected_frames() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = |f: &str| dir.path().join(f).to_str().unwrap().to_owned();
+        let (traj, gif, strip) = (path("r.jsonl"), path("r.gif"), path("strip.png"));
+        let o = bp(
+            &[
+                "rollout",
+                "--env",
+                "GripperTouch-v0",
+                "--policy",
+                "scripted",
+                "--episodes",
+                "1",
+                "--out",
+                &traj,
+                "--render",
+                &gif,
+                "--width",
+                "64",
+                "--height",
+                "48",
+            ],
+            false,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let steps = blockpuzzle::rollout::read_dump(std::path::Path::new(&traj)).unwrap()[0].steps.len();
+        let decoder = image::codecs::gif::GifDecoder::new(std::fs::File::open(&gif).unwrap()).unwrap();
+        let frames = decoder.into_frames().collect_frames().unwrap();
+        assert_eq!(frames.len(), steps + 1, "reset state + one frame per step");
+        assert!(frames.iter().all(|f| f.buffer().dimensions() == (64, 48)));
+
+        let o = bp(
+            &["render", "--traj", &traj, "--filmstrip", "3", "--width", "40", "--height", "30", "--out", &strip],
+            false,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        assert_eq!(image::open(&strip).unwrap().to_rgb8().dimensions(), (3 * 40, 30));
+
+        let o = bp(&["render", "--traj", &traj, "--episode", "5", "--out", &path("x.gif")], false);
+        assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
+        let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
+        assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
+
+        // A zoo policy plays one seeded episode and renders it, as its dump would.
+        let policy_strip = path("policy.png");
+        let o = bp(
+            &[
+                "render",
+                "--policy",
+                "ReachAvoid-v0-ddpg",
+                "--seed",
+                "5",
+                "--filmstrip",
+                "2",
+                "--width",
+                "40",
+                "--height",
+                "30",
+                "--out",
+                &policy_strip,
+            ],
+            false,
+        );
+        assert!(o.status.success() && text(&o).contains("seed 5 ("), "{}", text(&o));
+        assert_eq!(image::open(&policy_strip).unwrap().to_rgb8().dimensions(), (2 * 40, 30));
+        let o = bp(&["render", "--out", &path("y.gif")], false);
+        assert!(!o.status.success() && text(&o).contains("--traj"), "{}", text(&o));
+    }
+
+    #[test]
+    fn without_egl_rendering_fails_clearly_and_the_rest_works() {
+        let dir = tempfile::tempdir().unwrap();
+        let traj = dir.path().join("r.jsonl");
+        let traj = traj.to_str().unwrap();
+        let o = bp(
+            &["rollout", "--env", "GripperTouch-v0", "--policy", "scripted", "--episodes", "1", "--out", traj],
+            true,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let gif = dir.path().join("r.gif");
+        let o = bp(&["render", "--traj", traj, "--out", gif.to_str().unwrap()], true);
+        assert!(!o.status.success());
+        let t = text(&o);
+        assert!(t.contains("needs EGL") && t.contains("libegl1") && t.contains("make setup"), "{t}");
+        assert!(!gif.exists(), "nothing written");
+        assert!(bp(&["envs"], true).status.success());
+    }
+
+    #[test]
+    fn task_check_renders_one_reset_state_per_level_and_a_shuffled_episode_in_its_colours() {
+        let dir = tempfile::tempdir().unwrap();
+        let strip = dir.path().join("resets.png");
+        let o = bp(
+            &[
+                "task",
+                "check",
+                "ToppleTower-v0",
+                "--samples",
+                "2",
+                "--render",
+                strip.to_str().unwrap(),
+                "--width",
+                "64",
+                "--height",
+                "48",
+            ],
+            false,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let img = image::open(&strip).unwrap();
+        assert_eq!((img.width(), img.height()), (4 * 64, 48), "levels 0-3, one frame each");
+
+        // A shuffled episode replays with the episode's colours, not the task file's: find a
+        // seed that deals the green role to slot 0 (blue in the file) where the camera sees it.
+        let view = View { width: 320, height: 240, distance: 1.2, ..View::default() };
+        let mut env = registry::make("BlocksChooseShuffled-v0").unwrap();
+        env.set_level(env.max_level()).unwrap();
+        let model = env.data().model().clone();
+        let mut probe = Renderer::new(&model, &view).unwrap();
+        let found = (0..200).find_map(|seed| {
+            env.reset(Some(seed)).unwrap();
+            if env.block_colours()[0] != Colour::Green {
+                return None;
+            }
+            let file_colours = probe.render(env.data_mut(), None);
+            let (x, y) = probe.project(env.block_positions()[0])?;
+            blueish(file_colours.get_pixel(x as u32, y as u32)).then_some((seed, x as u32, y as u32))
+        });
+        let (seed, x, y) = found.expect("a seed with slot 0 green and in view");
+        let traj = dir.path().join("s.jsonl");
+        let args = format!("rollout --env BlocksChooseShuffled-v0 --policy random --episodes 1 --seed {seed} --out");
+        let o = bp(&args.split(' ').chain([traj.to_str().unwrap()]).collect::<Vec<_>>(), false);
+        assert!(o.status.success(), "{}", text(&o));
+        let ep = &blockpuzzle::rollout::read_dump(&traj).unwrap()[0];
+        assert_eq!(ep.objects[2].colour, Colour::Green);
+        let (frames, _) = blockpuzzle::render::replay::episode_frames(ep, &view).unwrap();
+        let px = frames[0].get_pixel(x, y);
+        assert!(greenish(px), "slot 0 drawn green, as dealt this episode: {px:?}");
+
+        // A dump of a task file renders after the file is gone (from the copy in the dump).
+        let file = dir.path().join("gone.toml");
+        let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
+        std::fs::write(&file, source.replace("GripperTouch-v0", "Gone-v0")).unwrap();
+        let traj = dir.path().join("gone.jsonl");
+        let o = bp(
+            &["rollout", "--env", file.to_str().unwrap(), "--episodes", "1", "--out", traj.to_str().unwrap()],
+            false,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        std::fs::remove_file(&file).unwrap();
+        let gif = dir.path().join("gone.gif");
+        let o = bp(
+            &[
+                "render",
+                "--traj",
+                traj.to_str().unwrap(),
+                "--out",
+                gif.to_str().unwrap(),
+                "--width",
+                "64",
+                "--height",
+                "48",
+            ],
+            false,
+        );
+        assert!(o.status.success() && gif.exists(), "{}", text(&o));
+    }
 }

@@ -25,12 +25,12 @@ pub enum Warning {
 impl Warning {
     fn index(self) -> usize {
         let w = match self {
-            Warning::Inertia => sys::mjtWarning_::mjWARN_INERTIA,
-            Warning::ContactFull => sys::mjtWarning_::mjWARN_CONTACTFULL,
-            Warning::ConstraintFull => sys::mjtWarning_::mjWARN_CNSTRFULL,
-            Warning::BadQpos => sys::mjtWarning_::mjWARN_BADQPOS,
-            Warning::BadQvel => sys::mjtWarning_::mjWARN_BADQVEL,
-            Warning::BadQacc => sys::mjtWarning_::mjWARN_BADQACC,
+            Warning::Inertia => sys::mjtWarning::mjWARN_INERTIA,
+            Warning::ContactFull => sys::mjtWarning::mjWARN_CONTACTFULL,
+            Warning::ConstraintFull => sys::mjtWarning::mjWARN_CNSTRFULL,
+            Warning::BadQpos => sys::mjtWarning::mjWARN_BADQPOS,
+            Warning::BadQvel => sys::mjtWarning::mjWARN_BADQVEL,
+            Warning::BadQacc => sys::mjtWarning::mjWARN_BADQACC,
         };
         w as usize
     }
@@ -43,11 +43,11 @@ pub struct Contact(sys::mjContact);
 impl Contact {
     /// First geom of the pair.
     pub fn geom1(&self) -> usize {
-        self.0.geom1 as usize
+        super::engine::contact_geoms(&self.0)[0] as usize
     }
     /// Second geom of the pair.
     pub fn geom2(&self) -> usize {
-        self.0.geom2 as usize
+        super::engine::contact_geoms(&self.0)[1] as usize
     }
     /// Signed distance (negative: penetration).
     pub fn dist(&self) -> f64 {

@@ -31,6 +31,13 @@ pub enum MjError {
     /// kept); the state must be reset before it is used again.
     #[error("MuJoCo failed: {message}; reset the environment before using it again")]
     Fatal { message: String },
+    /// The MuJoCo library loaded at run time is not the version whose headers
+    /// this build was made from (their structs may differ).
+    #[error(
+        "MuJoCo version mismatch: built against the {header} headers but the loaded library is {library}; \
+             rebuild (`cargo clean -p mujoco-sys`) or fix LD_LIBRARY_PATH so that the two agree"
+    )]
+    Version { header: String, library: String },
     /// An index outside a model array.
     #[error("{kind} index {index} out of range (model has {count})")]
     OutOfRange { kind: &'static str, index: usize, count: usize },

@@ -3,11 +3,15 @@
 //! and the contact list. Only what blockpuzzle needs is wrapped.
 
 mod data;
+mod engine;
 mod error;
 mod model;
+#[cfg(feature = "render")]
+pub mod render;
 mod vfs;
 
 pub use data::{Contact, Data, Warning};
+pub use engine::header_version;
 pub use error::MjError;
 pub use model::{Model, NEQDATA};
 pub use vfs::Vfs;
@@ -30,7 +34,7 @@ pub enum ObjType {
 
 impl ObjType {
     fn raw(self) -> i32 {
-        use sys::mjtObj_ as O;
+        use sys::mjtObj as O;
         (match self {
             ObjType::Body => O::mjOBJ_BODY,
             ObjType::XBody => O::mjOBJ_XBODY,
@@ -56,9 +60,9 @@ impl ObjType {
 }
 
 /// `mjEQ_WELD` as the integer stored in `eq_type`.
-pub const EQ_WELD: i32 = sys::mjtEq_::mjEQ_WELD as i32;
+pub const EQ_WELD: i32 = sys::mjtEq::mjEQ_WELD as i32;
 
-/// The MuJoCo library version string, e.g. "2.2.2".
+/// The MuJoCo library version string, e.g. "2.2.2" ("3.11.0" with the `mujoco3` feature).
 pub fn version() -> String {
     // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
     unsafe { CStr::from_ptr(sys::mj_versionString()) }.to_string_lossy().into_owned()

@@ -53,6 +53,7 @@ impl Model {
     }
 
     fn load(path: &Path, vfs: Option<&Vfs>) -> Result<Self, MjError> {
+        super::engine::check_version()?;
         let c_path = CString::new(path_str(path)?)
             .map_err(|_| MjError::InvalidName { name: path.display().to_string(), reason: "contains a NUL byte" })?;
         let mut err = vec![0 as std::os::raw::c_char; ERROR_BUF];

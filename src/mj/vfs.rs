@@ -5,8 +5,8 @@ use super::MjError;
 use mujoco_sys as sys;
 use std::ffi::CString;
 
-/// An owned `mjVFS`. It is large (about 2 MB of file names), so it lives on
-/// the heap; dropping it frees the file buffers MuJoCo allocated.
+/// An owned `mjVFS`. In MuJoCo 2.2.2 it is large (about 2 MB of file names),
+/// so it lives on the heap; dropping it frees the file buffers MuJoCo allocated.
 pub struct Vfs {
     raw: Box<sys::mjVFS>,
 }
@@ -14,7 +14,7 @@ pub struct Vfs {
 impl Vfs {
     /// An empty virtual file system.
     pub fn new() -> Self {
-        // SAFETY: mjVFS is plain old data (ints, chars and pointers), so an
+        // SAFETY: mjVFS is plain old data (ints, chars and pointers; 3.x: one pointer), so an
         // all-zero value is valid; mj_defaultVFS then initialises it.
         let mut raw: Box<sys::mjVFS> = unsafe { Box::new(std::mem::zeroed()) };
         // SAFETY: `raw` points to a live, writable mjVFS.
@@ -34,28 +34,8 @@ impl Vfs {
     pub fn add(&mut self, name: &str, contents: &[u8]) -> Result<(), MjError> {
         let c_name = CString::new(name)
             .map_err(|_| MjError::InvalidName { name: name.to_owned(), reason: "contains a NUL byte" })?;
-        if name.len() >= sys::mjMAXVFSNAME as usize {
-            return Err(MjError::Vfs { name: name.to_owned(), reason: "name too long" });
-        }
-        let size = i32::try_from(contents.len())
-            .map_err(|_| MjError::Vfs { name: name.to_owned(), reason: "file larger than 2 GiB" })?;
-        // SAFETY: `raw` is a live mjVFS and `c_name` a NUL-terminated string
-        // that outlives the call; MuJoCo copies the name.
-        let rc = unsafe { sys::mj_makeEmptyFileVFS(self.raw.as_mut(), c_name.as_ptr(), size) };
-        match rc {
-            0 => {}
-            1 => return Err(MjError::Vfs { name: name.to_owned(), reason: "the VFS is full" }),
-            _ => return Err(MjError::Vfs { name: name.to_owned(), reason: "a file of that name exists" }),
-        }
-        let index = (self.raw.nfile - 1) as usize;
-        let dst = self.raw.filedata[index] as *mut u8;
-        if !contents.is_empty() {
-            // SAFETY: mj_makeEmptyFileVFS just allocated `size` bytes at
-            // filedata[nfile-1] for this file; `contents` has exactly `size`
-            // bytes and the two buffers cannot overlap.
-            unsafe { std::ptr::copy_nonoverlapping(contents.as_ptr(), dst, contents.len()) };
-        }
-        Ok(())
+        super::engine::vfs_add(self.raw.as_mut(), &c_name, contents)
+            .map_err(|reason| MjError::Vfs { name: name.to_owned(), reason })
     }
 
     pub(crate) fn as_ptr(&self) -> *const sys::mjVFS {

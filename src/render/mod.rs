@@ -7,9 +7,9 @@ pub mod egl;
 pub mod output;
 pub mod replay;
 
+use crate::mj::render::{FreeCamera, Visual};
 use crate::mj::{Data, Model};
 use image::RgbImage;
-use mujoco_sys as sys;
 use std::ffi::CString;
 use thiserror::Error;
 
@@ -82,19 +82,13 @@ impl Default for View {
 /// MuJoCo's scene and render context in a headless OpenGL context.
 /// Not `Send`: the OpenGL context is current on the thread that made it.
 pub struct Renderer {
-    scene: Box<sys::mjvScene>,
-    context: Box<sys::mjrContext>,
-    camera: sys::mjvCamera,
-    option: sys::mjvOption,
+    visual: Visual,
     view: View,
     /// Colours drawn instead of the model's, by geom id.
     recolour: Vec<(usize, [f32; 4])>,
     // Declared last: dropped after the MuJoCo objects that use it.
     _gl: egl::GlContext,
 }
-
-/// Most geoms MuJoCo's scene holds.
-const MAX_GEOMS: i32 = 2000;
 
 impl Renderer {
     /// A renderer for `model` with the camera and size of `view`.
@@ -106,35 +100,21 @@ impl Renderer {
             return Err(RenderError::Empty { width: view.width, height: view.height });
         }
         let gl = egl::GlContext::new()?;
-        let m = model.as_ptr();
-        // SAFETY: `m` is a live compiled model.
-        let (max_width, max_height) =
-            unsafe { ((*m).vis.global.offwidth as usize, (*m).vis.global.offheight as usize) };
+        let (max_width, max_height) = model.offscreen_size();
         if view.width > max_width || view.height > max_height {
             return Err(RenderError::TooLarge { width: view.width, height: view.height, max_width, max_height });
         }
-        let mut scene = Box::<sys::mjvScene>::default();
-        let mut context = Box::<sys::mjrContext>::default();
-        let mut camera = sys::mjvCamera::default();
-        let mut option = sys::mjvOption::default();
-        // SAFETY: the structs are owned and writable; the OpenGL context made
-        // above is current on this thread, as mjr_makeContext requires; the
-        // scene and context are freed in Drop before the OpenGL context.
-        unsafe {
-            sys::mjv_defaultCamera(&mut camera);
-            sys::mjv_defaultOption(&mut option);
-            sys::mjv_defaultScene(scene.as_mut());
-            sys::mjr_defaultContext(context.as_mut());
-            sys::mjv_makeScene(m, scene.as_mut(), MAX_GEOMS);
-            sys::mjr_makeContext(m, context.as_mut(), sys::mjtFontScale::mjFONTSCALE_150 as i32);
-            sys::mjr_setBuffer(sys::mjtFramebuffer::mjFB_OFFSCREEN as i32, context.as_mut());
-        }
-        camera.type_ = sys::mjtCamera::mjCAMERA_FREE as i32;
-        camera.lookat = view.lookat;
-        camera.distance = view.distance;
-        camera.azimuth = view.azimuth;
-        camera.elevation = view.elevation;
-        Ok(Self { scene, context, camera, option, view: view.clone(), recolour: Vec::new(), _gl: gl })
+        let camera = FreeCamera {
+            lookat: view.lookat,
+            distance: view.distance,
+            azimuth: view.azimuth,
+            elevation: view.elevation,
+        };
+        // SAFETY: `gl` was made current on this thread above; it is stored in
+        // the same struct and declared after `visual`, so it stays current and
+        // alive until `visual` is dropped.
+        let visual = unsafe { Visual::new(model, &camera) };
+        Ok(Self { visual, view: view.clone(), recolour: Vec::new(), _gl: gl })
     }
 
     /// Draws every geom of the rule objects in its object's colour (`colours`
@@ -166,16 +146,11 @@ impl Renderer {
         &self.view
     }
 
-    fn viewport(&self) -> sys::mjrRect {
-        sys::mjrRect { left: 0, bottom: 0, width: self.view.width as i32, height: self.view.height as i32 }
-    }
-
     /// Renders the state in `data` (its kinematics must be current), with
     /// an optional caption in the top-left corner (`left` column and
     /// `right` column, lines separated by `\n`).
     pub fn render(&mut self, data: &mut Data, caption: Option<(&str, &str)>) -> RgbImage {
         let (w, h) = (self.view.width, self.view.height);
-        let viewport = self.viewport();
         let text = caption.map(|(a, b)| {
             (
                 CString::new(a.replace('\0', "")).unwrap_or_default(),
@@ -183,43 +158,8 @@ impl Renderer {
             )
         });
         let mut rgb = vec![0u8; 3 * w * h];
-        let m = data.model().as_ptr();
-        // SAFETY: model and data belong together (Data holds its Model); the
-        // scene and context were made for a model of this kind on this
-        // thread's current OpenGL context; `scene.geoms` holds `ngeom`
-        // initialised geoms after mjv_updateScene; `rgb` holds width × height × 3
-        // bytes, what mjr_readPixels writes for `viewport`; no depth buffer.
-        unsafe {
-            sys::mjv_updateScene(
-                m,
-                data.as_mut_ptr(),
-                &self.option,
-                std::ptr::null(),
-                &mut self.camera,
-                sys::mjtCatBit::mjCAT_ALL as i32,
-                self.scene.as_mut(),
-            );
-            for i in 0..self.scene.ngeom.max(0) as usize {
-                let g = &mut *self.scene.geoms.add(i);
-                if g.objtype == sys::mjtObj::mjOBJ_GEOM as i32 {
-                    if let Some((_, rgba)) = self.recolour.iter().find(|(id, _)| *id as i32 == g.objid) {
-                        g.rgba = *rgba;
-                    }
-                }
-            }
-            sys::mjr_render(viewport, self.scene.as_mut(), self.context.as_ref());
-            if let Some((a, b)) = &text {
-                sys::mjr_overlay(
-                    sys::mjtFont::mjFONT_NORMAL as i32,
-                    sys::mjtGridPos::mjGRID_TOPLEFT as i32,
-                    viewport,
-                    a.as_ptr(),
-                    b.as_ptr(),
-                    self.context.as_ref(),
-                );
-            }
-            sys::mjr_readPixels(rgb.as_mut_ptr(), std::ptr::null_mut(), viewport, self.context.as_ref());
-        }
+        let caption = text.as_ref().map(|(a, b)| (a.as_c_str(), b.as_c_str()));
+        self.visual.render(data, (w, h), &self.recolour, caption, &mut rgb);
         // OpenGL rows run bottom-up; images top-down.
         let mut flipped = Vec::with_capacity(rgb.len());
         for row in rgb.chunks_exact(3 * w).rev() {
@@ -231,11 +171,10 @@ impl Renderer {
     /// Pixel (column from the left, row from the top) where the world point
     /// `p` appears in the last rendered frame; None behind the camera.
     pub fn project(&self, p: [f64; 3]) -> Option<(f64, f64)> {
-        let cam = &self.scene.camera[0];
-        let f = cam.forward.map(f64::from);
-        let up = cam.up.map(f64::from);
+        let cam = self.visual.camera_frame();
+        let (f, up) = (cam.forward, cam.up);
         let right = [f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]];
-        let v = [p[0] - cam.pos[0] as f64, p[1] - cam.pos[1] as f64, p[2] - cam.pos[2] as f64];
+        let v = [p[0] - cam.pos[0], p[1] - cam.pos[1], p[2] - cam.pos[2]];
         let dot = |a: [f64; 3]| a[0] * v[0] + a[1] * v[1] + a[2] * v[2];
         let (x, y, z) = (dot(right), dot(up), dot(f));
         if z <= 0.0 {
@@ -243,23 +182,12 @@ impl Renderer {
         }
         // mjr_render's frustum: glFrustum(center ± halfwidth, bottom, top, near),
         // halfwidth matching the viewport's aspect ratio.
-        let (near, bottom, top) = (cam.frustum_near as f64, cam.frustum_bottom as f64, cam.frustum_top as f64);
+        let (near, bottom, top) = (cam.frustum_near, cam.frustum_bottom, cam.frustum_top);
         let aspect = self.view.width as f64 / self.view.height as f64;
         let half = 0.5 * aspect * (top - bottom);
         let (xn, yn) = (x / z * near, y / z * near);
-        let col = (xn - (cam.frustum_center as f64 - half)) / (2.0 * half) * self.view.width as f64;
+        let col = (xn - (cam.frustum_center - half)) / (2.0 * half) * self.view.width as f64;
         let row_from_bottom = (yn - bottom) / (top - bottom) * self.view.height as f64;
         Some((col, self.view.height as f64 - row_from_bottom))
-    }
-}
-
-impl Drop for Renderer {
-    fn drop(&mut self) {
-        // SAFETY: made in `new` and freed once; the OpenGL context (`_gl`)
-        // is dropped after this and is still current.
-        unsafe {
-            sys::mjr_freeContext(self.context.as_mut());
-            sys::mjv_freeScene(self.scene.as_mut());
-        }
     }
 }
