@@ -42,8 +42,11 @@ setup-mujoco3: setup
 	bash scripts/setup_mujoco3.sh
 M3 = --release --no-default-features --features mujoco3,render --target-dir target/mujoco3
 # The environment core, its tests and the renderer's on MuJoCo 3.11 (the training stack is engine-agnostic).
+# With them the alignment with gymnasium-robotics FetchPush-v4 on the same engine (tests/align_mujoco3.rs),
+# whose reference bench/align_fetchpush.sh records first (a venv with gymnasium-robotics and mujoco 3.11).
 test-mujoco3: setup-mujoco3
-	$(CARGO) test $(M3) --lib --tests
+	bash bench/align_fetchpush.sh --record
+	BLOCKPUZZLE_ALIGN_REFERENCE=$(CURDIR)/target/align/fetchpush-v4.json $(CARGO) test $(M3) --lib --tests
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

@@ -5,7 +5,9 @@
 # Measures, with STEPS steps each (default 20000):
 #   (a) FetchPush-v4, one Python process        (bench/fetchpush_steps.py)
 #   (b) FetchPush-v4, two Python processes, aggregate steps/s
-#   (c) BlocksTouch-v0, `cargo run --release -- bench ... --threads 1` and `--threads 2`
+#   (c) BlocksTouch-v0, `cargo run --release -- bench ... --threads 1` and `--threads 2`,
+#       on Debian's MuJoCo 2.2.2 and, after `make setup-mujoco3`, on MuJoCo 3.11.0 (the
+#       engine FetchPush-v4 runs on here: the comparison on equal engines)
 # and prints a markdown table with the BlocksTouch/FetchPush ratios.
 #
 # Installs (once; skipped when the pinned versions are already there) a Python venv at
@@ -19,35 +21,15 @@
 set -euo pipefail
 
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-VENV="$ROOT/bench/.venv-fetchpush"
-PY="$VENV/bin/python"
 STEPS="${1:-20000}"
 SEED="${SEED:-0}"
-GR_VERSION="1.4.2"
-MUJOCO_VERSION="3.11.0"
 
 log() { printf '[fetchpush] %s\n' "$*" >&2; }
 
 case "$STEPS" in ''|*[!0-9]*) log "STEPS must be a positive integer, got '$STEPS'"; exit 2 ;; esac
 
 # --- venv -----------------------------------------------------------------------------
-have_pins() {
-    [ -x "$PY" ] && "$PY" - "$GR_VERSION" "$MUJOCO_VERSION" <<'EOF' 2>/dev/null
-import sys
-from importlib.metadata import version
-sys.exit(version("gymnasium-robotics") != sys.argv[1] or version("mujoco") != sys.argv[2])
-EOF
-}
-
-if have_pins; then
-    log "venv $VENV already has gymnasium-robotics==$GR_VERSION mujoco==$MUJOCO_VERSION"
-else
-    log "creating venv $VENV and installing gymnasium-robotics==$GR_VERSION mujoco==$MUJOCO_VERSION"
-    python3 -m venv "$VENV"
-    "$PY" -m pip install --quiet --disable-pip-version-check \
-        "gymnasium-robotics==$GR_VERSION" "mujoco==$MUJOCO_VERSION"
-    have_pins || { log "install finished but pinned versions not found in $VENV"; exit 1; }
-fi
+. "$ROOT/bench/fetchpush_venv.sh"
 
 # --- measurements ---------------------------------------------------------------------
 # Each bench prints one JSON line; keep the last line of stdout.
@@ -61,26 +43,39 @@ echo "$PY2"
 has_rate() {  # $1 = a line; true if it is JSON with "env_steps_per_s"
     python3 -c 'import json,sys; float(json.loads(sys.argv[1])["env_steps_per_s"])' "$1" 2>/dev/null
 }
-rust_bench() {  # $1 = threads; prints the JSON line, or nothing on failure
-    local out=""
-    if out="$(cd "$ROOT" && cargo run --release --quiet -- bench --env BlocksTouch-v0 \
-            --steps "$STEPS" --threads "$1" --json | tail -n 1)" && has_rate "$out"; then
+M3=(--features mujoco3 --target-dir "$ROOT/target/mujoco3")
+rust_bench() {  # $1 = threads, then cargo's engine arguments; prints the JSON line, or nothing on failure
+    local out="" threads="$1"
+    shift
+    if out="$(cd "$ROOT" && cargo run --release --quiet "$@" -- bench --env BlocksTouch-v0 \
+            --steps "$STEPS" --threads "$threads" --json | tail -n 1)" && has_rate "$out"; then
         printf '%s\n' "$out"
     else
         log "Rust bench (threads=$1) failed or printed no JSON with env_steps_per_s" \
             "(got: '${out:0:200}'); is the 'bench' subcommand there yet? Rust numbers skipped."
     fi
 }
-log "BlocksTouch-v0 (Rust), 1 thread"
+log "BlocksTouch-v0 (Rust, MuJoCo 2.2.2), 1 thread"
 RS1="$(rust_bench 1)"
 [ -n "$RS1" ] && echo "$RS1"
-log "BlocksTouch-v0 (Rust), 2 threads"
+log "BlocksTouch-v0 (Rust, MuJoCo 2.2.2), 2 threads"
 RS2="$(rust_bench 2)"
 [ -n "$RS2" ] && echo "$RS2"
+M31="" M32=""
+if [ -f "$ROOT/engines/mujoco-3.11.0/lib/libmujoco.so" ]; then
+    log "BlocksTouch-v0 (Rust, MuJoCo 3.11.0), 1 thread"
+    M31="$(rust_bench 1 "${M3[@]}")"
+    [ -n "$M31" ] && echo "$M31"
+    log "BlocksTouch-v0 (Rust, MuJoCo 3.11.0), 2 threads"
+    M32="$(rust_bench 2 "${M3[@]}")"
+    [ -n "$M32" ] && echo "$M32"
+else
+    log "MuJoCo 3.11.0 not fetched (make setup-mujoco3): 3.x rows skipped"
+fi
 
 # --- table ----------------------------------------------------------------------------
 echo
-python3 - "$PY1" "$PY2" "$RS1" "$RS2" <<'EOF'
+python3 - "$PY1" "$PY2" "$RS1" "$RS2" "$M31" "$M32" <<'EOF'
 import json, sys
 
 def rate(line):
@@ -89,16 +84,16 @@ def rate(line):
     except (ValueError, KeyError, TypeError):
         return None
 
-py1, py2, rs1, rs2 = (rate(a) for a in sys.argv[1:5])
+py1, py2, rs1, rs2, m31, m32 = (rate(a) for a in sys.argv[1:7])
 fmt = lambda v: "n/a" if v is None else f"{v:,.0f}"
 ratio = lambda a, b: "n/a" if a is None or b is None else f"{a / b:.2f}x"
-print("| env | runtime | parallel | env steps/s |")
-print("| --- | --- | --- | ---: |")
-print(f"| FetchPush-v4 | python | 1 proc | {fmt(py1)} |")
-print(f"| FetchPush-v4 | python | 2 procs | {fmt(py2)} |")
-print(f"| BlocksTouch-v0 | rust | 1 thread | {fmt(rs1)} |")
-print(f"| BlocksTouch-v0 | rust | 2 threads | {fmt(rs2)} |")
-print()
-print(f"BlocksTouch/FetchPush, 1 thread vs 1 proc:   {ratio(rs1, py1)}")
-print(f"BlocksTouch/FetchPush, 2 threads vs 2 procs: {ratio(rs2, py2)}")
+print("| env | runtime | MuJoCo | parallel | env steps/s | vs FetchPush-v4 |")
+print("| --- | --- | --- | --- | ---: | ---: |")
+print(f"| FetchPush-v4 | python | 3.11.0 | 1 proc | {fmt(py1)} | |")
+print(f"| FetchPush-v4 | python | 3.11.0 | 2 procs | {fmt(py2)} | |")
+print(f"| BlocksTouch-v0 | rust | 2.2.2 | 1 thread | {fmt(rs1)} | {ratio(rs1, py1)} |")
+print(f"| BlocksTouch-v0 | rust | 2.2.2 | 2 threads | {fmt(rs2)} | {ratio(rs2, py2)} |")
+if m31 is not None or m32 is not None:
+    print(f"| BlocksTouch-v0 | rust | 3.11.0 | 1 thread | {fmt(m31)} | {ratio(m31, py1)} |")
+    print(f"| BlocksTouch-v0 | rust | 3.11.0 | 2 threads | {fmt(m32)} | {ratio(m32, py2)} |")
 EOF

@@ -66,19 +66,8 @@ if [ -f "$ASSETS_DIR/.sha256" ] && [ "$(cat "$ASSETS_DIR/.sha256")" = "$WHEEL_SH
     exit 0
 fi
 
-mkdir -p "$CACHE_DIR"
-WHEEL="$CACHE_DIR/$WHEEL_NAME"
-if [ ! -f "$WHEEL" ] || ! echo "$WHEEL_SHA256  $WHEEL" | sha256sum -c --status; then
-    log "downloading $WHEEL_NAME"
-    rm -f "$WHEEL"
-    python3 -m pip download --quiet --no-deps --disable-pip-version-check \
-        "gymnasium-robotics==1.4.2" -d "$CACHE_DIR"
-fi
-if ! echo "$WHEEL_SHA256  $WHEEL" | sha256sum -c --status; then
-    log "checksum mismatch for $WHEEL (expected $WHEEL_SHA256); refusing to use it"
-    rm -f "$WHEEL"
-    exit 1
-fi
+. "$ROOT/scripts/pinned_wheel.sh"
+fetch_pinned_wheel "$WHEEL_NAME" "$WHEEL_SHA256" "gymnasium-robotics==1.4.2"
 
 log "unpacking Fetch assets into $ASSETS_DIR"
 TMP="$(mktemp -d "$ROOT/models/.unpack.XXXXXX")"

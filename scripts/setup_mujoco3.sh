@@ -30,24 +30,14 @@ if [ -f "$DEST/.sha256" ] && [ "$(cat "$DEST/.sha256")" = "$WHEEL_SHA256" ] \
     exit 0
 fi
 
-mkdir -p "$CACHE_DIR"
-WHEEL="$CACHE_DIR/$WHEEL_NAME"
-if [ ! -f "$WHEEL" ] || ! echo "$WHEEL_SHA256  $WHEEL" | sha256sum -c --status; then
-    log "downloading $WHEEL_NAME"
-    rm -f "$WHEEL"
-    python3 -m pip download --quiet --no-deps --disable-pip-version-check --only-binary=:all: \
-        --python-version 3.11 --implementation cp --abi cp311 --platform manylinux_2_28_x86_64 \
-        "mujoco==$VERSION" -d "$CACHE_DIR"
-fi
-if ! echo "$WHEEL_SHA256  $WHEEL" | sha256sum -c --status; then
-    log "checksum mismatch for $WHEEL (expected $WHEEL_SHA256); refusing to use it"
-    rm -f "$WHEEL"
-    exit 1
-fi
+. "$ROOT/scripts/pinned_wheel.sh"
+fetch_pinned_wheel "$WHEEL_NAME" "$WHEEL_SHA256" "mujoco==$VERSION" --only-binary=:all: \
+    --python-version 3.11 --implementation cp --abi cp311 --platform manylinux_2_28_x86_64
 
 log "unpacking MuJoCo $VERSION into $DEST"
 mkdir -p "$ROOT/engines"
 TMP="$(mktemp -d "$ROOT/engines/.unpack.XXXXXX")"
+chmod 755 "$TMP"
 trap 'rm -rf "$TMP"' EXIT
 python3 - "$WHEEL" "$TMP" "$VERSION" <<'PY'
 import os, sys, zipfile

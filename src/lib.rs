@@ -10,6 +10,7 @@
 //! stack and command line, `mpi` training under `mpirun`.
 
 // The environment core.
+pub mod align;
 pub mod check;
 pub mod env;
 pub mod io;

@@ -62,6 +62,15 @@ enum Command {
         #[arg(long)]
         env: String,
     },
+    /// Replay gymnasium-robotics FetchPush-v4 episodes (recorded by
+    /// bench/align_fetchpush.py) in the FetchPush-like environment on this
+    /// build's MuJoCo and print, per episode, the largest distance between
+    /// the two gripper and block trajectories.
+    Align {
+        /// The reference file bench/align_fetchpush.py wrote.
+        #[arg(long)]
+        reference: PathBuf,
+    },
 }
 
 #[derive(Debug, Subcommand)]
@@ -427,6 +436,23 @@ pub fn main() -> Result<()> {
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
+        Command::Align { reference } => {
+            let r = crate::align::Reference::load(&reference)?;
+            println!(
+                "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
+                r.gymnasium_robotics,
+                r.mujoco,
+                crate::mj::version()
+            );
+            println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
+            for d in crate::align::replay_all(&r)? {
+                println!(
+                    "| {} {} | {} | {:.2e} | {:.2e} | {} |",
+                    d.kind, d.seed, d.steps, d.grip_max, d.object_max, d.worst_step
+                );
+            }
+            Ok(())
+        }
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             print!("{}", crate::scene::mjcf(&c.scene_spec())?);

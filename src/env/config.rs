@@ -118,6 +118,8 @@ pub enum EnvError {
     )]
     InitialViolation { red: String, blue: String },
     /// An invalid setting.
+    #[error("invalid state: {reason}")]
+    BadState { reason: String },
     #[error("invalid environment setting: {0}")]
     Config(String),
 }

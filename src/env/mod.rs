@@ -515,6 +515,41 @@ impl BlockEnv {
         })
     }
 
+    /// Starts an episode from the state `qpos`, `qvel` (MuJoCo's full vectors,
+    /// `nq` and `nv` long) instead of a sampled layout, as Gymnasium's
+    /// `MujocoEnv.set_state` does: everything else is as after construction
+    /// (mocap target, controls), the constraint solver starts cold
+    /// (`qacc_warmstart` zero, as after `mj_resetData`, which
+    /// gymnasium-robotics' Fetch reset calls), the rules start from the
+    /// contacts of that state (no layout checks: any state is accepted), and
+    /// the colours stay those of the last episode. Returns the observation.
+    ///
+    /// # Errors
+    /// [`EnvError::BadState`] for a wrong length or a non-finite value.
+    pub fn set_state(&mut self, qpos: &[f64], qvel: &[f64]) -> Result<Vec<f32>, EnvError> {
+        let model = self.data.model();
+        for (what, v, n) in [("qpos", qpos, model.nq()), ("qvel", qvel, model.nv())] {
+            if v.len() != n {
+                return Err(EnvError::BadState { reason: format!("{what} has {} values, the model {n}", v.len()) });
+            }
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(EnvError::BadState { reason: format!("{what}[{i}] is {}", v[i]) });
+            }
+        }
+        self.phase = Phase::NeedsReset;
+        self.data.copy_from(&self.initial)?;
+        self.data.qpos_mut().copy_from_slice(qpos);
+        self.data.qvel_mut().copy_from_slice(qvel);
+        self.data.qacc_warmstart_mut().fill(0.0);
+        self.data.forward()?;
+        self.rules.reset();
+        self.scan_contacts();
+        self.steps = 0;
+        self.phase = Phase::Running;
+        obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+        Ok(self.obs.clone())
+    }
+
     /// Applies one action for `n_substeps` physics substeps.
     ///
     /// Components are clipped to [-1, 1]; the fourth opens (> 0) or closes

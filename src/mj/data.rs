@@ -212,6 +212,11 @@ impl Data {
     pub fn qacc_warmstart(&self) -> &[f64] {
         self.reals(self.raw().qacc_warmstart, self.model.nv())
     }
+    /// Warm-start accelerations, writable (zero after `mj_resetData`).
+    pub fn qacc_warmstart_mut(&mut self) -> &mut [f64] {
+        let (p, n) = (self.raw().qacc_warmstart, self.model.nv());
+        self.reals_mut(p, n)
+    }
 
     /// Mocap body positions.
     pub fn mocap_pos(&self) -> &[[f64; 3]] {

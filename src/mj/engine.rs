@@ -27,13 +27,14 @@ fn version_text(v: i64) -> String {
 pub(crate) fn check_version() -> Result<(), MjError> {
     // SAFETY: mj_version takes no arguments and returns an int.
     let library = unsafe { sys::mj_version() } as i64;
-    let header = sys::mjVERSION_HEADER as i64;
+    compare(sys::mjVERSION_HEADER as i64, library)
+}
+
+fn compare(header: i64, library: i64) -> Result<(), MjError> {
     if library == header {
         return Ok(());
     }
-    // SAFETY: mj_versionString returns a pointer to a static NUL-terminated string.
-    let text = unsafe { CStr::from_ptr(sys::mj_versionString()) }.to_string_lossy().into_owned();
-    Err(MjError::Version { header: version_text(header), library: format!("{text} ({library})") })
+    Err(MjError::Version { header: version_text(header), library: version_text(library) })
 }
 
 /// The two geoms of a contact: `geom1`/`geom2` in 2.2.2, `geom[2]` in 3.x
@@ -92,6 +93,13 @@ mod tests {
         assert_eq!(version_text(222), "2.2.2");
         assert_eq!(version_text(3_011_000), "3.11.0");
         assert_eq!(version_text(3_002_007), "3.2.7");
+    }
+
+    #[test]
+    fn a_mismatch_names_both_versions() {
+        let e = compare(3_011_000, 222).unwrap_err().to_string();
+        assert!(e.contains("3.11.0 headers") && e.contains("library is 2.2.2"), "{e}");
+        assert!(compare(222, 222).is_ok());
     }
 
     #[test]
