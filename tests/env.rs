@@ -202,3 +202,39 @@ fn custom_configs_are_validated() {
     assert!(err.to_string().contains("blue"), "{err}");
     let _ = RandomPolicy::new(0).act(&[]);
 }
+
+/// `set_state` starts an episode from any state: the same state and actions
+/// give the same trajectory bit for bit (cold solver start, whatever ran
+/// before), the observation is that of the state, and bad states are errors.
+#[test]
+fn set_state_starts_reproducible_episodes_from_a_state() {
+    let mut env = make("BlocksTouch-v0").unwrap();
+    assert!(matches!(env.set_state(&[0.0; 3], &[0.0; 3]), Err(EnvError::BadState { .. })));
+    env.reset(Some(4)).unwrap();
+    env.step(&[0.3, -0.2, 0.0, 0.0]).unwrap();
+    let (mut q, v) = (env.data().qpos().to_vec(), env.data().qvel().to_vec());
+    let run = |env: &mut BlockEnv, q: &[f64], v: &[f64]| {
+        let obs = env.set_state(q, v).unwrap();
+        let grip = env.gripper_position();
+        assert!((0..3).all(|k| (obs[k] as f64 - grip[k]).abs() < 1e-6), "{:?} vs {grip:?}", &obs[..3]);
+        assert_eq!(env.data().qpos(), q);
+        let mut out = vec![obs];
+        for k in 0..10 {
+            let a = [0.5, (k as f32 * 0.3).sin(), -0.4, 0.0];
+            out.push(env.step(&a).unwrap().obs);
+        }
+        (out, env.data().qpos().to_vec())
+    };
+    let first = run(&mut env, &q, &v);
+    // Something else in between (another episode, other solver warm starts).
+    env.reset(Some(9)).unwrap();
+    for _ in 0..5 {
+        env.step(&[-1.0, 1.0, 0.2, 0.0]).unwrap();
+    }
+    assert_eq!(run(&mut env, &q, &v), first);
+    q[0] = f64::NAN;
+    let e = env.set_state(&q, &v).unwrap_err();
+    assert!(matches!(e, EnvError::BadState { .. }) && e.to_string().contains("qpos[0] is NaN"), "{e}");
+    let e = env.set_state(&q[..5], &v).unwrap_err();
+    assert!(e.to_string().contains("qpos has 5 values"), "{e}");
+}

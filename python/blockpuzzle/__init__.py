@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import gymnasium
 
-from ._native import env_ids
+from ._native import env_ids, mujoco_version
 from .env import BlockPuzzleEnv
 from .vector import BlockPuzzleVectorEnv, make_vec
 
-__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "make_task", "make_vec", "NAMESPACE"]
+__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "make_task", "make_vec", "mujoco_version", "NAMESPACE"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"

@@ -241,11 +241,15 @@ impl Env {
 #[pyfunction]
 fn _mujoco_fatal_error_selftest() -> PyResult<()> {
     use blockpuzzle::mj::{Data, Model};
-    let xml = r#"<mujoco><option timestep="0.002"/><size nstack="100"/><worldbody>
+    // A stack too small for the first contact: 2.2.2 counts it in mjtNums, 3.x in bytes.
+    let size = if cfg!(feature = "mujoco3") { r#"memory="4K""# } else { r#"nstack="100""# };
+    let xml = format!(
+        r#"<mujoco><option timestep="0.002"/><size {size}/><worldbody>
         <geom type="plane" size="1 1 0.1"/><body pos="0 0 0.5"><joint type="free"/>
-        <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#;
+        <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#
+    );
     let err = |e: blockpuzzle::mj::MjError| PyRuntimeError::new_err(e.to_string());
-    let model = Model::from_xml_string(xml, std::path::Path::new("selftest.xml")).map_err(err)?;
+    let model = Model::from_xml_string(&xml, std::path::Path::new("selftest.xml")).map_err(err)?;
     let mut data = Data::new(std::sync::Arc::new(model)).map_err(err)?;
     for _ in 0..1000 {
         data.step().map_err(err)?;
@@ -259,11 +263,19 @@ fn env_ids() -> Vec<&'static str> {
     registry::ids()
 }
 
+/// The MuJoCo version the environments run on ("2.2.2", or "3.11.0" in a
+/// build with the `mujoco3` feature).
+#[pyfunction]
+fn mujoco_version() -> String {
+    blockpuzzle::mj::version()
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<vector::VecEnv>()?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
+    m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     Ok(())
 }

@@ -161,8 +161,14 @@ def test_a_fatal_mujoco_error_raises_and_the_interpreter_goes_on():
         "import numpy as np, gymnasium as gym, blockpuzzle\n"
         "from blockpuzzle import _native\n"
         "try: _native._mujoco_fatal_error_selftest()\n"
-        "except RuntimeError as e: print('raised', 'Stack overflow' in str(e))\n"
+        "except RuntimeError as e: print('raised', 'stack overflow' in str(e).lower())\n"
         "env = gym.make('BlockPuzzle/BlocksTouch-v0'); env.reset(seed=0); env.step(np.zeros(4, np.float32))\n"
         "print('alive')\n"
     )
     assert run_python(code) == ["raised", "True", "alive"]
+
+
+def test_mujoco_version_is_the_engine_built_for():
+    # scripts/python_check.sh --mujoco3 builds against MuJoCo 3.11.0 and says so here.
+    want = os.environ.get("BLOCKPUZZLE_EXPECT_MUJOCO", "2.2.2")
+    assert blockpuzzle.mujoco_version() == want

@@ -176,3 +176,26 @@ pub fn replay_all(reference: &Reference) -> Result<Vec<Deviation>, AlignError> {
     let mut env = fetchpush_like()?;
     reference.episodes.iter().map(|ep| replay(&mut env, ep)).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_reference_files_are_clear_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = Reference::load(&dir.path().join("none.json")).unwrap_err().to_string();
+        assert!(missing.contains("bench/align_fetchpush.sh"), "{missing}");
+        let p = dir.path().join("r.json");
+        std::fs::write(&p, r#"{"env": "FetchPush-v4"}"#).unwrap();
+        let e = Reference::load(&p).unwrap_err().to_string();
+        assert!(e.contains("not an alignment reference") && e.contains("missing field"), "{e}");
+        let ep = r#"{"kind": "random", "seed": 0, "joints": {}, "actions": [[0, 0, 0, 0]], "grip": [[0, 0, 0]], "object": [[0, 0, 0]]}"#;
+        let text = format!(
+            r#"{{"env": "FetchPush-v4", "mujoco": "3.11.0", "gymnasium_robotics": "1.4.2", "episodes": [{ep}]}}"#
+        );
+        std::fs::write(&p, text).unwrap();
+        let e = Reference::load(&p).unwrap_err().to_string();
+        assert!(e.contains("episode 0 has 1 actions but 1 / 1 positions"), "{e}");
+    }
+}
