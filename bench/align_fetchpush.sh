@@ -4,7 +4,8 @@
 #   --record  only records the reference, target/align/fetchpush-v4.json, for tests/align_mujoco3.rs
 #             (every step of every episode within 1e-4 m; `make test-mujoco3` runs both)
 #   default   records it, runs that test, replays the reference on both engines (`blockpuzzle
-#             align`) and writes the tables to results/align.md
+#             align`) and writes the tables to results/align.md and the per-step figures to
+#             results/align-mujoco-{3.11.0,2.2.2}.png
 # Needs `make setup-mujoco3` (the MuJoCo 3 engine) for the mujoco3 build.
 set -euo pipefail
 
@@ -35,8 +36,10 @@ OUT="$ROOT/results/align.md"
     echo "## Same engine: MuJoCo 3.11.0 (\`--features mujoco3\`)"
     echo
     echo '```'
-    (cd "$ROOT" && cargo run "${M3[@]}" --quiet -- align --reference "$REF")
+    (cd "$ROOT" && cargo run "${M3[@]}" --quiet -- align --reference "$REF" --plot "$ROOT/results/align-mujoco-3.11.0.png")
     echo '```'
+    echo
+    echo '![per-step distance on MuJoCo 3.11.0](align-mujoco-3.11.0.png)'
     echo
     echo "FetchPush-v4 scales its float32 action by 0.05 in float32, BlockPuzzle in float64: the residual above"
     echo "(a few 1e-8 m) is that rounding. Stepped with the same actions as float64 (\`--f64-actions\`), the two"
@@ -49,8 +52,10 @@ OUT="$ROOT/results/align.md"
     echo "## The engines' own difference: Debian's MuJoCo 2.2.2 (the default build)"
     echo
     echo '```'
-    (cd "$ROOT" && cargo run --release --quiet -- align --reference "$REF")
+    (cd "$ROOT" && cargo run --release --quiet -- align --reference "$REF" --plot "$ROOT/results/align-mujoco-2.2.2.png")
     echo '```'
+    echo
+    echo '![per-step distance on MuJoCo 2.2.2](align-mujoco-2.2.2.png)'
 } > "$OUT.tmp"
 mv "$OUT.tmp" "$OUT"
 log "wrote $OUT"

@@ -106,6 +106,8 @@ pub struct Deviation {
     pub object_max: f64,
     /// The step of the largest deviation of either (0: the reset state).
     pub worst_step: usize,
+    /// Per step (reset state first): gripper and block distance (m).
+    pub per_step: Vec<[f64; 2]>,
 }
 
 /// The FetchPush-like environment: [`FETCHPUSH_TASK`] without the collision
@@ -143,8 +145,15 @@ pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignErr
         qvel[va..va + s.qvel.len()].copy_from_slice(&s.qvel);
     }
     env.set_state(&qpos, &qvel)?;
-    let mut d =
-        Deviation { kind: ep.kind.clone(), seed: ep.seed, steps: 0, grip_max: 0.0, object_max: 0.0, worst_step: 0 };
+    let mut d = Deviation {
+        kind: ep.kind.clone(),
+        seed: ep.seed,
+        steps: 0,
+        grip_max: 0.0,
+        object_max: 0.0,
+        worst_step: 0,
+        per_step: Vec::with_capacity(ep.actions.len() + 1),
+    };
     let mut worst = -1.0;
     for t in 0..=ep.actions.len() {
         if t > 0 {
@@ -157,6 +166,7 @@ pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignErr
             }
         }
         let (g, o) = (dist(env.gripper_position(), ep.grip[t]), dist(env.block_positions()[0], ep.object[t]));
+        d.per_step.push([g, o]);
         d.grip_max = d.grip_max.max(g);
         d.object_max = d.object_max.max(o);
         if g.max(o) > worst {

@@ -70,6 +70,9 @@ enum Command {
         /// The reference file bench/align_fetchpush.py wrote.
         #[arg(long)]
         reference: PathBuf,
+        /// Also draw the per-step distances (log scale) into this PNG.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
 }
 
@@ -171,9 +174,14 @@ struct PlotArgs {
     /// Run directory whose success.png to redraw.
     #[arg(long)]
     run_dir: Option<PathBuf>,
-    /// Run directories whose finals success to draw in one figure (needs --out).
+    /// Run directories whose finals success to draw in one figure (needs --out);
+    /// a CSV file instead of a directory is another trainer's log with the
+    /// columns epoch, time/env_steps and finals/success (examples/python/sb3_td3.py).
     #[arg(long, num_args = 1.., requires = "out")]
     overlay: Vec<PathBuf>,
+    /// Legend labels of the --overlay curves, in order (default: from each run's config, or the file name).
+    #[arg(long, num_args = 1..)]
+    labels: Vec<String>,
     /// Output PNG of --overlay.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -436,7 +444,7 @@ pub fn main() -> Result<()> {
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
-        Command::Align { reference } => {
+        Command::Align { reference, plot } => {
             let r = crate::align::Reference::load(&reference)?;
             println!(
                 "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
@@ -445,11 +453,23 @@ pub fn main() -> Result<()> {
                 crate::mj::version()
             );
             println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
-            for d in crate::align::replay_all(&r)? {
+            let all = crate::align::replay_all(&r)?;
+            for d in &all {
                 println!(
                     "| {} {} | {} | {:.2e} | {:.2e} | {} |",
                     d.kind, d.seed, d.steps, d.grip_max, d.object_max, d.worst_step
                 );
+            }
+            if let Some(png) = plot {
+                let title = format!(
+                    "FetchPush-v4 on MuJoCo {} against FetchPush-like on MuJoCo {}",
+                    r.mujoco,
+                    crate::mj::version()
+                );
+                let episodes: Vec<(String, Vec<[f64; 2]>)> =
+                    all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
+                crate::train::plot::deviations(&png, &title, &episodes)?;
+                println!("wrote {}", png.display());
             }
             Ok(())
         }
@@ -691,11 +711,26 @@ fn plot(a: PlotArgs) -> Result<()> {
         println!("wrote {}", run.plot().display());
     }
     if let Some(out) = a.out {
+        if !a.labels.is_empty() && a.labels.len() != a.overlay.len() {
+            bail!(
+                "--labels gives {} labels for {} --overlay runs: give one per run, or none",
+                a.labels.len(),
+                a.overlay.len()
+            );
+        }
         let mut runs = Vec::new();
-        for dir in &a.overlay {
-            let (config, rows) = read_run(dir)?;
-            let workers = if config.workers == 1 { "1 worker".into() } else { format!("{} workers", config.workers) };
-            runs.push((format!("{} ({workers})", config.title()), rows));
+        for (i, path) in a.overlay.iter().enumerate() {
+            let (label, points) = if path.is_file() {
+                let name =
+                    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+                (name, crate::train::plot::read_finals(path)?)
+            } else {
+                let (config, rows) = read_run(path)?;
+                let workers =
+                    if config.workers == 1 { "1 worker".into() } else { format!("{} workers", config.workers) };
+                (format!("{} ({workers})", config.title()), rows.iter().map(Into::into).collect())
+            };
+            runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
         }
         crate::train::plot::overlay(&out, &a.title, &runs)?;
         println!("wrote {}", out.display());

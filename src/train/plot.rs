@@ -129,12 +129,41 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
     })
 }
 
+/// One evaluation of a run for [`overlay`]: the columns of `progress.csv`
+/// that other trainers' logs (e.g. `examples/python/sb3_td3.py`) have too.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct FinalsPoint {
+    pub epoch: usize,
+    #[serde(rename = "time/env_steps")]
+    pub env_steps: u64,
+    #[serde(rename = "finals/success")]
+    pub finals_success: f64,
+}
+
+impl From<&EpochRow> for FinalsPoint {
+    fn from(r: &EpochRow) -> Self {
+        Self { epoch: r.epoch, env_steps: r.env_steps, finals_success: r.finals_success }
+    }
+}
+
+/// Reads the finals curve of a CSV log with `epoch`, `time/env_steps` and
+/// `finals/success` columns (others are ignored).
+///
+/// # Errors
+/// A message naming the file for a missing or malformed file.
+pub fn read_finals(path: &Path) -> Result<Vec<FinalsPoint>> {
+    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    r.deserialize().collect::<Result<Vec<FinalsPoint>, _>>().with_context(|| {
+        format!("{} is not a progress log (columns epoch, time/env_steps, finals/success)", path.display())
+    })
+}
+
 /// Finals success of several runs, one curve each, against the epoch and
 /// against env steps (the paper's training-plot figure), written to `path`.
 ///
 /// # Errors
 /// A missing font or an unwritable file.
-pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<EpochRow>)]) -> Result<()> {
+pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)]) -> Result<()> {
     const COLOURS: [RGBColor; 6] = [
         RGBColor(200, 40, 40),
         RGBColor(30, 90, 200),
@@ -149,8 +178,72 @@ pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<EpochRow>)]) -> Re
             .map(|(i, (label, rows))| Curve {
                 label: label.clone(),
                 colour: COLOURS[i % COLOURS.len()],
-                points: rows.iter().map(|r| (x_of(r, by_steps), r.finals_success)).collect(),
+                points: rows
+                    .iter()
+                    .map(|r| (if by_steps { r.env_steps as f64 / 1e6 } else { r.epoch as f64 + 1.0 }, r.finals_success))
+                    .collect(),
             })
             .collect()
+    })
+}
+
+/// Smallest distance the deviation plot shows: exact agreement (0) is drawn here.
+const DEVIATION_FLOOR: f64 = 1e-12;
+
+/// The alignment check's figure (`blockpuzzle align --plot`): per step, the
+/// distance between the reference and the replayed gripper (left) and block
+/// (right) positions, one line per episode, on a log scale with the 1e-4 m
+/// tolerance marked; exact agreement is drawn at 1e-12 m.
+///
+/// # Errors
+/// A missing font or an unwritable file.
+pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]) -> Result<()> {
+    register_font()?;
+    crate::io::write_atomic_via(path, |tmp| {
+        let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
+        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
+        root.fill(&WHITE).map_err(draw)?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
+        let (left, right) = root.split_horizontally(700);
+        let steps = episodes.iter().map(|(_, d)| d.len()).max().unwrap_or(1).max(2) as f64 - 1.0;
+        for (area, which, name) in [(&left, 0, "gripper"), (&right, 1, "block")] {
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(60)
+                .caption(name, ("sans-serif", 18))
+                .build_cartesian_2d(0f64..steps, (DEVIATION_FLOOR..1f64).log_scale())
+                .map_err(draw)?;
+            chart
+                .configure_mesh()
+                .x_desc("step")
+                .y_desc("distance (m)")
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .draw()
+                .map_err(draw)?;
+            let tol = RGBColor(90, 90, 90);
+            chart
+                .draw_series(LineSeries::new([(0.0, 1e-4), (steps, 1e-4)], tol.stroke_width(1)))
+                .map_err(draw)?
+                .label("tolerance 1e-4 m")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], tol.stroke_width(1)));
+            for (i, (label, d)) in episodes.iter().enumerate() {
+                let colour = Palette99::pick(i).to_rgba();
+                let points = d.iter().enumerate().map(|(t, v)| (t as f64, v[which].max(DEVIATION_FLOOR)));
+                chart
+                    .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+                    .map_err(draw)?
+                    .label(label.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(draw)?;
+        }
+        root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
     })
 }
