@@ -7,6 +7,9 @@ trainers' curves on the same environment can be drawn side by side.
     bash scripts/sb3_check.sh                 # the venv (SB3, torch) with the package built in
     bench/.venv-sb3/bin/python examples/python/sb3_td3.py --timesteps 600000 --run-dir runs/sb3-td3-s0
     (again with --resume to continue a stopped run from its last save)
+    bench/.venv-sb3/bin/python examples/python/sb3_td3.py --run-dir runs/sb3-td3-s0 --evaluate 1000
+    (the saved model on 1000 episodes at the top level, seeds 1,000,000+: the episodes
+    `blockpuzzle eval --episodes 1000` plays, so the two trainers' policies meet the same layouts)
 
 Hyperparameters follow the paper's DDPG where TD3 has them: 3 × 256 ReLU layers, batch 256,
 lr 1e-3, gamma 0.98, tau 0.05, Gaussian action noise 0.2, buffer 1e6; two environments
@@ -71,7 +74,27 @@ def main():
     ap.add_argument("--save-every", type=int, default=50_000, help="env steps between saves (model + replay buffer)")
     ap.add_argument("--run-dir", default="runs/sb3-td3-s0")
     ap.add_argument("--resume", action="store_true")
+    ap.add_argument("--evaluate", type=int, metavar="N",
+                    help="only evaluate the run's saved model on N episodes at the top level (seeds 1,000,000+)")
     args = ap.parse_args()
+
+    if args.evaluate:
+        model_path = os.path.join(args.run_dir, "model.zip")
+        if not os.path.exists(model_path):
+            ap.error(f"--evaluate: no saved model in {args.run_dir}")
+        model = TD3.load(model_path, device="cpu")
+        top = gym.make(args.env).unwrapped.max_level
+        n = args.evaluate
+        p = success_rate(model, args.env, top, n, 1_000_000)
+        # Wilson score interval, 95%.
+        z = 1.959964
+        centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+        half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+        with open(os.path.join(args.run_dir, "state.json")) as f:
+            steps = json.load(f)["next_eval"] - args.eval_every
+        print(json.dumps({"env": args.env, "level": top, "episodes": n, "first_seed": 1_000_000, "success": p,
+                          "wilson95": [round(centre - half, 4), round(centre + half, 4)], "env_steps": steps}))
+        return
 
     os.makedirs(args.run_dir, exist_ok=True)
     paths = {k: os.path.join(args.run_dir, k) for k in ("model.zip", "replay.pkl", "state.json", "progress.csv")}
