@@ -124,13 +124,12 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// Replays `ep` in `env` (made by [`fetchpush_like`]): the episode starts
-/// from the recorded state, set joint by joint (FetchPush's `object0:joint` is the block's), the
-/// recorded actions applied; positions compared after reset and each step.
+/// The full MuJoCo state (qpos, qvel) of `env`'s model for the state `ep`
+/// starts from, set joint by joint (FetchPush's `object0:joint` is the block's).
 ///
 /// # Errors
-/// A joint without counterpart, or an environment error.
-pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignError> {
+/// A joint of the reference without counterpart.
+pub fn start_state(env: &BlockEnv, ep: &RefEpisode) -> Result<(Vec<f64>, Vec<f64>), AlignError> {
     let model = env.data().model().clone();
     let (mut qpos, mut qvel) = (env.data().qpos().to_vec(), env.data().qvel().to_vec());
     for (name, s) in &ep.joints {
@@ -144,6 +143,17 @@ pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignErr
         qpos[qa..qa + s.qpos.len()].copy_from_slice(&s.qpos);
         qvel[va..va + s.qvel.len()].copy_from_slice(&s.qvel);
     }
+    Ok((qpos, qvel))
+}
+
+/// Replays `ep` in `env` (made by [`fetchpush_like`]): the episode starts
+/// from the recorded state ([`start_state`]), the recorded actions applied;
+/// positions compared after reset and each step.
+///
+/// # Errors
+/// A joint without counterpart, or an environment error.
+pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignError> {
+    let (qpos, qvel) = start_state(env, ep)?;
     env.set_state(&qpos, &qvel)?;
     let mut d = Deviation {
         kind: ep.kind.clone(),

@@ -33,29 +33,34 @@ pub struct BenchReport {
 }
 
 struct ThreadResult {
+    collision_filter: bool,
     seconds: f64,
     physics_seconds: f64,
     substeps: usize,
 }
 
-fn one_thread(id: &str, steps: usize, seed: u64, collision_filter: bool) -> Result<ThreadResult, EnvError> {
-    let mut config = registry::config(id)?;
-    config.collision_filter = collision_filter;
-    let mut env = BlockEnv::new(config)?;
+/// Makes a thread's environment.
+type MakeEnv<'a> = &'a (dyn Fn() -> Result<BlockEnv, EnvError> + Sync);
+/// Starts an episode (the environment and an episode seed) and returns its first observation.
+type StartEpisode<'a> = &'a (dyn Fn(&mut BlockEnv, Option<u64>) -> Result<Vec<f32>, EnvError> + Sync);
+
+fn one_thread(make: MakeEnv, start: StartEpisode, steps: usize, seed: u64) -> Result<ThreadResult, EnvError> {
+    let mut env = make()?;
     let mut policy = RandomPolicy::new(seed);
-    let mut obs = env.reset(Some(seed))?.0;
+    let mut obs = start(&mut env, Some(seed))?;
     // Warm-up outside the timing.
     for _ in 0..100 {
         let s = env.step(&policy.act(&obs))?;
-        obs = if s.terminated || s.truncated { env.reset(None)?.0 } else { s.obs };
+        obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
     }
     let physics0 = env.physics_seconds();
     let t = Instant::now();
     for _ in 0..steps {
         let s = env.step(&policy.act(&obs))?;
-        obs = if s.terminated || s.truncated { env.reset(None)?.0 } else { s.obs };
+        obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
     }
     Ok(ThreadResult {
+        collision_filter: env.config().collision_filter,
         seconds: t.elapsed().as_secs_f64(),
         physics_seconds: env.physics_seconds() - physics0,
         substeps: steps * env.config().n_substeps,
@@ -69,11 +74,31 @@ fn one_thread(id: &str, steps: usize, seed: u64, collision_filter: bool) -> Resu
 /// # Errors
 /// [`EnvError`] if an environment cannot be built or stepped.
 pub fn run(id: &str, steps: usize, threads: usize, collision_filter: bool) -> Result<BenchReport, EnvError> {
+    let make = || {
+        let mut config = registry::config(id)?;
+        config.collision_filter = collision_filter;
+        BlockEnv::new(config)
+    };
+    let start = |env: &mut BlockEnv, seed: Option<u64>| Ok(env.reset(seed)?.0);
+    run_with(id, &make, &start, steps, threads)
+}
+
+/// [`run`] over any environment: `make` builds each thread's, `start`
+/// begins each episode (a reset, or a state set with `BlockEnv::set_state`).
+///
+/// # Errors
+/// [`EnvError`] if an environment cannot be built, started or stepped.
+pub fn run_with(
+    label: &str,
+    make: MakeEnv,
+    start: StartEpisode,
+    steps: usize,
+    threads: usize,
+) -> Result<BenchReport, EnvError> {
     let threads = threads.max(1);
     let t = Instant::now();
     let results: Vec<Result<ThreadResult, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> =
-            (0..threads).map(|k| s.spawn(move || one_thread(id, steps, k as u64, collision_filter))).collect();
+        let handles: Vec<_> = (0..threads).map(|k| s.spawn(move || one_thread(make, start, steps, k as u64))).collect();
         handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked".into()))))
@@ -84,8 +109,9 @@ pub fn run(id: &str, steps: usize, threads: usize, collision_filter: bool) -> Re
     let total_env: f64 = results.iter().map(|r| r.seconds).sum();
     let total_phys: f64 = results.iter().map(|r| r.physics_seconds).sum();
     let substeps: usize = results.iter().map(|r| r.substeps).sum();
+    let collision_filter = results.first().is_some_and(|r| r.collision_filter);
     Ok(BenchReport {
-        env: id.to_owned(),
+        env: label.to_owned(),
         threads,
         steps,
         seconds,

@@ -73,6 +73,14 @@ enum Command {
         /// Also draw the per-step distances (log scale) into this PNG.
         #[arg(long)]
         plot: Option<PathBuf>,
+        /// Instead, measure env steps/s of the FetchPush-like scene with random
+        /// actions, every episode starting from the reference's first state
+        /// (the same scene as FetchPush-v4; its JSON as `bench --json` prints it).
+        #[arg(long)]
+        bench_steps: Option<usize>,
+        /// Threads of --bench-steps, each stepping its own environment.
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
     },
 }
 
@@ -444,7 +452,23 @@ pub fn main() -> Result<()> {
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => plot(a),
-        Command::Align { reference, plot } => {
+        Command::Align { reference, plot, bench_steps: Some(steps), threads } => {
+            if plot.is_some() {
+                bail!("--plot draws the replay; leave it out with --bench-steps");
+            }
+            let r = crate::align::Reference::load(&reference)?;
+            let Some(ep) = r.episodes.first() else { bail!("{} holds no episodes", reference.display()) };
+            let start = |env: &mut crate::env::BlockEnv, _: Option<u64>| {
+                let (q, v) = crate::align::start_state(env, ep)
+                    .map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
+                env.set_state(&q, &v)
+            };
+            let report =
+                crate::bench::run_with("FetchPush-like", &crate::align::fetchpush_like, &start, steps, threads)?;
+            println!("{}", serde_json::to_string(&report)?);
+            Ok(())
+        }
+        Command::Align { reference, plot, .. } => {
             let r = crate::align::Reference::load(&reference)?;
             println!(
                 "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
