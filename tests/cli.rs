@@ -368,3 +368,32 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     let set = blockpuzzle::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
     assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
 }
+
+/// `align` replays a reference file (here a made-up one: no joints set, so
+/// the episode starts from the scene's own state) and reports per episode;
+/// `--plot` draws it; `--bench-steps` measures that scene instead.
+#[test]
+fn align_replays_plots_and_benches_a_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = dir.path().join("ref.json");
+    let ep = r#"{"kind": "random", "seed": 7, "joints": {}, "actions": [[0.5, 0, 0, 0], [0, 0.5, 0, 0]],
+        "grip": [[1.3, 0.75, 0.42], [1.3, 0.75, 0.42], [1.3, 0.75, 0.42]], "object": [[0, 0, 0], [0, 0, 0], [0, 0, 0]]}"#;
+    let text_of =
+        format!(r#"{{"env": "FetchPush-v4", "mujoco": "3.11.0", "gymnasium_robotics": "1.4.2", "episodes": [{ep}]}}"#);
+    std::fs::write(&r, text_of).unwrap();
+    let (r, png) = (r.to_str().unwrap(), dir.path().join("a.png"));
+    let o = bp(&["align", "--reference", r, "--plot", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("| random 7 | 3 |"), "{}", text(&o));
+    assert!(image::open(&png).is_ok());
+    let o = bp(&["align", "--reference", r, "--bench-steps", "30"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let json: serde_json::Value =
+        serde_json::from_slice(o.stdout.trim_ascii_end().rsplit(|&b| b == b'\n').next().unwrap()).unwrap();
+    assert_eq!(json["env"], "FetchPush-like");
+    assert!(json["env_steps_per_s"].as_f64().unwrap() > 0.0);
+    let o = bp(&["align", "--reference", r, "--bench-steps", "30", "--plot", png.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("--plot draws the replay"), "{}", text(&o));
+    let o = bp(&["align", "--reference", dir.path().join("none.json").to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("bench/align_fetchpush.sh"), "{}", text(&o));
+}
