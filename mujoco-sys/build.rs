@@ -72,6 +72,28 @@ fn main() {
         )
     };
 
+    // The engine the headers are of must be the one the feature asks for: 2.x without
+    // `mujoco3`, 3.x with it (the wrapper's code differs between them).
+    let header_text = std::fs::read_to_string(include_dir.join("mujoco/mujoco.h")).unwrap_or_default();
+    let version = header_text
+        .lines()
+        .find_map(|l| l.strip_prefix("#define mjVERSION_HEADER"))
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(0);
+    let want3 = env::var_os("CARGO_FEATURE_MUJOCO3").is_some();
+    if want3 != (version >= 3_000_000) {
+        panic!(
+            "{} declares mjVERSION_HEADER {version}, but this build {}: {}",
+            include_dir.join("mujoco/mujoco.h").display(),
+            if want3 {
+                "has the `mujoco3` feature (MuJoCo 3.x)"
+            } else {
+                "expects MuJoCo 2.2.2 (no `mujoco3` feature)"
+            },
+            if want3 { "point MUJOCO_DIR at MuJoCo 3 or run `make setup-mujoco3`" } else { SETUP_HINT }
+        );
+    }
+
     // Fatal errors that return (guard.c); its archive comes before libmujoco on the link line.
     println!("cargo:rerun-if-changed=guard.c");
     println!("cargo:rerun-if-changed=guard.h");
