@@ -58,14 +58,20 @@ where
             .label(c.label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
+    legend(&mut chart).map_err(draw)?;
+    Ok(())
+}
+
+/// The legend box of every chart here: lower right, on a light background.
+fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::LowerRight)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()
-        .map_err(draw)?;
-    Ok(())
 }
 
 /// Two panels of the same curves: against the epoch (left) and against
@@ -236,13 +242,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
                     .label(label.clone())
                     .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(draw)?;
+            legend(&mut chart).map_err(draw)?;
         }
         root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
     })
