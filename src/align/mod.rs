@@ -125,7 +125,9 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// The full MuJoCo state (qpos, qvel) of `env`'s model for the state `ep`
-/// starts from, set joint by joint (FetchPush's `object0:joint` is the block's).
+/// starts from, set joint by joint (FetchPush's `object0:joint` is the
+/// block's); a joint the reference does not list keeps `env`'s current value
+/// (FetchPush-v4 references list every joint the FetchPush-like scene has).
 ///
 /// # Errors
 /// A joint of the reference without counterpart.
@@ -166,15 +168,10 @@ pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignErr
     };
     let mut worst = -1.0;
     for t in 0..=ep.actions.len() {
-        if t > 0 {
+        let over = t > 0 && {
             let s = env.step(&ep.actions[t - 1])?;
-            if (s.terminated || s.truncated) && t < ep.actions.len() {
-                // The rules ended the episode (the block reached the floor):
-                // compare what both ran.
-                d.steps = t + 1;
-                break;
-            }
-        }
+            s.terminated || s.truncated
+        };
         let (g, o) = (dist(env.gripper_position(), ep.grip[t]), dist(env.block_positions()[0], ep.object[t]));
         d.per_step.push([g, o]);
         d.grip_max = d.grip_max.max(g);
@@ -184,6 +181,11 @@ pub fn replay(env: &mut BlockEnv, ep: &RefEpisode) -> Result<Deviation, AlignErr
             d.worst_step = t;
         }
         d.steps = t + 1;
+        if over {
+            // The episode ended here (time limit, or the rules: the block
+            // reached the floor); the recorded one may go on: compare what both ran.
+            break;
+        }
     }
     Ok(d)
 }
