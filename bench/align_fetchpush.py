@@ -13,6 +13,7 @@ the same states with the same actions and report how far the two drift apart.
 """
 import argparse
 import json
+import os
 
 import gymnasium as gym
 import gymnasium_robotics
@@ -89,7 +90,6 @@ def main():
            "gymnasium_robotics": gymnasium_robotics.__version__, "episodes": episodes}
     with open(args.out + ".tmp", "w") as f:
         json.dump(out, f)
-    import os
     os.replace(args.out + ".tmp", args.out)
     print(f"[align] {len(episodes)} FetchPush-v4 episodes on MuJoCo {mujoco.__version__} -> {args.out}")
 

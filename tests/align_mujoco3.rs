@@ -5,10 +5,8 @@
 //! 1e-4 m, gripper and block, at every step of every episode.
 #![cfg(feature = "mujoco3")]
 
-use blockpuzzle::align::{replay_all, Reference};
+use blockpuzzle::align::{replay_all, Reference, TOLERANCE};
 use std::path::PathBuf;
-
-const TOLERANCE: f64 = 1e-4;
 
 #[test]
 fn fetchpush_like_follows_fetchpush_v4_on_mujoco_3() {

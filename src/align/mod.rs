@@ -16,6 +16,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use thiserror::Error;
 
+/// How far (m) the FetchPush-like trajectories may drift from FetchPush-v4's
+/// on the same engine: the bound of `tests/align_mujoco3.rs`, marked in the figure.
+pub const TOLERANCE: f64 = 1e-4;
+
 /// The task file of the FetchPush-like environment.
 pub const FETCHPUSH_TASK: &str = include_str!("fetchpush.toml");
 

@@ -470,12 +470,13 @@ pub fn main() -> Result<()> {
         }
         Command::Align { reference, plot, .. } => {
             let r = crate::align::Reference::load(&reference)?;
-            println!(
+            let title = format!(
                 "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
                 r.gymnasium_robotics,
                 r.mujoco,
                 crate::mj::version()
             );
+            println!("{title}");
             println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
             let all = crate::align::replay_all(&r)?;
             for d in &all {
@@ -485,11 +486,6 @@ pub fn main() -> Result<()> {
                 );
             }
             if let Some(png) = plot {
-                let title = format!(
-                    "FetchPush-v4 on MuJoCo {} against FetchPush-like on MuJoCo {}",
-                    r.mujoco,
-                    crate::mj::version()
-                );
                 let episodes: Vec<(String, Vec<[f64; 2]>)> =
                     all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
                 crate::train::plot::deviations(&png, &title, &episodes)?;

@@ -117,9 +117,10 @@ pub enum EnvError {
         "invalid scene: at reset the red object {red:?} already touches the blue object {blue:?}; move them apart"
     )]
     InitialViolation { red: String, blue: String },
-    /// An invalid setting.
+    /// A state given to `set_state` that the model cannot take.
     #[error("invalid state: {reason}")]
     BadState { reason: String },
+    /// An invalid setting.
     #[error("invalid environment setting: {0}")]
     Config(String),
 }

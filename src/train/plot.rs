@@ -1,6 +1,7 @@
 //! Success curves of a run as a PNG (plotters, headless bitmap backend).
 
 use super::EpochRow;
+use crate::align::TOLERANCE;
 use anyhow::{anyhow, Context, Result};
 use plotters::prelude::*;
 use std::path::Path;
@@ -98,11 +99,11 @@ fn two_panels_to(tmp: &Path, path: &Path, title: &str, curves: impl Fn(bool) -> 
 type Series = (&'static str, RGBColor, fn(&EpochRow) -> f64);
 
 /// The x value of a row: epochs completed, or millions of env steps.
-fn x_of(r: &EpochRow, by_steps: bool) -> f64 {
+fn x_of(epoch: usize, env_steps: u64, by_steps: bool) -> f64 {
     if by_steps {
-        r.env_steps as f64 / 1e6
+        env_steps as f64 / 1e6
     } else {
-        r.epoch as f64 + 1.0
+        epoch as f64 + 1.0
     }
 }
 
@@ -128,7 +129,7 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
                 Curve {
                     label: (*name).to_owned(),
                     colour: *colour,
-                    points: rows.iter().map(|r| (x_of(r, by_steps), f(r) * scale)).collect(),
+                    points: rows.iter().map(|r| (x_of(r.epoch, r.env_steps, by_steps), f(r) * scale)).collect(),
                 }
             })
             .collect()
@@ -184,10 +185,7 @@ pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)]) ->
             .map(|(i, (label, rows))| Curve {
                 label: label.clone(),
                 colour: COLOURS[i % COLOURS.len()],
-                points: rows
-                    .iter()
-                    .map(|r| (if by_steps { r.env_steps as f64 / 1e6 } else { r.epoch as f64 + 1.0 }, r.finals_success))
-                    .collect(),
+                points: rows.iter().map(|r| (x_of(r.epoch, r.env_steps, by_steps), r.finals_success)).collect(),
             })
             .collect()
     })
@@ -229,9 +227,9 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
                 .map_err(draw)?;
             let tol = RGBColor(90, 90, 90);
             chart
-                .draw_series(LineSeries::new([(0.0, 1e-4), (steps, 1e-4)], tol.stroke_width(1)))
+                .draw_series(LineSeries::new([(0.0, TOLERANCE), (steps, TOLERANCE)], tol.stroke_width(1)))
                 .map_err(draw)?
-                .label("tolerance 1e-4 m")
+                .label(format!("tolerance {TOLERANCE:.0e} m"))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], tol.stroke_width(1)));
             for (i, (label, d)) in episodes.iter().enumerate() {
                 let colour = Palette99::pick(i).to_rgba();
