@@ -13,6 +13,11 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 use std::path::Path;
 
+/// The first seed of the test episodes (episode k uses seed + k): the default of
+/// `eval`, `table` and `render --policy`, and the seed of zoo evaluations.
+/// Validation (model selection) uses other seeds, e.g. 2,000,000 onwards.
+pub const TEST_SEED: u64 = 1_000_000;
+
 /// A trained policy as a [`Policy`]. A policy trained without the grey
 /// block (BlocksTouch) acting in an environment with one sees it removed
 /// from its observation: the paper's "DDPG (2 blocks)" row.

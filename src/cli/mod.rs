@@ -226,7 +226,7 @@ struct TableArgs {
     #[arg(long, default_value_t = 1000)]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED)]
     seed: u64,
     /// Write the Markdown table here too (atomically).
     #[arg(long)]
@@ -254,7 +254,7 @@ struct EvalArgs {
     #[arg(long, default_value_t = 100)]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED)]
     seed: u64,
     /// Where to write the JSON result (default: next to the policy).
     #[arg(long)]
@@ -352,7 +352,7 @@ struct RenderArgs {
     #[arg(long, requires = "policy")]
     env: Option<String>,
     /// With --policy: the episode's seed.
-    #[arg(long, default_value_t = 1_000_000, requires = "policy")]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy")]
     seed: u64,
     /// With --policy: the challenge distribution.
     #[arg(long, requires = "policy")]
@@ -869,7 +869,7 @@ fn zoo(c: ZooCommand) -> Result<()> {
                         challenge,
                         level: None,
                         episodes: a.evaluate,
-                        seed: 1_000_000,
+                        seed: crate::evaluate::TEST_SEED,
                         threads,
                     };
                     let r = crate::zoo::ZooEvaluation::from(crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?);
