@@ -5,6 +5,7 @@
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvConfig, ACTION_DIM};
+use crate::outcome::{Outcome, Outcomes};
 use crate::policy::Policy;
 use crate::rollout::run_episode;
 use crate::task::Task;
@@ -98,6 +99,8 @@ pub struct Evaluation {
     pub ci95: (f64, f64),
     /// Whether the policy saw the observation without grey blocks.
     pub grey_blind: bool,
+    /// Episodes per outcome: what the unsuccessful ones did ([`crate::outcome`]).
+    pub outcomes: Outcomes,
 }
 
 /// What to evaluate on.
@@ -138,26 +141,27 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     let env = make_env(spec)?;
     let policy = trained_policy(path, saved, &env)?;
     let threads = spec.threads.clamp(1, spec.episodes);
-    let wins: Vec<Result<usize>> = std::thread::scope(|s| {
+    let tallies: Vec<Result<Outcomes>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let mut policy = policy.clone();
-                s.spawn(move || -> Result<usize> {
+                s.spawn(move || -> Result<Outcomes> {
                     let mut env = make_env(spec)?;
-                    let mut wins = 0;
+                    let mut tally = Outcomes::default();
                     for k in (t..spec.episodes).step_by(threads) {
                         let seed = spec.seed.wrapping_add(k as u64);
                         let ep =
                             run_episode(&mut env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
-                        wins += ep.success as usize;
+                        tally.add(Outcome::of(&ep));
                     }
-                    Ok(wins)
+                    Ok(tally)
                 })
             })
             .collect();
         handles.into_iter().map(|h| h.join().unwrap_or_else(|_| bail!("evaluation thread panicked"))).collect()
     });
-    let successes = wins.into_iter().sum::<Result<usize>>()?;
+    let outcomes = tallies.into_iter().try_fold(Outcomes::default(), |all, t| t.map(|t| all.merge(t)))?;
+    let successes = outcomes.success;
     Ok(Evaluation {
         env: spec.task.id().to_owned(),
         challenge: spec.challenge,
@@ -168,6 +172,7 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
         success_rate: successes as f64 / spec.episodes as f64,
         ci95: wilson95(successes, spec.episodes),
         grey_blind: policy.grey_blind(),
+        outcomes,
     })
 }
 

@@ -16,6 +16,7 @@ pub mod env;
 pub mod io;
 pub mod math;
 pub mod mj;
+pub mod outcome;
 pub mod policy;
 pub mod rollout;
 pub mod rules;

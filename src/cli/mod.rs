@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
 
 use crate::env::{registry, BlockEnv};
+use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use crate::rollout::{run_episode, DumpWriter};
 
@@ -564,12 +565,11 @@ fn rollout(a: RolloutArgs) -> Result<()> {
             &env,
         )?),
     };
-    let (mut successes, mut failures, mut steps) = (0usize, 0usize, 0usize);
+    let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
     for k in 0..a.episodes {
         let seed = a.seed.wrapping_add(k as u64);
         let ep = run_episode(&mut env, policy.as_mut(), seed).with_context(|| format!("episode {k} (seed {seed})"))?;
-        successes += ep.success as usize;
-        failures += ep.failure as usize;
+        outcomes.add(Outcome::of(&ep));
         steps += ep.steps.len();
         writer.write(&ep)?;
     }
@@ -580,16 +580,16 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     }
     let n = a.episodes as f64;
     println!(
-        "{} {} policy, level {}{}: success {:.3} ({}/{}), failure {:.3}, mean length {:.1}; wrote {}",
+        "{} {} policy, level {}{}: success {:.3} ({}/{}), mean length {:.1}; not successful: {}; wrote {}",
         a.env,
         a.policy,
         level,
         env.distribution_name().map_or(String::new(), |d| format!(" ({d})")),
-        successes as f64 / n,
-        successes,
+        outcomes.success as f64 / n,
+        outcomes.success,
         a.episodes,
-        failures as f64 / n,
         steps as f64 / n,
+        outcomes.summary(),
         a.out.display()
     );
     Ok(())
@@ -978,7 +978,7 @@ fn eval(a: EvalArgs) -> Result<()> {
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
-        "grey_blind": r.grey_blind, "policy": a.checkpoint, "policy_epoch": policy_epoch,
+        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": a.checkpoint, "policy_epoch": policy_epoch,
     });
     let out = a.out.clone().unwrap_or_else(|| {
         let dir = if a.checkpoint.is_dir() {
@@ -990,7 +990,7 @@ fn eval(a: EvalArgs) -> Result<()> {
     });
     crate::train::write_json_atomic(&out, &result)?;
     println!(
-        "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}) -> {}",
+        "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",
         if a.challenge { " challenge" } else { "" },
         if r.grey_blind { " (grey blocks removed from the policy's view)" } else { "" },
         r.success_rate,
@@ -998,6 +998,7 @@ fn eval(a: EvalArgs) -> Result<()> {
         r.ci95.1,
         r.successes,
         a.episodes,
+        r.outcomes.summary(),
         out.display()
     );
     Ok(())

@@ -1,0 +1,261 @@
+//! Why an episode ended as it did, in the colour rules' own terms: the
+//! failure modes `eval` and `rollout` count, so that a success rate comes
+//! with what the failed episodes did.
+//!
+//! An episode gets the first outcome that fits:
+//!
+//! | outcome | meaning |
+//! |---|---|
+//! | `success` | every blue object touched a green one |
+//! | `failure` | red touched blue |
+//! | `unstable` | the simulation went unstable (the episode was cut short) |
+//! | `no_contact` | the gripper touched nothing but the table: the arm never reached an object |
+//! | `blue_met_grey` | a blue object touched a grey one (not the table, not the gripper), e.g. pushed into the distractor |
+//! | `timeout` | anything else: objects moved, blue did not reach green in time |
+
+use crate::rollout::EpisodeRecord;
+use crate::rules::Colour;
+use serde::{Deserialize, Serialize};
+
+/// One episode's outcome (see the module documentation for the order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// The task's success.
+    Success,
+    /// The task's failure (red touched blue).
+    Failure,
+    /// Numerical instability cut the episode short.
+    Unstable,
+    /// The gripper touched no object but the table.
+    NoContact,
+    /// A blue object touched a grey block (and the episode did not succeed).
+    BlueMetGrey,
+    /// Time ran out otherwise.
+    Timeout,
+}
+
+impl Outcome {
+    /// Every outcome, in the order they are tested.
+    pub const ALL: [Outcome; 6] = [
+        Outcome::Success,
+        Outcome::Failure,
+        Outcome::Unstable,
+        Outcome::NoContact,
+        Outcome::BlueMetGrey,
+        Outcome::Timeout,
+    ];
+
+    /// The outcome's name in JSON and printed summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::Success => "success",
+            Outcome::Failure => "failure",
+            Outcome::Unstable => "unstable",
+            Outcome::NoContact => "no_contact",
+            Outcome::BlueMetGrey => "blue_met_grey",
+            Outcome::Timeout => "timeout",
+        }
+    }
+
+    /// Classifies a recorded episode.
+    pub fn of(ep: &EpisodeRecord) -> Outcome {
+        if ep.success {
+            return Outcome::Success;
+        }
+        if ep.failure {
+            return Outcome::Failure;
+        }
+        if ep.steps.iter().any(|s| s.unstable) {
+            return Outcome::Unstable;
+        }
+        let index = |name: &str| ep.objects.iter().position(|o| o.name == name);
+        let (gripper, table) = (index("gripper"), index("table"));
+        let block = |i: usize| Some(i) != gripper && Some(i) != table;
+        let colour = |i: usize| ep.objects.get(i).map(|o| o.colour);
+        let pairs = || ep.steps.iter().flat_map(|s| s.touching.iter().copied());
+        let gripper_reached =
+            pairs().any(|(a, b)| (Some(a) == gripper && Some(b) != table) || (Some(b) == gripper && Some(a) != table));
+        if !gripper_reached {
+            return Outcome::NoContact;
+        }
+        let blue_grey =
+            |a: usize, b: usize| colour(a) == Some(Colour::Blue) && colour(b) == Some(Colour::Grey) && block(b);
+        if pairs().any(|(a, b)| blue_grey(a, b) || blue_grey(b, a)) {
+            return Outcome::BlueMetGrey;
+        }
+        Outcome::Timeout
+    }
+}
+
+/// Episode counts per outcome.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Outcomes {
+    /// Successful episodes.
+    pub success: usize,
+    /// Failed episodes (red touched blue).
+    pub failure: usize,
+    /// Episodes cut short by numerical instability.
+    pub unstable: usize,
+    /// Timeouts where the gripper touched no object but the table.
+    pub no_contact: usize,
+    /// Timeouts where blue touched a grey block.
+    pub blue_met_grey: usize,
+    /// Other timeouts.
+    pub timeout: usize,
+}
+
+impl Outcomes {
+    /// Counts one more episode.
+    pub fn add(&mut self, outcome: Outcome) {
+        *self.count_mut(outcome) += 1;
+    }
+
+    /// Sums two tallies.
+    pub fn merge(mut self, other: Outcomes) -> Outcomes {
+        for o in Outcome::ALL {
+            *self.count_mut(o) += other.count(o);
+        }
+        self
+    }
+
+    /// The count of one outcome.
+    pub fn count(&self, outcome: Outcome) -> usize {
+        match outcome {
+            Outcome::Success => self.success,
+            Outcome::Failure => self.failure,
+            Outcome::Unstable => self.unstable,
+            Outcome::NoContact => self.no_contact,
+            Outcome::BlueMetGrey => self.blue_met_grey,
+            Outcome::Timeout => self.timeout,
+        }
+    }
+
+    fn count_mut(&mut self, outcome: Outcome) -> &mut usize {
+        match outcome {
+            Outcome::Success => &mut self.success,
+            Outcome::Failure => &mut self.failure,
+            Outcome::Unstable => &mut self.unstable,
+            Outcome::NoContact => &mut self.no_contact,
+            Outcome::BlueMetGrey => &mut self.blue_met_grey,
+            Outcome::Timeout => &mut self.timeout,
+        }
+    }
+
+    /// Episodes counted.
+    pub fn total(&self) -> usize {
+        Outcome::ALL.iter().map(|&o| self.count(o)).sum()
+    }
+
+    /// One line for people: the unsuccessful outcomes with their shares of all
+    /// episodes, e.g. `no_contact 0.070, blue_met_grey 0.050, timeout 0.125`.
+    pub fn summary(&self) -> String {
+        let n = self.total().max(1) as f64;
+        Outcome::ALL[1..]
+            .iter()
+            .filter(|&&o| self.count(o) > 0 || matches!(o, Outcome::NoContact | Outcome::Timeout))
+            .map(|&o| format!("{} {:.3}", o.name(), self.count(o) as f64 / n))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+impl<'a> FromIterator<&'a EpisodeRecord> for Outcomes {
+    fn from_iter<I: IntoIterator<Item = &'a EpisodeRecord>>(iter: I) -> Self {
+        let mut out = Outcomes::default();
+        for ep in iter {
+            out.add(Outcome::of(ep));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rollout::{ObjectRecord, StateRecord, StepRecord};
+
+    fn state() -> StateRecord {
+        StateRecord { qpos: vec![], gripper: [0.0; 3], blocks: vec![] }
+    }
+
+    /// An episode of BlocksChoose's objects (gripper and table grey) whose
+    /// steps touched the given pairs.
+    fn episode(touching: &[&[(usize, usize)]]) -> EpisodeRecord {
+        let objects = [
+            ("gripper", Colour::Grey),
+            ("table", Colour::Grey),
+            ("blue", Colour::Blue),
+            ("green", Colour::Green),
+            ("grey", Colour::Grey),
+        ];
+        EpisodeRecord {
+            env_id: "BlocksChoose-v0".into(),
+            task: None,
+            distribution: None,
+            seed: 0,
+            level: 0,
+            challenge: false,
+            objects: objects.iter().map(|&(n, c)| ObjectRecord { name: n.into(), colour: c }).collect(),
+            initial: state(),
+            steps: touching
+                .iter()
+                .map(|t| StepRecord {
+                    action: [0.0; 4],
+                    state: state(),
+                    touching: t.to_vec(),
+                    reward: -1.0,
+                    terminated: false,
+                    truncated: false,
+                    is_success: false,
+                    is_failure: false,
+                    unstable: false,
+                })
+                .collect(),
+            success: false,
+            failure: false,
+            episode_return: 0.0,
+        }
+    }
+
+    #[test]
+    fn each_outcome_is_recognised() {
+        // Blocks on the table, the gripper on the table only: the arm never reached.
+        let idle = episode(&[&[(1, 2), (1, 3), (1, 4), (0, 1)]]);
+        assert_eq!(Outcome::of(&idle), Outcome::NoContact);
+        // The gripper pushed blue into grey (blue touching the grey gripper and
+        // the grey table does not count as meeting grey).
+        let grey = episode(&[&[(0, 2), (1, 2)], &[(2, 4), (1, 4)]]);
+        assert_eq!(Outcome::of(&grey), Outcome::BlueMetGrey);
+        let pushed = episode(&[&[(0, 2), (1, 2)], &[(0, 2)]]);
+        assert_eq!(Outcome::of(&pushed), Outcome::Timeout);
+        // Touching only grey with the gripper still counts as reaching.
+        assert_eq!(Outcome::of(&episode(&[&[(4, 0)]])), Outcome::Timeout);
+
+        let mut won = grey.clone();
+        won.success = true;
+        assert_eq!(Outcome::of(&won), Outcome::Success);
+        let mut lost = idle.clone();
+        lost.failure = true;
+        assert_eq!(Outcome::of(&lost), Outcome::Failure);
+        let mut shaky = pushed.clone();
+        shaky.steps[1].unstable = true;
+        assert_eq!(Outcome::of(&shaky), Outcome::Unstable);
+
+        let tally: Outcomes = [&idle, &grey, &pushed, &won, &lost, &shaky].into_iter().collect();
+        assert_eq!(
+            tally,
+            Outcomes { success: 1, failure: 1, unstable: 1, no_contact: 1, blue_met_grey: 1, timeout: 1 }
+        );
+        assert_eq!(tally.merge(tally).total(), 12);
+        assert_eq!(
+            tally.summary(),
+            "failure 0.167, unstable 0.167, no_contact 0.167, blue_met_grey 0.167, timeout 0.167"
+        );
+    }
+
+    #[test]
+    fn summary_keeps_the_common_classes_and_drops_empty_rare_ones() {
+        let t = Outcomes { success: 3, timeout: 1, ..Outcomes::default() };
+        assert_eq!(t.summary(), "no_contact 0.000, timeout 0.250");
+    }
+}
