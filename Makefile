@@ -15,7 +15,7 @@ NP ?= 20
 MPIRUN ?= mpirun $$(test "$$(id -u)" = 0 && echo --allow-run-as-root) --oversubscribe $(MPIFLAGS)
 resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
-.PHONY: setup setup-mujoco3 test-mujoco3 demo test bench bench-mpi train build clean-assets ddpg3 ddpg3-paper aggrevated aggrevated-adv pggd table ddpg-task task-rates study expert-snapshots filmstrip aggrevated-weak
+.PHONY: setup setup-mujoco3 test-mujoco3 demo test bench bench-mpi train build clean-assets ddpg3 ddpg3-paper aggrevated aggrevated-adv pggd table ddpg-task task-rates study validate expert-snapshots filmstrip aggrevated-weak
 
 setup:
 	bash scripts/setup.sh
@@ -87,6 +87,15 @@ study: build
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
 		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
 		$(call resume,runs/study-$(VARIANT)-s$(SEED))
+#   Validation of a run's snapshots, the study's selection data (never the test seeds): 200 episodes
+#   from seed 2,000,000, Normal and Challenge, with outcome counts, e.g.
+#   `make validate RUN=runs/study-ours-nol2-s0 AT="40 100"` -> results/headline/validation/
+AT ?= 100
+validate: build
+	mkdir -p results/headline/validation
+	for e in $(AT); do for c in "" --challenge; do \
+		$(BP) eval --checkpoint $(RUN)/snapshots/epoch-$$(printf %04d $$e).json --episodes 200 --seed 2000000 $$c \
+			--out results/headline/validation/$(notdir $(RUN))-epoch$$e$$c.json || exit 1; done; done
 #   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
 aggrevated: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
