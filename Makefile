@@ -81,9 +81,10 @@ study_td3 = --precision bf16 --td3
 study_curriculum = --precision bf16 --level-replay 0.2 --challenge-share 0.25
 study_ours = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
 study_ours-nol2 = $(study_ours) --action-l2 0
+study_nol2 = --action-l2 0
 study: build
-	@test -n "$(filter $(VARIANT),paper bf16 nstep td3 curriculum ours ours-nol2)" || \
-		{ echo "VARIANT must be one of: paper bf16 nstep td3 curriculum ours ours-nol2"; exit 2; }
+	@test -n "$(filter $(VARIANT),paper bf16 nstep td3 curriculum ours ours-nol2 nol2)" || \
+		{ echo "VARIANT must be one of: paper bf16 nstep td3 curriculum ours ours-nol2 nol2"; exit 2; }
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
 		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
 		$(call resume,runs/study-$(VARIANT)-s$(SEED))

@@ -92,32 +92,32 @@ pub fn rows(p: Policies) -> Vec<Row> {
     rows
 }
 
-/// A row's outcome.
+/// A row's result.
 #[derive(Debug)]
-pub enum Outcome {
+pub enum RowResult {
     /// No policy was given for the row.
     NotGiven,
     /// The policy could not be loaded or evaluated (the message says why).
     Missing(String),
     /// Evaluated: (Normal, Challenge), the policy's epoch and env steps (where recorded).
-    Done { normal: Evaluation, challenge: Evaluation, epoch: usize, env_steps: Option<u64> },
+    Done { normal: Box<Evaluation>, challenge: Box<Evaluation>, epoch: usize, env_steps: Option<u64> },
 }
 
 /// Evaluates one row.
-pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> Outcome {
-    let Some(path) = &row.policy else { return Outcome::NotGiven };
+pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> RowResult {
+    let Some(path) = &row.policy else { return RowResult::NotGiven };
     // The policy file is read once; each evaluation gets its own copy.
-    let run = || -> Result<Outcome> {
+    let run = || -> Result<RowResult> {
         let saved = load_policy(path)?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
         let spec = |challenge| EvalSpec { task, challenge, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
         let challenge = evaluate(path, saved, &spec(true))?;
-        Ok(Outcome::Done { normal, challenge, epoch, env_steps })
+        Ok(RowResult::Done { normal: Box::new(normal), challenge: Box::new(challenge), epoch, env_steps })
     };
     match run() {
         Ok(done) => done,
-        Err(e) => Outcome::Missing(format!("{e:#}")),
+        Err(e) => RowResult::Missing(format!("{e:#}")),
     }
 }
 
@@ -127,7 +127,7 @@ fn cell(e: &Evaluation, paper: Option<f64>) -> String {
 }
 
 /// The table as Markdown.
-pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) -> String {
+pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "Final evaluation on {env}: Normal = the maximum curriculum level, Challenge = the challenge");
     let _ = writeln!(
@@ -146,7 +146,7 @@ pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) 
         let paper = |p: Option<f64>| p.map_or("no number".to_owned(), |p| format!("{p:.2}"));
         let shown = |p: &Path| p.display().to_string();
         match outcome {
-            Outcome::NotGiven => {
+            RowResult::NotGiven => {
                 let _ = writeln!(
                     s,
                     "| {} | not trained (paper {}) | not trained (paper {}) | none given |",
@@ -155,7 +155,7 @@ pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) 
                     paper(row.paper.1)
                 );
             }
-            Outcome::Missing(why) => {
+            RowResult::Missing(why) => {
                 let _ = writeln!(
                     s,
                     "| {} | missing (paper {}) | missing (paper {}) | {}: {} |",
@@ -166,7 +166,7 @@ pub fn markdown(rows: &[(Row, Outcome)], env: &str, episodes: usize, seed: u64) 
                     why.replace('|', "/").replace('\n', " ")
                 );
             }
-            Outcome::Done { normal, challenge, epoch, env_steps } => {
+            RowResult::Done { normal, challenge, epoch, env_steps } => {
                 let steps = env_steps.map_or(String::new(), |n| format!(", {:.2} M env steps", n as f64 / 1e6));
                 let _ = writeln!(
                     s,
