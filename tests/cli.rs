@@ -62,6 +62,32 @@ fn rollout_writes_a_replayable_dump() {
 }
 
 #[test]
+fn rollout_and_eval_count_why_episodes_did_not_succeed() {
+    use blockpuzzle::outcome::Outcomes;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("random.jsonl");
+    let args = "rollout --env BlocksChoose-v0 --policy random --episodes 4 --seed 3 --out";
+    let o = bp(&args.split(' ').chain([out.to_str().unwrap()]).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", text(&o));
+    let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
+    let tally: Outcomes = eps.iter().collect();
+    assert_eq!(tally.total(), 4);
+    assert_eq!(tally.success, eps.iter().filter(|e| e.success).count());
+    assert!(text(&o).contains(&format!("not successful: {};", tally.summary())), "{}", text(&o));
+
+    // eval: the JSON's outcome counts add up to the episodes, successes included.
+    let json = dir.path().join("eval.json");
+    let args = ["eval", "--checkpoint", "BlocksTouch-v0-ddpg", "--env", "BlocksChoose-v0", "--episodes", "6"];
+    let o = bp(&args.into_iter().chain(["--out", json.to_str().unwrap()]).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let counts: Outcomes = serde_json::from_value(v["outcomes"].clone()).unwrap();
+    assert_eq!(counts.total(), 6, "{v}");
+    assert_eq!(counts.success as u64, v["successes"].as_u64().unwrap(), "{v}");
+    assert!(text(&o).contains(&counts.summary()), "{}", text(&o));
+}
+
+#[test]
 fn unknown_env_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.jsonl");
