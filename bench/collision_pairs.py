@@ -22,55 +22,11 @@ moves of up to 5 cm, 20 substeps per action). The script reports:
 import argparse
 import itertools
 import os
-import time
 
 import mujoco
 import numpy as np
 
-
-def settle(m, d):
-    for i in range(m.neq):
-        if m.eq_type[i] == mujoco.mjtEq.mjEQ_WELD:
-            m.eq_data[i, :7] = [0, 0, 0, 0, 0, 0, 1]
-    for k, v in enumerate([0.405, 0.48, 0.0]):
-        d.qpos[m.jnt_qposadr[m.joint(f"robot0:slide{k}").id]] = v
-    mujoco.mj_forward(m, d)
-    d.mocap_pos[0] = d.site("robot0:grip").xpos + [-0.498, 0.005, -0.431 + 0.2]
-    d.mocap_quat[0] = [1, 0, 1, 0]
-    mujoco.mj_step(m, d, nstep=200)
-
-
-def episodes(m, n, seed, on_substep=None, on_step=None):
-    """Random-action episodes; returns the time spent in mj_step."""
-    d = mujoco.MjData(m)
-    settle(m, d)
-    q0, v0 = d.qpos.copy(), d.qvel.copy()
-    grip0 = d.site("robot0:grip").xpos[:2].copy()
-    gripper = m.body("robot0:gripper_link").id
-    blocks = [m.jnt_qposadr[j] for j in range(m.njnt) if m.joint(j).name.startswith("block")]
-    rng = np.random.default_rng(seed)
-    spent = 0.0
-    for _ in range(n):
-        mujoco.mj_resetData(m, d)
-        d.qpos[:], d.qvel[:] = q0, v0
-        for k, adr in enumerate(blocks):
-            d.qpos[adr:adr + 2] = grip0 + rng.uniform(-0.08, 0.08, 2) + [0.0, 0.08 * k]
-        mujoco.mj_forward(m, d)
-        for _ in range(50):
-            d.mocap_pos[0] = d.xpos[gripper] + rng.uniform(-1, 1, 3) * 0.05
-            d.mocap_quat[0] = d.xquat[gripper] + [1, 0, 1, 0]
-            if on_substep:
-                for _ in range(20):
-                    mujoco.mj_step(m, d)
-                    on_substep(d)
-            else:
-                t = time.perf_counter()
-                mujoco.mj_step(m, d, nstep=20)
-                spent += time.perf_counter() - t
-            mujoco.mj_forward(m, d)
-            if on_step:
-                on_step(d)
-    return spent
+from scene_rate_mujoco3 import episodes  # the same random-action driver
 
 
 def eligible_pairs(m):
@@ -134,8 +90,8 @@ def main():
     diff = max(float(np.abs(a - b).max()) for a, b in zip(qa, qb))
     ratios = []
     for r in range(6):
-        t1 = episodes(m, 20, 10 + r)
-        t2 = episodes(m2, 20, 10 + r)
+        t1, _ = episodes(m, 20, 10 + r)
+        t2, _ = episodes(m2, 20, 10 + r)
         ratios.append(t1 / t2)
     print(f"3. excluding them: mj_step {np.median(ratios):.3f}x faster (median of {len(ratios)}: "
           f"{', '.join(f'{x:.3f}' for x in ratios)}); largest qpos difference {diff:g}")
