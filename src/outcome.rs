@@ -147,12 +147,13 @@ impl Outcomes {
     }
 
     /// One line for people: the unsuccessful outcomes with their shares of all
-    /// episodes, e.g. `no_contact 0.070, blue_met_grey 0.050, timeout 0.125`.
+    /// episodes, e.g. `failure 0.000, no_contact 0.070, blue_met_grey 0.050,
+    /// timeout 0.125` (`unstable` and `blue_met_grey` only when they occurred).
     pub fn summary(&self) -> String {
         let n = self.total().max(1) as f64;
         Outcome::ALL[1..]
             .iter()
-            .filter(|&&o| self.count(o) > 0 || matches!(o, Outcome::NoContact | Outcome::Timeout))
+            .filter(|&&o| self.count(o) > 0 || matches!(o, Outcome::Failure | Outcome::NoContact | Outcome::Timeout))
             .map(|&o| format!("{} {:.3}", o.name(), self.count(o) as f64 / n))
             .collect::<Vec<_>>()
             .join(", ")
@@ -256,6 +257,6 @@ mod tests {
     #[test]
     fn summary_keeps_the_common_classes_and_drops_empty_rare_ones() {
         let t = Outcomes { success: 3, timeout: 1, ..Outcomes::default() };
-        assert_eq!(t.summary(), "no_contact 0.000, timeout 0.250");
+        assert_eq!(t.summary(), "failure 0.000, no_contact 0.000, timeout 0.250");
     }
 }
