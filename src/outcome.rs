@@ -9,12 +9,13 @@
 //! | `success` | every blue object touched a green one |
 //! | `failure` | red touched blue |
 //! | `unstable` | the simulation went unstable (the episode was cut short) |
-//! | `no_contact` | the gripper touched nothing but the table: the arm never reached an object |
-//! | `blue_met_grey` | a blue object touched a grey one (not the table, not the gripper), e.g. pushed into the distractor |
+//! | `no_contact` | the gripper touched no block (only the table or floor, if anything): the arm never reached an object |
+//! | `blue_met_grey` | a blue object touched a grey block (not the table, floor or gripper), e.g. pushed into the distractor |
 //! | `timeout` | anything else: objects moved, blue did not reach green in time |
 
 use crate::rollout::EpisodeRecord;
 use crate::rules::Colour;
+use crate::task::RESERVED_NAMES;
 use serde::{Deserialize, Serialize};
 
 /// One episode's outcome (see the module documentation for the order).
@@ -26,7 +27,7 @@ pub enum Outcome {
     Failure,
     /// Numerical instability cut the episode short.
     Unstable,
-    /// The gripper touched no object but the table.
+    /// The gripper touched no block (only the table or floor, if anything).
     NoContact,
     /// A blue object touched a grey block (and the episode did not succeed).
     BlueMetGrey,
@@ -68,13 +69,13 @@ impl Outcome {
         if ep.steps.iter().any(|s| s.unstable) {
             return Outcome::Unstable;
         }
-        let index = |name: &str| ep.objects.iter().position(|o| o.name == name);
-        let (gripper, table) = (index("gripper"), index("table"));
-        let block = |i: usize| Some(i) != gripper && Some(i) != table;
+        // Blocks are the task's objects: everything but the robot and the surfaces.
+        let block = |i: usize| ep.objects.get(i).is_some_and(|o| !RESERVED_NAMES.contains(&o.name.as_str()));
+        let gripper = ep.objects.iter().position(|o| o.name == "gripper");
         let colour = |i: usize| ep.objects.get(i).map(|o| o.colour);
         let pairs = || ep.steps.iter().flat_map(|s| s.touching.iter().copied());
         let gripper_reached =
-            pairs().any(|(a, b)| (Some(a) == gripper && Some(b) != table) || (Some(b) == gripper && Some(a) != table));
+            pairs().any(|(a, b)| (Some(a) == gripper && block(b)) || (Some(b) == gripper && block(a)));
         if !gripper_reached {
             return Outcome::NoContact;
         }
@@ -96,7 +97,7 @@ pub struct Outcomes {
     pub failure: usize,
     /// Episodes cut short by numerical instability.
     pub unstable: usize,
-    /// Timeouts where the gripper touched no object but the table.
+    /// Timeouts where the gripper touched no block.
     pub no_contact: usize,
     /// Timeouts where blue touched a grey block.
     pub blue_met_grey: usize,
@@ -231,6 +232,14 @@ mod tests {
         assert_eq!(Outcome::of(&pushed), Outcome::Timeout);
         // Touching only grey with the gripper still counts as reaching.
         assert_eq!(Outcome::of(&episode(&[&[(4, 0)]])), Outcome::Timeout);
+        // A floor is a surface like the table, not a block: blue falling onto a grey
+        // floor is not meeting grey, and a gripper on the floor has reached nothing.
+        let mut fell = episode(&[&[(0, 2)], &[(2, 5)]]);
+        fell.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey });
+        assert_eq!(Outcome::of(&fell), Outcome::Timeout);
+        let mut floor_only = episode(&[&[(0, 5), (0, 1)]]);
+        floor_only.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey });
+        assert_eq!(Outcome::of(&floor_only), Outcome::NoContact);
 
         let mut won = grey.clone();
         won.success = true;
