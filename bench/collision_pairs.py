@@ -61,15 +61,18 @@ def main():
 
     pairs = [p for p in eligible_pairs(m) if frozenset(p) not in touched]
     near = dict.fromkeys(pairs, 0)
-    states = []
-    episodes(m, args.episodes // 2, 1, on_step=lambda d: states.append(1) or [
-        near.__setitem__(p, near[p] + 1) for p in pairs
-        if np.linalg.norm(d.geom_xpos[p[0]] - d.geom_xpos[p[1]])
-        < m.geom_rbound[p[0]] + m.geom_rbound[p[1]] + m.geom_margin[p[0]] + m.geom_margin[p[1]]])
-    often = [p for p in pairs if near[p] > 0.5 * len(states)]
+
+    def count_near(d):
+        for a, b in pairs:
+            reach = m.geom_rbound[a] + m.geom_rbound[b] + m.geom_margin[a] + m.geom_margin[b]
+            near[(a, b)] += np.linalg.norm(d.geom_xpos[a] - d.geom_xpos[b]) < reach
+
+    _, substeps = episodes(m, args.episodes // 2, 1, on_step=count_near)
+    states = substeps // 20  # one state per action
+    often = [p for p in pairs if near[p] > 0.5 * states]
     print("2. never touched, bounding spheres overlapping in > 50% of states:")
     for p in often:
-        print(f"   {name(p[0])} / {name(p[1])}: {near[p] / len(states):.2f}")
+        print(f"   {name(p[0])} / {name(p[1])}: {near[p] / states:.2f}")
     if not often:
         return
 
