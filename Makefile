@@ -82,12 +82,19 @@ study_curriculum = --precision bf16 --level-replay 0.2 --challenge-share 0.25
 study_ours = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
 study_ours-nol2 = $(study_ours) --action-l2 0
 study_nol2 = --action-l2 0
+# ours-nol2 with half the top-level episodes in the challenge distribution, or with SB3's update ratio.
+study_ours-nol2-cs50 = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.5 --action-l2 0
+study_ours-nol2-b60 = $(study_ours-nol2) --batches 60
+STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-cs50 ours-nol2-b60
+#   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
+#   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
+STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)-s$(SEED)
 study: build
-	@test -n "$(filter $(VARIANT),paper bf16 nstep td3 curriculum ours ours-nol2 nol2)" || \
-		{ echo "VARIANT must be one of: paper bf16 nstep td3 curriculum ours ours-nol2 nol2"; exit 2; }
+	@test -n "$(filter $(VARIANT),$(STUDY_VARIANTS))" || \
+		{ echo "VARIANT must be one of: $(STUDY_VARIANTS)"; exit 2; }
 	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
-		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir runs/study-$(VARIANT)-s$(SEED) \
-		$(call resume,runs/study-$(VARIANT)-s$(SEED))
+		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir $(STUDY_DIR) \
+		$$(test -f $(STUDY_DIR)/checkpoint.bin && echo --resume || echo $(if $(FROM),--branch-from $(FROM)))
 #   Validation of a run's snapshots, the study's selection data (never the test seeds): 200 episodes
 #   from seed 2,000,000, Normal and Challenge, with outcome counts, e.g.
 #   `make validate RUN=runs/study-ours-nol2-s0 AT="40 100"` -> results/headline/validation/

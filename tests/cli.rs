@@ -423,3 +423,33 @@ fn align_replays_plots_and_benches_a_reference() {
     let o = bp(&["align", "--reference", dir.path().join("none.json").to_str().unwrap()]);
     assert!(!o.status.success() && text(&o).contains("bench/align_fetchpush.sh"), "{}", text(&o));
 }
+
+/// `train --branch-from`: a refused change is named before anything is
+/// written, a branch reports where it came from and trains on, and it
+/// cannot be combined with --resume or go without --run-dir.
+#[test]
+fn train_branch_from_names_refused_changes_and_continues_the_parent() {
+    let dir = tempfile::tempdir().unwrap();
+    let (parent, child) = (dir.path().join("parent"), dir.path().join("child"));
+    let train = |run: &Path, epochs: &str, extra: &[&str]| {
+        let mut args =
+            vec!["train", "--env", "GripperTouch-v0", "--run-dir", run.to_str().unwrap(), "--epochs", epochs];
+        args.extend(["--cycles", "1", "--batches", "2", "--test-episodes", "1", "--hidden", "16"]);
+        args.extend(extra);
+        bp(&args)
+    };
+    let o = train(&parent, "1", &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let from = ["--branch-from", parent.to_str().unwrap()];
+    let o = train(&child, "2", &[&from[..], &["--gamma", "0.9"]].concat());
+    assert!(!o.status.success() && text(&o).contains("--gamma") && !child.exists(), "{}", text(&o));
+    let o = train(&child, "2", &[&from[..], &["--resume"]].concat());
+    assert!(!o.status.success() && text(&o).contains("--resume"), "{}", text(&o));
+    let o = bp(&["train", "--env", "GripperTouch-v0", "--branch-from", parent.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("--run-dir"), "{}", text(&o));
+    let o = train(&child, "2", &[&from[..], &["--level-replay", "0.5"]].concat());
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("branched from") && text(&o).contains("at epoch 1"), "{}", text(&o));
+    let rows = std::fs::read_to_string(child.join("progress.csv")).unwrap();
+    assert_eq!(rows.lines().count(), 3, "the parent's epoch and the branch's own: {rows}");
+}

@@ -5,8 +5,8 @@
 use blockpuzzle::agents::ddpg::DdpgConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::train::{
-    checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout,
-    TrainConfig,
+    branch, checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight,
+    ReplayLayout, TrainConfig,
 };
 use std::path::Path;
 
@@ -33,6 +33,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         pggd: Default::default(),
         aggrevated: Default::default(),
         task: None,
+        branched_from: None,
     }
 }
 
@@ -108,6 +109,66 @@ fn resume_restores_the_exact_state() {
         load_policy(&split.path().join("policy.json")).unwrap(),
     );
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
+}
+
+/// A branch continues its parent's state exactly (no change: the same run
+/// as the parent continued), records where it came from, changes only what
+/// a branch may change, and leaves the parent as it was.
+#[test]
+fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
+    let config = |epochs| TrainConfig { success_threshold: Some(0.0), ..tiny("BlocksChoose-v0", epochs) };
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&config(3), straight.path(), false, &mut quiet).unwrap();
+    let parent = tempfile::tempdir().unwrap();
+    train(&config(2), parent.path(), false, &mut quiet).unwrap();
+    let before = std::fs::read(parent.path().join("checkpoint.bin")).unwrap();
+    let root = tempfile::tempdir().unwrap();
+
+    // Unchanged settings: exactly the parent's run continued.
+    let same = root.path().join("same");
+    let record = branch(parent.path(), &same, &config(3)).unwrap();
+    assert_eq!((record.epoch, record.changed.len()), (2, 0));
+    assert!(!same.join("snapshots").exists(), "snapshots stay with the parent");
+    let b = train(&config(3), &same, true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert_eq!(
+        load_policy(&straight.path().join("policy.json")).unwrap().policy,
+        load_policy(&same.join("policy.json")).unwrap().policy
+    );
+    // The record survives resuming the branch.
+    let saved: TrainConfig = serde_json::from_slice(&std::fs::read(same.join("config.json")).unwrap()).unwrap();
+    assert_eq!(saved.branched_from.as_ref().map(|r| r.epoch), Some(2));
+    assert_eq!(saved.options(), "5 batches per cycle, branched at epoch 2");
+    let label =
+        TrainConfig { batches: 60, ddpg: DdpgConfig { action_l2: 0.0, td3: true, ..config(1).ddpg }, ..config(1) };
+    assert_eq!(label.options(), "TD3, no action penalty, 60 batches per cycle");
+
+    // Changed draws: recorded, and the branch goes its own way from epoch 2 on.
+    let more = TrainConfig { challenge_share: 1.0, level_replay: 0.5, ..config(4) };
+    let changed = root.path().join("changed");
+    let record = branch(parent.path(), &changed, &more).unwrap();
+    assert_eq!(record.changed, ["--challenge-share", "--level-replay"]);
+    assert_eq!(record.env_steps, read_progress(&parent.path().join("progress.csv")).unwrap()[1].env_steps);
+    let c = train(&more, &changed, true, &mut quiet).unwrap();
+    assert_eq!(c.len(), 4);
+    assert_eq!(comparable(&c[..2]), comparable(&a[..2]), "the parent's history");
+    assert_ne!(comparable(&c[2..3]), comparable(&a[2..3]), "lower levels replayed from epoch 2 on");
+    // The parent is untouched.
+    assert_eq!(std::fs::read(parent.path().join("checkpoint.bin")).unwrap(), before);
+    assert_eq!(read_progress(&parent.path().join("progress.csv")).unwrap().len(), 2);
+    assert!(checkpoint::load(&parent.path().join("checkpoint.bin"), "BlocksChoose-v0", 67, 4).is_ok());
+
+    // Refused: a setting the checkpoint fixes, an existing directory, a directory without a run.
+    let other = TrainConfig { ddpg: DdpgConfig { gamma: 0.9, ..config(3).ddpg }, ..config(3) };
+    let err = branch(parent.path(), &root.path().join("gamma"), &other).unwrap_err().to_string();
+    assert!(err.contains("--gamma") && err.contains("--challenge-share"), "{err}");
+    assert!(!root.path().join("gamma").exists());
+    let err = branch(parent.path(), &same, &config(3)).unwrap_err().to_string();
+    assert!(err.contains("already exists"), "{err}");
+    let err = branch(root.path(), &root.path().join("x"), &config(3)).unwrap_err().to_string();
+    assert!(err.contains("not a run directory"), "{err}");
+    let leftovers: Vec<_> = std::fs::read_dir(root.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers.len(), 2, "no temporary folders left: {leftovers:?}");
 }
 
 /// The replay log: each checkpoint appends the epoch's transitions, segments

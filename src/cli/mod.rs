@@ -173,6 +173,12 @@ struct TrainArgs {
     /// Continue the run in --run-dir from its last checkpoint.
     #[arg(long)]
     resume: bool,
+    /// Start --run-dir (new) from this run directory's latest checkpoint, with
+    /// the settings given here; only --level-replay, --challenge-share,
+    /// --success-threshold and --batches may differ from the parent's (and
+    /// --epochs, the total to reach). The parent stays as it is.
+    #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
+    branch_from: Option<PathBuf>,
     #[command(flatten)]
     config: crate::train::TrainConfig,
 }
@@ -691,7 +697,11 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
         ));
         last = Some(row.clone());
     };
-    let rows = crate::train::train_ranks(comm, c, &run_dir, a.resume, &mut on_epoch)?;
+    if let Some(parent) = &a.branch_from {
+        branch_run(comm, parent, &run_dir, c)?;
+    }
+    let resume = a.resume || a.branch_from.is_some();
+    let rows = crate::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
     bar.finish();
     if let Some(r) = rows.last() {
         println!(
@@ -704,6 +714,34 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
             r.wall_seconds,
             run_dir.display()
         );
+    }
+    Ok(())
+}
+
+/// `train --branch-from`: rank 0 makes the branch, every rank learns whether it worked.
+fn branch_run(
+    comm: &crate::train::comm::Comm,
+    parent: &Path,
+    child: &Path,
+    c: &crate::train::TrainConfig,
+) -> Result<()> {
+    let mut status = Vec::new();
+    if comm.is_root() {
+        match crate::train::branch(parent, child, c) {
+            Ok(b) => eprintln!(
+                "{}: branched from {} at epoch {} ({} env steps){}",
+                child.display(),
+                parent.display(),
+                b.epoch,
+                b.env_steps,
+                if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
+            ),
+            Err(e) => status = format!("{e:#}").into_bytes(),
+        }
+    }
+    comm.broadcast_bytes(&mut status);
+    if !status.is_empty() {
+        bail!("{}", String::from_utf8_lossy(&status));
     }
     Ok(())
 }

@@ -383,6 +383,21 @@ fn replay_prefix(i: usize) -> String {
 /// # Errors
 /// [`CheckpointError::Io`] or [`CheckpointError::Corrupt`].
 pub fn peek_state(path: &Path) -> Result<RunState, CheckpointError> {
+    Ok(read_header(path)?.state)
+}
+
+/// The replay segment files (relative to the checkpoint's folder) a
+/// checkpoint needs, from its header only.
+///
+/// # Errors
+/// [`CheckpointError::Io`] or [`CheckpointError::Corrupt`].
+pub fn segment_files(path: &Path) -> Result<Vec<PathBuf>, CheckpointError> {
+    let header = read_header(path)?;
+    Ok(header.replay_log.iter().flat_map(|s| &s.segments).map(|g| Path::new("replay").join(&g.file)).collect())
+}
+
+/// A checkpoint's header, without reading its payload.
+fn read_header(path: &Path) -> Result<Header, CheckpointError> {
     use std::io::Read;
     let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
     let mut f = std::fs::File::open(path).map_err(io(path))?;
@@ -397,8 +412,7 @@ pub fn peek_state(path: &Path) -> Result<RunState, CheckpointError> {
     let hlen = u64::from_le_bytes(head[8..16].try_into().map_err(|_| corrupt("truncated"))?);
     let mut json = Vec::new();
     f.take(hlen).read_to_end(&mut json).map_err(io(path))?;
-    let header: Header = serde_json::from_slice(&json).map_err(|e| corrupt(&format!("bad header: {e}")))?;
-    Ok(header.state)
+    serde_json::from_slice(&json).map_err(|e| corrupt(&format!("bad header: {e}")))
 }
 
 /// What [`load`] returns.

@@ -22,6 +22,7 @@
 //! `expert_policy.json` (the run's copy of its expert); with `--snapshot-every
 //! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
 
+mod branch;
 pub mod checkpoint;
 pub mod comm;
 mod learner;
@@ -31,6 +32,7 @@ mod rollouts;
 mod rundir;
 mod trainer;
 
+pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, RunDir, SavedPolicy};
@@ -43,6 +45,9 @@ use crate::task::Task;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// Gradient steps per cycle in the paper's set-up (baselines' HER default).
+pub const PAPER_BATCHES: usize = 40;
 
 /// Training hyperparameters (defaults: the paper's set-up).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
@@ -67,7 +72,7 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = 2)]
     pub rollouts: usize,
     /// Gradient steps per cycle.
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = PAPER_BATCHES)]
     pub batches: usize,
     /// Transitions per batch and worker.
     #[arg(long, default_value_t = 256)]
@@ -128,6 +133,11 @@ pub struct TrainConfig {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub task: Option<crate::task::TaskSource>,
+    /// The run this one branched from (`train --branch-from`), recorded in
+    /// its `config.json`.
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branched_from: Option<BranchedFrom>,
 }
 
 /// How the workers of a process share replay (see [`TrainConfig::replay`]).
@@ -245,6 +255,18 @@ impl TrainConfig {
         if d.precision == Precision::Bf16 {
             v.push("bf16".to_owned());
         }
+        let paper = DdpgConfig::default();
+        if d.action_l2 == 0.0 {
+            v.push("no action penalty".to_owned());
+        } else if d.action_l2 != paper.action_l2 {
+            v.push(format!("action penalty {}", d.action_l2));
+        }
+        if self.batches != PAPER_BATCHES {
+            v.push(format!("{} batches per cycle", self.batches));
+        }
+        if let Some(b) = &self.branched_from {
+            v.push(format!("branched at epoch {}", b.epoch));
+        }
         v.join(", ")
     }
 
@@ -276,8 +298,9 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
 }
 
 /// Fields that may change on `--resume`: the epoch target, thread count and
-/// snapshots, and the task and its id (checked by content in [`run_task`]).
-const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env"];
+/// snapshots, the task and its id (checked by content in [`run_task`]), and
+/// the record of a branch (kept from the run's `config.json`).
+const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env", "branched_from"];
 
 /// The fields of two configurations that differ, as `--PREFIXfield-name`;
 /// nested configurations are compared field by field (PGGD's flags carry `pg-`).

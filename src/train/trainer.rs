@@ -169,6 +169,9 @@ impl<'a> Trainer<'a> {
         let task = shared_task(comm, config, &run, saved_config.as_ref())?;
         let mut config = config.clone();
         config.task = Some(task.source.clone());
+        if let Some(saved) = &saved_config {
+            config.branched_from = saved.branched_from.clone();
+        }
         // Replay: as given; else a resumed run's own; else per worker.
         let recorded = saved_config.as_ref().map(TrainConfig::replay_layout);
         config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
