@@ -5,7 +5,8 @@
 RUN is a run directory's name under runs/ (e.g. study-ours-nol2-s0), LABEL the row's first cell,
 EPOCH the snapshot epochs validated (results/headline/validation/RUN-epochE[--challenge].json).
 Each row: the label, epoch, env steps after that many epochs (progress.csv), then for Normal and
-Challenge the success rate and the shares of no_contact, blue_met_grey and timeout episodes.
+Challenge the success rate and the shares of no_contact, off_table, blue_met_grey and timeout
+episodes.
 """
 
 import csv
@@ -34,7 +35,7 @@ def main(argv):
             d = json.loads(path.read_text())
             o, n = d["outcomes"], d["episodes"]
             cells.append(f"{d['success_rate']:.3f}")
-            cells += [f"{o[k] / n:.3f}" for k in ("no_contact", "blue_met_grey", "timeout")]
+            cells += [f"{o[k] / n:.3f}" for k in ("no_contact", "off_table", "blue_met_grey", "timeout")]
         print(f"| {label} | {e} | {steps[e] / 1e6:.2f} M | " + " | ".join(cells) + " |")
 
 

@@ -10,11 +10,13 @@
 //! | `failure` | red touched blue |
 //! | `unstable` | the simulation went unstable (the episode was cut short) |
 //! | `no_contact` | the gripper touched no block (only the table or floor, if anything): the arm never reached an object |
+//! | `off_table` | a blue or green block that started on the table ended below its top: knocked off, the task usually lost |
 //! | `blue_met_grey` | a blue object touched a grey block (not the table, floor or gripper), e.g. pushed into the distractor |
 //! | `timeout` | anything else: objects moved, blue did not reach green in time |
 
 use crate::rollout::EpisodeRecord;
 use crate::rules::Colour;
+use crate::scene::xml::TABLE_TOP_Z;
 use crate::task::RESERVED_NAMES;
 use serde::{Deserialize, Serialize};
 
@@ -29,6 +31,8 @@ pub enum Outcome {
     Unstable,
     /// The gripper touched no block (only the table or floor, if anything).
     NoContact,
+    /// A blue or green block was knocked off the table.
+    OffTable,
     /// A blue object touched a grey block (and the episode did not succeed).
     BlueMetGrey,
     /// Time ran out otherwise.
@@ -37,11 +41,12 @@ pub enum Outcome {
 
 impl Outcome {
     /// Every outcome, in the order they are tested.
-    pub const ALL: [Outcome; 6] = [
+    pub const ALL: [Outcome; 7] = [
         Outcome::Success,
         Outcome::Failure,
         Outcome::Unstable,
         Outcome::NoContact,
+        Outcome::OffTable,
         Outcome::BlueMetGrey,
         Outcome::Timeout,
     ];
@@ -53,6 +58,7 @@ impl Outcome {
             Outcome::Failure => "failure",
             Outcome::Unstable => "unstable",
             Outcome::NoContact => "no_contact",
+            Outcome::OffTable => "off_table",
             Outcome::BlueMetGrey => "blue_met_grey",
             Outcome::Timeout => "timeout",
         }
@@ -79,6 +85,17 @@ impl Outcome {
         if !gripper_reached {
             return Outcome::NoContact;
         }
+        // The record's blocks are the objects that are not reserved, in order.
+        let blocks: Vec<usize> = (0..ep.objects.len()).filter(|&i| block(i)).collect();
+        let last = ep.steps.last().map_or(&ep.initial, |s| &s.state);
+        let knocked_off = blocks.iter().enumerate().any(|(k, &i)| {
+            let z = |state: &crate::rollout::StateRecord| state.blocks.get(k).map(|b| b.pos[2]);
+            matches!(colour(i), Some(Colour::Blue | Colour::Green))
+                && matches!((z(&ep.initial), z(last)), (Some(a), Some(b)) if a > TABLE_TOP_Z && b < TABLE_TOP_Z)
+        });
+        if knocked_off {
+            return Outcome::OffTable;
+        }
         let blue_grey =
             |a: usize, b: usize| colour(a) == Some(Colour::Blue) && colour(b) == Some(Colour::Grey) && block(b);
         if pairs().any(|(a, b)| blue_grey(a, b) || blue_grey(b, a)) {
@@ -99,6 +116,10 @@ pub struct Outcomes {
     pub unstable: usize,
     /// Timeouts where the gripper touched no block.
     pub no_contact: usize,
+    /// Timeouts where a blue or green block was knocked off the table (absent
+    /// in counts written before it was told apart: counted under the others).
+    #[serde(default)]
+    pub off_table: usize,
     /// Timeouts where blue touched a grey block.
     pub blue_met_grey: usize,
     /// Other timeouts.
@@ -126,6 +147,7 @@ impl Outcomes {
             Outcome::Failure => self.failure,
             Outcome::Unstable => self.unstable,
             Outcome::NoContact => self.no_contact,
+            Outcome::OffTable => self.off_table,
             Outcome::BlueMetGrey => self.blue_met_grey,
             Outcome::Timeout => self.timeout,
         }
@@ -137,6 +159,7 @@ impl Outcomes {
             Outcome::Failure => &mut self.failure,
             Outcome::Unstable => &mut self.unstable,
             Outcome::NoContact => &mut self.no_contact,
+            Outcome::OffTable => &mut self.off_table,
             Outcome::BlueMetGrey => &mut self.blue_met_grey,
             Outcome::Timeout => &mut self.timeout,
         }
@@ -149,7 +172,7 @@ impl Outcomes {
 
     /// One line for people: the unsuccessful outcomes with their shares of all
     /// episodes, e.g. `failure 0.000, no_contact 0.070, blue_met_grey 0.050,
-    /// timeout 0.125` (`unstable` and `blue_met_grey` only when they occurred).
+    /// timeout 0.125` (`unstable`, `off_table` and `blue_met_grey` only when they occurred).
     pub fn summary(&self) -> String {
         let n = self.total().max(1) as f64;
         Outcome::ALL[1..]
@@ -174,7 +197,7 @@ impl<'a> FromIterator<&'a EpisodeRecord> for Outcomes {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rollout::{ObjectRecord, StateRecord, StepRecord};
+    use crate::rollout::{BlockPose, ObjectRecord, StateRecord, StepRecord};
 
     fn state() -> StateRecord {
         StateRecord { qpos: vec![], gripper: [0.0; 3], blocks: vec![] }
@@ -251,15 +274,35 @@ mod tests {
         shaky.steps[1].unstable = true;
         assert_eq!(Outcome::of(&shaky), Outcome::Unstable);
 
-        let tally: Outcomes = [&idle, &grey, &pushed, &won, &lost, &shaky].into_iter().collect();
+        // Blocks knocked off the table: green (the task is lost) counts, grey (a
+        // distractor out of the way) does not; neither does a block that started below.
+        let z = |blue: f64, green: f64, grey: f64| StateRecord {
+            blocks: [blue, green, grey]
+                .iter()
+                .map(|&z| BlockPose { pos: [1.3, 0.75, z], quat: [1.0, 0.0, 0.0, 0.0] })
+                .collect(),
+            ..state()
+        };
+        let mut off = grey.clone();
+        off.initial = z(0.425, 0.425, 0.425);
+        off.steps[1].state = z(0.425, 0.025, 0.025);
+        assert_eq!(Outcome::of(&off), Outcome::OffTable);
+        let mut grey_off = off.clone();
+        grey_off.steps[1].state = z(0.425, 0.425, 0.025);
+        assert_eq!(Outcome::of(&grey_off), Outcome::BlueMetGrey);
+        let mut below = off.clone();
+        below.initial = z(0.425, 0.025, 0.425);
+        assert_eq!(Outcome::of(&below), Outcome::BlueMetGrey);
+
+        let tally: Outcomes = [&idle, &grey, &pushed, &won, &lost, &shaky, &off].into_iter().collect();
         assert_eq!(
             tally,
-            Outcomes { success: 1, failure: 1, unstable: 1, no_contact: 1, blue_met_grey: 1, timeout: 1 }
+            Outcomes { success: 1, failure: 1, unstable: 1, no_contact: 1, off_table: 1, blue_met_grey: 1, timeout: 1 }
         );
-        assert_eq!(tally.merge(tally).total(), 12);
+        assert_eq!(tally.merge(tally).total(), 14);
         assert_eq!(
             tally.summary(),
-            "failure 0.167, unstable 0.167, no_contact 0.167, blue_met_grey 0.167, timeout 0.167"
+            "failure 0.143, unstable 0.143, no_contact 0.143, off_table 0.143, blue_met_grey 0.143, timeout 0.143"
         );
     }
 

@@ -158,6 +158,19 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
     assert_eq!(read_progress(&parent.path().join("progress.csv")).unwrap().len(), 2);
     assert!(checkpoint::load(&parent.path().join("checkpoint.bin"), "BlocksChoose-v0", 67, 4).is_ok());
 
+    // The action penalty: the branch's agent uses its own from the first update,
+    // and its checkpoints carry it (a branch resumed is the branch trained straight).
+    let free = |epochs| TrainConfig { ddpg: DdpgConfig { action_l2: 0.0, ..config(epochs).ddpg }, ..config(epochs) };
+    let (split, whole) = (root.path().join("free-split"), root.path().join("free-whole"));
+    assert_eq!(branch(parent.path(), &split, &free(3)).unwrap().changed, ["--action-l2"]);
+    train(&free(3), &split, true, &mut quiet).unwrap();
+    let d = train(&free(4), &split, true, &mut quiet).unwrap();
+    branch(parent.path(), &whole, &free(4)).unwrap();
+    let e = train(&free(4), &whole, true, &mut quiet).unwrap();
+    assert_eq!(comparable(&d), comparable(&e));
+    assert_ne!(d[2].actor_loss, a[2].actor_loss, "the penalty is part of the actor's loss");
+    assert_eq!(comparable(&d[..2]), comparable(&a[..2]));
+
     // Refused: a setting the checkpoint fixes, an existing directory, a directory without a run.
     let other = TrainConfig { ddpg: DdpgConfig { gamma: 0.9, ..config(3).ddpg }, ..config(3) };
     let err = branch(parent.path(), &root.path().join("gamma"), &other).unwrap_err().to_string();
@@ -168,7 +181,7 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
     let err = branch(root.path(), &root.path().join("x"), &config(3)).unwrap_err().to_string();
     assert!(err.contains("not a run directory"), "{err}");
     let leftovers: Vec<_> = std::fs::read_dir(root.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
-    assert_eq!(leftovers.len(), 2, "no temporary folders left: {leftovers:?}");
+    assert_eq!(leftovers.len(), 4, "no temporary folders left: {leftovers:?}");
 }
 
 /// The replay log: each checkpoint appends the epoch's transitions, segments

@@ -208,7 +208,9 @@ impl<'a> Trainer<'a> {
                     );
                 }
             }
-            let loaded = checkpoint::load(&path, task.id(), obs_dim, act_dim)?;
+            let mut loaded = checkpoint::load(&path, task.id(), obs_dim, act_dim)?;
+            // A resume has the checkpoint's settings; a branch's first epoch, its own.
+            loaded.agent.take_branch_settings(&config.ddpg);
             let s = &loaded.state;
             if s.ranks != comm.size() {
                 bail!(
