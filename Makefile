@@ -82,10 +82,15 @@ study_curriculum = --precision bf16 --level-replay 0.2 --challenge-share 0.25
 study_ours = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
 study_ours-nol2 = $(study_ours) --action-l2 0
 study_nol2 = --action-l2 0
-# ours-nol2 with half the top-level episodes in the challenge distribution, or with SB3's update ratio.
+# ours-nol2 with half the top-level episodes in the challenge distribution, with SB3's update
+# ratio; ours with a tenth of the paper's action penalty.
 study_ours-nol2-cs50 = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.5 --action-l2 0
 study_ours-nol2-b60 = $(study_ours-nol2) --batches 60
-STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-cs50 ours-nol2-b60
+study_ours-l01 = $(study_ours) --action-l2 0.1
+# ours-nol2 with a small penalty on the actor's pre-tanh output (saturated actions pulled back).
+study_ours-nol2-pre = $(study_ours-nol2) --preact-l2 0.01
+STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-cs50 ours-nol2-b60 ours-l01 \
+	ours-nol2-pre
 #   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
 #   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
 STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)-s$(SEED)

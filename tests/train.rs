@@ -158,11 +158,14 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
     assert_eq!(read_progress(&parent.path().join("progress.csv")).unwrap().len(), 2);
     assert!(checkpoint::load(&parent.path().join("checkpoint.bin"), "BlocksChoose-v0", 67, 4).is_ok());
 
-    // The action penalty: the branch's agent uses its own from the first update,
+    // The action penalties: the branch's agent uses its own from the first update,
     // and its checkpoints carry it (a branch resumed is the branch trained straight).
-    let free = |epochs| TrainConfig { ddpg: DdpgConfig { action_l2: 0.0, ..config(epochs).ddpg }, ..config(epochs) };
+    let free = |epochs| TrainConfig {
+        ddpg: DdpgConfig { action_l2: 0.0, preact_l2: 0.01, ..config(epochs).ddpg },
+        ..config(epochs)
+    };
     let (split, whole) = (root.path().join("free-split"), root.path().join("free-whole"));
-    assert_eq!(branch(parent.path(), &split, &free(3)).unwrap().changed, ["--action-l2"]);
+    assert_eq!(branch(parent.path(), &split, &free(3)).unwrap().changed, ["--action-l2", "--preact-l2"]);
     train(&free(3), &split, true, &mut quiet).unwrap();
     let d = train(&free(4), &split, true, &mut quiet).unwrap();
     branch(parent.path(), &whole, &free(4)).unwrap();
@@ -223,11 +226,12 @@ fn replay_log_appends_prunes_and_rebuilds_the_buffer_exactly() {
     assert!(msg.contains("corrupt") && msg.contains(&*newest.file_name().unwrap().to_string_lossy()), "{msg}");
 }
 
-/// This project's options: TD3, 3-step returns, lower levels replayed.
+/// This project's options: TD3, 3-step returns, the pre-tanh penalty, lower levels replayed.
 fn tiny_ours(env: &str, epochs: usize) -> TrainConfig {
     let mut c = tiny(env, epochs);
     c.ddpg.td3 = true;
     c.ddpg.n_step = 3;
+    c.ddpg.preact_l2 = 0.01;
     c.level_replay = 0.5;
     c.success_threshold = Some(0.0); // climb a level each epoch, so that lower levels exist
     c

@@ -58,10 +58,11 @@ impl Agent {
     }
 
     /// Takes the settings a branch may change (`train --branch-from`) from
-    /// `ddpg`: DDPG's action penalty. Everything else stays as loaded.
+    /// `ddpg`: DDPG's action penalties. Everything else stays as loaded.
     pub fn take_branch_settings(&mut self, ddpg: &DdpgConfig) {
         if let Self::Ddpg(a) = self {
             a.config.action_l2 = ddpg.action_l2;
+            a.config.preact_l2 = ddpg.preact_l2;
         }
     }
 

@@ -56,6 +56,13 @@ pub struct DdpgConfig {
     /// Weight of the L2 penalty on the actor's (pre-scaling) actions.
     #[arg(long, default_value_t = 1.0)]
     pub action_l2: f64,
+    /// Weight of an L2 penalty on the actor's output before its tanh (0: off,
+    /// the paper's). Unlike `--action-l2`, its gradient does not vanish where
+    /// the tanh saturates, so it keeps actions in the range where the critic
+    /// can still steer them.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub preact_l2: f64,
     /// Probability of a uniform random action while exploring.
     #[arg(long, default_value_t = 0.3)]
     pub random_eps: f64,
@@ -138,6 +145,7 @@ impl Default for DdpgConfig {
             gamma: 0.98,
             polyak: 0.95,
             action_l2: 1.0,
+            preact_l2: 0.0,
             random_eps: 0.3,
             noise_eps: 0.2,
             norm_eps: 0.01,
@@ -159,7 +167,7 @@ impl DdpgConfig {
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 13] = [
+        let checks: [(bool, &str); 14] = [
             (self.layers >= 1, "--layers must be at least 1"),
             (self.hidden >= 1, "--hidden must be at least 1"),
             (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
@@ -167,6 +175,7 @@ impl DdpgConfig {
             ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
             ((0.0..=1.0).contains(&self.polyak), "--polyak must be in [0, 1]"),
             (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
+            (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),
             ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
             (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
             (
@@ -195,7 +204,7 @@ impl DdpgConfig {
 pub struct UpdateStats {
     /// Critic mean squared TD error.
     pub critic_loss: f64,
-    /// Actor loss (−Q + L2 penalty).
+    /// Actor loss (−Q + L2 penalties).
     pub actor_loss: f64,
     /// Mean Q(s, a) over the batch.
     pub mean_q: f64,
@@ -368,10 +377,16 @@ impl Ddpg {
         // detached: gradients reach the actor only, and both losses see the
         // same (pre-update) parameters, as in baselines.
         let actor_loss = self.actor_steps().then(|| {
-            let pi = self.actor.forward(&obs);
+            let u = self.actor.preactivation(&obs);
+            let pi = u.tanh();
             let frozen_critic = self.critic.detached_view();
-            -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
-                + pi.square().mean(tch::Kind::Float) * self.config.action_l2
+            let loss = -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
+                + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
+            if self.config.preact_l2 > 0.0 {
+                loss + u.square().mean(tch::Kind::Float) * self.config.preact_l2
+            } else {
+                loss
+            }
         });
 
         self.critic.zero_grad();
@@ -647,6 +662,40 @@ mod tests {
         bad(DdpgConfig { n_step: 0, ..small() }, "--n-step");
         bad(DdpgConfig { target_noise: f64::INFINITY, ..small() }, "--target-noise");
         bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
+        bad(DdpgConfig { preact_l2: -0.1, ..small() }, "--preact-l2");
+    }
+
+    /// The pre-tanh penalty pulls a saturated actor back into the tanh's
+    /// responsive range, where the action penalty's gradient (and the
+    /// critic's) has vanished; off (the default), the loss is the paper's.
+    #[test]
+    fn preact_penalty_pulls_saturated_actions_back() {
+        let run = |preact_l2: f64| {
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            let mut agent = Ddpg::new(6, 4, DdpgConfig { preact_l2, ..small() }, &mut rng);
+            let b = batch(256, 6, &mut rng);
+            agent.norm.update(&b.obs);
+            // Saturate: scale the output layer by 100.
+            let mut v = agent.actor.to_vecs();
+            let n = v.len();
+            for x in v[n - 2..].iter_mut().flatten() {
+                *x *= 100.0;
+            }
+            agent.actor.load_vecs(&v).unwrap();
+            let obs = agent.obs_tensor(&b.obs);
+            let size = |a: &Ddpg| a.actor.preactivation(&obs).abs().mean(tch::Kind::Float).double_value(&[]);
+            let before = size(&agent);
+            let stats: Vec<UpdateStats> = (0..40).map(|_| agent.update(&b)).collect();
+            (before, size(&agent), stats)
+        };
+        let (before, penalised, with) = run(0.01);
+        let (_, unpenalised, without) = run(0.0);
+        assert!(before > 10.0, "saturated: mean |u| {before}");
+        assert!(penalised < 0.8 * before, "{before} -> {penalised}");
+        assert!(penalised < 0.8 * unpenalised, "{penalised} vs {unpenalised}");
+        // The critic's side is untouched: the first update's critic loss is the same.
+        assert_eq!(with[0].critic_loss, without[0].critic_loss);
+        assert!(with[0].actor_loss > without[0].actor_loss, "the penalty is part of the actor's loss");
     }
 
     #[test]

@@ -77,6 +77,16 @@ impl Net {
 
     /// Output for a batch `[n, in]`.
     pub fn forward(&self, x: &Tensor) -> Tensor {
+        let h = self.preactivation(x);
+        if self.tanh_out {
+            h.tanh()
+        } else {
+            h
+        }
+    }
+
+    /// The output layer's values before its `tanh` (the output itself for a linear output).
+    pub fn preactivation(&self, x: &Tensor) -> Tensor {
         let n_layers = self.params.len() / 2;
         let mut h = x.shallow_clone();
         for l in 0..n_layers {
@@ -88,8 +98,6 @@ impl Net {
             };
             if l + 1 < n_layers {
                 h = h.relu();
-            } else if self.tanh_out {
-                h = h.tanh();
             }
         }
         h

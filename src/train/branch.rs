@@ -7,7 +7,7 @@
 //! the file system allows: they are written once and never changed) plus a
 //! `config.json` that records the change; training then
 //! resumes it like any run. The parent is untouched and may keep training.
-//! Only settings the trainer reads each epoch, and DDPG's action penalty,
+//! Only settings the trainer reads each epoch, and DDPG's action penalties,
 //! may change; the agent's other hyperparameters (network shape, learning
 //! rates, TD3, n-step, precision) live in its checkpoint and stay the parent's.
 
@@ -18,10 +18,18 @@ use std::path::{Path, PathBuf};
 
 /// Settings a branch may change besides those a resume may change: how
 /// episodes are drawn and explored, the curriculum's threshold, updates per
-/// cycle and DDPG's action penalty (the agent takes it over from its
+/// cycle and DDPG's action penalties (the agent takes them over from its
 /// checkpoint's, [`crate::agents::agent::Agent::take_branch_settings`]).
-pub const BRANCHABLE_CHANGES: &[&str] =
-    &["level_replay", "challenge_share", "success_threshold", "batches", "random_eps", "noise_eps", "action_l2"];
+pub const BRANCHABLE_CHANGES: &[&str] = &[
+    "level_replay",
+    "challenge_share",
+    "success_threshold",
+    "batches",
+    "random_eps",
+    "noise_eps",
+    "action_l2",
+    "preact_l2",
+];
 
 /// Where a branched run came from (recorded in its `config.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
