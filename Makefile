@@ -144,12 +144,14 @@ table: build
 
 # A filmstrip of a policy (zoo name, file or run directory) in the challenge distribution:
 # `make filmstrip POLICY=BlocksChoose-v0-ddpg-ours EPISODE=1000000` -> $(OUT)/filmstrip-POLICY.png
+# (seen from the robot's left, where the arm hides the blocks least).
 POLICY ?= BlocksChoose-v0-ddpg
 EPISODE ?= 1000000
+CAMERA ?= --distance 1.1 --elevation -45 --azimuth 270 --width 360 --height 360
 filmstrip: build
 	mkdir -p $(OUT)
 	$(BP) render --policy $(POLICY) --env BlocksChoose-v0 --challenge --seed $(EPISODE) --filmstrip 6 \
-		--out $(OUT)/filmstrip-$(notdir $(POLICY)).png
+		$(CAMERA) --out $(OUT)/filmstrip-$(notdir $(POLICY)).png
 
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
