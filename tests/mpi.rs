@@ -220,3 +220,19 @@ fn a_checkpoint_set_aside_but_not_yet_replaced_still_resumes() {
     ok(mpirun(2).args(args(&cut, 1, 2)).arg("--resume").output().unwrap());
     assert_same_run(&whole, &cut, "resumed");
 }
+
+/// `--branch-from` under mpirun: rank 0 copies the parent (its rank
+/// directories included) and every rank continues from its own checkpoint;
+/// with nothing changed that is the parent's run continued, exactly.
+#[test]
+fn a_branch_under_mpirun_continues_every_rank_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, parent, child) = (dir.path().join("whole"), dir.path().join("parent"), dir.path().join("child"));
+    ok(mpirun(2).args(args(&whole, 1, 2)).output().unwrap());
+    ok(mpirun(2).args(args(&parent, 1, 1)).output().unwrap());
+    let out = ok(mpirun(2).args(args(&child, 1, 2)).arg("--branch-from").arg(&parent).output().unwrap());
+    assert!(text(&out).contains("branched from"), "{}", text(&out));
+    assert!(child.join("rank-1/checkpoint.bin").exists());
+    assert_same_run(&whole, &child, "branched under mpirun");
+    assert_eq!(progress(&parent).len(), 1, "the parent is left as it was");
+}

@@ -165,7 +165,10 @@ impl Comm {
             let mut len = bytes.len() as u64;
             root.broadcast_into(&mut len);
             bytes.resize(len as usize, 0);
-            root.broadcast_into(&mut bytes[..]);
+            // MPI refuses an empty buffer; every rank knows the length by now.
+            if len > 0 {
+                root.broadcast_into(&mut bytes[..]);
+            }
         }
         let _ = bytes;
     }
