@@ -258,7 +258,9 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     let o = bp(&["report", expert.to_str().unwrap(), pggd.to_str().unwrap(), "--target", "0.5"]);
     let t = text(&o);
     assert!(
-        o.status.success() && t.contains("DDPG on BlocksTouch-v0 (2 workers") && t.contains("PGGD + AggreVaTeD on"),
+        o.status.success()
+            && t.contains("DDPG (2 batches per cycle) on BlocksTouch-v0 (2 workers")
+            && t.contains("PGGD + AggreVaTeD (2 batches per cycle) on"),
         "{t}"
     );
     assert!(t.contains("seconds per epoch") && t.contains("updates"), "{t}");

@@ -226,12 +226,13 @@ fn replay_log_appends_prunes_and_rebuilds_the_buffer_exactly() {
     assert!(msg.contains("corrupt") && msg.contains(&*newest.file_name().unwrap().to_string_lossy()), "{msg}");
 }
 
-/// This project's options: TD3, 3-step returns, the pre-tanh penalty, lower levels replayed.
+/// This project's options: TD3, 3-step returns, the pre-tanh penalty, correlated noise, lower levels replayed.
 fn tiny_ours(env: &str, epochs: usize) -> TrainConfig {
     let mut c = tiny(env, epochs);
     c.ddpg.td3 = true;
     c.ddpg.n_step = 3;
     c.ddpg.preact_l2 = 0.01;
+    c.ddpg.noise_correlation = 0.8;
     c.level_replay = 0.5;
     c.success_threshold = Some(0.0); // climb a level each epoch, so that lower levels exist
     c

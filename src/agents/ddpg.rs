@@ -69,6 +69,12 @@ pub struct DdpgConfig {
     /// Standard deviation of the Gaussian exploration noise.
     #[arg(long, default_value_t = 0.2)]
     pub noise_eps: f64,
+    /// Correlation of the exploration noise between consecutive steps of an
+    /// episode, in [0, 1): AR(1) noise with the same standard deviation, whose
+    /// deviations persist for about 1 / (1 − ρ) steps (0: independent, the paper's).
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub noise_correlation: f64,
     /// Floor of the normaliser's standard deviation.
     #[arg(long, default_value_t = 0.01)]
     pub norm_eps: f64,
@@ -148,6 +154,7 @@ impl Default for DdpgConfig {
             preact_l2: 0.0,
             random_eps: 0.3,
             noise_eps: 0.2,
+            noise_correlation: 0.0,
             norm_eps: 0.01,
             norm_clip: 5.0,
             precision: Precision::F32,
@@ -167,7 +174,7 @@ impl DdpgConfig {
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 14] = [
+        let checks: [(bool, &str); 15] = [
             (self.layers >= 1, "--layers must be at least 1"),
             (self.hidden >= 1, "--hidden must be at least 1"),
             (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
@@ -178,6 +185,7 @@ impl DdpgConfig {
             (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),
             ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
             (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
+            ((0.0..1.0).contains(&self.noise_correlation), "--noise-correlation must be in [0, 1)"),
             (
                 finite_pos(self.norm_eps) && self.norm_clip.is_finite() && self.norm_clip > 0.0,
                 "--norm-eps and --norm-clip must be positive numbers",
@@ -473,6 +481,39 @@ impl DdpgPolicy {
         self.net.forward(&x)
     }
 
+    /// The exploration action with noise correlated across an episode's
+    /// steps: uniform with probability `random_eps`, else π(s) + n, clipped to
+    /// [−1, 1], where n follows n ← ρ n + √(1 − ρ²) noise_eps z, z ~ N(0, I),
+    /// from a first draw noise_eps z (so each step's noise has standard
+    /// deviation noise_eps). `noise` is the episode's state (empty at its
+    /// start). ρ = 0 is [`DdpgPolicy::explore`], draw for draw.
+    pub fn explore_correlated(
+        &self,
+        obs: &[f32],
+        (random_eps, noise_eps, rho): (f64, f64, f64),
+        noise: &mut Vec<f32>,
+        rng: &mut impl Rng,
+    ) -> Vec<f32> {
+        if rho == 0.0 {
+            return self.explore(obs, random_eps, noise_eps, rng);
+        }
+        let a = self.act(obs);
+        if rng.gen_bool(random_eps.clamp(0.0, 1.0)) {
+            return a.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
+        }
+        let fresh = noise.is_empty();
+        noise.resize(a.len(), 0.0);
+        let keep = (1.0 - rho * rho).sqrt();
+        a.iter()
+            .zip(noise.iter_mut())
+            .map(|(&x, n)| {
+                let z: f64 = StandardNormal.sample(rng);
+                *n = if fresh { (noise_eps * z) as f32 } else { (rho * *n as f64 + keep * noise_eps * z) as f32 };
+                (x + *n).clamp(-1.0, 1.0)
+            })
+            .collect()
+    }
+
     /// The exploration action: uniform with probability `random_eps`, else
     /// π(s) + N(0, noise_eps²), clipped to [−1, 1].
     pub fn explore(&self, obs: &[f32], random_eps: f64, noise_eps: f64, rng: &mut impl Rng) -> Vec<f32> {
@@ -663,6 +704,37 @@ mod tests {
         bad(DdpgConfig { target_noise: f64::INFINITY, ..small() }, "--target-noise");
         bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
         bad(DdpgConfig { preact_l2: -0.1, ..small() }, "--preact-l2");
+        bad(DdpgConfig { noise_correlation: 1.0, ..small() }, "--noise-correlation");
+    }
+
+    /// Correlated exploration noise: ρ = 0 is the paper's independent noise
+    /// draw for draw; with ρ = 0.9 consecutive steps' noise correlates about
+    /// 0.9 and keeps its standard deviation.
+    #[test]
+    fn correlated_noise_persists_and_keeps_its_size() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let agent = Ddpg::new(6, 4, small(), &mut rng);
+        let policy = agent.policy();
+        let obs = [0.1f32, -0.2, 0.3, 0.0, 0.5, -0.5];
+        let mean = policy.act(&obs);
+        let (mut r1, mut r2) = (ChaCha8Rng::seed_from_u64(1), ChaCha8Rng::seed_from_u64(1));
+        let mut state = Vec::new();
+        for _ in 0..20 {
+            let a = policy.explore(&obs, 0.3, 0.2, &mut r1);
+            assert_eq!(a, policy.explore_correlated(&obs, (0.3, 0.2, 0.0), &mut state, &mut r2));
+        }
+        // Small noise so that clipping at ±1 does not bias the statistics.
+        let (sigma, rho) = (0.05, 0.9);
+        let mut noise = Vec::new();
+        let mut series = Vec::new();
+        for _ in 0..20_000 {
+            let a = policy.explore_correlated(&obs, (0.0, sigma, rho), &mut noise, &mut r1);
+            series.push((a[0] - mean[0]) as f64);
+        }
+        let var = series.iter().map(|x| x * x).sum::<f64>() / series.len() as f64;
+        let lag1 = series.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / (series.len() - 1) as f64;
+        assert!((var.sqrt() - sigma).abs() < 0.1 * sigma, "std {} vs {sigma}", var.sqrt());
+        assert!((lag1 / var - rho).abs() < 0.03, "lag-1 correlation {}", lag1 / var);
     }
 
     /// The pre-tanh penalty pulls a saturated actor back into the tanh's

@@ -27,6 +27,7 @@ pub const BRANCHABLE_CHANGES: &[&str] = &[
     "batches",
     "random_eps",
     "noise_eps",
+    "noise_correlation",
     "action_l2",
     "preact_l2",
 ];

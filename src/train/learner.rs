@@ -206,6 +206,7 @@ impl Learner {
                 policy: p,
                 random_eps: config.ddpg.random_eps,
                 noise_eps: config.ddpg.noise_eps,
+                noise_correlation: config.ddpg.noise_correlation,
             },
         }
     }

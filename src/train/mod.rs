@@ -261,6 +261,9 @@ impl TrainConfig {
         } else if d.action_l2 != paper.action_l2 {
             v.push(format!("action penalty {}", d.action_l2));
         }
+        if d.noise_correlation > 0.0 {
+            v.push(format!("noise correlation {}", d.noise_correlation));
+        }
         if d.preact_l2 > 0.0 {
             v.push(format!("pre-tanh penalty {}", d.preact_l2));
         }

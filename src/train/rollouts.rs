@@ -19,8 +19,10 @@ use std::time::Instant;
 pub(crate) enum Behaviour<'a> {
     /// The deterministic policy (tests and finals).
     Greedy(&'a AnyPolicy),
-    /// DDPG exploration: uniform with probability `random_eps`, else π(s) + N(0, noise_eps²).
-    DdpgExplore { policy: &'a DdpgPolicy, random_eps: f64, noise_eps: f64 },
+    /// DDPG exploration: uniform with probability `random_eps`, else π(s) +
+    /// noise of standard deviation `noise_eps`, correlated `noise_correlation`
+    /// between consecutive steps.
+    DdpgExplore { policy: &'a DdpgPolicy, random_eps: f64, noise_eps: f64, noise_correlation: f64 },
     /// PGGD sampling its Gaussian.
     PggdSample(&'a PggdPolicy),
     /// AggreVaTeD's roll-in mixture of expert and learner.
@@ -29,12 +31,13 @@ pub(crate) enum Behaviour<'a> {
 
 impl Behaviour<'_> {
     /// `(action to store, whether the expert chose it)`; the environment
-    /// receives the stored action clipped to [−1, 1].
-    fn act(&self, obs: &[f32], rng: &mut ChaCha8Rng) -> (Vec<f32>, bool) {
+    /// receives the stored action clipped to [−1, 1]. `noise` is the
+    /// episode's exploration-noise state (empty at its start).
+    fn act(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> (Vec<f32>, bool) {
         match self {
             Self::Greedy(p) => (p.act(obs), false),
-            Self::DdpgExplore { policy, random_eps, noise_eps } => {
-                (policy.explore(obs, *random_eps, *noise_eps, rng), false)
+            Self::DdpgExplore { policy, random_eps, noise_eps, noise_correlation } => {
+                (policy.explore_correlated(obs, (*random_eps, *noise_eps, *noise_correlation), noise, rng), false)
             }
             Self::PggdSample(p) => (p.sample(obs, rng), false),
             Self::Mixture(m) => {
@@ -165,9 +168,10 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
         expert_steps: 0,
         forward_seconds: 0.0,
     };
+    let mut noise = Vec::new();
     loop {
         let t = Instant::now();
-        let (act, by_expert) = behaviour.act(&obs, &mut rng);
+        let (act, by_expert) = behaviour.act(&obs, &mut noise, &mut rng);
         ep.forward_seconds += t.elapsed().as_secs_f64();
         ep.expert_steps += by_expert as usize;
         let clipped: Vec<f32> = act.iter().map(|a| a.clamp(-1.0, 1.0)).collect();
