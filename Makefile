@@ -89,8 +89,10 @@ study_ours-nol2-b60 = $(study_ours-nol2) --batches 60
 study_ours-l01 = $(study_ours) --action-l2 0.1
 # ours-nol2 with a small penalty on the actor's pre-tanh output (saturated actions pulled back).
 study_ours-nol2-pre = $(study_ours-nol2) --preact-l2 0.01
+# and with exploration noise correlated across steps (AR(1), ρ = 0.9), for detours.
+study_ours-nol2-pre-rho9 = $(study_ours-nol2-pre) --noise-correlation 0.9
 STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-cs50 ours-nol2-b60 ours-l01 \
-	ours-nol2-pre
+	ours-nol2-pre ours-nol2-pre-rho9
 #   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
 #   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
 STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)-s$(SEED)

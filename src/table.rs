@@ -106,6 +106,10 @@ pub enum RowResult {
 /// Evaluates one row.
 pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> RowResult {
     let Some(path) = &row.policy else { return RowResult::NotGiven };
+    // A zoo name without an entry: the row's policy has not been shipped yet.
+    if crate::zoo::is_name(path) && crate::zoo::find(&crate::zoo::dir(), &path.to_string_lossy()).is_err() {
+        return RowResult::Missing("not in the zoo yet (train it, then `blockpuzzle zoo export`)".into());
+    }
     // The policy file is read once; each evaluation gets its own copy.
     let run = || -> Result<RowResult> {
         let saved = load_policy(path)?;

@@ -292,7 +292,8 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ") && !l.starts_with("| Method")).collect();
     assert_eq!(rows.len(), 5, "{md}");
     assert!(rows[0].contains("| BlocksTouch-v0-ddpg (epoch 1, 0.00 M env steps, grey removed) |"), "{md}");
-    assert!(rows[1].contains("no policy file or zoo entry named \"BlocksChoose-v0-ddpg\""), "{md}");
+    assert!(rows[1].contains("| BlocksChoose-v0-ddpg: not in the zoo yet"), "{md}");
+    assert!(!md.contains(&*zoo.to_string_lossy()), "no machine paths in the table: {md}");
     assert!(rows[2].starts_with("| DDPG (3 blocks), ours | missing"), "{md}");
 
     // The same policies on the shuffled task (a generalisation test); a task without a challenge is refused.
