@@ -108,7 +108,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     let name = child.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "branch".into());
     let tmp = child.with_file_name(format!(".{name}.branching-{}", std::process::id()));
     let result = (|| -> Result<BranchedFrom> {
-        for attempt in 1..=3 {
+        for _attempt in 0..3 {
             if tmp.exists() {
                 std::fs::remove_dir_all(&tmp).with_context(|| format!("cannot remove {}", tmp.display()))?;
             }
@@ -126,9 +126,6 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
                 super::write_json_atomic(&copy.config(), &wanted)?;
                 return Ok(record);
             }
-            if attempt == 3 {
-                break;
-            }
         }
         bail!(
             "--branch-from {}: the parent wrote new checkpoints while it was being copied (three tries); \
@@ -136,20 +133,16 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
             parent.display()
         )
     })();
-    match result {
-        Ok(record) => {
-            if let Some(dir) = child.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-            }
-            std::fs::rename(&tmp, child)
-                .with_context(|| format!("cannot move {} to {}", tmp.display(), child.display()))?;
-            Ok(record)
-        }
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&tmp);
-            Err(e)
-        }
+    // The temporary folder sits beside the child, so its parent exists by now.
+    let placed = result.and_then(|record| {
+        std::fs::rename(&tmp, child)
+            .with_context(|| format!("cannot move {} to {}", tmp.display(), child.display()))?;
+        Ok(record)
+    });
+    if placed.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
     }
+    placed
 }
 
 /// `--level-replay` for `level_replay`.
