@@ -486,7 +486,8 @@ impl DdpgPolicy {
     /// [−1, 1], where n follows n ← ρ n + √(1 − ρ²) noise_eps z, z ~ N(0, I),
     /// from a first draw noise_eps z (so each step's noise has standard
     /// deviation noise_eps). `noise` is the episode's state (empty at its
-    /// start). ρ = 0 is [`DdpgPolicy::explore`], draw for draw.
+    /// start). With ρ = 0 every step's noise is noise_eps z, exactly (the
+    /// paper's independent noise, draw for draw).
     pub fn explore_correlated(
         &self,
         obs: &[f32],
@@ -494,9 +495,6 @@ impl DdpgPolicy {
         noise: &mut Vec<f32>,
         rng: &mut impl Rng,
     ) -> Vec<f32> {
-        if rho == 0.0 {
-            return self.explore(obs, random_eps, noise_eps, rng);
-        }
         let a = self.act(obs);
         if rng.gen_bool(random_eps.clamp(0.0, 1.0)) {
             return a.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
@@ -515,18 +513,9 @@ impl DdpgPolicy {
     }
 
     /// The exploration action: uniform with probability `random_eps`, else
-    /// π(s) + N(0, noise_eps²), clipped to [−1, 1].
+    /// π(s) + N(0, noise_eps²), clipped to [−1, 1] (independent noise: no state).
     pub fn explore(&self, obs: &[f32], random_eps: f64, noise_eps: f64, rng: &mut impl Rng) -> Vec<f32> {
-        let a = self.act(obs);
-        if rng.gen_bool(random_eps.clamp(0.0, 1.0)) {
-            return a.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
-        }
-        a.iter()
-            .map(|&x| {
-                let z: f64 = StandardNormal.sample(rng);
-                (x + (noise_eps * z) as f32).clamp(-1.0, 1.0)
-            })
-            .collect()
+        self.explore_correlated(obs, (random_eps, noise_eps, 0.0), &mut Vec::new(), rng)
     }
 }
 
@@ -719,10 +708,24 @@ mod tests {
         let mean = policy.act(&obs);
         let (mut r1, mut r2) = (ChaCha8Rng::seed_from_u64(1), ChaCha8Rng::seed_from_u64(1));
         let mut state = Vec::new();
+        // The paper's noise, written out: uniform with probability 0.3, else π(s) + 0.2 z.
+        let paper = |rng: &mut ChaCha8Rng| -> Vec<f32> {
+            if rng.gen_bool(0.3) {
+                return mean.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
+            }
+            mean.iter()
+                .map(|&x| {
+                    let z: f64 = StandardNormal.sample(rng);
+                    (x + (0.2 * z) as f32).clamp(-1.0, 1.0)
+                })
+                .collect()
+        };
         for _ in 0..20 {
-            let a = policy.explore(&obs, 0.3, 0.2, &mut r1);
+            let a = paper(&mut r1);
             assert_eq!(a, policy.explore_correlated(&obs, (0.3, 0.2, 0.0), &mut state, &mut r2));
         }
+        let (mut r1, mut r2) = (ChaCha8Rng::seed_from_u64(2), ChaCha8Rng::seed_from_u64(2));
+        assert_eq!(paper(&mut r1), policy.explore(&obs, 0.3, 0.2, &mut r2));
         // Small noise so that clipping at ±1 does not bias the statistics.
         let (sigma, rho) = (0.05, 0.9);
         let mut noise = Vec::new();

@@ -726,8 +726,8 @@ fn branch_run(
     child: &Path,
     c: &crate::train::TrainConfig,
 ) -> Result<()> {
-    // One byte (0: made) and the error's text: never an empty message, which MPI refuses.
-    let mut status = vec![0u8];
+    // Empty: made; else the error's text.
+    let mut status = Vec::new();
     if comm.is_root() {
         match crate::train::branch(parent, child, c) {
             Ok(b) => eprintln!(
@@ -738,12 +738,12 @@ fn branch_run(
                 b.env_steps,
                 if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
             ),
-            Err(e) => status = [&[1u8][..], format!("{e:#}").as_bytes()].concat(),
+            Err(e) => status = format!("{e:#}").into_bytes(),
         }
     }
     comm.broadcast_bytes(&mut status);
-    if status.first() != Some(&0) {
-        bail!("{}", String::from_utf8_lossy(status.get(1..).unwrap_or_default()));
+    if !status.is_empty() {
+        bail!("{}", String::from_utf8_lossy(&status));
     }
     Ok(())
 }
