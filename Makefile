@@ -114,7 +114,7 @@ validate: build
 #   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
 aggrevated: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
-		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
+		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
 #   the snapshots of the BlocksTouch-v0 run as experts: each one's grey-removed success on
 #   BlocksChoose-v0 on validation seeds (200 episodes from 2,000,000; the test seeds stay unused),
 #   to pick the earlier expert whose success is near the paper's 0.44 (results/aggrevated-weak.md);
@@ -132,12 +132,12 @@ aggrevated-weak: build
 #   the same with the paper's descent direction, the expert critic's advantage (not a table row);
 aggrevated-adv: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --pg-weight expert-advantage --workers 2 \
-		--epochs 300 --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-adv-s0 \
+		--epochs 300 --torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-adv-s0 \
 		$(call resume,runs/BlocksChoose-v0-pggd-aggrevated-adv-s0)
 #   PGGD alone on BlocksChoose-v0;
 pggd: build
 	$(BP) train --algo pggd --env BlocksChoose-v0 --workers 2 --epochs 200 \
-		--seed 0 --run-dir runs/BlocksChoose-v0-pggd-s0 $(call resume,runs/BlocksChoose-v0-pggd-s0)
+		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-s0 $(call resume,runs/BlocksChoose-v0-pggd-s0)
 #   and the table itself (rows whose run is missing say so).
 table: build
 	$(BP) table --expert $(EXPERT) --ddpg runs/BlocksChoose-v0-ddpg-s0 \
