@@ -184,5 +184,28 @@ pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64
             }
         }
     }
+    let done: Vec<_> = rows
+        .iter()
+        .filter_map(|(row, r)| match r {
+            RowResult::Done { normal, challenge, .. } => Some((row.method, normal, challenge)),
+            _ => None,
+        })
+        .collect();
+    if !done.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nHow the other episodes ended, as shares of all episodes (`failure`: red touched blue; \
+             `no_contact`: the gripper touched no block; `off_table`: a blue or green block left the table; \
+             `blue_met_grey`: blue touched grey; `timeout`: anything else):\n"
+        );
+        for (method, normal, challenge) in done {
+            let _ = writeln!(
+                s,
+                "- {method}: Normal {}; Challenge {}",
+                normal.outcomes.summary(),
+                challenge.outcomes.summary()
+            );
+        }
+    }
     s
 }

@@ -253,6 +253,11 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
             && rows[2].contains("(epoch 1, 0.00 M env steps)")
     );
     assert!(rows[3].contains("missing") && rows[3].contains("/nonexistent/run"), "{md}");
+    // Why the unsuccessful episodes ended, for the evaluated rows only.
+    let why: Vec<&str> = md.lines().filter(|l| l.starts_with("- ")).collect();
+    assert_eq!(why.len(), 2, "{md}");
+    assert!(why[0].starts_with("- DDPG (2 blocks), grey removed from its view: Normal failure "), "{md}");
+    assert!(why[1].starts_with("- PGGD + AggreVaTeD: Normal failure ") && why[1].contains("; Challenge failure "));
 
     // The time to a result of the two runs.
     let o = bp(&["report", expert.to_str().unwrap(), pggd.to_str().unwrap(), "--target", "0.5"]);
