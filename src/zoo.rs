@@ -37,8 +37,12 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
-/// The format tag in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/1";
+/// The format tag this blockpuzzle writes in every entry's metadata.
+pub const FORMAT: &str = "blockpuzzle-zoo/2";
+
+/// The formats it reads: version 2 added the outcome counts of evaluations
+/// (version 1 entries load with none).
+pub const READS: [&str; 2] = ["blockpuzzle-zoo/1", FORMAT];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -82,6 +86,9 @@ pub struct ZooEvaluation {
     pub success_rate: f64,
     /// Its Wilson 95% interval.
     pub ci95: (f64, f64),
+    /// Episodes per outcome ([`crate::outcome`]; absent in format 1 entries).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outcomes: Option<crate::outcome::Outcomes>,
 }
 
 impl From<crate::evaluate::Evaluation> for ZooEvaluation {
@@ -94,6 +101,7 @@ impl From<crate::evaluate::Evaluation> for ZooEvaluation {
             seed: e.seed,
             success_rate: e.success_rate,
             ci95: e.ci95,
+            outcomes: Some(e.outcomes),
         }
     }
 }
@@ -349,10 +357,14 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
     let text = std::fs::read_to_string(&json_path).map_err(io(&json_path))?;
     let meta: ZooMeta = serde_json::from_str(&text)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("bad metadata: {e}") })?;
-    if meta.format != FORMAT {
+    if !READS.contains(&meta.format.as_str()) {
         return Err(ZooError::Corrupt {
             path: json_path,
-            reason: format!("format {:?}, this blockpuzzle reads {FORMAT:?}", meta.format),
+            reason: format!(
+                "format {:?}, this blockpuzzle reads {} (a newer blockpuzzle wrote it? update this one)",
+                meta.format,
+                READS.join(", ")
+            ),
         });
     }
     Ok(meta)

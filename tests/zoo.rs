@@ -276,3 +276,53 @@ fn cli_takes_zoo_names() {
     let text = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && text.contains("NoSuchEntry") && text.contains("ReachAvoid-v0-ddpg"), "{text}");
 }
+
+#[test]
+fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
+    let bp = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (z, eval) = (dir.path().join("zoo"), dir.path().join("eval.json"));
+    let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "3", "--out", eval.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut args = vec!["zoo", "export", "--from", "ReachAvoid-v0-ddpg", "--name", "r", "--description", "d"];
+    args.extend([
+        "--trained-with",
+        "t",
+        "--evaluate",
+        "4",
+        "--eval",
+        eval.to_str().unwrap(),
+        "--zoo",
+        z.to_str().unwrap(),
+    ]);
+    let o = bp(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    // Both the recorded `eval` file and the export's own evaluation keep their outcome counts.
+    let entry = z.join("r.json");
+    let (meta, _) = zoo::load(&entry).unwrap();
+    assert_eq!(meta.format, zoo::FORMAT);
+    assert_eq!(meta.evaluations.len(), 2, "{:?}", meta.evaluations);
+    for (e, n) in meta.evaluations.iter().zip([3, 4]) {
+        let o = e.outcomes.expect("outcome counts recorded");
+        assert_eq!((e.episodes, o.total()), (n, n), "{e:?}");
+        assert_eq!(o.success as f64 / n as f64, e.success_rate, "{e:?}");
+    }
+    let o = bp(&["zoo", "list", "--zoo", z.to_str().unwrap()]);
+    let listed = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(listed.matches("the others: failure ").count(), 2, "{listed}");
+
+    // An entry of format 1 (no outcome counts) loads; an unknown format is refused, naming those read.
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    v["format"] = "blockpuzzle-zoo/1".into();
+    for e in v["evaluations"].as_array_mut().unwrap() {
+        e.as_object_mut().unwrap().remove("outcomes");
+    }
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let (meta, _) = zoo::load(&entry).unwrap();
+    assert!(meta.evaluations.iter().all(|e| e.outcomes.is_none()));
+    v["format"] = "blockpuzzle-zoo/9".into();
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(e.contains("\"blockpuzzle-zoo/9\"") && e.contains("blockpuzzle-zoo/1, blockpuzzle-zoo/2"), "{e}");
+}

@@ -24,7 +24,7 @@ class ZooPolicy:
     def __init__(self, json_path):
         json_path = pathlib.Path(json_path).with_suffix(".json")
         self.meta = json.loads(json_path.read_text())
-        if self.meta["format"] != "blockpuzzle-zoo/1":
+        if self.meta["format"] not in ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2"):
             raise ValueError(f"{json_path}: unknown format {self.meta['format']!r}")
         self.tensors = load_file(str(json_path.with_suffix(".safetensors")))
         self.layers = len(self.meta["actor"]["sizes"]) - 1

@@ -869,6 +869,9 @@ fn zoo(c: ZooCommand) -> Result<()> {
                         e.episodes,
                         e.seed
                     );
+                    if let Some(o) = &e.outcomes {
+                        println!("        the others: {}", o.summary());
+                    }
                 }
             }
             Ok(())
@@ -945,6 +948,8 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         success_rate: f64,
         ci95: (f64, f64),
         grey_blind: bool,
+        #[serde(default)]
+        outcomes: Option<crate::outcome::Outcomes>,
     }
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read evaluation {}", path.display()))?;
     let w: Written = serde_json::from_str(&text)
@@ -957,6 +962,7 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         seed: w.seed,
         success_rate: w.success_rate,
         ci95: w.ci95,
+        outcomes: w.outcomes,
     })
 }
 
