@@ -24,7 +24,7 @@
 //!   updated on every `policy_delay`-th critic update only.
 
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, take_grads, Adam, Net};
+use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use rand::Rng;
@@ -429,18 +429,23 @@ impl Ddpg {
     /// If `gradient` does not have that layout.
     pub fn apply_gradient(&mut self, gradient: &[f32]) {
         let actor_step = self.actor_steps();
-        let mut off = 0;
-        let g = take_grads(&self.critic.params, gradient, &mut off);
-        self.critic_opt.step(&mut self.critic.params, &g);
+        let mut rest = gradient;
+        let mut take = |params: &[Tensor]| {
+            let (g, r) = rest.split_at(params.iter().map(Tensor::numel).sum::<usize>().min(rest.len()));
+            rest = r;
+            g
+        };
+        let g = take(&self.critic.params);
+        self.critic_opt.step(&mut self.critic.params, g);
         if let Some(t) = &mut self.twin {
-            let g = take_grads(&t.critic.params, gradient, &mut off);
-            t.opt.step(&mut t.critic.params, &g);
+            let g = take(&t.critic.params);
+            t.opt.step(&mut t.critic.params, g);
         }
         if actor_step {
-            let g = take_grads(&self.actor.params, gradient, &mut off);
-            self.actor_opt.step(&mut self.actor.params, &g);
+            let g = take(&self.actor.params);
+            self.actor_opt.step(&mut self.actor.params, g);
         }
-        assert_eq!(off, gradient.len(), "a gradient of another layout");
+        assert!(rest.is_empty(), "a gradient of another layout");
     }
 
     /// The critic targets y of the last update, one per transition.
@@ -819,8 +824,7 @@ mod tests {
         let p = vec![Tensor::of_slice(&[1.0f32, -2.0, 3.0])];
         let mut params = p;
         let mut adam = Adam::new(&params, 0.01);
-        let g = vec![Tensor::of_slice(&[0.5f32, -4.0, 1e-3])];
-        adam.step(&mut params, &g);
+        adam.step(&mut params, &[0.5f32, -4.0, 1e-3]);
         let v = super::super::nets::tensor_to_vec(&params[0]);
         // m̂/√v̂ = sign(g) at the first step (up to eps)
         for (got, want) in v.iter().zip([0.99f32, -1.99, 2.99]) {

@@ -190,15 +190,25 @@ pub fn tensor_to_vec(t: &Tensor) -> Vec<f32> {
 }
 
 /// Adam (Kingma & Ba) with bias correction, as OpenAI baselines' MpiAdam:
-/// β1 = 0.9, β2 = 0.999, ε = 1e-8. Its moments are plain tensors, so the
+/// β1 = 0.9, β2 = 0.999, ε = 1e-8. Its moments are plain vectors, so the
 /// state can be checkpointed and restored exactly.
+///
+/// The step runs in one pass over each parameter in plain Rust, with the
+/// same float32 operations in the same order as libtorch's element-wise
+/// kernels would do them one tensor at a time (each product, sum, square
+/// root and quotient rounded to float32; scalars rounded to float32 first),
+/// so its results are bit for bit those of that tensor formulation (tested),
+/// at a quarter of the cost: a dozen whole-tensor passes and allocations
+/// per parameter were a fifth of a bf16 update's time.
 pub struct Adam {
     /// Learning rate.
     pub lr: f64,
     /// Steps taken.
     pub t: u64,
-    m: Vec<Tensor>,
-    v: Vec<Tensor>,
+    m: Vec<Vec<f32>>,
+    v: Vec<Vec<f32>>,
+    /// Scratch for a parameter's values.
+    values: Vec<f32>,
 }
 
 const BETA1: f64 = 0.9;
@@ -208,34 +218,47 @@ const EPS: f64 = 1e-8;
 impl Adam {
     /// Zero moments for `params`.
     pub fn new(params: &[Tensor], lr: f64) -> Self {
-        Self {
-            lr,
-            t: 0,
-            m: params.iter().map(Tensor::zeros_like).collect(),
-            v: params.iter().map(Tensor::zeros_like).collect(),
-        }
+        let zeros = || params.iter().map(|p| vec![0.0f32; p.numel()]).collect();
+        Self { lr, t: 0, m: zeros(), v: zeros(), values: Vec::new() }
     }
 
-    /// One update of `params` with the gradients `grads` (same order).
-    pub fn step(&mut self, params: &mut [Tensor], grads: &[Tensor]) {
+    /// One update of `params` with their gradients flattened in parameter
+    /// order (as [`append_grads`] writes them).
+    ///
+    /// # Panics
+    /// If `grads` does not hold exactly one value per parameter value (a
+    /// caller's bug: gradients are only ever produced for the same networks).
+    pub fn step(&mut self, params: &mut [Tensor], grads: &[f32]) {
+        let total: usize = params.iter().map(Tensor::numel).sum();
+        assert_eq!(grads.len(), total, "a gradient of another layout");
         self.t += 1;
         let t = self.t as i32;
-        let step = self.lr * (1.0 - BETA2.powi(t)).sqrt() / (1.0 - BETA1.powi(t));
-        tch::no_grad(|| {
-            for ((p, g), (m, v)) in params.iter_mut().zip(grads).zip(self.m.iter_mut().zip(self.v.iter_mut())) {
-                let new_m = &*m * BETA1 + g * (1.0 - BETA1);
-                let new_v = &*v * BETA2 + g.square() * (1.0 - BETA2);
-                m.copy_(&new_m);
-                v.copy_(&new_v);
-                let update = &new_m / (new_v.sqrt() + EPS) * step;
-                let _ = p.f_sub_(&update);
+        // libtorch rounds a double scalar to the tensor's float32 before the
+        // element-wise product; so do we.
+        let step = (self.lr * (1.0 - BETA2.powi(t)).sqrt() / (1.0 - BETA1.powi(t))) as f32;
+        let (b1, one_minus_b1) = (BETA1 as f32, (1.0 - BETA1) as f32);
+        let (b2, one_minus_b2) = (BETA2 as f32, (1.0 - BETA2) as f32);
+        let eps = EPS as f32;
+        let mut offset = 0;
+        for ((p, m), v) in params.iter_mut().zip(&mut self.m).zip(&mut self.v) {
+            let n = m.len();
+            let g = &grads[offset..offset + n];
+            offset += n;
+            self.values.resize(n, 0.0);
+            p.copy_data(&mut self.values, n);
+            for (((x, m), v), &g) in self.values.iter_mut().zip(m.iter_mut()).zip(v.iter_mut()).zip(g) {
+                *m = *m * b1 + g * one_minus_b1;
+                *v = *v * b2 + (g * g) * one_minus_b2;
+                *x -= *m / (v.sqrt() + eps) * step;
             }
-        });
+            let updated = Tensor::of_slice(&self.values).view(p.size().as_slice());
+            tch::no_grad(|| p.copy_(&updated));
+        }
     }
 
     /// Moments as flat vectors: all first moments, then all second moments.
     pub fn to_vecs(&self) -> Vec<Vec<f32>> {
-        self.m.iter().chain(&self.v).map(tensor_to_vec).collect()
+        self.m.iter().chain(&self.v).cloned().collect()
     }
 
     /// Restores moments saved by [`Adam::to_vecs`] and the step count.
@@ -248,11 +271,10 @@ impl Adam {
             return Err(format!("expected {} optimiser moments, found {}", 2 * n, vecs.len()));
         }
         for (i, (dst, src)) in self.m.iter_mut().chain(self.v.iter_mut()).zip(vecs).enumerate() {
-            if dst.numel() != src.len() {
-                return Err(format!("optimiser moment {i} has {} values, expected {}", src.len(), dst.numel()));
+            if dst.len() != src.len() {
+                return Err(format!("optimiser moment {i} has {} values, expected {}", src.len(), dst.len()));
             }
-            let s = Tensor::of_slice(src).view(dst.size().as_slice());
-            tch::no_grad(|| dst.copy_(&s));
+            dst.copy_from_slice(src);
         }
         self.t = t;
         Ok(())
@@ -265,24 +287,6 @@ pub fn append_grads(params: &[Tensor], out: &mut Vec<f32>) {
     for g in grads(params) {
         out.extend(tensor_to_vec(&g));
     }
-}
-
-/// Splits a flat gradient written by [`append_grads`] back into tensors
-/// shaped like `params`, starting at `*offset` (advanced past them).
-///
-/// # Panics
-/// If `flat` is shorter than the parameters (a caller's bug: gradients are
-/// only ever produced for the same networks).
-pub fn take_grads(params: &[Tensor], flat: &[f32], offset: &mut usize) -> Vec<Tensor> {
-    params
-        .iter()
-        .map(|p| {
-            let n = p.numel();
-            let t = Tensor::of_slice(&flat[*offset..*offset + n]).view(p.size().as_slice());
-            *offset += n;
-            t
-        })
-        .collect()
 }
 
 /// The current gradients of `params` (zeros where none was computed).
@@ -317,5 +321,74 @@ mod tests {
         let mut broken = plain;
         broken.layers[1].n_in = 7;
         assert!(Net::from_plain(&broken).err().is_some_and(|e| e.contains("layer 1")));
+    }
+
+    /// Adam as libtorch tensor operations, one whole-tensor pass each (the
+    /// formulation the runs up to 2026-11-23 trained with).
+    fn tensor_adam_step(params: &mut [Tensor], grads: &[Tensor], m: &mut [Tensor], v: &mut [Tensor], lr: f64, t: i32) {
+        let step = lr * (1.0 - BETA2.powi(t)).sqrt() / (1.0 - BETA1.powi(t));
+        tch::no_grad(|| {
+            for ((p, g), (m, v)) in params.iter_mut().zip(grads).zip(m.iter_mut().zip(v.iter_mut())) {
+                let new_m = &*m * BETA1 + g * (1.0 - BETA1);
+                let new_v = &*v * BETA2 + g.square() * (1.0 - BETA2);
+                m.copy_(&new_m);
+                v.copy_(&new_v);
+                let update = &new_m / (new_v.sqrt() + EPS) * step;
+                let _ = p.f_sub_(&update);
+            }
+        });
+    }
+
+    #[test]
+    fn adam_matches_the_tensor_formulation_bit_for_bit() {
+        use rand::Rng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut ours = Net::new(&[9, 256, 256, 5], true, &mut rng).params;
+        let mut theirs: Vec<Tensor> = ours.iter().map(|p| p.detach().copy()).collect();
+        let mut adam = Adam::new(&ours, 1e-3);
+        let mut m: Vec<Tensor> = theirs.iter().map(Tensor::zeros_like).collect();
+        let mut v: Vec<Tensor> = theirs.iter().map(Tensor::zeros_like).collect();
+        let n: usize = ours.iter().map(Tensor::numel).sum();
+        for t in 1..=30 {
+            // Gradients over many magnitudes, some exactly zero.
+            let flat: Vec<f32> = (0..n)
+                .map(|_| {
+                    if rng.gen_bool(0.1) {
+                        0.0
+                    } else {
+                        rng.gen_range(-1.0f32..1.0) * 10f32.powi(rng.gen_range(-6..3))
+                    }
+                })
+                .collect();
+            let mut off = 0;
+            let grads: Vec<Tensor> = theirs
+                .iter()
+                .map(|p| {
+                    let g = Tensor::of_slice(&flat[off..off + p.numel()]).view(p.size().as_slice());
+                    off += p.numel();
+                    g
+                })
+                .collect();
+            adam.step(&mut ours, &flat);
+            tensor_adam_step(&mut theirs, &grads, &mut m, &mut v, 1e-3, t);
+            for (a, b) in ours.iter().zip(&theirs) {
+                let (a, b) = (tensor_to_vec(a), tensor_to_vec(b));
+                assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "step {t}: parameters differ");
+            }
+        }
+        let moments: Vec<Vec<f32>> = m.iter().chain(&v).map(tensor_to_vec).collect();
+        assert_eq!(adam.to_vecs(), moments);
+        // Restored moments continue identically.
+        let mut again = Adam::new(&ours, 1e-3);
+        again.load_vecs(&adam.to_vecs(), adam.t).unwrap();
+        let mut copy: Vec<Tensor> = ours.iter().map(|p| p.detach().copy()).collect();
+        let g = vec![0.25f32; n];
+        adam.step(&mut ours, &g);
+        again.step(&mut copy, &g);
+        assert_eq!(
+            ours.iter().map(tensor_to_vec).collect::<Vec<_>>(),
+            copy.iter().map(tensor_to_vec).collect::<Vec<_>>()
+        );
+        assert!(again.load_vecs(&adam.to_vecs()[1..], 3).unwrap_err().contains("expected 12 optimiser moments"));
     }
 }

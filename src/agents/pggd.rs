@@ -15,7 +15,7 @@
 
 use super::ddpg::UpdateStats;
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, take_grads, Adam, Net};
+use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use rand::Rng;
@@ -171,10 +171,7 @@ impl Pggd {
     /// # Panics
     /// If `gradient` does not have that layout.
     pub fn apply_gradient(&mut self, gradient: &[f32]) {
-        let mut off = 0;
-        let g = take_grads(&self.net.params, gradient, &mut off);
-        assert_eq!(off, gradient.len(), "a gradient of another layout");
-        self.opt.step(&mut self.net.params, &g);
+        self.opt.step(&mut self.net.params, gradient);
     }
 
     /// A self-contained policy for rollouts (weights and normaliser frozen).
