@@ -13,6 +13,7 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
+use std::sync::{Mutex, PoisonError};
 
 /// What one environment reports from a step or reset.
 #[derive(Default, Clone)]
@@ -26,10 +27,13 @@ struct Report {
     contacts: Vec<i8>,
 }
 
-/// N environments of one task, stepped in Rust threads.
-#[pyclass(unsendable, module = "blockpuzzle._native")]
+/// N environments of one task, stepped in Rust threads. It may be made on
+/// one Python thread and used or closed on another: the environments sit
+/// behind a mutex (uncontended: every call that steps them holds the object
+/// exclusively and reaches them without locking).
+#[pyclass(module = "blockpuzzle._native")]
 pub struct VecEnv {
-    envs: Vec<BlockEnv>,
+    envs: Mutex<Vec<BlockEnv>>,
     /// Environments whose episode ended: the next step resets them.
     ended: Vec<bool>,
     reports: Vec<Report>,
@@ -59,7 +63,8 @@ impl VecEnv {
     /// Runs `f` on every environment in the thread pool with the GIL
     /// released; `out` is the `num_envs × obs_dim` observation buffer.
     fn par_each(&mut self, py: Python<'_>, out: &mut [f32], f: &PerEnv<'_>) -> PyResult<()> {
-        let (envs, reports, ended, pool) = (&mut self.envs, &mut self.reports, &mut self.ended, &self.pool);
+        let envs = self.envs.get_mut().unwrap_or_else(PoisonError::into_inner);
+        let (reports, ended, pool) = (&mut self.reports, &mut self.ended, &self.pool);
         let obs_dim = self.obs_dim;
         py.allow_threads(|| {
             pool.install(|| {
@@ -95,8 +100,9 @@ impl VecEnv {
         d.set_item("elapsed_steps", PyArray1::from_vec(py, count(|i| i.elapsed_steps)))?;
         let n = self.objects;
         let cells: Vec<i8> = self.reports.iter().flat_map(|r| r.contacts.iter().copied()).collect();
-        if cells.len() == self.envs.len() * n * n {
-            d.set_item("contact_matrix", PyArray1::from_vec(py, cells).reshape([self.envs.len(), n, n])?)?;
+        let num_envs = self.reports.len();
+        if cells.len() == num_envs * n * n {
+            d.set_item("contact_matrix", PyArray1::from_vec(py, cells).reshape([num_envs, n, n])?)?;
         }
         let present: Vec<bool> = infos.iter().map(Option::is_some).collect();
         for key in ["is_success", "is_failure", "challenge", "unstable", "level", "elapsed_steps", "contact_matrix"] {
@@ -149,7 +155,7 @@ impl VecEnv {
         Ok(Self {
             ended: vec![false; num_envs],
             reports: vec![Report::default(); num_envs],
-            envs,
+            envs: Mutex::new(envs),
             pool,
             obs_dim,
             objects,
@@ -166,7 +172,7 @@ impl VecEnv {
     /// Number of environments.
     #[getter]
     fn num_envs(&self) -> usize {
-        self.envs.len()
+        self.envs.lock().unwrap_or_else(PoisonError::into_inner).len()
     }
 
     /// Resets the environments whose `mask` entry is true (all when `mask`
@@ -187,7 +193,7 @@ impl VecEnv {
         distribution: Option<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         self.check_open()?;
-        let n = self.envs.len();
+        let n = self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).len();
         if seeds.len() != n || mask.as_ref().is_some_and(|m| m.len() != n) {
             return Err(PyValueError::new_err(format!("seeds and mask must have num_envs = {n} entries")));
         }
@@ -230,7 +236,7 @@ impl VecEnv {
         mut truncated: PyReadwriteArray1<'py, bool>,
     ) -> PyResult<Bound<'py, PyDict>> {
         self.check_open()?;
-        let (n, obs_dim) = (self.envs.len(), self.obs_dim);
+        let (n, obs_dim) = (self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).len(), self.obs_dim);
         let shape = actions.shape().to_vec();
         let act_dim = blockpuzzle::env::ACTION_DIM;
         if shape != [n, act_dim] {
@@ -282,7 +288,7 @@ impl VecEnv {
 
     /// Frees every environment; later calls raise RuntimeError.
     fn close(&mut self) {
-        self.envs.clear();
+        self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).clear();
         self.closed = true;
     }
 }

@@ -101,3 +101,34 @@ def test_copy_false_returns_the_preallocated_buffers():
     obs, _ = envs.reset(seed=0)
     obs2, *_ = envs.step(np.zeros((2, 4), np.float32))
     assert obs is obs2
+
+
+def test_a_vector_env_can_move_between_threads():
+    """Made on one thread, stepped on another (a data loader's worker, say), closed on a third."""
+    import threading
+
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=2)
+    out, errors = {}, []
+
+    def play():
+        try:
+            obs, _ = envs.reset(seed=3)
+            for t in range(5):
+                obs, *_ = envs.step(actions(2, t))
+            out["obs"] = obs
+        except Exception as e:  # noqa: BLE001 - reported below, on the test's thread
+            errors.append(e)
+
+    worker = threading.Thread(target=play)
+    worker.start()
+    worker.join()
+    assert not errors, errors
+    obs, _ = envs.reset(seed=3)
+    for t in range(5):
+        obs, *_ = envs.step(actions(2, t))
+    assert np.array_equal(out["obs"], obs)
+    closer = threading.Thread(target=envs.close)
+    closer.start()
+    closer.join()
+    with pytest.raises(RuntimeError, match="closed"):
+        envs.step(actions(2, 0))
