@@ -43,6 +43,13 @@ pub struct VecEnv {
     closed: bool,
 }
 
+/// The environments of a vector env that the caller holds exclusively, without
+/// locking. The mutex cannot be poisoned in practice (the only lock, in
+/// `num_envs`, is held to read a length), and would still hold them intact.
+fn unlocked(envs: &mut Mutex<Vec<BlockEnv>>) -> &mut Vec<BlockEnv> {
+    envs.get_mut().unwrap_or_else(PoisonError::into_inner)
+}
+
 fn contacts(env: &BlockEnv) -> Vec<i8> {
     let n = env.objects().len();
     let m = env.contact_matrix();
@@ -63,7 +70,7 @@ impl VecEnv {
     /// Runs `f` on every environment in the thread pool with the GIL
     /// released; `out` is the `num_envs × obs_dim` observation buffer.
     fn par_each(&mut self, py: Python<'_>, out: &mut [f32], f: &PerEnv<'_>) -> PyResult<()> {
-        let envs = self.envs.get_mut().unwrap_or_else(PoisonError::into_inner);
+        let envs = unlocked(&mut self.envs);
         let (reports, ended, pool) = (&mut self.reports, &mut self.ended, &self.pool);
         let obs_dim = self.obs_dim;
         py.allow_threads(|| {
@@ -193,7 +200,7 @@ impl VecEnv {
         distribution: Option<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         self.check_open()?;
-        let n = self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).len();
+        let n = unlocked(&mut self.envs).len();
         if seeds.len() != n || mask.as_ref().is_some_and(|m| m.len() != n) {
             return Err(PyValueError::new_err(format!("seeds and mask must have num_envs = {n} entries")));
         }
@@ -236,7 +243,7 @@ impl VecEnv {
         mut truncated: PyReadwriteArray1<'py, bool>,
     ) -> PyResult<Bound<'py, PyDict>> {
         self.check_open()?;
-        let (n, obs_dim) = (self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).len(), self.obs_dim);
+        let (n, obs_dim) = (unlocked(&mut self.envs).len(), self.obs_dim);
         let shape = actions.shape().to_vec();
         let act_dim = blockpuzzle::env::ACTION_DIM;
         if shape != [n, act_dim] {
@@ -288,7 +295,7 @@ impl VecEnv {
 
     /// Frees every environment; later calls raise RuntimeError.
     fn close(&mut self) {
-        self.envs.get_mut().unwrap_or_else(PoisonError::into_inner).clear();
+        unlocked(&mut self.envs).clear();
         self.closed = true;
     }
 }
