@@ -37,7 +37,8 @@ test: setup
 	$(MAKE) test-mujoco3
 
 # The opt-in second engine, MuJoCo 3.11.0 from its PyPI wheel (engines/mujoco-3.11.0, sha256-pinned):
-# `cargo build --release --features mujoco3` (its own target folder keeps the two builds apart).
+# `cargo build --release --features mujoco3 --target-dir target/mujoco3` (its own target folder
+# keeps the two builds apart).
 setup-mujoco3: setup
 	bash scripts/setup_mujoco3.sh
 M3 = --release --no-default-features --features mujoco3,render --target-dir target/mujoco3

@@ -27,7 +27,7 @@ use std::time::Instant;
 /// What to measure.
 #[derive(Debug, Clone)]
 pub struct DdpgBenchConfig {
-    /// Environment id.
+    /// Environment id or task file (.toml).
     pub env: String,
     /// Workers stepping environments in parallel during collection.
     pub workers: usize,

@@ -31,7 +31,7 @@ enum Command {
     Bench(BenchArgs),
     /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
     Render(RenderArgs),
-    /// Train an agent (DDPG with the paper's curriculum).
+    /// Train an agent with the task's curriculum: DDPG, PGGD, or PGGD with AggreVaTeD (--expert).
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
@@ -59,7 +59,7 @@ enum Command {
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
-        /// Environment id.
+        /// Environment id or task file (.toml).
         #[arg(long)]
         env: String,
     },
@@ -167,7 +167,8 @@ struct TaskCheckArgs {
 
 #[derive(Debug, clap::Args)]
 struct TrainArgs {
-    /// Run directory (config.json, progress.csv, checkpoints); default runs/ENV-ALGO-sSEED.
+    /// Run directory (config.json, progress.csv, checkpoints); default runs/TASK-METHOD-sSEED
+    /// (e.g. runs/BlocksChoose-v0-pggd-aggrevated-s0; a task file's stem for TASK).
     #[arg(long)]
     run_dir: Option<PathBuf>,
     /// Continue the run in --run-dir from its last checkpoint.
@@ -212,10 +213,10 @@ struct TableArgs {
     /// distribution (e.g. BlocksChooseShuffled-v0, to test generalisation).
     #[arg(long, default_value = crate::table::ENV)]
     env: String,
-    /// The 2-block DDPG expert (run directory or policy file); evaluated with grey blocks removed from its view.
+    /// The 2-block DDPG expert (run directory, policy file or zoo name); evaluated with grey blocks removed from its view.
     #[arg(long)]
     expert: Option<PathBuf>,
-    /// DDPG trained on BlocksChoose-v0.
+    /// DDPG trained on BlocksChoose-v0 (run directory, policy file or zoo name; so are the rows below).
     #[arg(long)]
     ddpg: Option<PathBuf>,
     /// PGGD trained with AggreVaTeD on BlocksChoose-v0.
@@ -246,13 +247,13 @@ struct TableArgs {
 
 #[derive(Debug, clap::Args)]
 struct EvalArgs {
-    /// A policy file or a run directory (uses best_policy.json, else policy.json).
+    /// A policy file, a run directory (uses best_policy.json, else policy.json) or a zoo name.
     #[arg(long)]
     checkpoint: PathBuf,
-    /// Environment id (default: the one the policy was trained on).
+    /// Environment id or task file (default: the one the policy was trained on).
     #[arg(long)]
     env: Option<String>,
-    /// Use the challenge distribution (BlocksChoose-v0).
+    /// Use the task's challenge distribution (BlocksChoose-v0 and the tasks that define one).
     #[arg(long)]
     challenge: bool,
     /// Curriculum level (default: the maximum).
@@ -264,7 +265,8 @@ struct EvalArgs {
     /// Seed of the first episode (episode k uses seed + k).
     #[arg(long, default_value_t = crate::evaluate::TEST_SEED)]
     seed: u64,
-    /// Where to write the JSON result (default: next to the policy).
+    /// Where to write the JSON result (default: next to the policy, i.e. its folder or run
+    /// directory; the current folder for a zoo name).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
@@ -274,10 +276,10 @@ struct EvalArgs {
 
 #[derive(Debug, clap::Args)]
 struct RolloutArgs {
-    /// Environment id (see `blockpuzzle envs`).
+    /// Environment id (see `blockpuzzle envs`) or task file (.toml).
     #[arg(long)]
     env: String,
-    /// Which policy acts: `random`, `scripted`, or a trained policy (file or run directory).
+    /// Which policy acts: `random`, `scripted`, or a trained policy (file, run directory or zoo name).
     #[arg(long, default_value = "scripted")]
     policy: String,
     /// Number of episodes.
@@ -374,7 +376,7 @@ struct RenderArgs {
 
 #[derive(Debug, clap::Args)]
 struct BenchArgs {
-    /// Environment id.
+    /// Environment id or task file (.toml).
     #[arg(long, default_value = "BlocksTouch-v0")]
     env: String,
     /// Steps per thread.
@@ -582,7 +584,16 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     }
     writer.finish()?;
     if let (Some(out), Some(kind)) = (&a.render, &render_kind) {
-        let (frames, fps) = crate::render::replay::render_dump(&a.out, 0, &a.view.view(), out, kind)?;
+        // The dump is whole by now: a failed rendering keeps it and says so.
+        let (frames, fps) =
+            crate::render::replay::render_dump(&a.out, 0, &a.view.view(), out, kind).with_context(|| {
+                format!(
+                    "the episodes are saved in {}, but --render failed; render them with \
+                     `blockpuzzle render --traj {}` once rendering works",
+                    a.out.display(),
+                    a.out.display()
+                )
+            })?;
         println!("rendered episode 0: {frames} frames ({fps:.1} frames/s) -> {}", out.display());
     }
     let n = a.episodes as f64;

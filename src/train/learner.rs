@@ -28,7 +28,7 @@ pub enum PgWeight {
 /// AggreVaTeD settings (PGGD only).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct AggrevatedConfig {
-    /// AggreVaTeD expert: a DDPG run directory (or policy file) trained on the
+    /// AggreVaTeD expert: a DDPG run directory, policy file or zoo name, trained on the
     /// grey-less layout; it sees the observation with grey blocks removed.
     #[arg(long)]
     pub expert: Option<PathBuf>,

@@ -56,7 +56,7 @@ pub struct TrainConfig {
     #[arg(long, value_enum, default_value = "ddpg")]
     #[serde(default)]
     pub algo: Algo,
-    /// Environment id.
+    /// Environment id or task file (.toml).
     #[arg(long)]
     pub env: String,
     /// Parallel workers (the paper's MPI workers), one environment each.
