@@ -9,6 +9,11 @@ use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use crate::rollout::{run_episode, DumpWriter};
 
+mod runs;
+mod zoo;
+use runs::{PlotArgs, TrainArgs};
+use zoo::ZooCommand;
+
 /// BlockPuzzle: coloured-block puzzles for the Fetch robot in MuJoCo.
 #[derive(Debug, Parser)]
 #[command(name = "blockpuzzle", version, about)]
@@ -94,60 +99,6 @@ enum TaskCommand {
     Check(TaskCheckArgs),
 }
 
-#[derive(Debug, Subcommand)]
-enum ZooCommand {
-    /// The entries: name, task, algorithm, epoch, environment steps, evaluations.
-    List {
-        /// The zoo folder (default: $BLOCKPUZZLE_ZOO, else zoo/ of this repository).
-        #[arg(long)]
-        zoo: Option<PathBuf>,
-    },
-    /// Load every entry (or the named ones) and check checksums, layouts and values.
-    Check {
-        /// Entries to check (default: all).
-        names: Vec<String>,
-        /// The zoo folder.
-        #[arg(long)]
-        zoo: Option<PathBuf>,
-    },
-    /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
-    Export(ZooExportArgs),
-}
-
-#[derive(Debug, clap::Args)]
-struct ZooExportArgs {
-    /// The policy: a policy file, a snapshot, or a run directory.
-    #[arg(long)]
-    from: PathBuf,
-    /// The entry's name (file stem), e.g. BlocksChoose-v0-ddpg.
-    #[arg(long)]
-    name: String,
-    /// One line on what it is.
-    #[arg(long)]
-    description: String,
-    /// The command that trained it (recorded as given).
-    #[arg(long)]
-    trained_with: String,
-    /// Evaluation results (JSON written by `blockpuzzle eval`) to record with it.
-    #[arg(long = "eval")]
-    evals: Vec<PathBuf>,
-    /// Evaluate it first on this many episodes (seeds 1,000,000 on) at the
-    /// maximum level and, where the task has one, in the challenge distribution,
-    /// and record the results (0: no evaluation).
-    #[arg(long, default_value_t = 0)]
-    evaluate: usize,
-    /// The tasks to evaluate on, repeatable (default: the one it was trained on;
-    /// e.g. BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
-    #[arg(long = "evaluate-env")]
-    evaluate_envs: Vec<String>,
-    /// Keep DDPG's critic too (for AggreVaTeD's --pg-weight expert-advantage).
-    #[arg(long)]
-    critic: bool,
-    /// The zoo folder.
-    #[arg(long)]
-    zoo: Option<PathBuf>,
-}
-
 #[derive(Debug, clap::Args)]
 struct TaskCheckArgs {
     /// Task file (.toml) or registered id.
@@ -163,48 +114,6 @@ struct TaskCheckArgs {
     render: Option<PathBuf>,
     #[command(flatten)]
     view: ViewArgs,
-}
-
-#[derive(Debug, clap::Args)]
-struct TrainArgs {
-    /// Run directory (config.json, progress.csv, checkpoints); default runs/TASK-METHOD-sSEED
-    /// (e.g. runs/BlocksChoose-v0-pggd-aggrevated-s0; a task file's stem for TASK).
-    #[arg(long)]
-    run_dir: Option<PathBuf>,
-    /// Continue the run in --run-dir from its last checkpoint.
-    #[arg(long)]
-    resume: bool,
-    /// Start --run-dir (new) from this run directory's latest checkpoint, with
-    /// the settings given here; only --level-replay, --challenge-share,
-    /// --success-threshold, --batches, --random-eps, --noise-eps,
-    /// --noise-correlation, --action-l2 and --preact-l2 may differ from the
-    /// parent's (and --epochs, the total to reach). The parent stays as it is.
-    #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
-    branch_from: Option<PathBuf>,
-    #[command(flatten)]
-    config: crate::train::TrainConfig,
-}
-
-#[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay"])))]
-struct PlotArgs {
-    /// Run directory whose success.png to redraw.
-    #[arg(long)]
-    run_dir: Option<PathBuf>,
-    /// Run directories whose finals success to draw in one figure (needs --out);
-    /// a CSV file instead of a directory is another trainer's log with the
-    /// columns epoch, time/env_steps and finals/success (examples/python/sb3_td3.py).
-    #[arg(long, num_args = 1.., requires = "out")]
-    overlay: Vec<PathBuf>,
-    /// Legend labels of the --overlay curves, in order (default: from each run's config, or the file name).
-    #[arg(long, num_args = 1..)]
-    labels: Vec<String>,
-    /// Output PNG of --overlay.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Title of the --overlay figure.
-    #[arg(long, default_value = "Finals success (maximum level)")]
-    title: String,
 }
 
 #[derive(Debug, clap::Args)]
@@ -447,21 +356,14 @@ pub fn main() -> Result<()> {
             Ok(())
         }
         Command::Rollout(a) => rollout(a),
-        Command::Train(a) => train(a),
+        Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval(a),
         Command::Render(a) => render(a),
-        Command::Zoo(c) => zoo(c),
-        Command::Report { run_dirs, target } => {
-            for dir in &run_dirs {
-                let (config, rows) = read_run(dir)?;
-                let title = format!("{} ({} workers, {})", config.title(), config.workers, dir.display());
-                print!("{}", crate::train::report::text(&title, &rows, run_max_level(&config)?, target));
-            }
-            Ok(())
-        }
+        Command::Zoo(c) => zoo::run(c),
+        Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
-        Command::Plot(a) => plot(a),
+        Command::Plot(a) => runs::plot(a),
         Command::Align { reference, plot, bench_steps: Some(steps), threads } => {
             if plot.is_some() {
                 bail!("--plot draws the replay; leave it out with --bench-steps");
@@ -659,156 +561,6 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
     Ok(())
 }
 
-fn train(a: TrainArgs) -> Result<()> {
-    if !crate::train::comm::Comm::launched_by_mpirun() {
-        return train_in(&crate::train::comm::Comm::local(), a);
-    }
-    #[cfg(feature = "mpi")]
-    {
-        // Only this thread talks to MPI (the workers are plain threads).
-        let Some((universe, _)) = mpi::initialize_with_threading(mpi::Threading::Funneled) else {
-            bail!("MPI was initialised twice");
-        };
-        let comm = crate::train::comm::Comm::mpi(universe.world());
-        if let Err(e) = train_in(&comm, a) {
-            // Other ranks may wait in a collective: stop the whole job.
-            eprintln!("error (rank {} of {}): {e:#}", comm.rank(), comm.size());
-            comm.abort(1);
-        }
-        Ok(())
-    }
-    #[cfg(not(feature = "mpi"))]
-    bail!("started by mpirun, but this blockpuzzle was built without the `mpi` feature; rebuild with --features mpi")
-}
-
-fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
-    let c = &a.config;
-    let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
-    let bar =
-        if comm.is_root() { indicatif::ProgressBar::new(c.epochs as u64) } else { indicatif::ProgressBar::hidden() };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    let mut last: Option<crate::train::EpochRow> = None;
-    let mut on_epoch = |row: &crate::train::EpochRow, cfg: &crate::train::TrainConfig| {
-        let (steps, updates, secs) = match &last {
-            Some(p) => (row.env_steps - p.env_steps, row.updates - p.updates, row.wall_seconds - p.wall_seconds),
-            None => (row.env_steps, row.updates, row.wall_seconds),
-        };
-        bar.set_position(row.epoch as u64 + 1);
-        let beta = if cfg.aggrevated.expert.is_some() { format!(" beta {:.2}", row.beta) } else { String::new() };
-        bar.set_message(format!(
-            "level {}{beta} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
-            row.level,
-            row.train_success,
-            row.test_success,
-            row.finals_success,
-            steps as f64 / secs.max(1e-9),
-            updates as f64 / secs.max(1e-9)
-        ));
-        last = Some(row.clone());
-    };
-    if let Some(parent) = &a.branch_from {
-        branch_run(comm, parent, &run_dir, c)?;
-    }
-    let resume = a.resume || a.branch_from.is_some();
-    let rows = crate::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
-    bar.finish();
-    if let Some(r) = rows.last() {
-        println!(
-            "{}: {} epochs, level {}, finals success {:.3}, {} env steps, {:.0} s; run directory {}",
-            c.env,
-            r.epoch + 1,
-            r.level,
-            r.finals_success,
-            r.env_steps,
-            r.wall_seconds,
-            run_dir.display()
-        );
-    }
-    Ok(())
-}
-
-/// `train --branch-from`: rank 0 makes the branch, every rank learns whether it worked.
-fn branch_run(
-    comm: &crate::train::comm::Comm,
-    parent: &Path,
-    child: &Path,
-    c: &crate::train::TrainConfig,
-) -> Result<()> {
-    // Empty: made; else the error's text.
-    let mut status = Vec::new();
-    if comm.is_root() {
-        match crate::train::branch(parent, child, c) {
-            Ok(b) => eprintln!(
-                "{}: branched from {} at epoch {} ({} env steps){}",
-                child.display(),
-                parent.display(),
-                b.epoch,
-                b.env_steps,
-                if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
-            ),
-            Err(e) => status = format!("{e:#}").into_bytes(),
-        }
-    }
-    comm.broadcast_bytes(&mut status);
-    if !status.is_empty() {
-        bail!("{}", String::from_utf8_lossy(&status));
-    }
-    Ok(())
-}
-
-/// A run directory's config and progress rows.
-/// The maximum curriculum level of a run's task (its recorded copy, else its id).
-fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
-    Ok(match &config.task {
-        Some(source) => registry::recorded(source)?.max_level(),
-        None => registry::task(&config.env)?.max_level(),
-    })
-}
-
-fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
-    let run = crate::train::RunDir { dir: dir.to_owned() };
-    Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
-}
-
-fn plot(a: PlotArgs) -> Result<()> {
-    if let Some(dir) = a.run_dir {
-        let (config, rows) = read_run(&dir)?;
-        let max_level = run_max_level(&config)?;
-        let run = crate::train::RunDir { dir };
-        crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
-        println!("wrote {}", run.plot().display());
-    }
-    if let Some(out) = a.out {
-        if !a.labels.is_empty() && a.labels.len() != a.overlay.len() {
-            bail!(
-                "--labels gives {} labels for {} --overlay runs: give one per run, or none",
-                a.labels.len(),
-                a.overlay.len()
-            );
-        }
-        let mut runs = Vec::new();
-        for (i, path) in a.overlay.iter().enumerate() {
-            let (label, points) = if path.is_file() {
-                let name =
-                    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-                (name, crate::train::plot::read_finals(path)?)
-            } else {
-                let (config, rows) = read_run(path)?;
-                let workers =
-                    if config.workers == 1 { "1 worker".into() } else { format!("{} workers", config.workers) };
-                (format!("{} ({workers})", config.title()), rows.iter().map(Into::into).collect())
-            };
-            runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
-        }
-        crate::train::plot::overlay(&out, &a.title, &runs)?;
-        println!("wrote {}", out.display());
-    }
-    Ok(())
-}
-
 fn render(a: RenderArgs) -> Result<()> {
     let kind = crate::render::replay::Output::for_path(&a.out, a.view.filmstrip, a.view.fps)?;
     let view = a.view.view();
@@ -855,135 +607,6 @@ fn policy_task(env: Option<&str>, saved: &crate::train::SavedPolicy) -> Result<c
         (Some(env), _) => registry::task(env)?,
         (None, Some(source)) => registry::recorded(source)?,
         (None, None) => registry::task(&saved.env_id)?,
-    })
-}
-
-fn zoo(c: ZooCommand) -> Result<()> {
-    let folder = |z: Option<PathBuf>| z.unwrap_or_else(crate::zoo::dir);
-    match c {
-        ZooCommand::List { zoo } => {
-            let zoo = folder(zoo);
-            for name in crate::zoo::names(&zoo) {
-                let meta = crate::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
-                let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
-                println!("{name:<36} {:<24} {} epoch {:>3}, {steps} env steps", meta.task.id, meta.algo, meta.epoch);
-                println!("    {}", meta.description);
-                for e in &meta.evaluations {
-                    println!(
-                        "    {} {}{}: {:.3} ({:.3}-{:.3}), {} episodes from seed {}",
-                        e.env,
-                        e.distribution,
-                        if e.grey_blind { ", grey removed" } else { "" },
-                        e.success_rate,
-                        e.ci95.0,
-                        e.ci95.1,
-                        e.episodes,
-                        e.seed
-                    );
-                    if let Some(o) = &e.outcomes {
-                        println!("        the others: {}", o.summary());
-                    }
-                }
-            }
-            Ok(())
-        }
-        ZooCommand::Check { names, zoo } => {
-            let zoo = folder(zoo);
-            let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
-            if names.is_empty() {
-                bail!("no zoo entries in {}", zoo.display());
-            }
-            for name in &names {
-                let (meta, _) = crate::zoo::load(&crate::zoo::find(&zoo, name)?)?;
-                println!("{name}: ok ({} {}, epoch {})", meta.task.id, meta.algo, meta.epoch);
-            }
-            Ok(())
-        }
-        ZooCommand::Export(a) => {
-            if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
-                bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
-            }
-            let saved = crate::train::load_policy(&a.from)?;
-            let mut evaluations = Vec::new();
-            for path in &a.evals {
-                evaluations.push(read_eval(path)?);
-            }
-            let envs: Vec<Option<&str>> = if a.evaluate_envs.is_empty() {
-                vec![None]
-            } else {
-                a.evaluate_envs.iter().map(|e| Some(e.as_str())).collect()
-            };
-            for env in envs.into_iter().filter(|_| a.evaluate > 0) {
-                let task = policy_task(env, &saved)?;
-                let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-                let has_challenge = task.distribution("challenge").is_some();
-                for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
-                    let spec = crate::evaluate::EvalSpec {
-                        task: &task,
-                        challenge,
-                        level: None,
-                        episodes: a.evaluate,
-                        seed: crate::evaluate::TEST_SEED,
-                        threads,
-                    };
-                    let r = crate::zoo::ZooEvaluation::from(crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?);
-                    eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
-                    evaluations.push(r);
-                }
-            }
-            let info = crate::zoo::ExportInfo {
-                name: a.name.clone(),
-                description: a.description,
-                trained_with: a.trained_with,
-                exported_from: a.from.display().to_string(),
-                env_steps: saved.env_steps.or_else(|| env_steps_of(&a.from, saved.epoch)),
-                evaluations,
-                keep_critic: a.critic,
-            };
-            let out = crate::zoo::export(&folder(a.zoo), &saved, &info)?;
-            let size = std::fs::metadata(&out).map_or(0, |m| m.len());
-            println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
-            Ok(())
-        }
-    }
-}
-
-/// An evaluation written by `blockpuzzle eval`, as a zoo record.
-fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
-    #[derive(serde::Deserialize)]
-    struct Written {
-        env: String,
-        challenge: bool,
-        episodes: usize,
-        seed: u64,
-        success_rate: f64,
-        ci95: (f64, f64),
-        grey_blind: bool,
-        #[serde(default)]
-        outcomes: Option<crate::outcome::Outcomes>,
-    }
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read evaluation {}", path.display()))?;
-    let w: Written = serde_json::from_str(&text)
-        .with_context(|| format!("{} is not an evaluation written by `blockpuzzle eval`", path.display()))?;
-    Ok(crate::zoo::ZooEvaluation {
-        env: w.env,
-        distribution: if w.challenge { "challenge" } else { "normal" }.into(),
-        grey_blind: w.grey_blind,
-        episodes: w.episodes,
-        seed: w.seed,
-        success_rate: w.success_rate,
-        ci95: w.ci95,
-        outcomes: w.outcomes,
-    })
-}
-
-/// Environment steps behind a policy of `epoch` epochs: from the
-/// `progress.csv` of its run (the policy's folder, or the run of a snapshot).
-fn env_steps_of(policy: &Path, epoch: usize) -> Option<u64> {
-    let dir = if policy.is_dir() { policy.to_path_buf() } else { policy.parent()?.to_path_buf() };
-    [dir.clone(), dir.parent()?.to_path_buf()].into_iter().find_map(|d| {
-        let rows = crate::train::read_progress(&d.join("progress.csv")).ok()?;
-        rows.iter().find(|r| r.epoch + 1 == epoch).map(|r| r.env_steps)
     })
 }
 

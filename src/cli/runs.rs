@@ -1,0 +1,211 @@
+//! Runs: `blockpuzzle train` (one process or an MPI rank; resume and branch),
+//! and `plot` and `report`, which read a run directory's files.
+
+use anyhow::{bail, Result};
+use std::path::{Path, PathBuf};
+
+use crate::env::registry;
+
+#[derive(Debug, clap::Args)]
+pub(super) struct TrainArgs {
+    /// Run directory (config.json, progress.csv, checkpoints); default runs/TASK-METHOD-sSEED
+    /// (e.g. runs/BlocksChoose-v0-pggd-aggrevated-s0; a task file's stem for TASK).
+    #[arg(long)]
+    run_dir: Option<PathBuf>,
+    /// Continue the run in --run-dir from its last checkpoint.
+    #[arg(long)]
+    resume: bool,
+    /// Start --run-dir (new) from this run directory's latest checkpoint, with
+    /// the settings given here; only --level-replay, --challenge-share,
+    /// --success-threshold, --batches, --random-eps, --noise-eps,
+    /// --noise-correlation, --action-l2 and --preact-l2 may differ from the
+    /// parent's (and --epochs, the total to reach). The parent stays as it is.
+    #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
+    branch_from: Option<PathBuf>,
+    #[command(flatten)]
+    config: crate::train::TrainConfig,
+}
+
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay"])))]
+pub(super) struct PlotArgs {
+    /// Run directory whose success.png to redraw.
+    #[arg(long)]
+    run_dir: Option<PathBuf>,
+    /// Run directories whose finals success to draw in one figure (needs --out);
+    /// a CSV file instead of a directory is another trainer's log with the
+    /// columns epoch, time/env_steps and finals/success (examples/python/sb3_td3.py).
+    #[arg(long, num_args = 1.., requires = "out")]
+    overlay: Vec<PathBuf>,
+    /// Legend labels of the --overlay curves, in order (default: from each run's config, or the file name).
+    #[arg(long, num_args = 1..)]
+    labels: Vec<String>,
+    /// Output PNG of --overlay.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Title of the --overlay figure.
+    #[arg(long, default_value = "Finals success (maximum level)")]
+    title: String,
+}
+
+/// `blockpuzzle train`: one process, or one rank of an MPI job.
+pub(super) fn train(a: TrainArgs) -> Result<()> {
+    if !crate::train::comm::Comm::launched_by_mpirun() {
+        return train_in(&crate::train::comm::Comm::local(), a);
+    }
+    #[cfg(feature = "mpi")]
+    {
+        // Only this thread talks to MPI (the workers are plain threads).
+        let Some((universe, _)) = mpi::initialize_with_threading(mpi::Threading::Funneled) else {
+            bail!("MPI was initialised twice");
+        };
+        let comm = crate::train::comm::Comm::mpi(universe.world());
+        if let Err(e) = train_in(&comm, a) {
+            // Other ranks may wait in a collective: stop the whole job.
+            eprintln!("error (rank {} of {}): {e:#}", comm.rank(), comm.size());
+            comm.abort(1);
+        }
+        Ok(())
+    }
+    #[cfg(not(feature = "mpi"))]
+    bail!("started by mpirun, but this blockpuzzle was built without the `mpi` feature; rebuild with --features mpi")
+}
+
+fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
+    let c = &a.config;
+    let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
+    let bar =
+        if comm.is_root() { indicatif::ProgressBar::new(c.epochs as u64) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut last: Option<crate::train::EpochRow> = None;
+    let mut on_epoch = |row: &crate::train::EpochRow, cfg: &crate::train::TrainConfig| {
+        let (steps, updates, secs) = match &last {
+            Some(p) => (row.env_steps - p.env_steps, row.updates - p.updates, row.wall_seconds - p.wall_seconds),
+            None => (row.env_steps, row.updates, row.wall_seconds),
+        };
+        bar.set_position(row.epoch as u64 + 1);
+        let beta = if cfg.aggrevated.expert.is_some() { format!(" beta {:.2}", row.beta) } else { String::new() };
+        bar.set_message(format!(
+            "level {}{beta} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
+            row.level,
+            row.train_success,
+            row.test_success,
+            row.finals_success,
+            steps as f64 / secs.max(1e-9),
+            updates as f64 / secs.max(1e-9)
+        ));
+        last = Some(row.clone());
+    };
+    if let Some(parent) = &a.branch_from {
+        branch_run(comm, parent, &run_dir, c)?;
+    }
+    let resume = a.resume || a.branch_from.is_some();
+    let rows = crate::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
+    bar.finish();
+    if let Some(r) = rows.last() {
+        println!(
+            "{}: {} epochs, level {}, finals success {:.3}, {} env steps, {:.0} s; run directory {}",
+            c.env,
+            r.epoch + 1,
+            r.level,
+            r.finals_success,
+            r.env_steps,
+            r.wall_seconds,
+            run_dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// `train --branch-from`: rank 0 makes the branch, every rank learns whether it worked.
+fn branch_run(
+    comm: &crate::train::comm::Comm,
+    parent: &Path,
+    child: &Path,
+    c: &crate::train::TrainConfig,
+) -> Result<()> {
+    // Empty: made; else the error's text.
+    let mut status = Vec::new();
+    if comm.is_root() {
+        match crate::train::branch(parent, child, c) {
+            Ok(b) => eprintln!(
+                "{}: branched from {} at epoch {} ({} env steps){}",
+                child.display(),
+                parent.display(),
+                b.epoch,
+                b.env_steps,
+                if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
+            ),
+            Err(e) => status = format!("{e:#}").into_bytes(),
+        }
+    }
+    comm.broadcast_bytes(&mut status);
+    if !status.is_empty() {
+        bail!("{}", String::from_utf8_lossy(&status));
+    }
+    Ok(())
+}
+
+/// A run directory's config and progress rows.
+/// The maximum curriculum level of a run's task (its recorded copy, else its id).
+fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
+    Ok(match &config.task {
+        Some(source) => registry::recorded(source)?.max_level(),
+        None => registry::task(&config.env)?.max_level(),
+    })
+}
+
+fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
+    let run = crate::train::RunDir { dir: dir.to_owned() };
+    Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
+}
+
+/// `blockpuzzle plot`: a run's success.png, or an overlay of several runs.
+pub(super) fn plot(a: PlotArgs) -> Result<()> {
+    if let Some(dir) = a.run_dir {
+        let (config, rows) = read_run(&dir)?;
+        let max_level = run_max_level(&config)?;
+        let run = crate::train::RunDir { dir };
+        crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
+        println!("wrote {}", run.plot().display());
+    }
+    if let Some(out) = a.out {
+        if !a.labels.is_empty() && a.labels.len() != a.overlay.len() {
+            bail!(
+                "--labels gives {} labels for {} --overlay runs: give one per run, or none",
+                a.labels.len(),
+                a.overlay.len()
+            );
+        }
+        let mut runs = Vec::new();
+        for (i, path) in a.overlay.iter().enumerate() {
+            let (label, points) = if path.is_file() {
+                let name =
+                    path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+                (name, crate::train::plot::read_finals(path)?)
+            } else {
+                let (config, rows) = read_run(path)?;
+                let workers =
+                    if config.workers == 1 { "1 worker".into() } else { format!("{} workers", config.workers) };
+                (format!("{} ({workers})", config.title()), rows.iter().map(Into::into).collect())
+            };
+            runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
+        }
+        crate::train::plot::overlay(&out, &a.title, &runs)?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+/// `blockpuzzle report`: time to a result, from each run's progress.csv.
+pub(super) fn report(run_dirs: &[PathBuf], target: f64) -> Result<()> {
+    for dir in run_dirs {
+        let (config, rows) = read_run(dir)?;
+        let title = format!("{} ({} workers, {})", config.title(), config.workers, dir.display());
+        print!("{}", crate::train::report::text(&title, &rows, run_max_level(&config)?, target));
+    }
+    Ok(())
+}
