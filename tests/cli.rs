@@ -209,6 +209,15 @@ fn ddpg_only_bench_options_need_ddpg() {
 }
 
 #[test]
+fn bench_without_steps_or_threads_is_refused() {
+    for args in [["--steps", "0"], ["--threads", "0"]] {
+        let o = bp(&["bench", args[0], args[1]]);
+        assert!(!o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains("--steps and --threads must be at least 1"), "{}", text(&o));
+    }
+}
+
+#[test]
 fn table_runs_end_to_end_and_reports_missing_rows() {
     let dir = tempfile::tempdir().unwrap();
     let (expert, pggd) = (dir.path().join("expert"), dir.path().join("pggd"));

@@ -284,6 +284,7 @@ fn bad_settings_are_refused_before_anything_is_written() {
         ("--pg-lr", Box::new(|c| c.pggd.lr = 0.0)),
         ("--t0", Box::new(|c| c.aggrevated.t0 = f64::NAN)),
         ("--challenge-share", Box::new(|c| c.challenge_share = 0.5)),
+        ("--epochs", Box::new(|c| c.epochs = 0)),
     ];
     for (flag, set) in bad {
         let mut c = tiny("BlocksTouch-v0", 1);

@@ -59,6 +59,9 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
         bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
     }
+    if config.epochs == 0 {
+        bail!("--epochs must be at least 1 (the number of epochs the run reaches, resumes included)");
+    }
     config.ddpg.validate().map_err(anyhow::Error::msg)?;
     if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
