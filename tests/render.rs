@@ -116,6 +116,11 @@ mod cli {
         assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
         let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
         assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
+        let o = bp(&["render", "--traj", &traj, "--out", &path("x.gif"), "--fps", "0"], false);
+        assert!(!o.status.success() && text(&o).contains("--fps must be at least 1"), "{}", text(&o));
+        let o = bp(&["render", "--traj", &traj, "--out", &path("x.mp4")], false);
+        assert!(!o.status.success() && text(&o).contains(".mp4 is not written here"), "{}", text(&o));
+        assert!(!std::path::Path::new(&path("x.mp4")).exists(), "nothing written");
 
         // A zoo policy plays one seeded episode and renders it, as its dump would.
         let policy_strip = path("policy.png");

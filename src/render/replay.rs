@@ -68,16 +68,24 @@ impl Output {
     /// The output kind for `out` and the `--filmstrip` option.
     ///
     /// # Errors
-    /// A filmstrip not written to `.png`, a `.png` without `--filmstrip`.
+    /// A filmstrip not written to `.png`, a `.png` without `--filmstrip`, a
+    /// GIF at 0 frames per second, or a file name of another kind (an
+    /// extension other than `.gif` or `.png` on a path that is not a folder).
     pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self> {
         let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
         match (ext.as_deref(), filmstrip) {
             (Some("png"), Some(n)) if n > 0 => Ok(Self::Filmstrip(n)),
             (_, Some(_)) => bail!("--filmstrip N writes a PNG: give --out FILE.png with N ≥ 1"),
+            (Some("gif"), None) if fps == 0 => bail!("--fps must be at least 1 (frames per second of the GIF)"),
             (Some("gif"), None) => Ok(Self::Gif { fps }),
             (Some("png"), None) => {
                 bail!("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", out.display())
             }
+            (Some(other), None) if !out.is_dir() => bail!(
+                "--out {}: .{other} is not written here; give FILE.gif (animation), FILE.png with --filmstrip N, \
+                 or a folder without an extension (one PNG per frame)",
+                out.display()
+            ),
             _ => Ok(Self::Folder),
         }
     }
