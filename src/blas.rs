@@ -84,3 +84,20 @@ pub fn ensure_fast_kernels() {
     let names: Vec<String> = missing.iter().map(|(k, v)| format!("{k}={v}")).collect();
     eprintln!("note: restarting with {} failed ({err}); training may be slower", names.join(" "));
 }
+
+/// The number of libtorch threads for `--torch-threads n` (0: one per core).
+///
+/// # Errors
+/// More threads than this machine has cores: libtorch's OpenMP pool would
+/// oversubscribe the CPU (and a very large count makes it hang while the
+/// threads are created), so it is refused naming the core count.
+pub fn torch_threads(n: usize) -> Result<i32, String> {
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    match n {
+        0 => Ok(cores as i32),
+        n if n <= cores => Ok(n as i32),
+        n => Err(format!(
+            "--torch-threads {n} is more than this machine's {cores} cores; give at most {cores} (0: one per core)"
+        )),
+    }
+}

@@ -285,6 +285,7 @@ fn bad_settings_are_refused_before_anything_is_written() {
         ("--t0", Box::new(|c| c.aggrevated.t0 = f64::NAN)),
         ("--challenge-share", Box::new(|c| c.challenge_share = 0.5)),
         ("--epochs", Box::new(|c| c.epochs = 0)),
+        ("--torch-threads", Box::new(|c| c.torch_threads = 1 << 20)),
     ];
     for (flag, set) in bad {
         let mut c = tiny("BlocksTouch-v0", 1);
@@ -345,7 +346,7 @@ fn resume_with_other_settings_is_refused() {
     let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--td3"), "{err}");
     // --epochs and thread counts may change.
-    let more = TrainConfig { torch_threads: 2, snapshot_every: 0, ..tiny("GripperTouch-v0", 2) };
+    let more = TrainConfig { torch_threads: 0, snapshot_every: 0, ..tiny("GripperTouch-v0", 2) };
     assert_eq!(train(&more, dir.path(), true, &mut quiet).unwrap().len(), 2);
     let err = train(&tiny("GripperTouch-v0", 2), Path::new("/nonexistent/run"), true, &mut quiet).unwrap_err();
     assert!(!err.to_string().is_empty());

@@ -94,7 +94,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     if c.workers == 0 || c.steps == 0 || c.updates == 0 || c.batch_size == 0 || c.torch_threads == 0 {
         bail!("--workers, --steps, --updates, --batch-size and --torch-threads must be at least 1");
     }
-    tch::set_num_threads(c.torch_threads as i32);
+    tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;
     let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
     if c.precision == Precision::Bf16 && !Precision::bf16_supported() {

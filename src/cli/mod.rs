@@ -313,7 +313,7 @@ struct BenchArgs {
     /// DDPG: transitions per update batch.
     #[arg(long, default_value_t = 256, requires = "ddpg")]
     batch_size: usize,
-    /// DDPG: threads libtorch may use for the updates.
+    /// DDPG: threads libtorch may use for the updates (at most the number of cores).
     #[arg(long, default_value_t = 1, requires = "ddpg")]
     torch_threads: usize,
     /// DDPG: seed of networks, layouts and noise.

@@ -99,7 +99,7 @@ pub struct TrainConfig {
     /// Seed of everything (weights, layouts, exploration, batches).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Threads libtorch may use for updates (0: all cores).
+    /// Threads libtorch may use for updates (0: all cores; at most the number of cores).
     #[arg(long, default_value_t = 0)]
     pub torch_threads: usize,
     /// Probability that an exploration episode plays a uniformly drawn lower

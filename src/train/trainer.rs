@@ -59,6 +59,7 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
         bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
     }
+    crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?;
     if config.epochs == 0 {
         bail!("--epochs must be at least 1 (the number of epochs the run reaches, resumes included)");
     }
@@ -159,11 +160,7 @@ impl<'a> Trainer<'a> {
         let mine = rank_dir(&run, comm.rank());
         std::fs::create_dir_all(&mine.dir)
             .with_context(|| format!("cannot create run directory {}", mine.dir.display()))?;
-        tch::set_num_threads(if config.torch_threads == 0 {
-            std::thread::available_parallelism().map_or(1, |n| n.get()) as i32
-        } else {
-            config.torch_threads as i32
-        });
+        tch::set_num_threads(crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?);
 
         // The task: rank 0 resolves it (checked against the run's recorded
         // copy on resume) and every other rank builds the same one from it.
