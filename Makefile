@@ -52,7 +52,7 @@ test-mujoco3: setup-mujoco3
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build
 	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 --snapshot-every 4 \
-		--seed 0 --run-dir $(RUN) $(call resume,$(RUN))
+		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir $(RUN) $(call resume,$(RUN))
 
 # The paper's results table, one target per row (each resumes its run directory):
 #   DDPG (2 blocks) = `make train` above, shipped in the zoo as the AggreVaTeD expert ($(EXPERT));
