@@ -87,7 +87,8 @@ pub fn run(id: &str, steps: usize, threads: usize, collision_filter: bool) -> Re
 /// begins each episode (a reset, or a state set with `BlockEnv::set_state`).
 ///
 /// # Errors
-/// [`EnvError`] if an environment cannot be built, started or stepped.
+/// No steps or no threads, or [`EnvError`] if an environment cannot be
+/// built, started or stepped.
 pub fn run_with(
     label: &str,
     make: MakeEnv,
@@ -95,7 +96,11 @@ pub fn run_with(
     steps: usize,
     threads: usize,
 ) -> Result<BenchReport, EnvError> {
-    let threads = threads.max(1);
+    if steps == 0 || threads == 0 {
+        return Err(EnvError::Config(
+            "--steps and --threads must be at least 1 (for `align`: --bench-steps and --threads)".into(),
+        ));
+    }
     let t = Instant::now();
     let results: Vec<Result<ThreadResult, EnvError>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads).map(|k| s.spawn(move || one_thread(make, start, steps, k as u64))).collect();

@@ -432,9 +432,6 @@ pub fn main() -> Result<()> {
             Ok(())
         }
         Command::Bench(a) => {
-            if a.steps == 0 || a.threads == 0 {
-                bail!("--steps and --threads must be at least 1");
-            }
             let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
             if a.json {
                 println!("{}", serde_json::to_string(&r)?);
