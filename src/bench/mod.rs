@@ -8,6 +8,7 @@ pub mod ddpg;
 use crate::env::{registry, BlockEnv, EnvError};
 use crate::policy::{Policy, RandomPolicy};
 use serde::Serialize;
+use std::sync::Barrier;
 use std::time::Instant;
 
 /// Result of a benchmark run.
@@ -19,7 +20,10 @@ pub struct BenchReport {
     pub threads: usize,
     /// Steps per thread.
     pub steps: usize,
-    /// Wall-clock seconds of the whole run.
+    /// Wall-clock seconds of the timed stepping: from the moment every
+    /// thread has built its environment and warmed up (a barrier) to the
+    /// last thread's last step, the way `bench/fetchpush_steps.py` times
+    /// FetchPush-v4's processes.
     pub seconds: f64,
     /// Whether the robot collision filter was on.
     pub collision_filter: bool,
@@ -34,6 +38,8 @@ pub struct BenchReport {
 
 struct ThreadResult {
     collision_filter: bool,
+    started: Instant,
+    ended: Instant,
     seconds: f64,
     physics_seconds: f64,
     substeps: usize,
@@ -44,32 +50,59 @@ type MakeEnv<'a> = &'a (dyn Fn() -> Result<BlockEnv, EnvError> + Sync);
 /// Starts an episode (the environment and an episode seed) and returns its first observation.
 type StartEpisode<'a> = &'a (dyn Fn(&mut BlockEnv, Option<u64>) -> Result<Vec<f32>, EnvError> + Sync);
 
-fn one_thread(make: MakeEnv, start: StartEpisode, steps: usize, seed: u64) -> Result<ThreadResult, EnvError> {
+/// Builds an environment, starts an episode with `seed` and steps it 100
+/// times: the warm-up kept outside the timing.
+fn warmed_up(
+    make: MakeEnv,
+    start: StartEpisode,
+    seed: u64,
+    policy: &mut RandomPolicy,
+) -> Result<(BlockEnv, Vec<f32>), EnvError> {
     let mut env = make()?;
-    let mut policy = RandomPolicy::new(seed);
     let mut obs = start(&mut env, Some(seed))?;
-    // Warm-up outside the timing.
     for _ in 0..100 {
         let s = env.step(&policy.act(&obs))?;
         obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
     }
+    Ok((env, obs))
+}
+
+/// Builds and warms up one thread's environment, waits at `ready` until every
+/// thread has, then times `steps` steps. Every thread reaches the barrier,
+/// also when its set-up fails (the error is returned after it), so a failing
+/// thread cannot leave the others waiting.
+fn one_thread(
+    make: MakeEnv,
+    start: StartEpisode,
+    steps: usize,
+    seed: u64,
+    ready: &Barrier,
+) -> Result<ThreadResult, EnvError> {
+    let mut policy = RandomPolicy::new(seed);
+    let set_up = warmed_up(make, start, seed, &mut policy);
+    ready.wait();
+    let (mut env, mut obs) = set_up?;
     let physics0 = env.physics_seconds();
-    let t = Instant::now();
+    let started = Instant::now();
     for _ in 0..steps {
         let s = env.step(&policy.act(&obs))?;
         obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
     }
+    let ended = Instant::now();
     Ok(ThreadResult {
         collision_filter: env.config().collision_filter,
-        seconds: t.elapsed().as_secs_f64(),
+        started,
+        ended,
+        seconds: (ended - started).as_secs_f64(),
         physics_seconds: env.physics_seconds() - physics0,
         substeps: steps * env.config().n_substeps,
     })
 }
 
 /// Steps `threads` independent environments of `id` in parallel, `steps`
-/// random-action steps each (resets included in the timing), with or
-/// without the robot collision filter.
+/// random-action steps each (resets included in the timing; building the
+/// environment and a 100-step warm-up are not), with or without the robot
+/// collision filter.
 ///
 /// # Errors
 /// [`EnvError`] if an environment cannot be built or stepped.
@@ -101,16 +134,24 @@ pub fn run_with(
             "--steps and --threads must be at least 1 (for `align`: --bench-steps and --threads)".into(),
         ));
     }
-    let t = Instant::now();
+    let ready = Barrier::new(threads);
+    let ready = &ready;
     let results: Vec<Result<ThreadResult, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads).map(|k| s.spawn(move || one_thread(make, start, steps, k as u64))).collect();
+        let handles: Vec<_> =
+            (0..threads).map(|k| s.spawn(move || one_thread(make, start, steps, k as u64, ready))).collect();
         handles
             .into_iter()
             .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked".into()))))
             .collect()
     });
     let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    let seconds = t.elapsed().as_secs_f64();
+    // From the barrier (all threads start within microseconds of it) to the last finisher.
+    let first = results.iter().map(|r| r.started).min();
+    let last = results.iter().map(|r| r.ended).max();
+    let seconds = match (first, last) {
+        (Some(first), Some(last)) => (last - first).as_secs_f64(),
+        _ => 0.0,
+    };
     let total_env: f64 = results.iter().map(|r| r.seconds).sum();
     let total_phys: f64 = results.iter().map(|r| r.physics_seconds).sum();
     let substeps: usize = results.iter().map(|r| r.substeps).sum();
@@ -125,4 +166,46 @@ pub fn run_with(
         mj_steps_per_s: substeps as f64 / total_phys * threads as f64,
         overhead_fraction: 1.0 - total_phys / total_env,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::time::Duration;
+
+    fn gripper_touch() -> Result<BlockEnv, EnvError> {
+        BlockEnv::new(registry::config("GripperTouch-v0")?)
+    }
+
+    fn reset(env: &mut BlockEnv, seed: Option<u64>) -> Result<Vec<f32>, EnvError> {
+        Ok(env.reset(seed)?.0)
+    }
+
+    #[test]
+    fn building_the_environments_is_not_timed() {
+        // A second's set-up per thread against two steps: the timed span must leave it out
+        // (before the barrier it counted, as FetchPush-v4's side never did).
+        let slow = || {
+            std::thread::sleep(Duration::from_secs(1));
+            gripper_touch()
+        };
+        let r = run_with("GripperTouch-v0", &slow, &reset, 2, 2).unwrap();
+        assert!(r.seconds < 1.0, "set-up counted: {r:?}");
+        assert!(r.env_steps_per_s > 4.0, "{r:?}");
+    }
+
+    #[test]
+    fn a_thread_that_cannot_build_its_environment_fails_the_run_without_a_hang() {
+        let built = AtomicUsize::new(0);
+        let second_fails = || {
+            if built.fetch_add(1, Ordering::SeqCst) == 1 {
+                Err(EnvError::Config("no second environment".into()))
+            } else {
+                gripper_touch()
+            }
+        };
+        let e = run_with("GripperTouch-v0", &second_fails, &reset, 5, 3).unwrap_err();
+        assert!(e.to_string().contains("no second environment"), "{e}");
+    }
 }
