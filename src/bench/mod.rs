@@ -79,7 +79,9 @@ fn one_thread(
     ready: &Barrier,
 ) -> Result<ThreadResult, EnvError> {
     let mut policy = RandomPolicy::new(seed);
-    let set_up = warmed_up(make, start, seed, &mut policy);
+    // A panic before the barrier would leave the other threads waiting: make it an error.
+    let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| warmed_up(make, start, seed, &mut policy)))
+        .unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked while building its environment".into())));
     ready.wait();
     let (mut env, mut obs) = set_up?;
     let physics0 = env.physics_seconds();
@@ -207,5 +209,16 @@ mod tests {
         };
         let e = run_with("GripperTouch-v0", &second_fails, &reset, 5, 3).unwrap_err();
         assert!(e.to_string().contains("no second environment"), "{e}");
+    }
+
+    #[test]
+    fn a_thread_that_panics_while_building_fails_the_run_without_a_hang() {
+        let built = AtomicUsize::new(0);
+        let second_panics = || {
+            assert!(built.fetch_add(1, Ordering::SeqCst) != 1, "deliberate panic in the second set-up");
+            gripper_touch()
+        };
+        let e = run_with("GripperTouch-v0", &second_panics, &reset, 5, 2).unwrap_err();
+        assert!(e.to_string().contains("panicked while building"), "{e}");
     }
 }
