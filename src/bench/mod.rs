@@ -40,7 +40,6 @@ struct ThreadResult {
     collision_filter: bool,
     started: Instant,
     ended: Instant,
-    seconds: f64,
     physics_seconds: f64,
     substeps: usize,
 }
@@ -59,12 +58,25 @@ fn warmed_up(
     policy: &mut RandomPolicy,
 ) -> Result<(BlockEnv, Vec<f32>), EnvError> {
     let mut env = make()?;
-    let mut obs = start(&mut env, Some(seed))?;
-    for _ in 0..100 {
-        let s = env.step(&policy.act(&obs))?;
-        obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
-    }
+    let obs = start(&mut env, Some(seed))?;
+    let obs = random_steps(&mut env, start, policy, obs, 100)?;
     Ok((env, obs))
+}
+
+/// Steps `env` `n` times with random actions from `obs`, starting a new
+/// episode with `start` whenever one ends; returns the last observation.
+fn random_steps(
+    env: &mut BlockEnv,
+    start: StartEpisode,
+    policy: &mut RandomPolicy,
+    mut obs: Vec<f32>,
+    n: usize,
+) -> Result<Vec<f32>, EnvError> {
+    for _ in 0..n {
+        let s = env.step(&policy.act(&obs))?;
+        obs = if s.terminated || s.truncated { start(env, None)? } else { s.obs };
+    }
+    Ok(obs)
 }
 
 /// Builds and warms up one thread's environment, waits at `ready` until every
@@ -83,19 +95,15 @@ fn one_thread(
     let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| warmed_up(make, start, seed, &mut policy)))
         .unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked while building its environment".into())));
     ready.wait();
-    let (mut env, mut obs) = set_up?;
+    let (mut env, obs) = set_up?;
     let physics0 = env.physics_seconds();
     let started = Instant::now();
-    for _ in 0..steps {
-        let s = env.step(&policy.act(&obs))?;
-        obs = if s.terminated || s.truncated { start(&mut env, None)? } else { s.obs };
-    }
+    random_steps(&mut env, start, &mut policy, obs, steps)?;
     let ended = Instant::now();
     Ok(ThreadResult {
         collision_filter: env.config().collision_filter,
         started,
         ended,
-        seconds: (ended - started).as_secs_f64(),
         physics_seconds: env.physics_seconds() - physics0,
         substeps: steps * env.config().n_substeps,
     })
@@ -154,7 +162,7 @@ pub fn run_with(
         (Some(first), Some(last)) => (last - first).as_secs_f64(),
         _ => 0.0,
     };
-    let total_env: f64 = results.iter().map(|r| r.seconds).sum();
+    let total_env: f64 = results.iter().map(|r| (r.ended - r.started).as_secs_f64()).sum();
     let total_phys: f64 = results.iter().map(|r| r.physics_seconds).sum();
     let substeps: usize = results.iter().map(|r| r.substeps).sum();
     let collision_filter = results.first().is_some_and(|r| r.collision_filter);
