@@ -75,17 +75,22 @@ EPOCHS ?= 100
 SEED ?= 0
 # 0: all cores; 1 when two runs share the machine (libgomp's spinning threads collapse under contention).
 TORCH_THREADS ?= 0
+# The recipes' updates use bfloat16 products (`--precision bf16`), which need AMX or AVX512-BF16
+# (`blockpuzzle info`: "bf16 updates yes"); PRECISION=f32 runs the same recipe in float32 on any CPU,
+# in its own run directory (runs/study-VARIANT-f32-sSEED).
+PRECISION ?= bf16
+prec = --precision $(PRECISION)
 study_paper =
-study_bf16 = --precision bf16
-study_nstep = --precision bf16 --n-step 3
-study_td3 = --precision bf16 --td3
-study_curriculum = --precision bf16 --level-replay 0.2 --challenge-share 0.25
-study_ours = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
+study_bf16 = $(prec)
+study_nstep = $(prec) --n-step 3
+study_td3 = $(prec) --td3
+study_curriculum = $(prec) --level-replay 0.2 --challenge-share 0.25
+study_ours = $(prec) --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
 study_ours-nol2 = $(study_ours) --action-l2 0
 study_nol2 = --action-l2 0
 # ours-nol2 with half the top-level episodes in the challenge distribution, with SB3's update
 # ratio; ours with a tenth of the paper's action penalty.
-study_ours-nol2-cs50 = --precision bf16 --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.5 --action-l2 0
+study_ours-nol2-cs50 = $(prec) --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.5 --action-l2 0
 study_ours-nol2-b60 = $(study_ours-nol2) --batches 60
 study_ours-l01 = $(study_ours) --action-l2 0.1
 # ours-nol2 with a small penalty on the actor's pre-tanh output (saturated actions pulled back).
@@ -96,12 +101,21 @@ STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-c
 	ours-nol2-pre ours-nol2-pre-rho9
 #   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
 #   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
-STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)-s$(SEED)
+#   RANKS=2 runs the 2 workers as 2 MPI ranks of 1 worker (torch threads 1 each): the same computation
+#   bit for bit, faster when the run has the 2 cores to itself (results/mpi.md); a run resumes with
+#   the RANKS it started with.
+RANKS ?= 1
+STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)$(if $(findstring --precision f32,$(study_$(VARIANT))),-f32)-s$(SEED)
+study_launch = $(if $(filter 2,$(RANKS)),$(MPIRUN) -np 2 $(BIN) train --workers 1 --torch-threads 1,$(BP) train --workers 2 --torch-threads $(TORCH_THREADS))
 study: build
 	@test -n "$(filter $(VARIANT),$(STUDY_VARIANTS))" || \
 		{ echo "VARIANT must be one of: $(STUDY_VARIANTS)"; exit 2; }
-	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs $(EPOCHS) --seed $(SEED) \
-		--torch-threads $(TORCH_THREADS) --snapshot-every 10 $(study_$(VARIANT)) --run-dir $(STUDY_DIR) \
+	@test -n "$(filter $(PRECISION),bf16 f32)" || { echo "PRECISION must be bf16 or f32"; exit 2; }
+	@test -n "$(filter $(RANKS),1 2)" || { echo "RANKS must be 1 (one process of 2 workers) or 2 (mpirun)"; exit 2; }
+	@case "$(study_$(VARIANT))" in *"--precision bf16"*) $(BIN) info | grep -q "^bf16 updates yes" || \
+		{ echo "VARIANT=$(VARIANT) updates in bfloat16, and this CPU has no AMX or AVX512-BF16 for it: add PRECISION=f32 to run the same recipe in float32 (runs/study-$(VARIANT)$(if $(FROM),-branched)-f32-s$(SEED))"; exit 2; };; esac
+	$(study_launch) --algo ddpg --env BlocksChoose-v0 --epochs $(EPOCHS) --seed $(SEED) \
+		--snapshot-every 10 $(study_$(VARIANT)) --run-dir $(STUDY_DIR) \
 		$$(test -f $(STUDY_DIR)/checkpoint.bin && echo --resume || echo $(if $(FROM),--branch-from $(FROM)))
 #   Validation of a run's snapshots, the study's selection data (never the test seeds): 200 episodes
 #   from seed 2,000,000, Normal and Challenge, with outcome counts, e.g.
