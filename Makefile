@@ -102,10 +102,11 @@ STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-c
 #   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
 #   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
 #   RANKS=2 runs the 2 workers as 2 MPI ranks of 1 worker (torch threads 1 each): the same computation
-#   bit for bit, faster when the run has the 2 cores to itself (results/mpi.md); a run resumes with
+#   bit for bit, faster when the run has the 2 cores to itself (results/mpi.md); resume a run with
 #   the RANKS it started with.
 RANKS ?= 1
-STUDY_DIR = runs/study-$(VARIANT)$(if $(FROM),-branched)$(if $(findstring --precision f32,$(study_$(VARIANT))),-f32)-s$(SEED)
+study_dir = runs/study-$(VARIANT)$(if $(FROM),-branched)$(1)-s$(SEED)
+STUDY_DIR = $(call study_dir,$(if $(findstring --precision f32,$(study_$(VARIANT))),-f32))
 study_launch = $(if $(filter 2,$(RANKS)),$(MPIRUN) -np 2 $(BIN) train --workers 1 --torch-threads 1,$(BP) train --workers 2 --torch-threads $(TORCH_THREADS))
 study: build
 	@test -n "$(filter $(VARIANT),$(STUDY_VARIANTS))" || \
@@ -113,7 +114,7 @@ study: build
 	@test -n "$(filter $(PRECISION),bf16 f32)" || { echo "PRECISION must be bf16 or f32"; exit 2; }
 	@test -n "$(filter $(RANKS),1 2)" || { echo "RANKS must be 1 (one process of 2 workers) or 2 (mpirun)"; exit 2; }
 	@case "$(study_$(VARIANT))" in *"--precision bf16"*) $(BIN) info | grep -q "^bf16 updates yes" || \
-		{ echo "VARIANT=$(VARIANT) updates in bfloat16, and this CPU has no AMX or AVX512-BF16 for it: add PRECISION=f32 to run the same recipe in float32 (runs/study-$(VARIANT)$(if $(FROM),-branched)-f32-s$(SEED))"; exit 2; };; esac
+		{ echo "VARIANT=$(VARIANT) updates in bfloat16, and this CPU has no AMX or AVX512-BF16 for it: add PRECISION=f32 to run the same recipe in float32 ($(call study_dir,-f32))"; exit 2; };; esac
 	$(study_launch) --algo ddpg --env BlocksChoose-v0 --epochs $(EPOCHS) --seed $(SEED) \
 		--snapshot-every 10 $(study_$(VARIANT)) --run-dir $(STUDY_DIR) \
 		$$(test -f $(STUDY_DIR)/checkpoint.bin && echo --resume || echo $(if $(FROM),--branch-from $(FROM)))
