@@ -79,11 +79,12 @@ pub fn settings(task: &Task) -> Vec<(String, usize, Option<String>)> {
 }
 
 /// Compiles the task `arg` (id or file) and resets it `samples` times (seeds
-/// `seed`, `seed + 1`, …) at every level and in every distribution.
+/// `seed`, `seed + 1`, …) at every level and in every distribution, calling
+/// `on_reset` after each reset (a progress bar's tick).
 ///
 /// # Errors
 /// A task that does not compile, or a scene MuJoCo refuses.
-pub fn check(arg: &str, samples: u64, seed: u64) -> Result<CheckReport, EnvError> {
+pub fn check(arg: &str, samples: u64, seed: u64, on_reset: &mut dyn FnMut()) -> Result<CheckReport, EnvError> {
     let config = registry::config(arg)?;
     let settings = settings(&config.task);
     let mut levels = Vec::new();
@@ -93,7 +94,9 @@ pub fn check(arg: &str, samples: u64, seed: u64) -> Result<CheckReport, EnvError
         env.set_distribution(distribution.as_deref())?;
         let mut error = None;
         for k in 0..samples {
-            if let Err(e) = env.reset(Some(seed + k)) {
+            let reset = env.reset(Some(seed.wrapping_add(k)));
+            on_reset();
+            if let Err(e) = reset {
                 error = Some(e.to_string());
                 break;
             }

@@ -135,24 +135,27 @@ fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    if spec.episodes == 0 {
-        bail!("--episodes must be at least 1");
-    }
+    crate::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(anyhow::Error::msg)?;
+    crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     let env = make_env(spec)?;
     let policy = trained_policy(path, saved, &env)?;
     let threads = spec.threads.clamp(1, spec.episodes);
+    // On a terminal only (indicatif draws nothing elsewhere).
+    let bar = crate::cli::progress_bar(spec.episodes as u64, "episode");
     let tallies: Vec<Result<Outcomes>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
                 let mut policy = policy.clone();
+                let bar = &bar;
                 s.spawn(move || -> Result<Outcomes> {
                     let mut env = make_env(spec)?;
                     let mut tally = Outcomes::default();
                     for k in (t..spec.episodes).step_by(threads) {
-                        let seed = spec.seed.wrapping_add(k as u64);
+                        let seed = spec.seed + k as u64;
                         let ep =
                             run_episode(&mut env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
                         tally.add(Outcome::of(&ep));
+                        bar.inc(1);
                     }
                     Ok(tally)
                 })
@@ -160,6 +163,7 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
             .collect();
         handles.into_iter().map(|h| h.join().unwrap_or_else(|_| bail!("evaluation thread panicked"))).collect()
     });
+    bar.finish_and_clear();
     let outcomes = tallies.into_iter().try_fold(Outcomes::default(), |all, t| t.map(|t| all.merge(t)))?;
     let successes = outcomes.success;
     Ok(Evaluation {

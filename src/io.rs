@@ -88,6 +88,42 @@ pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result
     result.with_context(|| format!("cannot write {}", path.display()))
 }
 
+/// A folder this process made (with the parents it lacked), removed again
+/// with everything in it when the guard is dropped, unless [`CreatedDir::keep`]
+/// was called: a command that fails leaves the file system as it found it.
+/// A folder that already existed is never removed.
+#[derive(Debug)]
+pub struct CreatedDir {
+    /// The topmost folder this guard created, while it is armed.
+    top: Option<PathBuf>,
+}
+
+impl CreatedDir {
+    /// Creates `path` and its missing parents.
+    ///
+    /// # Errors
+    /// The I/O error of creating a folder (whatever was created is removed).
+    pub fn create(path: &Path) -> std::io::Result<Self> {
+        let top = path.ancestors().take_while(|p| !p.as_os_str().is_empty() && !p.exists()).last();
+        let guard = Self { top: top.map(Path::to_path_buf) };
+        std::fs::create_dir_all(path)?;
+        Ok(guard)
+    }
+
+    /// Keeps the folder: the work that needed it succeeded.
+    pub fn keep(mut self) {
+        self.top = None;
+    }
+}
+
+impl Drop for CreatedDir {
+    fn drop(&mut self) {
+        if let Some(top) = self.top.take() {
+            let _ = std::fs::remove_dir_all(top);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,5 +147,19 @@ mod tests {
         assert!(format!("{:#}", err.unwrap_err()).contains("a.txt"));
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.txt")], "no temporary file is left");
+    }
+
+    #[test]
+    fn a_created_folder_goes_unless_kept_and_an_existing_one_stays() {
+        let dir = tempfile::tempdir().unwrap();
+        let deep = dir.path().join("a/b/c");
+        let guard = CreatedDir::create(&deep).unwrap();
+        std::fs::write(deep.join("f"), b"x").unwrap();
+        drop(guard);
+        assert!(!dir.path().join("a").exists(), "the topmost created folder is removed");
+        CreatedDir::create(&deep).unwrap().keep();
+        assert!(deep.is_dir());
+        drop(CreatedDir::create(&deep).unwrap());
+        assert!(deep.is_dir(), "a folder that existed stays");
     }
 }

@@ -14,6 +14,7 @@ pub mod align;
 pub mod check;
 pub mod env;
 pub mod io;
+pub mod limits;
 pub mod math;
 pub mod mj;
 pub mod outcome;

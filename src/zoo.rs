@@ -53,6 +53,15 @@ pub enum ZooError {
     /// The files are damaged, do not belong together, or hold impossible values.
     #[error("zoo entry {path} is not usable: {reason}")]
     Corrupt { path: PathBuf, reason: String },
+    /// Export would replace an entry.
+    #[error("the zoo already has an entry {path}; pass --force to replace it, or choose another --name")]
+    Exists { path: PathBuf },
+    /// The zoo path is a file.
+    #[error("the zoo {zoo} is a file; give a folder (it is created if missing)")]
+    NotAFolder { zoo: PathBuf },
+    /// The zoo folder does not exist.
+    #[error("the zoo folder {zoo} does not exist (set $BLOCKPUZZLE_ZOO or --zoo to a folder of NAME.safetensors + NAME.json entries)")]
+    NoZoo { zoo: PathBuf },
     /// A name that is neither a file nor an entry of the zoo.
     #[error("no policy file or zoo entry named {name:?} (the zoo in {zoo} has: {known}); pass a policy file, a run directory or one of those names")]
     Unknown { name: String, zoo: PathBuf, known: String },
@@ -224,6 +233,9 @@ pub fn find(zoo: &Path, name: &str) -> Result<PathBuf, ZooError> {
     if path.exists() {
         return Ok(path);
     }
+    if !zoo.is_dir() {
+        return Err(ZooError::NoZoo { zoo: zoo.to_owned() });
+    }
     let known = names(zoo);
     Err(ZooError::Unknown {
         name: name.to_owned(),
@@ -272,6 +284,20 @@ pub struct ExportInfo {
     pub evaluations: Vec<ZooEvaluation>,
     /// Keep DDPG's critic (needed by AggreVaTeD's expert-advantage weights).
     pub keep_critic: bool,
+    /// Replace an entry of the same name (else that is an error).
+    pub overwrite: bool,
+}
+
+/// Whether the entry `name` may be written in `zoo`: it does not exist yet, or `overwrite`.
+///
+/// # Errors
+/// [`ZooError::Exists`].
+pub fn entry_free(zoo: &Path, name: &str, overwrite: bool) -> Result<(), ZooError> {
+    let path = zoo.join(format!("{name}.safetensors"));
+    if path.exists() && !overwrite {
+        return Err(ZooError::Exists { path });
+    }
+    Ok(())
 }
 
 /// Writes `saved` as the entry `info.name` in `zoo` (both files atomically;
@@ -286,6 +312,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)) {
         return Err(corrupt(format!("name {:?}: use letters, digits, '-' and '_'", info.name)));
     }
+    entry_free(zoo, &info.name, info.overwrite)?;
     saved.check().map_err(&corrupt)?;
     let task = saved
         .task
@@ -341,6 +368,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         probes: probes(saved)?,
         tensors_sha256: sha256(&bytes),
     };
+    if zoo.exists() && !zoo.is_dir() {
+        return Err(ZooError::NotAFolder { zoo: zoo.to_owned() });
+    }
     std::fs::create_dir_all(zoo).map_err(io(zoo))?;
     crate::train::write_atomic(&tensors_path, &bytes).map_err(|e| corrupt(format!("{e:#}")))?;
     let json = serde_json::to_vec_pretty(&meta).map_err(|e| corrupt(e.to_string()))?;
@@ -378,6 +408,7 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 /// [`ZooError::Corrupt`] naming what does not fit.
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
+    meta.task.compile().map_err(|e| ZooError::Corrupt { path: path.with_extension("json"), reason: e.to_string() })?;
     let tensors_path = path.with_extension("safetensors");
     let bytes = std::fs::read(&tensors_path).map_err(io(&tensors_path))?;
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };

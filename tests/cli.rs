@@ -246,6 +246,25 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
         "--out",
         out.to_str().unwrap(),
     ]);
+    // A row asked for that cannot be built fails the command, and nothing is written ...
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("missing row PGGD alone (/nonexistent/run)"), "{}", text(&o));
+    assert!(text(&o).contains("--allow-missing") && !out.exists(), "{}", text(&o));
+    // ... unless --allow-missing.
+    let o = bp(&[
+        "table",
+        "--expert",
+        expert.to_str().unwrap(),
+        "--pggd",
+        pggd.to_str().unwrap(),
+        "--pggd-alone",
+        "/nonexistent/run",
+        "--episodes",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+        "--allow-missing",
+    ]);
     assert!(o.status.success(), "{}", text(&o));
     let md = std::fs::read_to_string(&out).unwrap();
     assert_eq!(md, String::from_utf8_lossy(&o.stdout));
@@ -297,7 +316,7 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     ]);
     assert!(o.status.success(), "{}", text(&o));
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["table", "--zoo", "--episodes", "3"])
+        .args(["table", "--zoo", "--episodes", "3", "--allow-missing"])
         .env("BLOCKPUZZLE_ZOO", &zoo)
         .output()
         .unwrap();

@@ -11,7 +11,7 @@ const A: [f64; 2] = [1.30, 0.60];
 const A_TOUCH: [f64; 2] = [1.349, 0.60];
 
 fn spec(blocks: Vec<Colour>, positions: Vec<[f64; 2]>) -> TaskSpec {
-    TaskSpec::fixed("test", &blocks, &positions).unwrap()
+    TaskSpec::fixed("Test-v0", &blocks, &positions).unwrap()
 }
 
 fn env(blocks: Vec<Colour>, positions: Vec<[f64; 2]>) -> BlockEnv {

@@ -227,7 +227,7 @@ fn a_coloured_floor_is_a_rule_object_and_the_built_ins_have_none() {
     use blockpuzzle::task::{SurfaceSpec, TaskSpec};
     // Blue near the table's edge, green far from it; the gripper pushes blue off the table.
     let spec = |floor: Option<Colour>| {
-        let mut s = TaskSpec::fixed("floor", &[Colour::Blue, Colour::Green], &[[1.30, 0.44], [1.12, 1.02]]).unwrap();
+        let mut s = TaskSpec::fixed("Floor-v0", &[Colour::Blue, Colour::Green], &[[1.30, 0.44], [1.12, 1.02]]).unwrap();
         s.floor = floor.map(|colour| SurfaceSpec { colour });
         BlockEnv::new(EnvConfig::from_spec(s).unwrap()).unwrap()
     };

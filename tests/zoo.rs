@@ -49,6 +49,7 @@ fn info(name: &str) -> ExportInfo {
         trained_with: "none (made by tests/zoo.rs)".into(),
         exported_from: "tests/zoo.rs".into(),
         keep_critic: true,
+        overwrite: false,
         ..ExportInfo::default()
     }
 }

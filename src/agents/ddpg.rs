@@ -36,10 +36,10 @@ use tch::Tensor;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct DdpgConfig {
     /// Hidden layers of actor and critic.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::limits::LAYERS.parse::<usize>(s))]
     pub layers: usize,
     /// Units per hidden layer.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::limits::HIDDEN.parse::<usize>(s))]
     pub hidden: usize,
     /// Actor learning rate (Adam).
     #[arg(long, default_value_t = 1e-3)]
@@ -88,7 +88,7 @@ pub struct DdpgConfig {
     #[serde(default)]
     pub precision: Precision,
     /// Steps of reward summed before bootstrapping (1: the paper's one-step target).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::limits::N_STEP.parse::<usize>(s))]
     #[serde(default = "one")]
     pub n_step: usize,
     /// TD3's changes: twin critics (clipped double Q), target policy smoothing, delayed actor updates.
@@ -104,7 +104,7 @@ pub struct DdpgConfig {
     #[serde(default = "target_noise_clip")]
     pub target_noise_clip: f64,
     /// TD3: the actor is updated on every this-many critic updates.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::POLICY_DELAY.parse::<usize>(s))]
     #[serde(default = "policy_delay")]
     pub policy_delay: usize,
 }
@@ -174,10 +174,14 @@ impl DdpgConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
+        use crate::limits::{HIDDEN, LAYERS, N_STEP, POLICY_DELAY};
+        for (bound, v) in
+            [(LAYERS, self.layers), (HIDDEN, self.hidden), (N_STEP, self.n_step), (POLICY_DELAY, self.policy_delay)]
+        {
+            bound.check_usize(v)?;
+        }
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 15] = [
-            (self.layers >= 1, "--layers must be at least 1"),
-            (self.hidden >= 1, "--hidden must be at least 1"),
+        let checks: [(bool, &str); 11] = [
             (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
             (finite_pos(self.lr_critic), "--lr-critic must be a positive number"),
             ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
@@ -191,7 +195,6 @@ impl DdpgConfig {
                 finite_pos(self.norm_eps) && self.norm_clip.is_finite() && self.norm_clip > 0.0,
                 "--norm-eps and --norm-clip must be positive numbers",
             ),
-            ((1..=50).contains(&self.n_step), "--n-step must be in 1..=50"),
             (
                 self.target_noise.is_finite()
                     && self.target_noise >= 0.0
@@ -199,7 +202,6 @@ impl DdpgConfig {
                     && self.target_noise_clip >= 0.0,
                 "--target-noise and --target-noise-clip must be numbers ≥ 0",
             ),
-            (self.policy_delay >= 1, "--policy-delay must be at least 1"),
         ];
         match checks.iter().find(|(ok, _)| !ok) {
             Some((_, msg)) => Err((*msg).to_owned()),

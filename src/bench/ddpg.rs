@@ -91,8 +91,14 @@ const WARMUP_UPDATES: usize = 20;
 /// # Errors
 /// Unknown environment id, zero counts, environment failures.
 pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
-    if c.workers == 0 || c.steps == 0 || c.updates == 0 || c.batch_size == 0 || c.torch_threads == 0 {
-        bail!("--workers, --steps, --updates, --batch-size and --torch-threads must be at least 1");
+    use crate::limits::{BATCH_SIZE, BENCH_STEPS, BENCH_UPDATES, WORKERS};
+    for (bound, v) in
+        [(WORKERS, c.workers), (BENCH_STEPS, c.steps), (BENCH_UPDATES, c.updates), (BATCH_SIZE, c.batch_size)]
+    {
+        bound.check_usize(v).map_err(anyhow::Error::msg)?;
+    }
+    if c.torch_threads == 0 {
+        bail!("--torch-threads must be at least 1");
     }
     tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;

@@ -139,10 +139,10 @@ pub fn run_with(
     steps: usize,
     threads: usize,
 ) -> Result<BenchReport, EnvError> {
-    if steps == 0 || threads == 0 {
-        return Err(EnvError::Config(
-            "--steps and --threads must be at least 1 (for `align`: --bench-steps and --threads)".into(),
-        ));
+    for (bound, v) in [(crate::limits::BENCH_STEPS, steps), (crate::limits::THREADS, threads)] {
+        bound
+            .check_usize(v)
+            .map_err(|e| EnvError::Config(format!("{e} (for `align`: --bench-steps and --threads)")))?;
     }
     let ready = Barrier::new(threads);
     let ready = &ready;

@@ -51,8 +51,8 @@ enum Command {
         /// Run directories.
         #[arg(required = true)]
         run_dirs: Vec<PathBuf>,
-        /// Success to report the first epoch of.
-        #[arg(long, default_value_t = 0.95)]
+        /// Success to report the first epoch of (0 to 1).
+        #[arg(long, default_value_t = 0.95, value_parser = crate::limits::parse_fraction)]
         target: f64,
     },
     /// Task files: `task check FILE` validates a task and samples its layouts.
@@ -82,10 +82,10 @@ enum Command {
         /// Instead, measure env steps/s of the FetchPush-like scene with random
         /// actions, every episode starting from the reference's first state
         /// (the same scene as FetchPush-v4; its JSON as `bench --json` prints it).
-        #[arg(long)]
+        #[arg(long, value_parser = |s: &str| crate::limits::BENCH_STEPS.parse::<usize>(s))]
         bench_steps: Option<usize>,
         /// Threads of --bench-steps, each stepping its own environment.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = threads)]
         threads: usize,
     },
 }
@@ -104,10 +104,10 @@ struct TaskCheckArgs {
     /// Task file (.toml) or registered id.
     file: String,
     /// Resets per level and distribution.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::limits::CHECK_SAMPLES.parse::<u64>(s))]
     samples: u64,
     /// Seed of the first reset (reset k uses seed + k).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = seed)]
     seed: u64,
     /// Filmstrip PNG of one reset state per level and distribution.
     #[arg(long)]
@@ -141,16 +141,20 @@ struct TableArgs {
     #[arg(long)]
     zoo: bool,
     /// Episodes per cell.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = eval_episodes)]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = seed)]
     seed: u64,
     /// Write the Markdown table here too (atomically).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Threads playing episodes (default: all cores); the result does not depend on it.
+    /// Write the table even when a row's policy cannot be loaded or evaluated
+    /// (the row then says why); without it such a row is an error.
     #[arg(long)]
+    allow_missing: bool,
+    /// Threads playing episodes (default: all cores); the result does not depend on it.
+    #[arg(long, value_parser = threads)]
     threads: Option<usize>,
 }
 
@@ -166,20 +170,20 @@ struct EvalArgs {
     #[arg(long)]
     challenge: bool,
     /// Curriculum level (default: the maximum).
-    #[arg(long)]
+    #[arg(long, value_parser = index)]
     level: Option<usize>,
     /// Episodes.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = eval_episodes)]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = seed)]
     seed: u64,
     /// Where to write the JSON result (default: next to the policy, i.e. its folder or run
     /// directory; the current folder for a zoo name).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
-    #[arg(long)]
+    #[arg(long, value_parser = threads)]
     threads: Option<usize>,
 }
 
@@ -192,13 +196,13 @@ struct RolloutArgs {
     #[arg(long, default_value = "scripted")]
     policy: String,
     /// Number of episodes.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::ROLLOUT_EPISODES.parse::<usize>(s))]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = seed)]
     seed: u64,
     /// Curriculum level (default: the maximum, i.e. the evaluation distribution).
-    #[arg(long, conflicts_with_all = ["challenge", "distribution"])]
+    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = index)]
     level: Option<usize>,
     /// Use the challenge distribution (the same as --distribution challenge).
     #[arg(long, conflicts_with = "distribution")]
@@ -214,16 +218,18 @@ struct RolloutArgs {
     render: Option<PathBuf>,
     #[command(flatten)]
     view: ViewArgs,
+    #[command(flatten)]
+    movie: MovieArgs,
 }
 
 /// Frame size and camera (the Fetch viewer's by default).
 #[derive(Debug, Clone, clap::Args)]
 struct ViewArgs {
     /// Frame width in pixels.
-    #[arg(long, default_value_t = 480)]
+    #[arg(long, default_value_t = 480, value_parser = pixels)]
     width: usize,
     /// Frame height in pixels.
-    #[arg(long, default_value_t = 480)]
+    #[arg(long, default_value_t = 480, value_parser = pixels)]
     height: usize,
     /// Camera distance from the point it looks at (m).
     #[arg(long, default_value_t = 2.5)]
@@ -234,11 +240,16 @@ struct ViewArgs {
     /// Camera elevation (degrees, negative looks down).
     #[arg(long, default_value_t = -14.0, allow_negative_numbers = true)]
     elevation: f64,
+}
+
+/// What a rendered episode is written as (`rollout --render`, `render`).
+#[derive(Debug, Clone, clap::Args)]
+struct MovieArgs {
     /// Frames per second of a GIF.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::FPS.parse::<u32>(s))]
     fps: u32,
     /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
-    #[arg(long)]
+    #[arg(long, value_parser = |s: &str| crate::limits::FILMSTRIP.parse::<usize>(s))]
     filmstrip: Option<usize>,
 }
 
@@ -262,7 +273,7 @@ struct RenderArgs {
     #[arg(long)]
     traj: Option<PathBuf>,
     /// Which episode of the dump (0-based).
-    #[arg(long, default_value_t = 0, requires = "traj")]
+    #[arg(long, default_value_t = 0, requires = "traj", value_parser = index)]
     episode: usize,
     /// Or play one episode of a trained policy (file, run directory or zoo name) and render it.
     #[arg(long)]
@@ -271,7 +282,7 @@ struct RenderArgs {
     #[arg(long, requires = "policy")]
     env: Option<String>,
     /// With --policy: the episode's seed.
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy")]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy", value_parser = seed)]
     seed: u64,
     /// With --policy: the challenge distribution.
     #[arg(long, requires = "policy")]
@@ -281,6 +292,8 @@ struct RenderArgs {
     out: PathBuf,
     #[command(flatten)]
     view: ViewArgs,
+    #[command(flatten)]
+    movie: MovieArgs,
 }
 
 #[derive(Debug, clap::Args)]
@@ -289,10 +302,10 @@ struct BenchArgs {
     #[arg(long, default_value = "BlocksTouch-v0")]
     env: String,
     /// Steps per thread.
-    #[arg(long, default_value_t = 20_000)]
+    #[arg(long, default_value_t = 20_000, value_parser = |s: &str| crate::limits::BENCH_STEPS.parse::<usize>(s))]
     steps: usize,
     /// Threads, each stepping its own environment.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = threads)]
     threads: usize,
     /// Print one JSON line instead of text.
     #[arg(long)]
@@ -305,23 +318,81 @@ struct BenchArgs {
     #[arg(long, conflicts_with_all = ["threads", "no_collision_filter"])]
     ddpg: bool,
     /// DDPG: collection workers, each stepping its own environment.
-    #[arg(long, default_value_t = 1, requires = "ddpg")]
+    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = |s: &str| crate::limits::WORKERS.parse::<usize>(s))]
     workers: usize,
     /// DDPG: gradient updates to time.
-    #[arg(long, default_value_t = 300, requires = "ddpg")]
+    #[arg(long, default_value_t = 300, requires = "ddpg", value_parser = |s: &str| crate::limits::BENCH_UPDATES.parse::<usize>(s))]
     updates: usize,
     /// DDPG: transitions per update batch.
-    #[arg(long, default_value_t = 256, requires = "ddpg")]
+    #[arg(long, default_value_t = 256, requires = "ddpg", value_parser = |s: &str| crate::limits::BATCH_SIZE.parse::<usize>(s))]
     batch_size: usize,
     /// DDPG: threads libtorch may use for the updates (at most the number of cores).
-    #[arg(long, default_value_t = 1, requires = "ddpg")]
+    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = index)]
     torch_threads: usize,
     /// DDPG: seed of networks, layouts and noise.
-    #[arg(long, default_value_t = 0, requires = "ddpg")]
+    #[arg(long, default_value_t = 0, requires = "ddpg", value_parser = seed)]
     seed: u64,
     /// DDPG: arithmetic of the updates' hidden-layer products.
     #[arg(long, value_enum, default_value = "f32", requires = "ddpg")]
     precision: crate::agents::ddpg::Precision,
+}
+
+// Value parsers of the flags that take whole numbers: each names its range,
+// and a negative number reaches them (instead of reading as a flag).
+fn seed(s: &str) -> Result<u64, String> {
+    crate::limits::SEED.parse(s)
+}
+fn eval_episodes(s: &str) -> Result<usize, String> {
+    crate::limits::EVAL_EPISODES.parse(s)
+}
+fn threads(s: &str) -> Result<usize, String> {
+    crate::limits::THREADS.parse(s)
+}
+/// A progress bar of `len` steps named `what` on stderr (drawn on a terminal only).
+pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    let template = format!("{{bar:30}} {what} {{pos}}/{{len}} [{{elapsed_precise}} < {{eta_precise}}]");
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// An index or count with no bound of its own (a level, an episode of a dump).
+fn index(s: &str) -> Result<usize, String> {
+    crate::limits::COUNT.parse(s)
+}
+fn pixels(s: &str) -> Result<usize, String> {
+    crate::limits::FRAME_PIXELS.parse(s)
+}
+
+/// The command line's definition, every value-taking flag accepting a
+/// leading '-' so that `--episodes -3` reaches the flag's parser and its
+/// range is named, rather than '-3' reading as an unknown flag.
+fn command() -> clap::Command {
+    fn negatives(cmd: clap::Command) -> clap::Command {
+        cmd.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a })
+            .mut_subcommands(negatives)
+    }
+    negatives(<Cli as clap::CommandFactory>::command())
+}
+
+/// An error and its causes on one line, each cause once: a message that
+/// already ends with its cause's text (`cannot read X: No such file`) does
+/// not repeat it.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    text
 }
 
 /// Runs the command line.
@@ -329,7 +400,7 @@ struct BenchArgs {
 /// # Errors
 /// Any failure, with a message that names the problem.
 pub fn main() -> Result<()> {
-    let cli = Cli::parse();
+    let cli = <Cli as clap::FromArgMatches>::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
     match cli.command {
         Command::Envs => {
             for r in registry::REGISTRY {
@@ -454,7 +525,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     let render_kind = a
         .render
         .as_deref()
-        .map(|out| crate::render::replay::Output::for_path(out, a.view.filmstrip, a.view.fps))
+        .map(|out| crate::render::replay::Output::for_path(out, a.movie.filmstrip, a.movie.fps))
         .transpose()?;
     let mut env: BlockEnv = registry::make(&a.env)?;
     if a.challenge {
@@ -463,9 +534,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     env.set_distribution(a.distribution.as_deref().or(a.challenge.then_some("challenge")))?;
     let level = a.level.unwrap_or(env.max_level());
     env.set_level(level)?;
-    if a.episodes == 0 {
-        bail!("--episodes must be at least 1");
-    }
+    crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     let mut writer = DumpWriter::create(&a.out)?;
     let mut policy: Box<dyn Policy> = match a.policy.as_str() {
         "random" => Box::new(RandomPolicy::new(a.seed)),
@@ -478,7 +547,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     };
     let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
     for k in 0..a.episodes {
-        let seed = a.seed.wrapping_add(k as u64);
+        let seed = a.seed + k as u64;
         let ep = run_episode(&mut env, policy.as_mut(), seed).with_context(|| format!("episode {k} (seed {seed})"))?;
         outcomes.add(Outcome::of(&ep));
         steps += ep.steps.len();
@@ -516,15 +585,16 @@ fn rollout(a: RolloutArgs) -> Result<()> {
 }
 
 fn task_check(a: TaskCheckArgs) -> Result<()> {
-    if a.samples == 0 {
-        bail!("--samples must be at least 1");
-    }
+    crate::limits::seed_range(a.seed, a.samples).map_err(anyhow::Error::msg)?;
     if let Some(out) = &a.render {
         if out.extension().map_or(true, |e| !e.eq_ignore_ascii_case("png")) {
             bail!("--render writes a filmstrip PNG: give a FILE.png");
         }
     }
-    let report = crate::check::check(&a.file, a.samples, a.seed)?;
+    let settings = crate::check::settings(&registry::task(&a.file)?).len() as u64;
+    let bar = progress_bar(settings * a.samples, "reset");
+    let report = crate::check::check(&a.file, a.samples, a.seed, &mut || bar.inc(1))?;
+    bar.finish_and_clear();
     let task = &report.task;
     println!(
         "{}: task {} is valid: {} objects, levels 0-{}, distributions: {}",
@@ -562,7 +632,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
 }
 
 fn render(a: RenderArgs) -> Result<()> {
-    let kind = crate::render::replay::Output::for_path(&a.out, a.view.filmstrip, a.view.fps)?;
+    let kind = crate::render::replay::Output::for_path(&a.out, a.movie.filmstrip, a.movie.fps)?;
     let view = a.view.view();
     let (frames, fps, what) = match (&a.traj, &a.policy) {
         (Some(traj), _) => {
@@ -611,9 +681,7 @@ fn policy_task(env: Option<&str>, saved: &crate::train::SavedPolicy) -> Result<c
 }
 
 fn table(a: TableArgs) -> Result<()> {
-    if a.episodes == 0 {
-        bail!("--episodes must be at least 1");
-    }
+    crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let task = registry::task(&a.env)?;
     if task.distribution("challenge").is_none() {
@@ -632,6 +700,27 @@ fn table(a: TableArgs) -> Result<()> {
         eprintln!("evaluating {} ...", row.method);
         let outcome = crate::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
         done.push((row, outcome));
+    }
+    let missing: Vec<String> = done
+        .iter()
+        .filter_map(|(row, r)| match r {
+            crate::table::RowResult::Missing(why) => Some(format!(
+                "{} ({}): {why}",
+                row.method,
+                row.policy.as_deref().map_or(String::new(), |p| p.display().to_string())
+            )),
+            _ => None,
+        })
+        .collect();
+    for m in &missing {
+        eprintln!("missing row {m}");
+    }
+    if !missing.is_empty() && !a.allow_missing {
+        bail!(
+            "{} row(s) asked for could not be built (above); no table was written. Fix them, or pass \
+             --allow-missing to write the table with those rows marked missing",
+            missing.len()
+        );
     }
     let md = crate::table::markdown(&done, task.id(), a.episodes, a.seed);
     print!("{md}");

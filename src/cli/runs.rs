@@ -127,26 +127,18 @@ fn branch_run(
     child: &Path,
     c: &crate::train::TrainConfig,
 ) -> Result<()> {
-    // Empty: made; else the error's text.
-    let mut status = Vec::new();
-    if comm.is_root() {
-        match crate::train::branch(parent, child, c) {
-            Ok(b) => eprintln!(
-                "{}: branched from {} at epoch {} ({} env steps){}",
-                child.display(),
-                parent.display(),
-                b.epoch,
-                b.env_steps,
-                if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
-            ),
-            Err(e) => status = format!("{e:#}").into_bytes(),
-        }
-    }
-    comm.broadcast_bytes(&mut status);
-    if !status.is_empty() {
-        bail!("{}", String::from_utf8_lossy(&status));
-    }
-    Ok(())
+    comm.root_check(|| {
+        let b = crate::train::branch(parent, child, c)?;
+        eprintln!(
+            "{}: branched from {} at epoch {} ({} env steps){}",
+            child.display(),
+            parent.display(),
+            b.epoch,
+            b.env_steps,
+            if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
+        );
+        Ok(())
+    })
 }
 
 /// A run directory's config and progress rows.

@@ -44,7 +44,7 @@ pub(super) struct ZooExportArgs {
     /// Evaluate it first on this many episodes (seeds 1,000,000 on) at the
     /// maximum level and, where the task has one, in the challenge distribution,
     /// and record the results (0: no evaluation).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = |s: &str| if s.trim() == "0" { Ok(0) } else { crate::limits::EVAL_EPISODES.parse::<usize>(s) })]
     evaluate: usize,
     /// The tasks to evaluate on, repeatable (default: the one it was trained on;
     /// e.g. BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
@@ -56,6 +56,9 @@ pub(super) struct ZooExportArgs {
     /// The zoo folder.
     #[arg(long)]
     zoo: Option<PathBuf>,
+    /// Replace an existing entry of the same name.
+    #[arg(long)]
+    force: bool,
 }
 
 /// Runs a `blockpuzzle zoo` subcommand.
@@ -64,7 +67,14 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
     match c {
         ZooCommand::List { zoo } => {
             let zoo = folder(zoo);
-            for name in crate::zoo::names(&zoo) {
+            if !zoo.is_dir() {
+                return Err(crate::zoo::ZooError::NoZoo { zoo }.into());
+            }
+            let names = crate::zoo::names(&zoo);
+            if names.is_empty() {
+                println!("the zoo in {} has no entries", zoo.display());
+            }
+            for name in names {
                 let meta = crate::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
                 let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
                 println!("{name:<36} {:<24} {} epoch {:>3}, {steps} env steps", meta.task.id, meta.algo, meta.epoch);
@@ -90,6 +100,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
         }
         ZooCommand::Check { names, zoo } => {
             let zoo = folder(zoo);
+            if !zoo.is_dir() {
+                return Err(crate::zoo::ZooError::NoZoo { zoo }.into());
+            }
             let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
             if names.is_empty() {
                 bail!("no zoo entries in {}", zoo.display());
@@ -104,6 +117,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
                 bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
             }
+            let zoo = folder(a.zoo);
+            // Before the evaluations, which may take long.
+            crate::zoo::entry_free(&zoo, &a.name, a.force)?;
             let saved = crate::train::load_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {
@@ -140,8 +156,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 env_steps: saved.env_steps.or_else(|| env_steps_of(&a.from, saved.epoch)),
                 evaluations,
                 keep_critic: a.critic,
+                overwrite: a.force,
             };
-            let out = crate::zoo::export(&folder(a.zoo), &saved, &info)?;
+            let out = crate::zoo::export(&zoo, &saved, &info)?;
             let size = std::fs::metadata(&out).map_or(0, |m| m.len());
             println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
             Ok(())

@@ -77,12 +77,7 @@ pub fn recorded(source: &TaskSource) -> Result<Task, EnvError> {
     };
     match current {
         Some(t) if t.source.hash == source.hash => Ok(t),
-        _ => {
-            let origin = format!("the recorded copy of {}", source.id);
-            let mut t = Task::parse(&source.toml, &origin, None)?;
-            t.source.path.clone_from(&source.path);
-            Ok(t)
-        }
+        _ => Ok(source.compile()?),
     }
 }
 

@@ -68,6 +68,32 @@ pub struct TaskSource {
     pub hash: String,
 }
 
+impl TaskSource {
+    /// The task of the recorded text, checked against the recorded hash: a
+    /// copy whose text was edited (its hash left as it was) is refused rather
+    /// than run as if it were the recorded task.
+    ///
+    /// # Errors
+    /// Text that does not compile, or compiles to another task than `hash` names.
+    pub fn compile(&self) -> Result<Task, TaskError> {
+        let origin = format!("the recorded copy of {}", self.id);
+        let mut task = Task::parse(&self.toml, &origin, None)?;
+        if task.source.hash != self.hash {
+            return Err(TaskError {
+                origin,
+                line: None,
+                message: format!(
+                    "its text is not the task its hash {} names (the text was edited, its hash was not); restore \
+                     the original file",
+                    self.hash
+                ),
+            });
+        }
+        task.source.path.clone_from(&self.path);
+        Ok(task)
+    }
+}
+
 /// A compiled named distribution: its level, parameter values and starts.
 #[derive(Debug, Clone)]
 pub(crate) struct Distribution {
@@ -134,6 +160,31 @@ impl Tally {
 fn key_span(text: &str, key: &str) -> Option<std::ops::Range<usize>> {
     let at = text.find(&format!("[{key}]")).or_else(|| text.find(&format!("[{key}.")))?;
     Some(at..at)
+}
+
+/// Where the top-level key `key = ...` (or one inside a table) first appears in `text`.
+fn field_span(text: &str, key: &str) -> Option<std::ops::Range<usize>> {
+    let mut offset = 0;
+    for line in text.split_inclusive('\n') {
+        let t = line.trim_start();
+        if t.strip_prefix(key).is_some_and(|rest| rest.trim_start().starts_with('=')) {
+            let at = offset + (line.len() - t.len());
+            return Some(at..at);
+        }
+        offset += line.len();
+    }
+    None
+}
+
+/// Whether a task id is safe in file names: `Name-vN`, a letter first, then
+/// letters, digits, '_' and '-', at most 64 characters.
+pub fn is_safe_id(id: &str) -> bool {
+    let Some((name, version)) = id.rsplit_once("-v") else { return false };
+    id.len() <= 64
+        && name.starts_with(|c: char| c.is_ascii_alphabetic())
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        && !version.is_empty()
+        && version.chars().all(|c| c.is_ascii_digit())
 }
 
 /// 1-based line of byte `offset` in `text`.
@@ -226,12 +277,19 @@ impl Task {
         if spec.version != FORMAT_VERSION {
             return Err(c.err(None, format!("version = {}: this build reads task files of version {FORMAT_VERSION}; write version = {FORMAT_VERSION}", spec.version)));
         }
-        if spec.id.trim().is_empty() {
-            return Err(c.err(None, "id is empty: give the task a versioned id such as \"MyTask-v0\""));
+        if !is_safe_id(&spec.id) {
+            return Err(c.err(
+                field_span(text, "id"),
+                format!(
+                    "id = {:?}: give a versioned id such as \"MyTask-v0\" (a letter, then letters, digits, '_' or \
+                     '-', ending in -vN; at most 64 characters: ids name files)",
+                    spec.id
+                ),
+            ));
         }
-        if spec.max_episode_steps == 0 {
-            return Err(c.err(None, "max_episode_steps must be at least 1"));
-        }
+        crate::limits::EPISODE_STEPS
+            .check_usize(spec.max_episode_steps)
+            .map_err(|e| c.err(field_span(text, "max_episode_steps"), e))?;
         if !spec.robot.extra_height.is_finite() {
             return Err(c.err(None, "robot.extra_height must be a finite number of metres"));
         }
@@ -255,8 +313,16 @@ impl Task {
                 "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite",
             ));
         }
-        if p.max_attempts == 0 || p.max_reset_attempts == 0 {
-            return Err(c.err(None, "placement: max_attempts and max_reset_attempts must be at least 1"));
+        if !crate::limits::within(p.settle_seconds, crate::limits::SETTLE_SECONDS) {
+            return Err(c.err(
+                field_span(text, "settle_seconds"),
+                format!("placement.settle_seconds = {}: allowed are 0 to 10 s of simulated time", p.settle_seconds),
+            ));
+        }
+        for (name, v) in [("max_attempts", p.max_attempts), ("max_reset_attempts", p.max_reset_attempts)] {
+            crate::limits::PLACEMENT_ATTEMPTS
+                .check_usize(v)
+                .map_err(|e| c.err(field_span(text, name), format!("placement.{name}: {e}")))?;
         }
 
         // Objects: names, shapes, colours.
@@ -281,14 +347,31 @@ impl Task {
             if names[..i].contains(&o.name.as_str()) {
                 return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
             }
-            if !o.half_extents.iter().all(|h| h.is_finite() && *h > 0.0) {
-                return Err(c.err(span, format!("object {:?}: half_extents must be positive metres", o.name)));
+            use crate::limits::{within, FRICTION, HALF_EXTENT_M, MASS_KG};
+            if !o.half_extents.iter().all(|&h| within(h, HALF_EXTENT_M)) {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "object {:?}: half_extents = {:?}: each must be from {} to {} m (a block wider than the \
+                         0.5 × 0.7 m table cannot stand on it)",
+                        o.name, o.half_extents, HALF_EXTENT_M.0, HALF_EXTENT_M.1
+                    ),
+                ));
             }
-            if !(o.mass.is_finite() && o.mass > 0.0) {
-                return Err(c.err(span, format!("object {:?}: mass must be a positive number of kg", o.name)));
+            if !within(o.mass, MASS_KG) {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "object {:?}: mass = {}: allowed are {} to {} kg (the simulation loses accuracy beyond)",
+                        o.name, o.mass, MASS_KG.0, MASS_KG.1
+                    ),
+                ));
             }
-            if o.friction.is_some_and(|f| !f.iter().all(|v| v.is_finite() && *v >= 0.0)) {
-                return Err(c.err(span, format!("object {:?}: friction values must be ≥ 0", o.name)));
+            if o.friction.is_some_and(|f| !f.iter().all(|&v| within(v, FRICTION))) {
+                return Err(c.err(
+                    span,
+                    format!("object {:?}: friction values must be from {} to {}", o.name, FRICTION.0, FRICTION.1),
+                ));
             }
         }
         let mut colours = vec![spec.robot.gripper, spec.table.colour];

@@ -71,6 +71,13 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
             child.display()
         );
     }
+    // The parent's checkpoints must load before anything is created.
+    for path in checkpoints(&from)? {
+        if path.exists() {
+            checkpoint::verify(&path)
+                .with_context(|| format!("--branch-from {}: nothing was created", parent.display()))?;
+        }
+    }
     let saved = from.read_config()?;
     let mut wanted = config.clone();
     wanted.task = saved.task.clone();
@@ -177,9 +184,8 @@ fn copy_state(from: &Path, to: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Whether every checkpoint of a copied run (one per rank) finds the replay
-/// segments it needs.
-fn whole(run: &RunDir) -> Result<bool> {
+/// The checkpoint files of a run, one per rank (rank 0's first; they may not exist).
+fn checkpoints(run: &RunDir) -> Result<Vec<PathBuf>> {
     let mut dirs = vec![run.dir.clone()];
     for entry in std::fs::read_dir(&run.dir).with_context(|| format!("cannot read {}", run.dir.display()))? {
         let path = entry?.path();
@@ -187,11 +193,17 @@ fn whole(run: &RunDir) -> Result<bool> {
             dirs.push(path);
         }
     }
-    for dir in dirs {
-        let path = dir.join("checkpoint.bin");
+    Ok(dirs.into_iter().map(|d| d.join("checkpoint.bin")).collect())
+}
+
+/// Whether every checkpoint of a copied run (one per rank) finds the replay
+/// segments it needs.
+fn whole(run: &RunDir) -> Result<bool> {
+    for path in checkpoints(run)? {
         if !path.exists() {
             return Ok(false);
         }
+        let dir = path.parent().unwrap_or(&run.dir);
         for segment in checkpoint::segment_files(&path)? {
             if !dir.join(segment).exists() {
                 return Ok(false);

@@ -229,7 +229,13 @@ fn read_log(
         let mut next = start;
         for g in shard.segments.iter().filter(|g| g.first + g.count > start) {
             let path = dir.join("replay").join(&g.file);
-            let bytes = std::fs::read(&path).map_err(io(&path))?;
+            let bytes = std::fs::read(&path).map_err(|e| match e.kind() {
+                std::io::ErrorKind::NotFound => corrupt(&format!(
+                    "its replay segment {} is missing: restore that file from a backup of the run",
+                    path.display()
+                )),
+                _ => io(&path)(e),
+            })?;
             let bad = |r: &str| corrupt(&format!("replay segment {}: {r}", path.display()));
             let count = g.count as usize;
             if bytes.len() != 16 + 4 * row * count || &bytes[..8] != SEGMENT_MAGIC {
@@ -384,6 +390,17 @@ fn replay_prefix(i: usize) -> String {
 /// [`CheckpointError::Io`] or [`CheckpointError::Corrupt`].
 pub fn peek_state(path: &Path) -> Result<RunState, CheckpointError> {
     Ok(read_header(path)?.state)
+}
+
+/// Reads a checkpoint whole, as a resume would (checksums, network shapes,
+/// every replay segment it needs), without knowing the run: a check before a
+/// copy of it is made.
+///
+/// # Errors
+/// As [`load`].
+pub fn verify(path: &Path) -> Result<RunState, CheckpointError> {
+    let s = peek_state(path)?;
+    Ok(load(path, &s.env_id, s.obs_dim, s.act_dim)?.state)
 }
 
 /// The replay segment files (relative to the checkpoint's folder) a

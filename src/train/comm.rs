@@ -157,6 +157,29 @@ impl Comm {
         }
     }
 
+    /// Runs `check` on rank 0 and gives every rank its outcome: an error on
+    /// rank 0 is the same error (its text) on every rank, so that all stop
+    /// with rank 0's message instead of failing later each in its own way.
+    ///
+    /// # Errors
+    /// Rank 0's error.
+    pub fn root_check(&self, check: impl FnOnce() -> anyhow::Result<()>) -> anyhow::Result<()> {
+        let mut status = Vec::new();
+        if self.is_root() {
+            if let Err(e) = check() {
+                status = format!("{e:#}").into_bytes();
+            }
+        }
+        if self.size() > 1 {
+            self.broadcast_bytes(&mut status);
+        }
+        if status.is_empty() {
+            Ok(())
+        } else {
+            Err(anyhow::anyhow!("{}", String::from_utf8_lossy(&status)))
+        }
+    }
+
     /// Rank 0's bytes on every rank.
     pub fn broadcast_bytes(&self, bytes: &mut Vec<u8>) {
         #[cfg(feature = "mpi")]

@@ -60,25 +60,25 @@ pub struct TrainConfig {
     #[arg(long)]
     pub env: String,
     /// Parallel workers (the paper's MPI workers), one environment each.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::WORKERS.parse::<usize>(s))]
     pub workers: usize,
     /// Epochs to train (a resumed run continues up to this many).
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = |s: &str| crate::limits::EPOCHS.parse::<usize>(s))]
     pub epochs: usize,
     /// Cycles per epoch.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, value_parser = |s: &str| crate::limits::CYCLES.parse::<usize>(s))]
     pub cycles: usize,
     /// Exploration episodes per worker per cycle.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::ROLLOUTS.parse::<usize>(s))]
     pub rollouts: usize,
     /// Gradient steps per cycle.
-    #[arg(long, default_value_t = PAPER_BATCHES)]
+    #[arg(long, default_value_t = PAPER_BATCHES, value_parser = |s: &str| crate::limits::BATCHES.parse::<usize>(s))]
     pub batches: usize,
     /// Transitions per batch and worker.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::limits::BATCH_SIZE.parse::<usize>(s))]
     pub batch_size: usize,
     /// Replay buffer capacity in transitions, per worker (`--replay shared`: per process).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = |s: &str| crate::limits::BUFFER_SIZE.parse::<usize>(s))]
     pub buffer_size: usize,
     /// How workers share replay: `per-worker` (the paper's MPI workers: each
     /// worker keeps its buffer, samples its batch and computes its gradient,
@@ -90,17 +90,17 @@ pub struct TrainConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayLayout>,
     /// Test and finals episodes per worker per epoch.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::TEST_EPISODES.parse::<usize>(s))]
     pub test_episodes: usize,
     /// Test success rate that moves the curriculum up a level (default: the
     /// task file's `curriculum.success_threshold`, 0.7 for the paper's tasks).
     #[arg(long)]
     pub success_threshold: Option<f64>,
     /// Seed of everything (weights, layouts, exploration, batches).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::SEED.parse::<u64>(s))]
     pub seed: u64,
     /// Threads libtorch may use for updates (0: all cores; at most the number of cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::COUNT.parse::<usize>(s))]
     pub torch_threads: usize,
     /// Probability that an exploration episode plays a uniformly drawn lower
     /// level instead of the current one (0: the paper's curriculum).
@@ -114,7 +114,7 @@ pub struct TrainConfig {
     pub challenge_share: f64,
     /// Also keep the policy of every Nth epoch as `snapshots/epoch-NNNN.json`
     /// (0: never); earlier policies for AggreVaTeD experts or learning-curve studies.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::COUNT.parse::<usize>(s))]
     #[serde(default)]
     pub snapshot_every: usize,
     /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
@@ -333,8 +333,8 @@ fn differing_fields<T: Serialize>(prefix: &str, a: &T, b: &T, out: &mut Vec<Stri
 ///
 /// # Errors
 /// An unknown id or bad task file, or a task that changed since the run started.
-fn run_task(config: &TrainConfig, run: &RunDir, recorded: Option<&crate::task::TaskSource>) -> Result<Task> {
-    let Some(source) = recorded else {
+fn run_task(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Task> {
+    let Some((saved, source)) = saved.and_then(|s| Some((s, s.task.as_ref()?))) else {
         return Ok(registry::task(&config.env)?);
     };
     if registry::is_path(&config.env) && !Path::new(&config.env).exists() {
@@ -347,6 +347,16 @@ fn run_task(config: &TrainConfig, run: &RunDir, recorded: Option<&crate::task::T
         return Ok(registry::recorded(source)?);
     }
     let current = registry::task(&config.env)?;
+    if current.id() != source.id {
+        bail!(
+            "--resume: {} was trained on {} (--env {}), this command asks for {}; pass --env {}",
+            run.dir.display(),
+            source.id,
+            saved.env,
+            current.id(),
+            saved.env
+        );
+    }
     if current.source.hash != source.hash {
         let copy = Task::parse(&source.toml, &format!("the copy in {}", run.config().display()), None)?;
         let changed = copy.differences(&current);

@@ -56,13 +56,21 @@ pub fn train_ranks(
 
 /// Checks every setting before anything is written.
 fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
-    if config.workers == 0 || config.cycles == 0 || config.batch_size == 0 || config.test_episodes == 0 {
-        bail!("--workers, --cycles, --batch-size and --test-episodes must be at least 1");
+    use crate::limits::{BATCHES, BATCH_SIZE, BUFFER_SIZE, CYCLES, EPOCHS, ROLLOUTS, TEST_EPISODES, WORKERS};
+    let c = config;
+    for (bound, v) in [
+        (WORKERS, c.workers),
+        (EPOCHS, c.epochs),
+        (CYCLES, c.cycles),
+        (ROLLOUTS, c.rollouts),
+        (BATCHES, c.batches),
+        (BATCH_SIZE, c.batch_size),
+        (BUFFER_SIZE, c.buffer_size),
+        (TEST_EPISODES, c.test_episodes),
+    ] {
+        bound.check_usize(v).map_err(anyhow::Error::msg)?;
     }
     crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?;
-    if config.epochs == 0 {
-        bail!("--epochs must be at least 1 (the number of epochs the run reaches, resumes included)");
-    }
     config.ddpg.validate().map_err(anyhow::Error::msg)?;
     if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
@@ -102,6 +110,78 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     Ok(())
 }
 
+/// The memory a run needs at most, in bytes: its replay buffers when full
+/// (or when they hold every transition the run collects, if fewer) and one
+/// update's batches and activations.
+fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> u64 {
+    let (workers, shards) = match config.replay_layout() {
+        ReplayLayout::PerWorker => (1, config.workers),
+        ReplayLayout::Shared => (config.workers, 1),
+    };
+    let collected = (config.epochs as u64)
+        .saturating_mul(config.cycles as u64)
+        .saturating_mul(config.rollouts as u64)
+        .saturating_mul(max_episode_steps as u64)
+        .saturating_mul(workers as u64);
+    let stored = collected.min(config.buffer_size as u64);
+    // obs, next obs, action, reward, done, extra, discount: f32 each.
+    let transition = 4 * (2 * obs_dim + act_dim + 4) as u64;
+    let replay = stored.saturating_mul(transition).saturating_mul(shards as u64);
+    let batch_rows = (config.batch_size as u64).saturating_mul(config.workers as u64);
+    let activations = (config.ddpg.hidden as u64) * (config.ddpg.layers as u64) * 16;
+    replay.saturating_add(batch_rows.saturating_mul(transition + activations))
+}
+
+/// Refuses a run whose replay buffers and batches would not fit in this
+/// machine's memory, naming the settings that size them.
+fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> Result<()> {
+    let (Some(have), need) =
+        (crate::limits::memory_bytes(), memory_needed(config, obs_dim, act_dim, max_episode_steps))
+    else {
+        return Ok(());
+    };
+    if need > have {
+        bail!(
+            "this run would need {} of memory (--workers {} with --buffer-size {} and --batch-size {}: replay \
+             buffers of {obs_dim}-dimensional observations, filled by {} epochs, and the update batches), more \
+             than this machine's {}; lower --buffer-size, --batch-size or --workers, or spread the workers over \
+             MPI ranks on several machines",
+            crate::limits::gigabytes(need),
+            config.workers,
+            config.buffer_size,
+            config.batch_size,
+            config.epochs,
+            crate::limits::gigabytes(have)
+        );
+    }
+    Ok(())
+}
+
+/// Before anything is created on a resume: the run exists and was written by
+/// a job of this job's size (rank 0's checkpoint says; every rank learns it).
+fn check_resume(comm: &Comm, run: &RunDir) -> Result<()> {
+    comm.root_check(|| {
+        let path = [run.checkpoint(), checkpoint::previous(&run.checkpoint())].into_iter().find(|p| p.exists());
+        let Some(path) = path else {
+            bail!(
+                "--resume: {} holds no run (no {}); start a new run without --resume",
+                run.dir.display(),
+                run.checkpoint().display()
+            );
+        };
+        let ranks = checkpoint::peek_state(&path)?.ranks;
+        if ranks != comm.size() {
+            bail!(
+                "{} was written by a job of {ranks} rank(s), this one has {}; resume with mpirun -np {ranks} (or \
+                 without mpirun for 1)",
+                path.display(),
+                comm.size()
+            );
+        }
+        Ok(())
+    })
+}
+
 /// The folder of rank `rank`'s own files: the run directory for rank 0,
 /// `rank-R/` inside it for the others.
 pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
@@ -136,6 +216,9 @@ struct Trainer<'a> {
     obs_dim: usize,
     /// Seconds spent persisting the previous epoch (reported in the next row).
     persist_seconds: f64,
+    /// The folders this run created, removed if it stops before its first
+    /// checkpoint (kept from then on).
+    created: Vec<crate::io::CreatedDir>,
 }
 
 /// What one epoch's collection and learning measured on this rank.
@@ -158,8 +241,15 @@ impl<'a> Trainer<'a> {
         validate(config, comm)?;
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
-        std::fs::create_dir_all(&mine.dir)
-            .with_context(|| format!("cannot create run directory {}", mine.dir.display()))?;
+        if resume {
+            check_resume(comm, &run)?;
+        }
+        let created = [&run.dir, &mine.dir]
+            .into_iter()
+            .map(|d| {
+                crate::io::CreatedDir::create(d).with_context(|| format!("cannot create run directory {}", d.display()))
+            })
+            .collect::<Result<Vec<_>>>()?;
         tch::set_num_threads(crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?);
 
         // The task: rank 0 resolves it (checked against the run's recorded
@@ -187,6 +277,7 @@ impl<'a> Trainer<'a> {
             (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
         let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
         let max_level = envs[0].max_level();
+        check_memory(&config, obs_dim, act_dim, task.spec.max_episode_steps)?;
         if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
         }
@@ -212,16 +303,6 @@ impl<'a> Trainer<'a> {
             // A resume has the checkpoint's settings; a branch's first epoch, its own.
             loaded.agent.take_branch_settings(&config.ddpg);
             let s = &loaded.state;
-            if s.ranks != comm.size() {
-                bail!(
-                    "{} was written by a job of {} rank(s), this one has {}; resume with mpirun -np {} (or without \
-                     mpirun for 1)",
-                    path.display(),
-                    s.ranks,
-                    comm.size(),
-                    s.ranks
-                );
-            }
             let rows = if comm.is_root() {
                 read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < s.epoch).collect()
             } else {
@@ -303,6 +384,7 @@ impl<'a> Trainer<'a> {
             max_level,
             obs_dim,
             persist_seconds: 0.0,
+            created,
         })
     }
 
@@ -541,6 +623,7 @@ impl<'a> Trainer<'a> {
         self.state.best_finals = self.state.best_finals.max(row.finals_success);
         let (agent, ddpg) = (&self.learner.agent, &self.config.ddpg);
         checkpoint::save(&self.mine.checkpoint(), &self.state, agent, ddpg, &self.replays, &mut self.replay_log)?;
+        self.created.drain(..).for_each(crate::io::CreatedDir::keep);
         // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
         self.persist_seconds = started.elapsed().as_secs_f64();
         self.state.wall_seconds += self.persist_seconds;
@@ -553,11 +636,11 @@ impl<'a> Trainer<'a> {
 /// even when their hosts' task files differ.
 fn shared_task(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Task> {
     if comm.size() == 1 {
-        return run_task(config, run, saved.and_then(|c| c.task.as_ref()));
+        return run_task(config, run, saved);
     }
     let mut bytes = Vec::new();
     let task = if comm.is_root() {
-        let task = run_task(config, run, saved.and_then(|c| c.task.as_ref()))?;
+        let task = run_task(config, run, saved)?;
         bytes = serde_json::to_vec(&task.source)?;
         Some(task)
     } else {

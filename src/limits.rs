@@ -1,0 +1,238 @@
+//! The hard limits on numbers a user gives: command-line flags and task-file
+//! fields. Each bound is written once here, with why it exists, and checked
+//! before anything is created or allocated: by the command line's parsers
+//! ([`Bound::parse`], which also turns `--episodes -3` into a message naming
+//! the flag and its range) and again by the configs' own validation
+//! ([`Bound::check`]), which library callers go through too.
+
+use std::fmt;
+
+/// An inclusive range of whole numbers for one setting, and why it ends there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Bound {
+    /// The setting as the user writes it (`--workers`, `max_episode_steps`).
+    pub name: &'static str,
+    /// Smallest allowed value.
+    pub min: u64,
+    /// Largest allowed value.
+    pub max: u64,
+    /// Why the range ends there (empty: any value of the type).
+    pub why: &'static str,
+}
+
+/// `1,000,000` for 1000000.
+fn grouped(v: u64) -> String {
+    let s = v.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+impl fmt::Display for Bound {
+    /// `1 to 1,000,000 (why)`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} to {}", grouped(self.min), grouped(self.max))?;
+        if !self.why.is_empty() {
+            write!(f, " ({})", self.why)?;
+        }
+        Ok(())
+    }
+}
+
+impl Bound {
+    /// Whether `v` is in range; the error names the setting, the value and the range.
+    ///
+    /// # Errors
+    /// A value outside `min..=max`.
+    pub fn check(&self, v: u64) -> Result<(), String> {
+        if (self.min..=self.max).contains(&v) {
+            Ok(())
+        } else {
+            Err(format!("{} = {}: allowed are {self}", self.name, grouped(v)))
+        }
+    }
+
+    /// As [`Bound::check`] for a `usize`.
+    ///
+    /// # Errors
+    /// A value outside `min..=max`.
+    pub fn check_usize(&self, v: usize) -> Result<(), String> {
+        self.check(v as u64)
+    }
+
+    /// Parses a command-line value: a whole number in range. Used as clap's
+    /// value parser, whose error names the flag and the value given.
+    ///
+    /// # Errors
+    /// Not a whole number (a negative one included), or out of range.
+    pub fn parse<T: TryFrom<u64>>(&self, s: &str) -> Result<T, String> {
+        let v: u64 = s.trim().parse().map_err(|_| format!("give a whole number from {self}"))?;
+        if !(self.min..=self.max).contains(&v) {
+            return Err(format!("allowed are {self}"));
+        }
+        T::try_from(v).map_err(|_| format!("allowed are {self}"))
+    }
+}
+
+const fn bound(name: &'static str, min: u64, max: u64, why: &'static str) -> Bound {
+    Bound { name, min, max, why }
+}
+
+/// A count with no bound of its own (a level, an index, a period).
+pub const COUNT: Bound = bound("", 0, u32::MAX as u64, "");
+/// A seed: any 64-bit value.
+pub const SEED: Bound = bound("--seed", 0, u64::MAX, "");
+/// Episodes of an evaluation (`eval`, `table`, `zoo export --evaluate`).
+pub const EVAL_EPISODES: Bound =
+    bound("--episodes", 1, 1_000_000, "a success rate's 95% interval is ±0.001 at a million episodes");
+/// Episodes of a trajectory dump (`rollout`).
+pub const ROLLOUT_EPISODES: Bound =
+    bound("--episodes", 1, 100_000, "every episode adds about 50 kB to the dump: 100,000 make about 5 GB");
+/// Resets per level and distribution of `task check`.
+pub const CHECK_SAMPLES: Bound =
+    bound("--samples", 1, 100_000, "per level and distribution; 100,000 estimate a redraw rate to ±0.3%");
+/// Steps per thread of `bench` and `align --bench-steps`.
+pub const BENCH_STEPS: Bound = bound("--steps", 1, 10_000_000, "about an hour of stepping per thread");
+/// Gradient updates of `bench --ddpg`.
+pub const BENCH_UPDATES: Bound = bound("--updates", 1, 1_000_000, "");
+/// Threads of evaluations and benchmarks, each with its own environment.
+pub const THREADS: Bound =
+    bound("--threads", 1, 256, "each thread steps its own MuJoCo environment; more than the cores only wait");
+/// Workers of one training process (spread more over MPI ranks).
+pub const WORKERS: Bound = bound(
+    "--workers",
+    1,
+    256,
+    "per process: each is a thread with its own environment and replay buffer; run more as MPI ranks",
+);
+/// Transitions per batch and worker.
+pub const BATCH_SIZE: Bound =
+    bound("--batch-size", 1, 65_536, "per worker; a batch's activations take batch × hidden × layers × 16 bytes");
+/// Replay capacity per worker.
+pub const BUFFER_SIZE: Bound =
+    bound("--buffer-size", 1, 100_000_000, "transitions per worker; the run's memory is checked too");
+/// Epochs of a run.
+pub const EPOCHS: Bound = bound("--epochs", 1, 100_000, "");
+/// Cycles per epoch.
+pub const CYCLES: Bound = bound("--cycles", 1, 10_000, "");
+/// Exploration episodes per worker and cycle.
+pub const ROLLOUTS: Bound = bound("--rollouts", 1, 10_000, "");
+/// Gradient steps per cycle.
+pub const BATCHES: Bound = bound("--batches", 0, 100_000, "");
+/// Test and finals episodes per worker and epoch.
+pub const TEST_EPISODES: Bound = bound("--test-episodes", 1, 100_000, "");
+/// Hidden units per layer.
+pub const HIDDEN: Bound = bound("--hidden", 1, 8_192, "a layer of 8,192 units already holds 67 M weights");
+/// Hidden layers.
+pub const LAYERS: Bound = bound("--layers", 1, 32, "");
+/// Steps of an n-step return.
+pub const N_STEP: Bound = bound("--n-step", 1, 50, "an episode's length in the paper's tasks");
+/// TD3's critic updates per actor update.
+pub const POLICY_DELAY: Bound = bound("--policy-delay", 1, 1_000, "");
+/// Frames of a filmstrip.
+pub const FILMSTRIP: Bound =
+    bound("--filmstrip", 1, 64, "a strip is one row of frames: 64 frames of 480 px are 30,720 px wide");
+/// Frame width and height in pixels.
+pub const FRAME_PIXELS: Bound =
+    bound("--width/--height", 1, 16_384, "the renderer then checks the model's offscreen buffer");
+/// GIF frames per second.
+pub const FPS: Bound = bound("--fps", 1, 100, "GIF frame delays are whole hundredths of a second");
+/// Steps of one episode (task files).
+pub const EPISODE_STEPS: Bound =
+    bound("max_episode_steps", 1, 10_000, "200 times the paper's 50; evaluation and replay hold whole episodes");
+/// Layout draws and whole resets tried before a reset gives up (task files).
+pub const PLACEMENT_ATTEMPTS: Bound = bound("placement attempts", 1, 100_000, "a reset must end");
+
+/// Object sizes in a task file: half extents in metres.
+pub const HALF_EXTENT_M: (f64, f64) = (0.001, 0.5);
+/// Object masses in a task file, kg.
+pub const MASS_KG: (f64, f64) = (0.001, 1_000.0);
+/// Friction coefficients in a task file.
+pub const FRICTION: (f64, f64) = (0.0, 10.0);
+/// Settling time of a reset, seconds of simulated time.
+pub const SETTLE_SECONDS: (f64, f64) = (0.0, 10.0);
+
+/// Whether `v` lies in the closed range `r` (NaN never does).
+pub fn within(v: f64, r: (f64, f64)) -> bool {
+    v >= r.0 && v <= r.1
+}
+
+/// The seeds of `n` episodes from `first` (episode k: first + k) must not pass
+/// 2⁶⁴ − 1, where they would wrap to 0, 1, … and repeat other episodes.
+///
+/// # Errors
+/// A range that wraps, naming the largest first seed that fits.
+pub fn seed_range(first: u64, n: u64) -> Result<(), String> {
+    if n == 0 || first.checked_add(n - 1).is_some() {
+        Ok(())
+    } else {
+        Err(format!(
+            "--seed {first} with {n} episodes passes the largest seed 18446744073709551615 (episode k uses seed + k); \
+             give --seed {} or less",
+            u64::MAX - (n - 1)
+        ))
+    }
+}
+
+/// A fraction in [0, 1] given on the command line (`report --target`).
+///
+/// # Errors
+/// Not a number, NaN, or outside [0, 1].
+pub fn parse_fraction(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err("give a number from 0 to 1 (a success rate)".into()),
+    }
+}
+
+/// The machine's memory in bytes (`MemTotal` of /proc/meminfo), if known.
+pub fn memory_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// `12.3 GB` for a byte count.
+pub fn gigabytes(bytes: u64) -> String {
+    format!("{:.1} GB", bytes as f64 / 1e9)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_name_the_setting_and_the_range() {
+        assert_eq!(WORKERS.parse::<usize>("12"), Ok(12));
+        let e = WORKERS.parse::<usize>("-3").unwrap_err();
+        assert!(e.contains("whole number from 1 to 256"), "{e}");
+        let e = WORKERS.parse::<usize>("100000").unwrap_err();
+        assert!(e.contains("allowed are 1 to 256") && e.contains("MPI"), "{e}");
+        let e = EPISODE_STEPS.check(1_000_000_000_000).unwrap_err();
+        assert!(e.starts_with("max_episode_steps = 1,000,000,000,000: allowed are 1 to 10,000"), "{e}");
+        assert_eq!(SEED.parse::<u64>("18446744073709551615"), Ok(u64::MAX));
+        assert!(SEED.parse::<u64>("-1").unwrap_err().contains("0 to 18,446,744,073,709,551,615"));
+    }
+
+    #[test]
+    fn seed_ranges_never_wrap() {
+        assert!(seed_range(u64::MAX, 1).is_ok());
+        assert!(seed_range(0, u64::MAX).is_ok());
+        let e = seed_range(u64::MAX, 2).unwrap_err();
+        assert!(e.contains("give --seed 18446744073709551614 or less"), "{e}");
+    }
+
+    #[test]
+    fn fractions_are_finite_and_in_the_unit_interval() {
+        assert_eq!(parse_fraction("0.95"), Ok(0.95));
+        for bad in ["2", "NaN", "-0.1", "inf", "x"] {
+            assert!(parse_fraction(bad).is_err(), "{bad}");
+        }
+    }
+}
