@@ -81,6 +81,9 @@ pub fn write_atomic(
 pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
     use anyhow::Context;
     let tmp = temp_path(path);
+    // Whether the folder takes a file at all, in the OS's words, before the
+    // library tries and reports it in its own.
+    File::create(&tmp).with_context(|| format!("cannot write {}", path.display()))?;
     let result = write(&tmp).and_then(|()| Ok(commit(&tmp, path)?));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);

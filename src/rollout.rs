@@ -207,8 +207,10 @@ impl DumpWriter {
             path: path.clone(),
             source: std::io::Error::other("writer already finished"),
         })?;
-        serde_json::to_writer(&mut *f, ep)?;
-        f.write_all(b"\n").map_err(|source| RolloutError::Io { path, source })
+        // Encoded first, so that a failed write is reported as one (naming the file).
+        let mut line = serde_json::to_vec(ep)?;
+        line.push(b'\n');
+        f.write_all(&line).map_err(|source| RolloutError::Io { path, source })
     }
 
     /// Flushes and moves the file into place.

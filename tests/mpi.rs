@@ -110,9 +110,15 @@ fn mpi_resume_is_exact_and_another_rank_count_is_refused() {
     let out = Command::new(BP).args(args(&split, 1, 3)).arg("--resume").output().unwrap();
     assert!(!out.status.success());
     assert!(text(&out).contains("mpirun -np 2"), "{}", text(&out));
+    // Three ranks are told the job size that wrote the run, and the third rank creates nothing.
     let out = mpirun(3).args(args(&split, 1, 3)).arg("--resume").output().unwrap();
     assert!(!out.status.success());
-    assert!(text(&out).contains("rank"), "{}", text(&out));
+    assert!(
+        text(&out).contains("written by a job of 2 rank(s)") && text(&out).contains("mpirun -np 2"),
+        "{}",
+        text(&out)
+    );
+    assert!(!split.join("rank-2").exists(), "a refused rank leaves no folder");
 }
 
 #[test]

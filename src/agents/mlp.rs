@@ -71,7 +71,9 @@ impl TanhMlp {
             }
             if let Some(k) = l.w.iter().chain(&l.b).position(|v| !v.is_finite() || v.abs() > max_abs) {
                 let v = if k < l.w.len() { l.w[k] } else { l.b[k - l.w.len()] };
-                return Err(format!("layer {i} holds {v} (value {k}): weights must be finite and at most {max_abs:e}"));
+                return Err(format!(
+                    "layer {i} holds {v} (element {k}): weights must be finite and at most {max_abs:e}"
+                ));
             }
             width = l.b.len();
         }

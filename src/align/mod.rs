@@ -35,6 +35,9 @@ pub enum AlignError {
     /// A joint of the reference that our model lacks.
     #[error("the reference's joint {name:?} has no counterpart in the FetchPush-like scene")]
     UnknownJoint { name: String },
+    /// A joint of the reference with another number of values than ours.
+    #[error("the reference's joint {name:?} has {qpos} position and {qvel} velocity values, the scene's has {want_qpos} and {want_qvel} (a free joint: 7 and 6); record the reference again with `bash bench/align_fetchpush.sh`")]
+    JointSize { name: String, qpos: usize, qvel: usize, want_qpos: usize, want_qvel: usize },
     /// The environment failed.
     #[error(transparent)]
     Env(#[from] EnvError),
@@ -85,6 +88,9 @@ impl Reference {
         let text = std::fs::read_to_string(path).map_err(|source| AlignError::Read { path: p.clone(), source })?;
         let r: Reference =
             serde_json::from_str(&text).map_err(|e| AlignError::Format { path: p.clone(), reason: e.to_string() })?;
+        if r.episodes.is_empty() {
+            return Err(AlignError::Format { path: p, reason: "it holds no episodes".into() });
+        }
         for (i, e) in r.episodes.iter().enumerate() {
             let n = e.actions.len() + 1;
             if e.grip.len() != n || e.object.len() != n {
@@ -142,9 +148,19 @@ pub fn start_state(env: &BlockEnv, ep: &RefEpisode) -> Result<(Vec<f64>, Vec<f64
         let ours =
             if name == "object0:joint" { format!("{}:joint", crate::scene::xml::block_name(0)) } else { name.clone() };
         let j = env.model_id(ObjType::Joint, &ours).map_err(|_| AlignError::UnknownJoint { name: name.clone() })?;
-        let (qa, va) = (model.jnt_qposadr()[j] as usize, model.jnt_dofadr()[j] as usize);
-        if qa + s.qpos.len() > qpos.len() || va + s.qvel.len() > qvel.len() {
-            return Err(AlignError::UnknownJoint { name: name.clone() });
+        // A joint's values run up to the next joint's (or the end).
+        let span = |adr: &[i32], total: usize| {
+            (adr[j] as usize, adr.get(j + 1).map_or(total, |&next| next as usize) - adr[j] as usize)
+        };
+        let ((qa, nq), (va, nv)) = (span(model.jnt_qposadr(), qpos.len()), span(model.jnt_dofadr(), qvel.len()));
+        if (s.qpos.len(), s.qvel.len()) != (nq, nv) {
+            return Err(AlignError::JointSize {
+                name: name.clone(),
+                qpos: s.qpos.len(),
+                qvel: s.qvel.len(),
+                want_qpos: nq,
+                want_qvel: nv,
+            });
         }
         qpos[qa..qa + s.qpos.len()].copy_from_slice(&s.qpos);
         qvel[va..va + s.qvel.len()].copy_from_slice(&s.qvel);

@@ -178,8 +178,8 @@ struct EvalArgs {
     /// Seed of the first episode (episode k uses seed + k).
     #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = seed)]
     seed: u64,
-    /// Where to write the JSON result (default: next to the policy, i.e. its folder or run
-    /// directory; the current folder for a zoo name).
+    /// Where to write the JSON result (default: the run directory for a policy of a run,
+    /// else the current folder, as eval-POLICY-TASK-DISTRIBUTION.json).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
@@ -730,6 +730,25 @@ fn table(a: TableArgs) -> Result<()> {
     Ok(())
 }
 
+/// Where `eval` writes by default: `eval-POLICY-TASK-DISTRIBUTION.json` in the
+/// policy's run directory (a run directory, or a policy file or snapshot in
+/// one), else in the current folder; POLICY is the file's stem or zoo name
+/// (`best_policy` for a run directory, whose best policy is evaluated).
+fn eval_out(checkpoint: &Path, task: &str, distribution: &str) -> PathBuf {
+    let is_run = |d: &Path| d.join("config.json").is_file();
+    let (run, policy) = if checkpoint.is_dir() {
+        let best = checkpoint.join("best_policy.json").exists();
+        (Some(checkpoint.to_path_buf()), if best { "best_policy" } else { "policy" }.to_owned())
+    } else {
+        let stem = checkpoint.file_stem().map_or_else(|| "policy".into(), |s| s.to_string_lossy().into_owned());
+        let folder = checkpoint.parent().filter(|p| !p.as_os_str().is_empty());
+        // A policy file in a run directory, or a snapshot in its snapshots/ folder.
+        let run = folder.and_then(|f| [Some(f), f.parent()].into_iter().flatten().find(|d| is_run(d)));
+        (run.map(Path::to_path_buf), stem)
+    };
+    run.unwrap_or_default().join(format!("eval-{policy}-{task}-{distribution}.json"))
+}
+
 fn eval(a: EvalArgs) -> Result<()> {
     let saved = crate::train::load_policy(&a.checkpoint)?;
     let task = policy_task(a.env.as_deref(), &saved)?;
@@ -749,14 +768,12 @@ fn eval(a: EvalArgs) -> Result<()> {
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
         "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": a.checkpoint, "policy_epoch": policy_epoch,
     });
-    let out = a.out.clone().unwrap_or_else(|| {
-        let dir = if a.checkpoint.is_dir() {
-            a.checkpoint.clone()
-        } else {
-            a.checkpoint.parent().map(Path::to_path_buf).unwrap_or_default()
-        };
-        dir.join(format!("eval-{id}{}.json", if a.challenge { "-challenge" } else { "" }))
-    });
+    let distribution = match (a.challenge, a.level) {
+        (true, _) => "challenge".to_owned(),
+        (false, Some(l)) if l < task.max_level() => format!("level{l}"),
+        _ => "normal".to_owned(),
+    };
+    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &id, &distribution));
     crate::train::write_json_atomic(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",

@@ -28,16 +28,29 @@ pub fn gif(path: &Path, frames: &[RgbImage], fps: u32) -> Result<()> {
     })
 }
 
-/// Writes `frames` as `frame_00000.png`, ... into the folder `dir` (created).
+/// Writes `frames` as `frame_00000.png`, ... into the folder `dir` (created):
+/// all of them into a temporary folder beside it first, then moved into place
+/// (renames, which need no space), so a failure leaves no frames behind.
 ///
 /// # Errors
-/// I/O or encoding errors.
+/// I/O or encoding errors, naming the folder.
 pub fn png_folder(dir: &Path, frames: &[RgbImage]) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    for (k, f) in frames.iter().enumerate() {
-        let path = dir.join(format!("frame_{k:05}.png"));
-        atomic(&path, |tmp| Ok(f.save_with_format(tmp, image::ImageFormat::Png)?))?;
+    let tmp = crate::io::temp_path(dir);
+    let staged = crate::io::CreatedDir::create(&tmp).with_context(|| format!("cannot write {}", dir.display()))?;
+    let names: Vec<String> = (0..frames.len()).map(|k| format!("frame_{k:05}.png")).collect();
+    for (f, name) in frames.iter().zip(&names) {
+        f.save_with_format(tmp.join(name), image::ImageFormat::Png)
+            .with_context(|| format!("cannot write {}", dir.join(name).display()))?;
     }
+    if dir.exists() {
+        for name in &names {
+            std::fs::rename(tmp.join(name), dir.join(name))
+                .with_context(|| format!("cannot move {} into {}", name, dir.display()))?;
+        }
+    } else {
+        std::fs::rename(&tmp, dir).with_context(|| format!("cannot move {} to {}", tmp.display(), dir.display()))?;
+    }
+    drop(staged);
     Ok(())
 }
 
@@ -55,6 +68,13 @@ pub fn filmstrip_indices(len: usize, n: usize) -> Vec<usize> {
 /// # Errors
 /// No frames, I/O or encoding errors.
 pub fn filmstrip(path: &Path, frames: &[RgbImage], n: usize) -> Result<()> {
+    if n > frames.len() && !frames.is_empty() {
+        bail!(
+            "the episode has {} frames, --filmstrip {n} asks for more; give --filmstrip {} or less",
+            frames.len(),
+            frames.len()
+        );
+    }
     let picks = filmstrip_indices(frames.len(), n);
     let Some(first) = picks.first().map(|&k| &frames[k]) else {
         bail!("no frames to write to {}", path.display());

@@ -362,7 +362,7 @@ impl Task {
                 return Err(c.err(
                     span,
                     format!(
-                        "object {:?}: mass = {}: allowed are {} to {} kg (the simulation loses accuracy beyond)",
+                        "object {:?}: mass = {:?}: allowed are {} to {} kg (the simulation loses accuracy beyond)",
                         o.name, o.mass, MASS_KG.0, MASS_KG.1
                     ),
                 ));

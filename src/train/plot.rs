@@ -42,7 +42,7 @@ fn panel<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let draw = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e:?}");
+    let draw = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e}");
     let x_max = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)).fold(1e-9, f64::max);
     let mut chart = ChartBuilder::on(area)
         .margin(12)
@@ -85,7 +85,7 @@ fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> 
 /// [`two_panels`] drawn into the file `tmp`.
 fn two_panels_to(tmp: &Path, path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
     let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
-    let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
+    let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
     root.fill(&WHITE).map_err(draw)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
     let (left, right) = root.split_horizontally(700);
@@ -205,7 +205,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
     register_font()?;
     crate::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
-        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e:?}", path.display());
+        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
         root.fill(&WHITE).map_err(draw)?;
         let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
         let (left, right) = root.split_horizontally(700);
