@@ -103,6 +103,9 @@ pub const BENCH_UPDATES: Bound = bound("--updates", 1, 1_000_000, "");
 /// Threads of evaluations and benchmarks, each with its own environment.
 pub const THREADS: Bound =
     bound("--threads", 1, 256, "each thread steps its own MuJoCo environment; more than the cores only wait");
+/// Environments of one vector environment (Python's `VecEnv`).
+pub const NUM_ENVS: Bound =
+    bound("num_envs", 1, 4_096, "each environment holds its own MuJoCo model and data, a few MB");
 /// Workers of one training process (spread more over MPI ranks).
 pub const WORKERS: Bound = bound(
     "--workers",

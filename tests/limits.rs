@@ -90,6 +90,8 @@ fn numbers_without_an_upper_limit_are_refused_before_anything_is_created() {
     // A run that would not fit in memory is refused by its size, naming what to lower.
     let o = bp_in(cwd, &["train", "--env", "BlocksTouch-v0", "--workers", "256", "--buffer-size", "100000000"]);
     refused(&o, &["would need", "GB of memory", "lower --buffer-size"]);
+    let o = bp_in(cwd, &["train", "--env", "BlocksTouch-v0", "--hidden", "8192", "--layers", "32"]);
+    refused(&o, &["would need", "--layers 32 x --hidden 8192"]);
     assert!(entries(cwd).is_empty(), "{:?}", entries(cwd));
 }
 
@@ -318,7 +320,7 @@ fn on_small_fs(opts: &str, script: &str) -> Option<Output> {
         eprintln!("skipped: cannot mount a tmpfs here ({})", text(&probe).trim());
         return None;
     }
-    let m = tempfile::tempdir().unwrap().into_path();
+    let m = tempfile::tempdir().unwrap().keep();
     let full = format!("mount -t tmpfs -o {opts} tmpfs {m} && export M={m} BP={BP} && {script}", m = m.display());
     let out = Command::new("unshare").args(["-m", "sh", "-c", &full]).output().unwrap();
     let _ = std::fs::remove_dir_all(&m);

@@ -117,7 +117,11 @@ mod cli {
         let o = bp(&["render", "--traj", &traj, "--out", &path("x.png")], false);
         assert!(!o.status.success() && text(&o).contains("--filmstrip"), "{}", text(&o));
         let o = bp(&["render", "--traj", &traj, "--out", &path("x.gif"), "--fps", "0"], false);
-        assert!(!o.status.success() && text(&o).contains("--fps must be at least 1"), "{}", text(&o));
+        assert!(
+            !o.status.success() && text(&o).contains("'0' for '--fps") && text(&o).contains("1 to 100"),
+            "{}",
+            text(&o)
+        );
         let o = bp(&["render", "--traj", &traj, "--out", &path("x.mp4")], false);
         assert!(!o.status.success() && text(&o).contains(".mp4 is not written here"), "{}", text(&o));
         assert!(!std::path::Path::new(&path("x.mp4")).exists(), "nothing written");

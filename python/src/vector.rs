@@ -142,11 +142,10 @@ impl VecEnv {
     #[new]
     #[pyo3(signature = (task, num_envs, threads = 1))]
     fn new(task: &str, num_envs: usize, threads: usize) -> PyResult<Self> {
-        if num_envs == 0 {
-            return Err(PyValueError::new_err("num_envs must be at least 1"));
-        }
-        if threads == 0 {
-            return Err(PyValueError::new_err("threads must be at least 1"));
+        let threads_bound = blockpuzzle::limits::Bound { name: "threads", ..blockpuzzle::limits::THREADS };
+        let bounds = [(blockpuzzle::limits::NUM_ENVS, num_envs), (threads_bound, threads)];
+        for (bound, v) in bounds {
+            bound.check_usize(v).map_err(PyValueError::new_err)?;
         }
         let task = registry::task(task).map_err(to_py)?;
         let envs: Vec<BlockEnv> = (0..num_envs)

@@ -132,3 +132,10 @@ def test_a_vector_env_can_move_between_threads():
     closer.join()
     with pytest.raises(RuntimeError, match="closed"):
         envs.step(actions(2, 0))
+
+
+def test_absurd_sizes_are_refused_naming_the_range():
+    with pytest.raises(ValueError, match="num_envs = 100,000: allowed are 1 to 4,096"):
+        blockpuzzle.make_vec("BlocksTouch-v0", num_envs=100_000)
+    with pytest.raises(ValueError, match="threads = 0: allowed are 1 to 256"):
+        blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=0)

@@ -111,8 +111,9 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
 }
 
 /// The memory a run needs at most, in bytes: its replay buffers when full
-/// (or when they hold every transition the run collects, if fewer) and one
-/// update's batches and activations.
+/// (or when they hold every transition the run collects, if fewer), one
+/// update's batches and activations, and the networks (actor, critic, their
+/// targets and Adam's two moments of each: eight copies, twelve with TD3's twin).
 fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> u64 {
     let (workers, shards) = match config.replay_layout() {
         ReplayLayout::PerWorker => (1, config.workers),
@@ -128,8 +129,11 @@ fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episo
     let transition = 4 * (2 * obs_dim + act_dim + 4) as u64;
     let replay = stored.saturating_mul(transition).saturating_mul(shards as u64);
     let batch_rows = (config.batch_size as u64).saturating_mul(config.workers as u64);
-    let activations = (config.ddpg.hidden as u64) * (config.ddpg.layers as u64) * 16;
-    replay.saturating_add(batch_rows.saturating_mul(transition + activations))
+    let (hidden, layers) = (config.ddpg.hidden as u64, config.ddpg.layers as u64);
+    let activations = hidden * layers * 16;
+    let weights = hidden * (hidden * (layers - 1) + 2 * obs_dim as u64 + 2 * act_dim as u64 + 2);
+    let copies = if config.ddpg.td3 { 12 } else { 8 };
+    replay.saturating_add(batch_rows.saturating_mul(transition + activations)).saturating_add(4 * copies * weights)
 }
 
 /// Refuses a run whose replay buffers and batches would not fit in this
@@ -143,14 +147,16 @@ fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episod
     if need > have {
         bail!(
             "this run would need {} of memory (--workers {} with --buffer-size {} and --batch-size {}: replay \
-             buffers of {obs_dim}-dimensional observations, filled by {} epochs, and the update batches), more \
-             than this machine's {}; lower --buffer-size, --batch-size or --workers, or spread the workers over \
-             MPI ranks on several machines",
+             buffers of {obs_dim}-dimensional observations, filled by {} epochs, the update batches, and networks \
+             of --layers {} x --hidden {}), more than this machine's {}; lower --buffer-size, --batch-size, \
+             --hidden or --workers, or spread the workers over MPI ranks on several machines",
             crate::limits::gigabytes(need),
             config.workers,
             config.buffer_size,
             config.batch_size,
             config.epochs,
+            config.ddpg.layers,
+            config.ddpg.hidden,
             crate::limits::gigabytes(have)
         );
     }
