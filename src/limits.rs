@@ -77,6 +77,11 @@ impl Bound {
         }
         T::try_from(v).map_err(|_| format!("allowed are {self}"))
     }
+
+    /// [`Bound::parse`] as clap's value parser (`value_parser = WORKERS.parser::<usize>()`).
+    pub fn parser<T: TryFrom<u64>>(self) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static {
+        move |s: &str| self.parse(s)
+    }
 }
 
 const fn bound(name: &'static str, min: u64, max: u64, why: &'static str) -> Bound {

@@ -234,38 +234,20 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     assert!(o.status.success(), "{}", text(&o));
 
     let out = dir.path().join("table.md");
-    let o = bp(&[
-        "table",
-        "--expert",
-        expert.to_str().unwrap(),
-        "--pggd",
-        pggd.to_str().unwrap(),
-        "--pggd-alone",
-        "/nonexistent/run",
-        "--episodes",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let table = |extra: &[&str]| {
+        let (e, p, o) = (expert.to_str().unwrap(), pggd.to_str().unwrap(), out.to_str().unwrap());
+        let mut args = vec!["table", "--expert", e, "--pggd", p, "--pggd-alone", "/nonexistent/run"];
+        args.extend(["--episodes", "3", "--out", o]);
+        args.extend(extra);
+        bp(&args)
+    };
     // A row asked for that cannot be built fails the command, and nothing is written ...
+    let o = table(&[]);
     assert!(!o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("missing row PGGD alone (/nonexistent/run)"), "{}", text(&o));
     assert!(text(&o).contains("--allow-missing") && !out.exists(), "{}", text(&o));
     // ... unless --allow-missing.
-    let o = bp(&[
-        "table",
-        "--expert",
-        expert.to_str().unwrap(),
-        "--pggd",
-        pggd.to_str().unwrap(),
-        "--pggd-alone",
-        "/nonexistent/run",
-        "--episodes",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-        "--allow-missing",
-    ]);
+    let o = table(&["--allow-missing"]);
     assert!(o.status.success(), "{}", text(&o));
     let md = std::fs::read_to_string(&out).unwrap();
     assert_eq!(md, String::from_utf8_lossy(&o.stdout));

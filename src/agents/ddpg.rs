@@ -36,10 +36,10 @@ use tch::Tensor;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct DdpgConfig {
     /// Hidden layers of actor and critic.
-    #[arg(long, default_value_t = 3, value_parser = |s: &str| crate::limits::LAYERS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 3, value_parser = crate::limits::LAYERS.parser::<usize>())]
     pub layers: usize,
     /// Units per hidden layer.
-    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::limits::HIDDEN.parse::<usize>(s))]
+    #[arg(long, default_value_t = 256, value_parser = crate::limits::HIDDEN.parser::<usize>())]
     pub hidden: usize,
     /// Actor learning rate (Adam).
     #[arg(long, default_value_t = 1e-3)]
@@ -88,7 +88,7 @@ pub struct DdpgConfig {
     #[serde(default)]
     pub precision: Precision,
     /// Steps of reward summed before bootstrapping (1: the paper's one-step target).
-    #[arg(long, default_value_t = 1, value_parser = |s: &str| crate::limits::N_STEP.parse::<usize>(s))]
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::N_STEP.parser::<usize>())]
     #[serde(default = "one")]
     pub n_step: usize,
     /// TD3's changes: twin critics (clipped double Q), target policy smoothing, delayed actor updates.
@@ -104,7 +104,7 @@ pub struct DdpgConfig {
     #[serde(default = "target_noise_clip")]
     pub target_noise_clip: f64,
     /// TD3: the actor is updated on every this-many critic updates.
-    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::POLICY_DELAY.parse::<usize>(s))]
+    #[arg(long, default_value_t = 2, value_parser = crate::limits::POLICY_DELAY.parser::<usize>())]
     #[serde(default = "policy_delay")]
     pub policy_delay: usize,
 }

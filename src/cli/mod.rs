@@ -82,10 +82,10 @@ enum Command {
         /// Instead, measure env steps/s of the FetchPush-like scene with random
         /// actions, every episode starting from the reference's first state
         /// (the same scene as FetchPush-v4; its JSON as `bench --json` prints it).
-        #[arg(long, value_parser = |s: &str| crate::limits::BENCH_STEPS.parse::<usize>(s))]
+        #[arg(long, value_parser = crate::limits::BENCH_STEPS.parser::<usize>())]
         bench_steps: Option<usize>,
         /// Threads of --bench-steps, each stepping its own environment.
-        #[arg(long, default_value_t = 1, value_parser = threads)]
+        #[arg(long, default_value_t = 1, value_parser = crate::limits::THREADS.parser::<usize>())]
         threads: usize,
     },
 }
@@ -104,10 +104,10 @@ struct TaskCheckArgs {
     /// Task file (.toml) or registered id.
     file: String,
     /// Resets per level and distribution.
-    #[arg(long, default_value_t = 100, value_parser = |s: &str| crate::limits::CHECK_SAMPLES.parse::<u64>(s))]
+    #[arg(long, default_value_t = 100, value_parser = crate::limits::CHECK_SAMPLES.parser::<u64>())]
     samples: u64,
     /// Seed of the first reset (reset k uses seed + k).
-    #[arg(long, default_value_t = 0, value_parser = seed)]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Filmstrip PNG of one reset state per level and distribution.
     #[arg(long)]
@@ -141,10 +141,10 @@ struct TableArgs {
     #[arg(long)]
     zoo: bool,
     /// Episodes per cell.
-    #[arg(long, default_value_t = 1000, value_parser = eval_episodes)]
+    #[arg(long, default_value_t = 1000, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = seed)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Write the Markdown table here too (atomically).
     #[arg(long)]
@@ -154,7 +154,7 @@ struct TableArgs {
     #[arg(long)]
     allow_missing: bool,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
-    #[arg(long, value_parser = threads)]
+    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
 }
 
@@ -170,20 +170,20 @@ struct EvalArgs {
     #[arg(long)]
     challenge: bool,
     /// Curriculum level (default: the maximum).
-    #[arg(long, value_parser = index)]
+    #[arg(long, value_parser = crate::limits::COUNT.parser::<usize>())]
     level: Option<usize>,
     /// Episodes.
-    #[arg(long, default_value_t = 100, value_parser = eval_episodes)]
+    #[arg(long, default_value_t = 100, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = seed)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Where to write the JSON result (default: the run directory for a policy of a run,
     /// else the current folder, as eval-POLICY-TASK-DISTRIBUTION.json).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
-    #[arg(long, value_parser = threads)]
+    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
 }
 
@@ -196,13 +196,13 @@ struct RolloutArgs {
     #[arg(long, default_value = "scripted")]
     policy: String,
     /// Number of episodes.
-    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::ROLLOUT_EPISODES.parse::<usize>(s))]
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::ROLLOUT_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = 0, value_parser = seed)]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Curriculum level (default: the maximum, i.e. the evaluation distribution).
-    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = index)]
+    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = crate::limits::COUNT.parser::<usize>())]
     level: Option<usize>,
     /// Use the challenge distribution (the same as --distribution challenge).
     #[arg(long, conflicts_with = "distribution")]
@@ -226,10 +226,10 @@ struct RolloutArgs {
 #[derive(Debug, Clone, clap::Args)]
 struct ViewArgs {
     /// Frame width in pixels.
-    #[arg(long, default_value_t = 480, value_parser = pixels)]
+    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
     width: usize,
     /// Frame height in pixels.
-    #[arg(long, default_value_t = 480, value_parser = pixels)]
+    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
     height: usize,
     /// Camera distance from the point it looks at (m).
     #[arg(long, default_value_t = 2.5)]
@@ -246,10 +246,10 @@ struct ViewArgs {
 #[derive(Debug, Clone, clap::Args)]
 struct MovieArgs {
     /// Frames per second of a GIF.
-    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::FPS.parse::<u32>(s))]
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::FPS.parser::<u32>())]
     fps: u32,
     /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
-    #[arg(long, value_parser = |s: &str| crate::limits::FILMSTRIP.parse::<usize>(s))]
+    #[arg(long, value_parser = crate::limits::FILMSTRIP.parser::<usize>())]
     filmstrip: Option<usize>,
 }
 
@@ -273,7 +273,7 @@ struct RenderArgs {
     #[arg(long)]
     traj: Option<PathBuf>,
     /// Which episode of the dump (0-based).
-    #[arg(long, default_value_t = 0, requires = "traj", value_parser = index)]
+    #[arg(long, default_value_t = 0, requires = "traj", value_parser = crate::limits::COUNT.parser::<usize>())]
     episode: usize,
     /// Or play one episode of a trained policy (file, run directory or zoo name) and render it.
     #[arg(long)]
@@ -282,7 +282,7 @@ struct RenderArgs {
     #[arg(long, requires = "policy")]
     env: Option<String>,
     /// With --policy: the episode's seed.
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy", value_parser = seed)]
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy", value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// With --policy: the challenge distribution.
     #[arg(long, requires = "policy")]
@@ -302,10 +302,10 @@ struct BenchArgs {
     #[arg(long, default_value = "BlocksTouch-v0")]
     env: String,
     /// Steps per thread.
-    #[arg(long, default_value_t = 20_000, value_parser = |s: &str| crate::limits::BENCH_STEPS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 20_000, value_parser = crate::limits::BENCH_STEPS.parser::<usize>())]
     steps: usize,
     /// Threads, each stepping its own environment.
-    #[arg(long, default_value_t = 1, value_parser = threads)]
+    #[arg(long, default_value_t = 1, value_parser = crate::limits::THREADS.parser::<usize>())]
     threads: usize,
     /// Print one JSON line instead of text.
     #[arg(long)]
@@ -318,36 +318,25 @@ struct BenchArgs {
     #[arg(long, conflicts_with_all = ["threads", "no_collision_filter"])]
     ddpg: bool,
     /// DDPG: collection workers, each stepping its own environment.
-    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = |s: &str| crate::limits::WORKERS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = crate::limits::WORKERS.parser::<usize>())]
     workers: usize,
     /// DDPG: gradient updates to time.
-    #[arg(long, default_value_t = 300, requires = "ddpg", value_parser = |s: &str| crate::limits::BENCH_UPDATES.parse::<usize>(s))]
+    #[arg(long, default_value_t = 300, requires = "ddpg", value_parser = crate::limits::BENCH_UPDATES.parser::<usize>())]
     updates: usize,
     /// DDPG: transitions per update batch.
-    #[arg(long, default_value_t = 256, requires = "ddpg", value_parser = |s: &str| crate::limits::BATCH_SIZE.parse::<usize>(s))]
+    #[arg(long, default_value_t = 256, requires = "ddpg", value_parser = crate::limits::BATCH_SIZE.parser::<usize>())]
     batch_size: usize,
     /// DDPG: threads libtorch may use for the updates (at most the number of cores).
-    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = index)]
+    #[arg(long, default_value_t = 1, requires = "ddpg", value_parser = crate::limits::COUNT.parser::<usize>())]
     torch_threads: usize,
     /// DDPG: seed of networks, layouts and noise.
-    #[arg(long, default_value_t = 0, requires = "ddpg", value_parser = seed)]
+    #[arg(long, default_value_t = 0, requires = "ddpg", value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
     /// DDPG: arithmetic of the updates' hidden-layer products.
     #[arg(long, value_enum, default_value = "f32", requires = "ddpg")]
     precision: crate::agents::ddpg::Precision,
 }
 
-// Value parsers of the flags that take whole numbers: each names its range,
-// and a negative number reaches them (instead of reading as a flag).
-fn seed(s: &str) -> Result<u64, String> {
-    crate::limits::SEED.parse(s)
-}
-fn eval_episodes(s: &str) -> Result<usize, String> {
-    crate::limits::EVAL_EPISODES.parse(s)
-}
-fn threads(s: &str) -> Result<usize, String> {
-    crate::limits::THREADS.parse(s)
-}
 /// A progress bar of `len` steps named `what` on stderr (drawn on a terminal only).
 pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(len);
@@ -356,14 +345,6 @@ pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
         indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar
-}
-
-/// An index or count with no bound of its own (a level, an episode of a dump).
-fn index(s: &str) -> Result<usize, String> {
-    crate::limits::COUNT.parse(s)
-}
-fn pixels(s: &str) -> Result<usize, String> {
-    crate::limits::FRAME_PIXELS.parse(s)
 }
 
 /// The command line's definition, every value-taking flag accepting a
@@ -377,9 +358,8 @@ fn command() -> clap::Command {
     negatives(<Cli as clap::CommandFactory>::command())
 }
 
-/// An error and its causes on one line, each cause once: a message that
-/// already ends with its cause's text (`cannot read X: No such file`) does
-/// not repeat it.
+/// An error and its causes on one line, each cause once: a cause whose text
+/// the message already holds (`cannot read X: No such file`) is not repeated.
 pub fn error_text(e: &anyhow::Error) -> String {
     let mut text = String::new();
     for cause in e.chain() {

@@ -60,25 +60,25 @@ pub struct TrainConfig {
     #[arg(long)]
     pub env: String,
     /// Parallel workers (the paper's MPI workers), one environment each.
-    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::WORKERS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 2, value_parser = crate::limits::WORKERS.parser::<usize>())]
     pub workers: usize,
     /// Epochs to train (a resumed run continues up to this many).
-    #[arg(long, default_value_t = 200, value_parser = |s: &str| crate::limits::EPOCHS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 200, value_parser = crate::limits::EPOCHS.parser::<usize>())]
     pub epochs: usize,
     /// Cycles per epoch.
-    #[arg(long, default_value_t = 50, value_parser = |s: &str| crate::limits::CYCLES.parse::<usize>(s))]
+    #[arg(long, default_value_t = 50, value_parser = crate::limits::CYCLES.parser::<usize>())]
     pub cycles: usize,
     /// Exploration episodes per worker per cycle.
-    #[arg(long, default_value_t = 2, value_parser = |s: &str| crate::limits::ROLLOUTS.parse::<usize>(s))]
+    #[arg(long, default_value_t = 2, value_parser = crate::limits::ROLLOUTS.parser::<usize>())]
     pub rollouts: usize,
     /// Gradient steps per cycle.
-    #[arg(long, default_value_t = PAPER_BATCHES, value_parser = |s: &str| crate::limits::BATCHES.parse::<usize>(s))]
+    #[arg(long, default_value_t = PAPER_BATCHES, value_parser = crate::limits::BATCHES.parser::<usize>())]
     pub batches: usize,
     /// Transitions per batch and worker.
-    #[arg(long, default_value_t = 256, value_parser = |s: &str| crate::limits::BATCH_SIZE.parse::<usize>(s))]
+    #[arg(long, default_value_t = 256, value_parser = crate::limits::BATCH_SIZE.parser::<usize>())]
     pub batch_size: usize,
     /// Replay buffer capacity in transitions, per worker (`--replay shared`: per process).
-    #[arg(long, default_value_t = 1_000_000, value_parser = |s: &str| crate::limits::BUFFER_SIZE.parse::<usize>(s))]
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::limits::BUFFER_SIZE.parser::<usize>())]
     pub buffer_size: usize,
     /// How workers share replay: `per-worker` (the paper's MPI workers: each
     /// worker keeps its buffer, samples its batch and computes its gradient,
@@ -90,17 +90,17 @@ pub struct TrainConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayLayout>,
     /// Test and finals episodes per worker per epoch.
-    #[arg(long, default_value_t = 10, value_parser = |s: &str| crate::limits::TEST_EPISODES.parse::<usize>(s))]
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::TEST_EPISODES.parser::<usize>())]
     pub test_episodes: usize,
     /// Test success rate that moves the curriculum up a level (default: the
     /// task file's `curriculum.success_threshold`, 0.7 for the paper's tasks).
     #[arg(long)]
     pub success_threshold: Option<f64>,
     /// Seed of everything (weights, layouts, exploration, batches).
-    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::SEED.parse::<u64>(s))]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
     pub seed: u64,
     /// Threads libtorch may use for updates (0: all cores; at most the number of cores).
-    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::COUNT.parse::<usize>(s))]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::COUNT.parser::<usize>())]
     pub torch_threads: usize,
     /// Probability that an exploration episode plays a uniformly drawn lower
     /// level instead of the current one (0: the paper's curriculum).
@@ -114,7 +114,7 @@ pub struct TrainConfig {
     pub challenge_share: f64,
     /// Also keep the policy of every Nth epoch as `snapshots/epoch-NNNN.json`
     /// (0: never); earlier policies for AggreVaTeD experts or learning-curve studies.
-    #[arg(long, default_value_t = 0, value_parser = |s: &str| crate::limits::COUNT.parse::<usize>(s))]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::COUNT.parser::<usize>())]
     #[serde(default)]
     pub snapshot_every: usize,
     /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
