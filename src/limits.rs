@@ -95,6 +95,9 @@ pub const SEED: Bound = bound("--seed", 0, u64::MAX, "");
 /// Episodes of an evaluation (`eval`, `table`, `zoo export --evaluate`).
 pub const EVAL_EPISODES: Bound =
     bound("--episodes", 1, 1_000_000, "a success rate's 95% interval is ±0.001 at a million episodes");
+/// Episodes of each evaluation of `zoo export --evaluate` (0: none).
+pub const EXPORT_EPISODES: Bound =
+    bound("--evaluate", 0, 1_000_000, "0: no evaluation; a 95% interval is ±0.001 at a million episodes");
 /// Episodes of a trajectory dump (`rollout`).
 pub const ROLLOUT_EPISODES: Bound =
     bound("--episodes", 1, 100_000, "every episode adds about 50 kB to the dump: 100,000 make about 5 GB");

@@ -44,7 +44,7 @@ pub(super) struct ZooExportArgs {
     /// Evaluate it first on this many episodes (seeds 1,000,000 on) at the
     /// maximum level and, where the task has one, in the challenge distribution,
     /// and record the results (0: no evaluation).
-    #[arg(long, default_value_t = 0, value_parser = |s: &str| if s.trim() == "0" { Ok(0) } else { crate::limits::EVAL_EPISODES.parse::<usize>(s) })]
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::EXPORT_EPISODES.parser::<usize>())]
     evaluate: usize,
     /// The tasks to evaluate on, repeatable (default: the one it was trained on;
     /// e.g. BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
