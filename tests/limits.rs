@@ -370,3 +370,19 @@ fn a_full_or_read_only_disk_fails_cleanly_naming_the_path() {
     assert!(t.contains("rc=1") && t.contains("/o.png: Read-only file system"), "{t}");
     assert!(!t.contains("BackendError"), "{t}");
 }
+
+#[test]
+fn long_commands_show_progress_on_a_terminal() {
+    // `script` gives the command a terminal (indicatif draws nothing elsewhere).
+    let on_tty = |args: &str| Command::new("script").args(["-qec", &format!("{BP} {args}"), "/dev/null"]).output();
+    let Ok(o) = on_tty("task check BlocksTouch-v0 --samples 5") else {
+        eprintln!("skipped: no `script` to give the command a terminal");
+        return;
+    };
+    assert!(o.status.success() && text(&o).contains("reset 1/30"), "{}", text(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.json");
+    let o = on_tty(&format!("eval --checkpoint BlocksTouch-v0-ddpg --episodes 3 --threads 1 --out {}", out.display()))
+        .unwrap();
+    assert!(text(&o).contains("episode 1/3") || text(&o).contains("episode 0/3"), "{}", text(&o));
+}
