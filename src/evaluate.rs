@@ -8,8 +8,8 @@ use crate::env::{BlockEnv, EnvConfig, ACTION_DIM};
 use crate::outcome::{Outcome, Outcomes};
 use crate::policy::Policy;
 use crate::rollout::run_episode;
+use crate::saved::SavedPolicy;
 use crate::task::Task;
-use crate::train::SavedPolicy;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -141,7 +141,7 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     let policy = trained_policy(path, saved, &env)?;
     let threads = spec.threads.clamp(1, spec.episodes);
     // On a terminal only (indicatif draws nothing elsewhere).
-    let bar = crate::cli::progress_bar(spec.episodes as u64, "episode");
+    let bar = crate::progress::bar(spec.episodes as u64, "episode");
     let tallies: Vec<Result<Outcomes>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|t| {
@@ -178,6 +178,21 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
         grey_blind: policy.grey_blind(),
         outcomes,
     })
+}
+
+impl From<Evaluation> for crate::zoo::ZooEvaluation {
+    fn from(e: Evaluation) -> Self {
+        Self {
+            env: e.env,
+            distribution: if e.challenge { "challenge" } else { "normal" }.into(),
+            grey_blind: e.grey_blind,
+            episodes: e.episodes,
+            seed: e.seed,
+            success_rate: e.success_rate,
+            ci95: e.ci95,
+            outcomes: Some(e.outcomes),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -73,6 +73,23 @@ pub fn write_atomic(
     }
 }
 
+/// Writes `bytes` to `path` atomically.
+///
+/// # Errors
+/// I/O errors, naming the path.
+pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    use anyhow::Context;
+    write_atomic(path, |f| f.write_all(bytes)).with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes `value` to `path` atomically as pretty JSON.
+///
+/// # Errors
+/// Encoding or I/O errors, naming the path.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    write_file(path, &serde_json::to_vec_pretty(value)?)
+}
+
 /// Writes `path` atomically through a library that writes to a path of its
 /// own choosing (images, plots, CSV): `write` gets the temporary path.
 ///

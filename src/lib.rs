@@ -42,6 +42,12 @@ pub mod cli;
 #[cfg(feature = "train")]
 pub mod evaluate;
 #[cfg(feature = "train")]
+pub mod load;
+#[cfg(feature = "train")]
+pub mod progress;
+#[cfg(feature = "train")]
+pub mod saved;
+#[cfg(feature = "train")]
 pub mod table;
 #[cfg(feature = "train")]
 pub mod train;

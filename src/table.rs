@@ -4,7 +4,7 @@
 //! paper's numbers beside them. Rows without a trained policy say so.
 
 use crate::evaluate::{evaluate, EvalSpec, Evaluation};
-use crate::train::load_policy;
+use crate::load::load_policy;
 use anyhow::Result;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -21,15 +21,15 @@
 //!
 //! Every consumer of policies (`eval`, `rollout --policy`, `render
 //! --policy`, `table`, AggreVaTeD's `--expert`) takes a zoo name as well as
-//! a file or run directory: [`crate::train::load_policy`].
+//! a file or run directory: [`crate::load::load_policy`].
 
 use crate::agents::ddpg::DdpgPolicy;
 use crate::agents::mlp::{Dense, TanhMlp};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::pggd::PggdPolicy;
 use crate::agents::AnyPolicy;
+use crate::saved::SavedPolicy;
 use crate::task::TaskSource;
-use crate::train::SavedPolicy;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -98,21 +98,6 @@ pub struct ZooEvaluation {
     /// Episodes per outcome ([`crate::outcome`]; absent in format 1 entries).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outcomes: Option<crate::outcome::Outcomes>,
-}
-
-impl From<crate::evaluate::Evaluation> for ZooEvaluation {
-    fn from(e: crate::evaluate::Evaluation) -> Self {
-        Self {
-            env: e.env,
-            distribution: if e.challenge { "challenge" } else { "normal" }.into(),
-            grey_blind: e.grey_blind,
-            episodes: e.episodes,
-            seed: e.seed,
-            success_rate: e.success_rate,
-            ci95: e.ci95,
-            outcomes: Some(e.outcomes),
-        }
-    }
 }
 
 /// `NAME.json`: everything about an entry but its tensors.
@@ -372,9 +357,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         return Err(ZooError::NotAFolder { zoo: zoo.to_owned() });
     }
     std::fs::create_dir_all(zoo).map_err(io(zoo))?;
-    crate::train::write_atomic(&tensors_path, &bytes).map_err(|e| corrupt(format!("{e:#}")))?;
+    crate::io::write_file(&tensors_path, &bytes).map_err(|e| corrupt(format!("{e:#}")))?;
     let json = serde_json::to_vec_pretty(&meta).map_err(|e| corrupt(e.to_string()))?;
-    crate::train::write_atomic(&tensors_path.with_extension("json"), &json).map_err(|e| corrupt(format!("{e:#}")))?;
+    crate::io::write_file(&tensors_path.with_extension("json"), &json).map_err(|e| corrupt(format!("{e:#}")))?;
     Ok(tensors_path)
 }
 

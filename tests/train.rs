@@ -4,9 +4,10 @@
 
 use blockpuzzle::agents::ddpg::DdpgConfig;
 use blockpuzzle::agents::AnyPolicy;
+use blockpuzzle::load::load_policy;
 use blockpuzzle::train::{
-    branch, checkpoint, load_policy, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight,
-    ReplayLayout, TrainConfig,
+    branch, checkpoint, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout,
+    TrainConfig,
 };
 use std::path::Path;
 
@@ -446,7 +447,7 @@ fn bad_expert_settings_are_clear_errors() {
 
 #[test]
 fn expert_advantage_uses_the_critic_of_the_experts_epoch() {
-    use blockpuzzle::train::SavedPolicy;
+    use blockpuzzle::saved::SavedPolicy;
     let exp = tempfile::tempdir().unwrap();
     expert(exp.path());
     let adv = |expert: &Path| AggrevatedConfig {
@@ -524,7 +525,7 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     let run = dir.path().join("run");
     let env = file.to_str().unwrap();
     train(&tiny(env, 1), &run, false, &mut quiet).unwrap();
-    let saved = blockpuzzle::train::load_policy(&run).unwrap();
+    let saved = blockpuzzle::load::load_policy(&run).unwrap();
     assert_eq!(saved.env_id, "MyReach-v0");
     assert_eq!(saved.task.as_ref().unwrap().id, "MyReach-v0");
     assert!(std::fs::read_to_string(run.join("config.json")).unwrap().contains("MyReach-v0"));
@@ -544,7 +545,7 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     std::fs::remove_file(&file).unwrap();
     let rows = train(&tiny(env, 3), &run, true, &mut quiet).unwrap();
     assert_eq!(rows.len(), 3);
-    let saved = blockpuzzle::train::load_policy(&run).unwrap();
+    let saved = blockpuzzle::load::load_policy(&run).unwrap();
     let task = blockpuzzle::env::registry::recorded(saved.task.as_ref().unwrap()).unwrap();
     assert_eq!((task.id(), task.spec.max_episode_steps), ("MyReach-v0", 50));
 }

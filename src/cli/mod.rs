@@ -337,16 +337,6 @@ struct BenchArgs {
     precision: crate::agents::ddpg::Precision,
 }
 
-/// A progress bar of `len` steps named `what` on stderr (drawn on a terminal only).
-pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::new(len);
-    let template = format!("{{bar:30}} {what} {{pos}}/{{len}} [{{elapsed_precise}} < {{eta_precise}}]");
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
-}
-
 /// The command line's definition, every value-taking flag accepting a
 /// leading '-' so that `--episodes -3` reaches the flag's parser and its
 /// range is named, rather than '-3' reading as an unknown flag.
@@ -451,7 +441,7 @@ pub fn main() -> Result<()> {
             if let Some(png) = plot {
                 let episodes: Vec<(String, Vec<[f64; 2]>)> =
                     all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
-                crate::train::plot::deviations(&png, &title, &episodes)?;
+                crate::train::plot::deviations(&png, &title, &episodes, crate::align::TOLERANCE)?;
                 println!("wrote {}", png.display());
             }
             Ok(())
@@ -521,7 +511,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
         path => Box::new(crate::evaluate::trained_policy(
             Path::new(path),
-            crate::train::load_policy(Path::new(path))?,
+            crate::load::load_policy(Path::new(path))?,
             &env,
         )?),
     };
@@ -572,7 +562,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
         }
     }
     let settings = crate::check::settings(&registry::task(&a.file)?).len() as u64;
-    let bar = progress_bar(settings * a.samples, "reset");
+    let bar = crate::progress::bar(settings * a.samples, "reset");
     let report = crate::check::check(&a.file, a.samples, a.seed, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let task = &report.task;
@@ -620,7 +610,7 @@ fn render(a: RenderArgs) -> Result<()> {
             (frames, fps, format!("episode {}", a.episode))
         }
         (None, Some(path)) => {
-            let saved = crate::train::load_policy(path)?;
+            let saved = crate::load::load_policy(path)?;
             let task = policy_task(a.env.as_deref(), &saved)?;
             let mut env = BlockEnv::new(crate::env::EnvConfig::new(task))?;
             env.set_distribution(a.challenge.then_some("challenge"))?;
@@ -652,7 +642,7 @@ fn render(a: RenderArgs) -> Result<()> {
 
 /// The task to run a policy on: the one named, else the one it was trained
 /// on (its recorded copy if the file moved or changed).
-fn policy_task(env: Option<&str>, saved: &crate::train::SavedPolicy) -> Result<crate::task::Task> {
+fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) -> Result<crate::task::Task> {
     Ok(match (env, &saved.task) {
         (Some(env), _) => registry::task(env)?,
         (None, Some(source)) => registry::recorded(source)?,
@@ -705,7 +695,7 @@ fn table(a: TableArgs) -> Result<()> {
     let md = crate::table::markdown(&done, task.id(), a.episodes, a.seed);
     print!("{md}");
     if let Some(out) = &a.out {
-        crate::train::write_atomic(out, md.as_bytes())?;
+        crate::io::write_file(out, md.as_bytes())?;
     }
     Ok(())
 }
@@ -730,7 +720,7 @@ fn eval_out(checkpoint: &Path, task: &str, distribution: &str) -> PathBuf {
 }
 
 fn eval(a: EvalArgs) -> Result<()> {
-    let saved = crate::train::load_policy(&a.checkpoint)?;
+    let saved = crate::load::load_policy(&a.checkpoint)?;
     let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
@@ -754,7 +744,7 @@ fn eval(a: EvalArgs) -> Result<()> {
         _ => "normal".to_owned(),
     };
     let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &id, &distribution));
-    crate::train::write_json_atomic(&out, &result)?;
+    crate::io::write_json(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",
         if a.challenge { " challenge" } else { "" },

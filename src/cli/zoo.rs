@@ -120,7 +120,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             let zoo = folder(a.zoo);
             // Before the evaluations, which may take long.
             crate::zoo::entry_free(&zoo, &a.name, a.force)?;
-            let saved = crate::train::load_policy(&a.from)?;
+            let saved = crate::load::load_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);

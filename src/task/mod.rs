@@ -274,208 +274,18 @@ impl Task {
 
     fn compile(spec: TaskSpec, text: &str, path: Option<&Path>, origin: &str) -> Result<Task, TaskError> {
         let c = Checker { origin, text };
-        if spec.version != FORMAT_VERSION {
-            return Err(c.err(None, format!("version = {}: this build reads task files of version {FORMAT_VERSION}; write version = {FORMAT_VERSION}", spec.version)));
-        }
-        if !is_safe_id(&spec.id) {
-            return Err(c.err(
-                field_span(text, "id"),
-                format!(
-                    "id = {:?}: give a versioned id such as \"MyTask-v0\" (a letter, then letters, digits, '_' or \
-                     '-', ending in -vN; at most 64 characters: ids name files)",
-                    spec.id
-                ),
-            ));
-        }
-        crate::limits::EPISODE_STEPS
-            .check_usize(spec.max_episode_steps)
-            .map_err(|e| c.err(field_span(text, "max_episode_steps"), e))?;
-        if !spec.robot.extra_height.is_finite() {
-            return Err(c.err(None, "robot.extra_height must be a finite number of metres"));
-        }
+        check_settings(&c, &spec)?;
+        check_objects(&c, &spec)?;
         let cur = &spec.curriculum;
-        if cur.max_level > MAX_LEVEL {
-            return Err(c.err(None, format!("curriculum.max_level = {} is above the limit {MAX_LEVEL}", cur.max_level)));
-        }
-        if !(0.0..=1.0).contains(&cur.success_threshold) {
-            return Err(c.err(None, "curriculum.success_threshold must be in [0, 1]"));
-        }
-        let p = &spec.placement;
-        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        if !(non_negative(p.min_separation)
-            && p.table_margin.is_finite()
-            && non_negative(p.settle_seconds)
-            && positive(p.settle_tolerance))
-        {
-            return Err(c.err(
-                None,
-                "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite",
-            ));
-        }
-        if !crate::limits::within(p.settle_seconds, crate::limits::SETTLE_SECONDS) {
-            return Err(c.err(
-                field_span(text, "settle_seconds"),
-                format!("placement.settle_seconds = {}: allowed are 0 to 10 s of simulated time", p.settle_seconds),
-            ));
-        }
-        for (name, v) in [("max_attempts", p.max_attempts), ("max_reset_attempts", p.max_reset_attempts)] {
-            crate::limits::PLACEMENT_ATTEMPTS
-                .check_usize(v)
-                .map_err(|e| c.err(field_span(text, name), format!("placement.{name}: {e}")))?;
-        }
-
-        // Objects: names, shapes, colours.
-        if spec.objects.is_empty() {
-            return Err(c.err(None, "the task has no objects: add [[objects]] entries"));
-        }
-        if spec.objects.len() > MAX_TASK_OBJECTS {
-            return Err(c.err(
-                Some(spec.objects[MAX_TASK_OBJECTS].span()),
-                format!("too many objects: {} (at most {MAX_TASK_OBJECTS})", spec.objects.len()),
-            ));
-        }
-        let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
-        for (i, o) in spec.objects.iter().enumerate() {
-            let (span, o) = (Some(o.span()), o.get_ref());
-            if o.name.trim().is_empty() || RESERVED_NAMES.contains(&o.name.as_str()) {
-                return Err(c.err(
-                    span,
-                    format!("object name {:?} is empty or reserved (gripper, table, floor): choose another", o.name),
-                ));
-            }
-            if names[..i].contains(&o.name.as_str()) {
-                return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
-            }
-            use crate::limits::{within, FRICTION, HALF_EXTENT_M, MASS_KG};
-            if !o.half_extents.iter().all(|&h| within(h, HALF_EXTENT_M)) {
-                return Err(c.err(
-                    span,
-                    format!(
-                        "object {:?}: half_extents = {:?}: each must be from {} to {} m (a block wider than the \
-                         0.5 × 0.7 m table cannot stand on it)",
-                        o.name, o.half_extents, HALF_EXTENT_M.0, HALF_EXTENT_M.1
-                    ),
-                ));
-            }
-            if !within(o.mass, MASS_KG) {
-                return Err(c.err(
-                    span,
-                    format!(
-                        "object {:?}: mass = {:?}: allowed are {} to {} kg (the simulation loses accuracy beyond)",
-                        o.name, o.mass, MASS_KG.0, MASS_KG.1
-                    ),
-                ));
-            }
-            if o.friction.is_some_and(|f| !f.iter().all(|&v| within(v, FRICTION))) {
-                return Err(c.err(
-                    span,
-                    format!("object {:?}: friction values must be from {} to {}", o.name, FRICTION.0, FRICTION.1),
-                ));
-            }
-        }
-        let mut colours = vec![spec.robot.gripper, spec.table.colour];
-        colours.extend(spec.objects.iter().map(|o| o.get_ref().colour));
-        colours.extend(spec.floor.as_ref().map(|f| f.colour));
-        Rules::new(colours).map_err(|e| c.err(None, format!("{e} (the gripper, table and floor count too)")))?;
-
         // Parameters in dependency order, then their values at every level.
         let order = param_order(&c, &cur.params)?;
         let names_all: Vec<String> = order.iter().map(|(n, _)| n.clone()).collect();
         let values = (0..=cur.max_level)
             .map(|level| eval_params(&c, &order, level, cur.max_level, &BTreeMap::new()))
             .collect::<Result<Vec<_>, _>>()?;
-
-        let starts = spec
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(i, o)| sampler::Placement::compile(&c, &spec, i, &o.get_ref().start, Some(o.span())))
-            .collect::<Result<Vec<_>, _>>()?;
-        fn scope<'a>(names: &'a [String], values: &'a [f64], level: usize, max_level: usize) -> Scope<'a> {
-            Scope { names, values, level, max_level }
-        }
-        for (level, vals) in values.iter().enumerate() {
-            for (i, s) in starts.iter().enumerate() {
-                s.check(
-                    &c,
-                    &scope(&names_all, vals, level, cur.max_level),
-                    &spec.objects[i],
-                    &format!("at level {level}"),
-                )?;
-            }
-        }
-
-        let mut distributions = Vec::new();
-        for (name, d) in &spec.distributions {
-            // (toml cannot give spans of tables made implicitly by a dotted header.)
-            let span = key_span(text, &format!("distributions.{name}"));
-            let level = d.level.unwrap_or(cur.max_level);
-            if level > cur.max_level {
-                return Err(c.err(
-                    span,
-                    format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level),
-                ));
-            }
-            for key in d.params.keys() {
-                if !cur.params.contains_key(key) {
-                    return Err(c.err(span, format!("distribution {name:?} replaces parameter {key:?}, which [curriculum.params] does not define")));
-                }
-            }
-            let vals = eval_params(&c, &order, level, cur.max_level, &d.params)?;
-            let mut dstarts = starts.clone();
-            for (obj, start) in &d.starts {
-                let Some(i) = names.iter().position(|n| n == obj) else {
-                    return Err(c.err(
-                        span,
-                        format!(
-                            "distribution {name:?} gives a start for {obj:?}, which is not an object (objects: {})",
-                            names.join(", ")
-                        ),
-                    ));
-                };
-                dstarts[i] = sampler::Placement::compile(&c, &spec, i, start, span.clone())?;
-            }
-            for (i, s) in dstarts.iter().enumerate() {
-                s.check(
-                    &c,
-                    &scope(&names_all, &vals, level, cur.max_level),
-                    &spec.objects[i],
-                    &format!("in distribution {name:?}"),
-                )?;
-            }
-            distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts });
-        }
-
-        let mut shuffle = Vec::new();
-        let mut seen = Vec::new();
-        for group in &spec.shuffle {
-            let mut idx = Vec::new();
-            for n in group {
-                let Some(i) = names.iter().position(|m| m == n) else {
-                    return Err(c.err(
-                        None,
-                        format!("shuffle names {n:?}, which is not an object (objects: {})", names.join(", ")),
-                    ));
-                };
-                if seen.contains(&i) {
-                    return Err(c.err(None, format!("object {n:?} is in two shuffle groups (or twice in one)")));
-                }
-                seen.push(i);
-                idx.push(i);
-            }
-            if idx.len() < 2 {
-                return Err(c.err(None, "a shuffle group needs at least two objects"));
-            }
-            let shape = |i: usize| {
-                let o = spec.objects[i].get_ref();
-                (o.kind, o.half_extents, o.mass, o.friction)
-            };
-            if idx.iter().any(|&i| shape(i) != shape(idx[0])) {
-                return Err(c.err(None, format!("shuffle group {group:?}: the objects must have the same kind, size, mass and friction (only their roles move)")));
-            }
-            shuffle.push(idx);
-        }
+        let starts = compile_starts(&c, &spec, &names_all, &values)?;
+        let distributions = compile_distributions(&c, &spec, &order, &names_all, &starts)?;
+        let shuffle = compile_shuffle(&c, &spec)?;
 
         let hash = canonical_hash(&spec);
         let source = TaskSource { id: spec.id.clone(), path: path.map(Path::to_path_buf), toml: text.to_owned(), hash };
@@ -584,6 +394,239 @@ fn parse_value(c: &Checker, span: Option<std::ops::Range<usize>>, what: &str, v:
 
 /// Parameters sorted so that each comes after those it reads; cycles and
 /// unknown names are errors.
+/// The task's settings outside objects and parameters: format version, id,
+/// episode length, robot, curriculum and placement, each within its range.
+fn check_settings(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
+    let text = c.text;
+    if spec.version != FORMAT_VERSION {
+        return Err(c.err(None, format!("version = {}: this build reads task files of version {FORMAT_VERSION}; write version = {FORMAT_VERSION}", spec.version)));
+    }
+    if !is_safe_id(&spec.id) {
+        return Err(c.err(
+            field_span(text, "id"),
+            format!(
+                "id = {:?}: give a versioned id such as \"MyTask-v0\" (a letter, then letters, digits, '_' or \
+                 '-', ending in -vN; at most 64 characters: ids name files)",
+                spec.id
+            ),
+        ));
+    }
+    crate::limits::EPISODE_STEPS
+        .check_usize(spec.max_episode_steps)
+        .map_err(|e| c.err(field_span(text, "max_episode_steps"), e))?;
+    if !spec.robot.extra_height.is_finite() {
+        return Err(c.err(None, "robot.extra_height must be a finite number of metres"));
+    }
+    let cur = &spec.curriculum;
+    if cur.max_level > MAX_LEVEL {
+        return Err(c.err(None, format!("curriculum.max_level = {} is above the limit {MAX_LEVEL}", cur.max_level)));
+    }
+    if !(0.0..=1.0).contains(&cur.success_threshold) {
+        return Err(c.err(None, "curriculum.success_threshold must be in [0, 1]"));
+    }
+    let p = &spec.placement;
+    let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    if !(non_negative(p.min_separation)
+        && p.table_margin.is_finite()
+        && non_negative(p.settle_seconds)
+        && positive(p.settle_tolerance))
+    {
+        return Err(
+            c.err(None, "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite")
+        );
+    }
+    if !crate::limits::within(p.settle_seconds, crate::limits::SETTLE_SECONDS) {
+        return Err(c.err(
+            field_span(text, "settle_seconds"),
+            format!("placement.settle_seconds = {}: allowed are 0 to 10 s of simulated time", p.settle_seconds),
+        ));
+    }
+    for (name, v) in [("max_attempts", p.max_attempts), ("max_reset_attempts", p.max_reset_attempts)] {
+        crate::limits::PLACEMENT_ATTEMPTS
+            .check_usize(v)
+            .map_err(|e| c.err(field_span(text, name), format!("placement.{name}: {e}")))?;
+    }
+    Ok(())
+}
+
+/// Objects: names, shapes and masses in range, and colours the rules accept.
+fn check_objects(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
+    if spec.objects.is_empty() {
+        return Err(c.err(None, "the task has no objects: add [[objects]] entries"));
+    }
+    if spec.objects.len() > MAX_TASK_OBJECTS {
+        return Err(c.err(
+            Some(spec.objects[MAX_TASK_OBJECTS].span()),
+            format!("too many objects: {} (at most {MAX_TASK_OBJECTS})", spec.objects.len()),
+        ));
+    }
+    let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
+    for (i, o) in spec.objects.iter().enumerate() {
+        let (span, o) = (Some(o.span()), o.get_ref());
+        if o.name.trim().is_empty() || RESERVED_NAMES.contains(&o.name.as_str()) {
+            return Err(c.err(
+                span,
+                format!("object name {:?} is empty or reserved (gripper, table, floor): choose another", o.name),
+            ));
+        }
+        if names[..i].contains(&o.name.as_str()) {
+            return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
+        }
+        use crate::limits::{within, FRICTION, HALF_EXTENT_M, MASS_KG};
+        if !o.half_extents.iter().all(|&h| within(h, HALF_EXTENT_M)) {
+            return Err(c.err(
+                span,
+                format!(
+                    "object {:?}: half_extents = {:?}: each must be from {} to {} m (a block wider than the \
+                     0.5 × 0.7 m table cannot stand on it)",
+                    o.name, o.half_extents, HALF_EXTENT_M.0, HALF_EXTENT_M.1
+                ),
+            ));
+        }
+        if !within(o.mass, MASS_KG) {
+            return Err(c.err(
+                span,
+                format!(
+                    "object {:?}: mass = {:?}: allowed are {} to {} kg (the simulation loses accuracy beyond)",
+                    o.name, o.mass, MASS_KG.0, MASS_KG.1
+                ),
+            ));
+        }
+        if o.friction.is_some_and(|f| !f.iter().all(|&v| within(v, FRICTION))) {
+            return Err(c.err(
+                span,
+                format!("object {:?}: friction values must be from {} to {}", o.name, FRICTION.0, FRICTION.1),
+            ));
+        }
+    }
+    let mut colours = vec![spec.robot.gripper, spec.table.colour];
+    colours.extend(spec.objects.iter().map(|o| o.get_ref().colour));
+    colours.extend(spec.floor.as_ref().map(|f| f.colour));
+    Rules::new(colours).map_err(|e| c.err(None, format!("{e} (the gripper, table and floor count too)")))?;
+    Ok(())
+}
+
+/// Every object's start, checked at every level against the parameters' values there.
+fn compile_starts(
+    c: &Checker,
+    spec: &TaskSpec,
+    names_all: &[String],
+    values: &[Vec<f64>],
+) -> Result<Vec<sampler::Placement>, TaskError> {
+    let cur = &spec.curriculum;
+    let starts = spec
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| sampler::Placement::compile(c, spec, i, &o.get_ref().start, Some(o.span())))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (level, vals) in values.iter().enumerate() {
+        for (i, s) in starts.iter().enumerate() {
+            s.check(
+                c,
+                &Scope { names: names_all, values: vals, level, max_level: cur.max_level },
+                &spec.objects[i],
+                &format!("at level {level}"),
+            )?;
+        }
+    }
+    Ok(starts)
+}
+
+/// The named evaluation distributions: a level, parameters replaced, starts replaced.
+fn compile_distributions(
+    c: &Checker,
+    spec: &TaskSpec,
+    order: &[(String, Expr)],
+    names_all: &[String],
+    starts: &[sampler::Placement],
+) -> Result<Vec<Distribution>, TaskError> {
+    let (cur, text) = (&spec.curriculum, c.text);
+    let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
+    let mut distributions = Vec::new();
+    for (name, d) in &spec.distributions {
+        // (toml cannot give spans of tables made implicitly by a dotted header.)
+        let span = key_span(text, &format!("distributions.{name}"));
+        let level = d.level.unwrap_or(cur.max_level);
+        if level > cur.max_level {
+            return Err(c.err(
+                span,
+                format!("distribution {name:?}: level {level} is above curriculum.max_level {}", cur.max_level),
+            ));
+        }
+        for key in d.params.keys() {
+            if !cur.params.contains_key(key) {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "distribution {name:?} replaces parameter {key:?}, which [curriculum.params] does not define"
+                    ),
+                ));
+            }
+        }
+        let vals = eval_params(c, order, level, cur.max_level, &d.params)?;
+        let mut dstarts = starts.to_vec();
+        for (obj, start) in &d.starts {
+            let Some(i) = names.iter().position(|n| n == obj) else {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "distribution {name:?} gives a start for {obj:?}, which is not an object (objects: {})",
+                        names.join(", ")
+                    ),
+                ));
+            };
+            dstarts[i] = sampler::Placement::compile(c, spec, i, start, span.clone())?;
+        }
+        for (i, s) in dstarts.iter().enumerate() {
+            s.check(
+                c,
+                &Scope { names: names_all, values: &vals, level, max_level: cur.max_level },
+                &spec.objects[i],
+                &format!("in distribution {name:?}"),
+            )?;
+        }
+        distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts });
+    }
+    Ok(distributions)
+}
+
+/// The shuffle groups: objects that exist, each in one group, alike in all but their roles.
+fn compile_shuffle(c: &Checker, spec: &TaskSpec) -> Result<Vec<Vec<usize>>, TaskError> {
+    let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
+    let mut shuffle = Vec::new();
+    let mut seen = Vec::new();
+    for group in &spec.shuffle {
+        let mut idx = Vec::new();
+        for n in group {
+            let Some(i) = names.iter().position(|m| m == n) else {
+                return Err(c.err(
+                    None,
+                    format!("shuffle names {n:?}, which is not an object (objects: {})", names.join(", ")),
+                ));
+            };
+            if seen.contains(&i) {
+                return Err(c.err(None, format!("object {n:?} is in two shuffle groups (or twice in one)")));
+            }
+            seen.push(i);
+            idx.push(i);
+        }
+        if idx.len() < 2 {
+            return Err(c.err(None, "a shuffle group needs at least two objects"));
+        }
+        let shape = |i: usize| {
+            let o = spec.objects[i].get_ref();
+            (o.kind, o.half_extents, o.mass, o.friction)
+        };
+        if idx.iter().any(|&i| shape(i) != shape(idx[0])) {
+            return Err(c.err(None, format!("shuffle group {group:?}: the objects must have the same kind, size, mass and friction (only their roles move)")));
+        }
+        shuffle.push(idx);
+    }
+    Ok(shuffle)
+}
+
 fn param_order(c: &Checker, params: &BTreeMap<String, Spanned<Value>>) -> Result<Vec<(String, Expr)>, TaskError> {
     let mut pending: Vec<(String, Expr, std::ops::Range<usize>)> = Vec::new();
     for (name, v) in params {

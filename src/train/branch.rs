@@ -130,7 +130,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
                     changed: allowed.clone(),
                 };
                 wanted.branched_from = Some(record.clone());
-                super::write_json_atomic(&copy.config(), &wanted)?;
+                crate::io::write_json(&copy.config(), &wanted)?;
                 return Ok(record);
             }
         }

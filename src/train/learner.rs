@@ -2,14 +2,15 @@
 
 use super::comm::Comm;
 use super::rollouts::Behaviour;
-use super::rundir::SavedPolicy;
-use super::{load_policy, write_json_atomic, TrainConfig};
+use super::TrainConfig;
 pub use crate::agents::agent::{Agent, Algo};
 use crate::agents::ddpg::{DdpgPolicy, UpdateStats};
 use crate::agents::expert::{beta, without_grey, ExpertCritic, Mixture};
 use crate::agents::mlp::TanhMlp;
 use crate::agents::replay::Batch;
 use crate::agents::AnyPolicy;
+use crate::load::load_policy;
+use crate::saved::SavedPolicy;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -107,7 +108,7 @@ impl Expert {
         };
         // Only a valid expert is copied into the run (with its critic when used).
         if !from_copy {
-            write_json_atomic(frozen, &saved)?;
+            crate::io::write_json(frozen, &saved)?;
         }
         Ok(Some(Self { policy, critic }))
     }

@@ -35,7 +35,7 @@ mod trainer;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{load_policy, read_progress, write_atomic, write_json_atomic, RunDir, SavedPolicy};
+pub use rundir::{read_progress, RunDir};
 pub use trainer::{train, train_ranks, OnEpoch};
 
 use crate::agents::ddpg::{DdpgConfig, Precision};

@@ -1,7 +1,6 @@
 //! Success curves of a run as a PNG (plotters, headless bitmap backend).
 
 use super::EpochRow;
-use crate::align::TOLERANCE;
 use anyhow::{anyhow, Context, Result};
 use plotters::prelude::*;
 use std::path::Path;
@@ -201,7 +200,7 @@ const DEVIATION_FLOOR: f64 = 1e-12;
 ///
 /// # Errors
 /// A missing font or an unwritable file.
-pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]) -> Result<()> {
+pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)], tolerance: f64) -> Result<()> {
     register_font()?;
     crate::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
@@ -227,9 +226,9 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
                 .map_err(draw)?;
             let tol = RGBColor(90, 90, 90);
             chart
-                .draw_series(LineSeries::new([(0.0, TOLERANCE), (steps, TOLERANCE)], tol.stroke_width(1)))
+                .draw_series(LineSeries::new([(0.0, tolerance), (steps, tolerance)], tol.stroke_width(1)))
                 .map_err(draw)?
-                .label(format!("tolerance {TOLERANCE:.0e} m"))
+                .label(format!("tolerance {tolerance:.0e} m"))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], tol.stroke_width(1)));
             for (i, (label, d)) in episodes.iter().enumerate() {
                 let colour = Palette99::pick(i).to_rgba();

@@ -8,12 +8,14 @@ use super::checkpoint::{self, RunState};
 use super::comm::Comm;
 use super::learner::{Agent, Expert, Learner};
 use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
-use super::rundir::{read_progress, write_json_atomic, write_progress, RunDir, SavedPolicy};
+use super::rundir::{read_progress, write_progress, RunDir};
 use super::{computation_differences, plot, run_task, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig};
 use crate::agents::ddpg::{Precision, UpdateStats};
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
 use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::io::write_json;
+use crate::saved::SavedPolicy;
 use crate::task::Task;
 use anyhow::{bail, Context, Result};
 use rand::SeedableRng;
@@ -198,6 +200,140 @@ pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
     }
 }
 
+/// The run's settings and task: the task resolved by rank 0 (checked against
+/// the run's recorded copy on resume, `saved`) and built by every other rank
+/// from it; the recorded task, branch and replay layout filled in.
+fn run_config(
+    comm: &Comm,
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(TrainConfig, Task)> {
+    let task = shared_task(comm, config, run, saved)?;
+    let mut config = config.clone();
+    config.task = Some(task.source.clone());
+    if let Some(saved) = saved {
+        config.branched_from = saved.branched_from.clone();
+    }
+    // Replay: as given; else a resumed run's own; else per worker.
+    let recorded = saved.map(TrainConfig::replay_layout);
+    config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
+    if comm.size() > 1 && config.replay_layout() == ReplayLayout::Shared {
+        bail!(
+            "{} shares replay per process (it predates per-worker replay); it cannot continue under mpirun",
+            run.dir.display()
+        );
+    }
+    Ok((config, task))
+}
+
+/// Where a run begins: a fresh agent and empty buffers, or a checkpoint's.
+struct Begun {
+    agent: Agent,
+    replays: Vec<ReplayBuffer>,
+    replay_log: checkpoint::ReplayLog,
+    state: RunState,
+    /// progress.csv's rows so far (rank 0).
+    rows: Vec<EpochRow>,
+}
+
+impl Begun {
+    /// The agent and buffers fit the run's settings.
+    fn check(&self, config: &TrainConfig, mine: &RunDir) -> Result<()> {
+        if self.agent.algo() != config.algo {
+            bail!("{} holds a {:?} agent, not {:?}", mine.checkpoint().display(), self.agent.algo(), config.algo);
+        }
+        let layout = config.replay_layout();
+        let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
+        if self.replays.len() != expected {
+            bail!(
+                "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
+                mine.checkpoint().display(),
+                self.replays.len(),
+                config.workers,
+                layout
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A new run: weights drawn from the run seed (the same on every rank), empty buffers.
+fn fresh(
+    comm: &Comm,
+    config: &TrainConfig,
+    task: &Task,
+    run: &RunDir,
+    mine: &RunDir,
+    dims: (usize, usize),
+) -> Result<Begun> {
+    let (obs_dim, act_dim) = dims;
+    if mine.checkpoint().exists() || run.checkpoint().exists() {
+        bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
+    let agent = Agent::new(config.algo, &config.ddpg, &config.pggd, obs_dim, act_dim, &mut rng);
+    let state = RunState {
+        env_id: task.id().to_owned(),
+        obs_dim,
+        act_dim,
+        epoch: 0,
+        level: 0,
+        env_steps: 0,
+        updates: 0,
+        episodes_per_worker: 0,
+        wall_seconds: 0.0,
+        best_finals: -1.0,
+        ranks: comm.size(),
+        rank: comm.rank(),
+    };
+    let shards = match config.replay_layout() {
+        ReplayLayout::PerWorker => config.workers,
+        ReplayLayout::Shared => 1,
+    };
+    let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
+    Ok(Begun { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
+}
+
+/// A resumed run: this rank's checkpoint of the last epoch every rank
+/// completed, after rank 0 checked that the settings are the run's.
+fn resumed(
+    comm: &Comm,
+    config: &TrainConfig,
+    task: &Task,
+    run: &RunDir,
+    mine: &RunDir,
+    saved_config: Option<TrainConfig>,
+    dims: (usize, usize),
+) -> Result<Begun> {
+    let path = resume_checkpoint(comm, &mine.checkpoint(), run)?;
+    if comm.is_root() {
+        let mut saved = match saved_config {
+            Some(c) => c,
+            None => run.read_config()?,
+        };
+        saved.replay = Some(saved.replay_layout());
+        let changed = computation_differences(&saved, config);
+        if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
+            bail!(
+                "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
+                run.config().display(),
+                if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
+            );
+        }
+    }
+    let mut loaded = checkpoint::load(&path, task.id(), dims.0, dims.1)?;
+    // A resume has the checkpoint's settings; a branch's first epoch, its own.
+    loaded.agent.take_branch_settings(&config.ddpg);
+    let epoch = loaded.state.epoch;
+    let rows = if comm.is_root() {
+        read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < epoch).collect()
+    } else {
+        Vec::new()
+    };
+    Ok(Begun { agent: loaded.agent, replays: loaded.replays, replay_log: loaded.log, state: loaded.state, rows })
+}
+
 /// Everything a run holds between epochs.
 struct Trainer<'a> {
     comm: &'a Comm,
@@ -258,26 +394,9 @@ impl<'a> Trainer<'a> {
             .collect::<Result<Vec<_>>>()?;
         tch::set_num_threads(crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?);
 
-        // The task: rank 0 resolves it (checked against the run's recorded
-        // copy on resume) and every other rank builds the same one from it.
         let saved_config =
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
-        let task = shared_task(comm, config, &run, saved_config.as_ref())?;
-        let mut config = config.clone();
-        config.task = Some(task.source.clone());
-        if let Some(saved) = &saved_config {
-            config.branched_from = saved.branched_from.clone();
-        }
-        // Replay: as given; else a resumed run's own; else per worker.
-        let recorded = saved_config.as_ref().map(TrainConfig::replay_layout);
-        config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
-        let layout = config.replay_layout();
-        if comm.size() > 1 && layout == ReplayLayout::Shared {
-            bail!(
-                "{} shares replay per process (it predates per-worker replay); it cannot continue under mpirun",
-                run.dir.display()
-            );
-        }
+        let (config, task) = run_config(comm, config, &run, saved_config.as_ref())?;
         let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
         let envs: Vec<BlockEnv> =
             (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
@@ -288,84 +407,20 @@ impl<'a> Trainer<'a> {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
         }
 
-        let (agent, replays, replay_log, state, rows) = if resume {
-            let path = resume_checkpoint(comm, &mine.checkpoint(), &run)?;
-            if comm.is_root() {
-                let mut saved = match saved_config {
-                    Some(c) => c,
-                    None => run.read_config()?,
-                };
-                saved.replay = Some(saved.replay_layout());
-                let changed = computation_differences(&saved, &config);
-                if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
-                    bail!(
-                        "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
-                        run.config().display(),
-                        if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
-                    );
-                }
-            }
-            let mut loaded = checkpoint::load(&path, task.id(), obs_dim, act_dim)?;
-            // A resume has the checkpoint's settings; a branch's first epoch, its own.
-            loaded.agent.take_branch_settings(&config.ddpg);
-            let s = &loaded.state;
-            let rows = if comm.is_root() {
-                read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < s.epoch).collect()
-            } else {
-                Vec::new()
-            };
-            (loaded.agent, loaded.replays, loaded.log, loaded.state, rows)
+        let dims = (obs_dim, act_dim);
+        let begun = if resume {
+            resumed(comm, &config, &task, &run, &mine, saved_config, dims)?
         } else {
-            if mine.checkpoint().exists() || run.checkpoint().exists() {
-                bail!(
-                    "{} already holds a run; pass --resume to continue it or choose another --run-dir",
-                    run.dir.display()
-                );
-            }
-            // Every rank draws the same initial weights from the run seed.
-            let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-            let agent = Agent::new(config.algo, &config.ddpg, &config.pggd, obs_dim, act_dim, &mut rng);
-            let state = RunState {
-                env_id: task.id().to_owned(),
-                obs_dim,
-                act_dim,
-                epoch: 0,
-                level: 0,
-                env_steps: 0,
-                updates: 0,
-                episodes_per_worker: 0,
-                wall_seconds: 0.0,
-                best_finals: -1.0,
-                ranks: comm.size(),
-                rank: comm.rank(),
-            };
-            let shards = match layout {
-                ReplayLayout::PerWorker => config.workers,
-                ReplayLayout::Shared => 1,
-            };
-            let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
-            (agent, replays, checkpoint::ReplayLog::default(), state, Vec::new())
+            fresh(comm, &config, &task, &run, &mine, dims)?
         };
-        if agent.algo() != config.algo {
-            bail!("{} holds a {:?} agent, not {:?}", mine.checkpoint().display(), agent.algo(), config.algo);
-        }
-        let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
-        if replays.len() != expected {
-            bail!(
-                "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
-                mine.checkpoint().display(),
-                replays.len(),
-                config.workers,
-                layout
-            );
-        }
+        begun.check(&config, &mine)?;
         let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
-            write_json_atomic(&run.config(), &config)?;
+            write_json(&run.config(), &config)?;
         }
         if comm.is_root() && comm.size() > 1 {
-            let (p, w, bytes) = (comm.size(), config.workers, 4 * agent.gradient_len());
+            let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
             eprintln!(
                 "mpirun: {p} ranks × {w} workers; each update averages {} gradients of {} KiB: every rank sends and \
                  receives about {} KiB",
@@ -381,11 +436,11 @@ impl<'a> Trainer<'a> {
             mine,
             task,
             envs,
-            learner: Learner { agent, expert, reduce_seconds: 0.0 },
-            replays,
-            replay_log,
-            state,
-            rows,
+            learner: Learner { agent: begun.agent, expert, reduce_seconds: 0.0 },
+            replays: begun.replays,
+            replay_log: begun.replay_log,
+            state: begun.state,
+            rows: begun.rows,
             threshold,
             max_level,
             obs_dim,
@@ -615,15 +670,15 @@ impl<'a> Trainer<'a> {
                 policy,
                 critic: self.learner.agent.critic(),
             };
-            write_json_atomic(&run.policy(), &saved)?;
+            write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
                 std::fs::create_dir_all(run.snapshots())
                     .with_context(|| format!("cannot create {}", run.snapshots().display()))?;
-                write_json_atomic(&run.snapshot(state.epoch), &saved)?;
+                write_json(&run.snapshot(state.epoch), &saved)?;
             }
             // Ties go to the newer policy: same finals score, more training.
             if row.finals_success >= state.best_finals {
-                write_json_atomic(&run.best_policy(), &saved)?;
+                write_json(&run.best_policy(), &saved)?;
             }
         }
         self.state.best_finals = self.state.best_finals.max(row.finals_success);

@@ -1,0 +1,70 @@
+//! A trained policy as a file: [`SavedPolicy`] (the actor, its normaliser,
+//! the task it was trained on and, for DDPG, its critic), the JSON form runs
+//! write (`policy.json`, `best_policy.json`, snapshots). The zoo's
+//! safetensors form is `crate::zoo`; a policy named on the command line
+//! (file, run directory or zoo name) is resolved by `crate::load`.
+
+use crate::agents::mlp::TanhMlp;
+use crate::agents::AnyPolicy;
+use anyhow::{Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A run's latest policy, in its run directory.
+pub const POLICY_FILE: &str = "policy.json";
+/// A run's policy of the best finals success, in its run directory.
+pub const BEST_POLICY_FILE: &str = "best_policy.json";
+
+/// A saved policy: the actor, its normaliser and what it was trained on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SavedPolicy {
+    /// Environment id it was trained on.
+    pub env_id: String,
+    /// The task it was trained on, by content (absent in policies saved before tasks were files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<crate::task::TaskSource>,
+    /// Epochs of training behind it.
+    pub epoch: usize,
+    /// Environment steps of training behind it (absent in policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env_steps: Option<u64>,
+    /// Its finals success when saved.
+    pub finals_success: f64,
+    /// The policy.
+    pub policy: AnyPolicy,
+    /// DDPG's critic Q(s, a) of the same epoch (input: the normalised
+    /// observation, then the action), so that the policy can be an AggreVaTeD
+    /// expert with `--pg-weight expert-advantage`. Absent for PGGD and in
+    /// policies saved before the critic was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critic: Option<TanhMlp>,
+}
+
+impl SavedPolicy {
+    /// Whether the policy (and critic, if kept) can act: see
+    /// [`AnyPolicy::check`]; the critic maps observation and action to one value.
+    ///
+    /// # Errors
+    /// The first problem, named.
+    pub fn check(&self) -> Result<(), String> {
+        self.policy.check()?;
+        if let Some(c) = &self.critic {
+            let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
+            c.check(n_in, 1, crate::agents::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Reads a policy file written by a run (JSON), checked ([`SavedPolicy::check`]).
+///
+/// # Errors
+/// A missing, malformed or damaged file, named.
+pub fn read(file: &Path) -> Result<SavedPolicy> {
+    let text = std::fs::read_to_string(file)
+        .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
+    let saved: SavedPolicy =
+        serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;
+    saved.check().map_err(|e| anyhow::anyhow!("policy {} is not usable: {e}", file.display()))?;
+    Ok(saved)
+}
