@@ -62,7 +62,7 @@ ddpg3: build
 		--torch-threads $(TORCH_THREADS) \
 		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
 #   the paper's own configuration, 20 MPI workers (one process each, `make ddpg3-paper NP=20`;
-#   MPIFLAGS="--hostfile examples/mpi/hostfile" spreads it over machines, see the README);
+#   MPIFLAGS="--hostfile examples/mpi/hostfile" spreads it over machines, see docs/training.md);
 ddpg3-paper: build
 	$(MPIRUN) -np $(NP) $(BIN) train --algo ddpg --env BlocksChoose-v0 --workers 1 --epochs 500 \
 		--snapshot-every 10 --torch-threads 1 --seed 0 --run-dir runs/BlocksChoose-v0-ddpg-np$(NP)-s0 \
