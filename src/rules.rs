@@ -2,7 +2,7 @@
 //!
 //! Objects (the gripper, the table, each block) carry one [`Colour`]. At every
 //! physics substep the environment reports which object pairs touch
-//! ([`Touching`]); [`Rules::observe`] turns that sequence into an outcome:
+//! ([`Touching`]); [`Rules::observe`] turns that sequence into an verdict:
 //!
 //! * **failure** at the first substep where any red object touches a blue one;
 //! * **success** at the first substep where every blue object touches at least
@@ -195,10 +195,11 @@ impl ContactMatrix {
     }
 }
 
-/// How an episode ended under the rules.
+/// The rules' verdict on an episode (the episode-level [`crate::outcome::Outcome`]
+/// adds why an episode without one ended).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Outcome {
+pub enum Verdict {
     /// Every blue object touched a green one.
     Success,
     /// A red object touched a blue one.
@@ -213,7 +214,7 @@ pub struct Rules {
     blue: u64,
     green: u64,
     matrix: ContactMatrix,
-    outcome: Option<Outcome>,
+    verdict: Option<Verdict>,
 }
 
 fn mask(colours: &[Colour], c: Colour) -> u64 {
@@ -238,7 +239,7 @@ impl Rules {
             return Err(RuleError::NoGreen);
         }
         let matrix = ContactMatrix::new(colours.len());
-        Ok(Self { colours, red, blue, green, matrix, outcome: None })
+        Ok(Self { colours, red, blue, green, matrix, verdict: None })
     }
 
     /// Colours of the objects.
@@ -246,10 +247,10 @@ impl Rules {
         &self.colours
     }
 
-    /// Forgets the episode: no outcome, empty contact matrix.
+    /// Forgets the episode: no verdict, empty contact matrix.
     pub fn reset(&mut self) {
         self.matrix = ContactMatrix::new(self.colours.len());
-        self.outcome = None;
+        self.verdict = None;
     }
 
     /// A red–blue pair among `touching`, if any (red first).
@@ -279,24 +280,24 @@ impl Rules {
         true
     }
 
-    /// Feeds the contacts of one substep. Returns the outcome if the episode
+    /// Feeds the contacts of one substep. Returns the verdict if the episode
     /// has one by now (the first one is kept: later substeps cannot change it).
-    pub fn observe(&mut self, touching: &Touching) -> Option<Outcome> {
+    pub fn observe(&mut self, touching: &Touching) -> Option<Verdict> {
         self.matrix.now.clone_from(touching);
         self.matrix.ever.union_with(touching);
-        if self.outcome.is_none() {
+        if self.verdict.is_none() {
             if self.violation(touching).is_some() {
-                self.outcome = Some(Outcome::Failure);
+                self.verdict = Some(Verdict::Failure);
             } else if self.all_blue_on_green(touching) {
-                self.outcome = Some(Outcome::Success);
+                self.verdict = Some(Verdict::Success);
             }
         }
-        self.outcome
+        self.verdict
     }
 
-    /// The outcome so far.
-    pub fn outcome(&self) -> Option<Outcome> {
-        self.outcome
+    /// The verdict so far.
+    pub fn verdict(&self) -> Option<Verdict> {
+        self.verdict
     }
 
     /// The contact-state matrix of the episode so far.
@@ -322,27 +323,27 @@ mod tests {
     fn blue_on_green_succeeds() {
         let mut r = rules();
         assert_eq!(r.observe(&t(&[(1, 2), (1, 3)])), None);
-        assert_eq!(r.observe(&t(&[(3, 2)])), Some(Outcome::Success));
+        assert_eq!(r.observe(&t(&[(3, 2)])), Some(Verdict::Success));
     }
 
     #[test]
     fn red_on_blue_fails_and_outcome_is_sticky() {
         let mut r = rules();
-        assert_eq!(r.observe(&t(&[(4, 2)])), Some(Outcome::Failure));
-        assert_eq!(r.observe(&t(&[(2, 3)])), Some(Outcome::Failure));
+        assert_eq!(r.observe(&t(&[(4, 2)])), Some(Verdict::Failure));
+        assert_eq!(r.observe(&t(&[(2, 3)])), Some(Verdict::Failure));
     }
 
     #[test]
     fn success_first_then_red_touch_keeps_success() {
         let mut r = rules();
-        assert_eq!(r.observe(&t(&[(2, 3)])), Some(Outcome::Success));
-        assert_eq!(r.observe(&t(&[(2, 4)])), Some(Outcome::Success));
+        assert_eq!(r.observe(&t(&[(2, 3)])), Some(Verdict::Success));
+        assert_eq!(r.observe(&t(&[(2, 4)])), Some(Verdict::Success));
     }
 
     #[test]
     fn failure_wins_a_tie() {
         let mut r = rules();
-        assert_eq!(r.observe(&t(&[(2, 3), (2, 4)])), Some(Outcome::Failure));
+        assert_eq!(r.observe(&t(&[(2, 3), (2, 4)])), Some(Verdict::Failure));
     }
 
     #[test]
@@ -359,7 +360,7 @@ mod tests {
         let mut r = Rules::new(vec![Blue, Blue, Green, Green]).unwrap();
         assert_eq!(r.observe(&Touching::from_pairs(4, &[(0, 2)])), None);
         assert_eq!(r.observe(&Touching::from_pairs(4, &[(1, 3)])), None);
-        assert_eq!(r.observe(&Touching::from_pairs(4, &[(0, 3), (1, 3)])), Some(Outcome::Success));
+        assert_eq!(r.observe(&Touching::from_pairs(4, &[(0, 3), (1, 3)])), Some(Verdict::Success));
     }
 
     #[test]
@@ -372,10 +373,10 @@ mod tests {
     fn coloured_gripper_and_table_count() {
         // blue gripper must reach the green block; red table must not touch blue
         let mut r = Rules::new(vec![Blue, Green, Grey]).unwrap();
-        assert_eq!(r.observe(&Touching::from_pairs(3, &[(0, 1)])), Some(Outcome::Success));
+        assert_eq!(r.observe(&Touching::from_pairs(3, &[(0, 1)])), Some(Verdict::Success));
         let mut r = Rules::new(vec![Grey, Red, Blue, Green]).unwrap();
         assert_eq!(r.violation(&Touching::from_pairs(4, &[(1, 2)])), Some((1, 2)));
-        assert_eq!(r.observe(&Touching::from_pairs(4, &[(2, 1)])), Some(Outcome::Failure));
+        assert_eq!(r.observe(&Touching::from_pairs(4, &[(2, 1)])), Some(Verdict::Failure));
     }
 
     #[test]
@@ -383,7 +384,7 @@ mod tests {
         let mut r = rules();
         r.observe(&t(&[(4, 2)]));
         r.reset();
-        assert_eq!(r.outcome(), None);
+        assert_eq!(r.verdict(), None);
         assert_eq!(r.matrix().get(4, 2), ContactState::NeverTouched);
     }
 

@@ -1,7 +1,7 @@
 //! Each rule scenario in simulation, with blocks placed by hand.
 
 use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError};
-use blockpuzzle::rules::{ContactState, Outcome};
+use blockpuzzle::rules::{ContactState, Verdict};
 use blockpuzzle::task::TaskSpec;
 use blockpuzzle::Colour::{self, *};
 
@@ -35,7 +35,7 @@ fn blue_placed_touching_green_succeeds_on_the_first_step() {
     let s = e.step(&[0.0; 4]).unwrap();
     assert!(s.terminated && !s.truncated && s.info.is_success && !s.info.is_failure);
     assert_eq!(s.reward, 0.0);
-    assert_eq!(e.outcome(), Some(Outcome::Success));
+    assert_eq!(e.verdict(), Some(Verdict::Success));
     assert_eq!(e.contact_matrix().get(2, 3), ContactState::TouchingNow);
 }
 

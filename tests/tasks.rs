@@ -50,7 +50,7 @@ fn every_task_resets_at_every_level_without_a_rule_broken() {
                         "{id} level {level} seed {seed}: red touches blue at reset"
                     );
                 }
-                assert_eq!(env.outcome(), None);
+                assert_eq!(env.verdict(), None);
             }
         }
     }

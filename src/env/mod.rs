@@ -17,7 +17,7 @@ pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
 
 use crate::mj::{Data, ObjType, Warning};
-use crate::rules::{Colour, ContactMatrix, Outcome, Rules, Touching};
+use crate::rules::{Colour, ContactMatrix, Rules, Touching, Verdict};
 use crate::scene::{Scene, SceneObject};
 use crate::task::{Placed, Tally};
 use rand::seq::SliceRandom;
@@ -253,9 +253,9 @@ impl BlockEnv {
     pub fn contact_matrix(&self) -> &ContactMatrix {
         self.rules.matrix()
     }
-    /// The rules outcome so far.
-    pub fn outcome(&self) -> Option<Outcome> {
-        self.rules.outcome()
+    /// The rules' verdict so far.
+    pub fn verdict(&self) -> Option<Verdict> {
+        self.rules.verdict()
     }
     /// Grip site position after set-up (the centre of the curriculum discs).
     pub fn initial_gripper_position(&self) -> [f64; 3] {
@@ -610,14 +610,14 @@ impl BlockEnv {
 
         let unstable = self.bad_number_warnings() > bad_before
             || !self.data.qpos().iter().chain(self.data.qvel()).all(|v| v.is_finite());
-        let outcome = if unstable { None } else { self.rules.outcome() };
-        let (is_success, is_failure) = (outcome == Some(Outcome::Success), outcome == Some(Outcome::Failure));
-        let terminated = outcome.is_some();
+        let verdict = if unstable { None } else { self.rules.verdict() };
+        let (is_success, is_failure) = (verdict == Some(Verdict::Success), verdict == Some(Verdict::Failure));
+        let terminated = verdict.is_some();
         let max_steps = self.config.task.spec.max_episode_steps;
         let truncated = !terminated && (unstable || self.steps >= max_steps);
-        let reward = match outcome {
-            Some(Outcome::Success) => 0.0,
-            Some(Outcome::Failure) => -((max_steps + 1).saturating_sub(self.steps) as f32),
+        let reward = match verdict {
+            Some(Verdict::Success) => 0.0,
+            Some(Verdict::Failure) => -((max_steps + 1).saturating_sub(self.steps) as f32),
             None => -1.0,
         };
         if !unstable {

@@ -365,7 +365,7 @@ struct Trainer<'a> {
 
 /// What one epoch's collection and learning measured on this rank.
 #[derive(Default)]
-struct Tally {
+struct EpochTally {
     env_seconds: f64,
     update_seconds: f64,
     forward_seconds: f64,
@@ -463,7 +463,7 @@ impl<'a> Trainer<'a> {
         for env in &mut self.envs {
             env.set_level(level)?;
         }
-        let mut tally = Tally::default();
+        let mut tally = EpochTally::default();
         self.learner.reduce_seconds = 0.0;
         for cycle in 0..self.config.cycles {
             self.collect(epoch, &mut tally)?;
@@ -487,7 +487,7 @@ impl<'a> Trainer<'a> {
     /// Every worker plays `rollouts` exploration episodes; their transitions
     /// go to the worker's buffer, and every rank's observations (in global
     /// shard order) to the normaliser.
-    fn collect(&mut self, epoch: usize, tally: &mut Tally) -> Result<()> {
+    fn collect(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
         let t = Instant::now();
         let config = &self.config;
         let policy = self.learner.agent.policy();
@@ -526,7 +526,7 @@ impl<'a> Trainer<'a> {
     }
 
     /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
-    fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut Tally) {
+    fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut EpochTally) {
         let t = Instant::now();
         let config = &self.config;
         let (e, c) = (epoch as u64, cycle as u64);
@@ -586,7 +586,7 @@ impl<'a> Trainer<'a> {
     fn row(
         &mut self,
         epoch: usize,
-        tally: &Tally,
+        tally: &EpochTally,
         test: &[Episode],
         finals: &[Episode],
         eval_seconds: f64,
