@@ -51,22 +51,21 @@ test-mujoco3: setup-mujoco3
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build
-	$(BP) train --algo ddpg --env BlocksTouch-v0 --workers 2 --epochs 300 --snapshot-every 4 \
-		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir $(RUN) $(call resume,$(RUN))
+	$(BP) train --config experiments/blocks-touch-ddpg.toml \
+		--torch-threads $(TORCH_THREADS) --run-dir $(RUN) $(call resume,$(RUN))
 
-# The paper's results table, one target per row (each resumes its run directory):
+# The paper's results table, one target per row (each resumes its run directory); the recipes are
+# the files in experiments/ (`blockpuzzle train --config FILE`, flags on the command line win):
 #   DDPG (2 blocks) = `make train` above, shipped in the zoo as the AggreVaTeD expert ($(EXPERT));
 #   DDPG (3 blocks) on BlocksChoose-v0;
 ddpg3: build
-	$(BP) train --algo ddpg --env BlocksChoose-v0 --workers 2 --epochs 500 --snapshot-every 10 \
-		--torch-threads $(TORCH_THREADS) \
-		--seed 0 --run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
+	$(BP) train --config experiments/ddpg3.toml --torch-threads $(TORCH_THREADS) \
+		--run-dir runs/BlocksChoose-v0-ddpg-s0 $(call resume,runs/BlocksChoose-v0-ddpg-s0)
 #   the paper's own configuration, 20 MPI workers (one process each, `make ddpg3-paper NP=20`;
 #   MPIFLAGS="--hostfile examples/mpi/hostfile" spreads it over machines, see docs/training.md);
 ddpg3-paper: build
-	$(MPIRUN) -np $(NP) $(BIN) train --algo ddpg --env BlocksChoose-v0 --workers 1 --epochs 500 \
-		--snapshot-every 10 --torch-threads 1 --seed 0 --run-dir runs/BlocksChoose-v0-ddpg-np$(NP)-s0 \
-		$(call resume,runs/BlocksChoose-v0-ddpg-np$(NP)-s0)
+	$(MPIRUN) -np $(NP) $(BIN) train --config experiments/ddpg3-paper.toml \
+		--run-dir runs/BlocksChoose-v0-ddpg-np$(NP)-s0 $(call resume,runs/BlocksChoose-v0-ddpg-np$(NP)-s0)
 #   The headline study (results/headline.md): DDPG variants on BlocksChoose-v0, 2 workers,
 #   `make study VARIANT=ours EPOCHS=100 SEED=0` (each resumes runs/study-VARIANT-sSEED). The
 #   baseline is the paper's configuration: seed 0 is `make ddpg3` itself (its first epochs).
@@ -79,26 +78,11 @@ TORCH_THREADS ?= 0
 # (`blockpuzzle info`: "bf16 updates yes"); PRECISION=f32 runs the same recipe in float32 on any CPU,
 # in its own run directory (runs/study-VARIANT-f32-sSEED).
 PRECISION ?= bf16
-prec = --precision $(PRECISION)
-study_paper =
-study_bf16 = $(prec)
-study_nstep = $(prec) --n-step 3
-study_td3 = $(prec) --td3
-study_curriculum = $(prec) --level-replay 0.2 --challenge-share 0.25
-study_ours = $(prec) --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.25
-study_ours-nol2 = $(study_ours) --action-l2 0
-study_nol2 = --action-l2 0
-# ours-nol2 with half the top-level episodes in the challenge distribution, with SB3's update
-# ratio; ours with a tenth of the paper's action penalty.
-study_ours-nol2-cs50 = $(prec) --td3 --n-step 3 --level-replay 0.2 --challenge-share 0.5 --action-l2 0
-study_ours-nol2-b60 = $(study_ours-nol2) --batches 60
-study_ours-l01 = $(study_ours) --action-l2 0.1
-# ours-nol2 with a small penalty on the actor's pre-tanh output (saturated actions pulled back).
-study_ours-nol2-pre = $(study_ours-nol2) --preact-l2 0.01
-# and with exploration noise correlated across steps (AR(1), ρ = 0.9), for detours.
-study_ours-nol2-pre-rho9 = $(study_ours-nol2-pre) --noise-correlation 0.9
-STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-cs50 ours-nol2-b60 ours-l01 \
-	ours-nol2-pre ours-nol2-pre-rho9
+# The variants are the recipes in experiments/study/ (one file each).
+STUDY_FILE = experiments/study/$(VARIANT).toml
+STUDY_VARIANTS = $(sort $(basename $(notdir $(wildcard experiments/study/*.toml))))
+study_bf16 = $(shell grep -qs '^precision *= *"bf16"' $(STUDY_FILE) && echo yes)
+study_prec = $(if $(study_bf16),$(if $(filter f32,$(PRECISION)),--precision f32))
 #   FROM=RUN_DIR branches that run instead of starting afresh (`train --branch-from`: its latest
 #   checkpoint, with this variant's draws or update count) into runs/study-VARIANT-branched-sSEED.
 #   RANKS=2 runs the 2 workers as 2 MPI ranks of 1 worker (torch threads 1 each): the same computation
@@ -106,17 +90,17 @@ STUDY_VARIANTS = paper bf16 nstep td3 curriculum ours ours-nol2 nol2 ours-nol2-c
 #   the RANKS it started with.
 RANKS ?= 1
 study_dir = runs/study-$(VARIANT)$(if $(FROM),-branched)$(1)-s$(SEED)
-STUDY_DIR = $(call study_dir,$(if $(findstring --precision f32,$(study_$(VARIANT))),-f32))
+STUDY_DIR = $(call study_dir,$(if $(study_prec),-f32))
 study_launch = $(if $(filter 2,$(RANKS)),$(MPIRUN) -np 2 $(BIN) train --workers 1 --torch-threads 1,$(BP) train --workers 2 --torch-threads $(TORCH_THREADS))
 study: build
 	@test -n "$(filter $(VARIANT),$(STUDY_VARIANTS))" || \
 		{ echo "VARIANT must be one of: $(STUDY_VARIANTS)"; exit 2; }
 	@test -n "$(filter $(PRECISION),bf16 f32)" || { echo "PRECISION must be bf16 or f32"; exit 2; }
 	@test -n "$(filter $(RANKS),1 2)" || { echo "RANKS must be 1 (one process of 2 workers) or 2 (mpirun)"; exit 2; }
-	@case "$(study_$(VARIANT))" in *"--precision bf16"*) $(BIN) info | grep -q "^bf16 updates yes" || \
-		{ echo "VARIANT=$(VARIANT) updates in bfloat16, and this CPU has no AMX or AVX512-BF16 for it: add PRECISION=f32 to run the same recipe in float32 ($(call study_dir,-f32))"; exit 2; };; esac
-	$(study_launch) --algo ddpg --env BlocksChoose-v0 --epochs $(EPOCHS) --seed $(SEED) \
-		--snapshot-every 10 $(study_$(VARIANT)) --run-dir $(STUDY_DIR) \
+	@test -z "$(study_bf16)" -o "$(PRECISION)" = f32 || $(BIN) info | grep -q "^bf16 updates yes" || \
+		{ echo "VARIANT=$(VARIANT) updates in bfloat16, and this CPU has no AMX or AVX512-BF16 for it: add PRECISION=f32 to run the same recipe in float32 ($(call study_dir,-f32))"; exit 2; }
+	$(study_launch) --config $(STUDY_FILE) --epochs $(EPOCHS) --seed $(SEED) \
+		$(study_prec) --run-dir $(STUDY_DIR) \
 		$$(test -f $(STUDY_DIR)/checkpoint.bin && echo --resume || echo $(if $(FROM),--branch-from $(FROM)))
 #   Validation of a run's snapshots, the study's selection data (never the test seeds): 200 episodes
 #   from seed 2,000,000, Normal and Challenge, with outcome counts, e.g.
@@ -129,8 +113,8 @@ validate: build
 			--out results/headline/validation/$(notdir $(RUN))-epoch$$e$$c.json || exit 1; done; done
 #   PGGD + AggreVaTeD on BlocksChoose-v0 with the 2-block expert (beta0 = 0, t0 = 50);
 aggrevated: build
-	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --workers 2 --epochs 300 \
-		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
+	$(BP) train --config experiments/aggrevated.toml --expert $(EXPERT) --torch-threads $(TORCH_THREADS) \
+		--run-dir runs/BlocksChoose-v0-pggd-aggrevated-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-s0)
 #   the snapshots of the BlocksTouch-v0 run as experts: each one's grey-removed success on
 #   BlocksChoose-v0 on validation seeds (200 episodes from 2,000,000; the test seeds stay unused),
 #   to pick the earlier expert whose success is near the paper's 0.44 (results/aggrevated-weak.md);
@@ -142,18 +126,16 @@ expert-snapshots: build
 #   PGGD + AggreVaTeD from that weaker expert (zoo: BlocksTouch-v0-ddpg-epoch60), to see whether
 #   the learner overtakes a weaker expert as the paper's did;
 aggrevated-weak: build
-	$(BP) train --algo pggd --env BlocksChoose-v0 --expert BlocksTouch-v0-ddpg-epoch60 --workers 2 --epochs 300 \
-		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-weak-s0 \
-		$(call resume,runs/BlocksChoose-v0-pggd-aggrevated-weak-s0)
+	$(BP) train --config experiments/aggrevated-weak.toml --torch-threads $(TORCH_THREADS) \
+		--run-dir runs/BlocksChoose-v0-pggd-aggrevated-weak-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-weak-s0)
 #   the same with the paper's descent direction, the expert critic's advantage (not a table row);
 aggrevated-adv: build
-	$(BP) train --algo pggd --env BlocksChoose-v0 --expert $(EXPERT) --pg-weight expert-advantage --workers 2 \
-		--epochs 300 --torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-aggrevated-adv-s0 \
-		$(call resume,runs/BlocksChoose-v0-pggd-aggrevated-adv-s0)
+	$(BP) train --config experiments/aggrevated-adv.toml --expert $(EXPERT) --torch-threads $(TORCH_THREADS) \
+		--run-dir runs/BlocksChoose-v0-pggd-aggrevated-adv-s0 $(call resume,runs/BlocksChoose-v0-pggd-aggrevated-adv-s0)
 #   PGGD alone on BlocksChoose-v0;
 pggd: build
-	$(BP) train --algo pggd --env BlocksChoose-v0 --workers 2 --epochs 200 \
-		--torch-threads $(TORCH_THREADS) --seed 0 --run-dir runs/BlocksChoose-v0-pggd-s0 $(call resume,runs/BlocksChoose-v0-pggd-s0)
+	$(BP) train --config experiments/pggd.toml --torch-threads $(TORCH_THREADS) \
+		--run-dir runs/BlocksChoose-v0-pggd-s0 $(call resume,runs/BlocksChoose-v0-pggd-s0)
 #   and the table itself (rows whose run is missing say so).
 table: build
 	$(BP) table --expert $(EXPERT) --ddpg runs/BlocksChoose-v0-ddpg-s0 \
@@ -187,8 +169,8 @@ clean-assets:
 # `make ddpg-task TASK=ToppleTower-v0` (resumes runs/$(TASK)-ddpg-s0 if it exists).
 TASK ?= ReachAvoid-v0
 ddpg-task: build
-	$(BP) train --algo ddpg --env $(TASK) --workers 1 --torch-threads 1 --epochs 300 \
-		--seed 0 --run-dir runs/$(TASK)-ddpg-s0 $(call resume,runs/$(TASK)-ddpg-s0)
+	$(BP) train --config experiments/ddpg-task.toml --env $(TASK) \
+		--run-dir runs/$(TASK)-ddpg-s0 $(call resume,runs/$(TASK)-ddpg-s0)
 # Scripted and random success rates of a task at its evaluation level (200 episodes each).
 task-rates: build
 	mkdir -p $(OUT)

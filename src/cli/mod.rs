@@ -9,8 +9,10 @@ use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use crate::rollout::{run_episode, DumpWriter};
 
+mod experiment;
 mod runs;
 mod zoo;
+pub use runs::train_config;
 use runs::{PlotArgs, TrainArgs};
 use zoo::ZooCommand;
 
@@ -345,7 +347,10 @@ fn command() -> clap::Command {
         cmd.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a })
             .mut_subcommands(negatives)
     }
-    negatives(<Cli as clap::CommandFactory>::command())
+    let cmd = negatives(<Cli as clap::CommandFactory>::command());
+    // A flag given twice takes its last value: `train --config FILE` puts the
+    // file's flags first, so the command line's own win.
+    cmd.mut_subcommand("train", |t| t.args_override_self(true))
 }
 
 /// An error and its causes on one line, each cause once: a cause whose text
@@ -365,12 +370,31 @@ pub fn error_text(e: &anyhow::Error) -> String {
     text
 }
 
+/// The command line `args` (from the program name on), `train --config`
+/// recipes expanded.
+///
+/// # Errors
+/// An unreadable recipe, or clap's error (help and version included).
+fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
+    let cmd = command();
+    let train = cmd.find_subcommand("train").cloned().unwrap_or_default();
+    let matches = cmd.try_get_matches_from(experiment::expand(args, &train)?)?;
+    Ok(<Cli as clap::FromArgMatches>::from_arg_matches(&matches)?)
+}
+
 /// Runs the command line.
 ///
 /// # Errors
 /// Any failure, with a message that names the problem.
 pub fn main() -> Result<()> {
-    let cli = <Cli as clap::FromArgMatches>::from_arg_matches(&command().get_matches()).unwrap_or_else(|e| e.exit());
+    let cli = match parse(std::env::args_os().collect()) {
+        Ok(cli) => cli,
+        // Help, version and usage errors as clap prints them (and its exit codes).
+        Err(e) => match e.downcast::<clap::Error>() {
+            Ok(usage) => usage.exit(),
+            Err(e) => return Err(e),
+        },
+    };
     match cli.command {
         Command::Envs => {
             for r in registry::REGISTRY {

@@ -8,6 +8,11 @@ use crate::env::registry;
 
 #[derive(Debug, clap::Args)]
 pub(super) struct TrainArgs {
+    /// An experiment recipe: a TOML file of these flags (`epochs = 500`,
+    /// `td3 = true`), e.g. experiments/ddpg3.toml; flags given here win over it.
+    // Expanded before parsing (cli/experiment.rs): the field is here for --help.
+    #[arg(long = "config", id = "recipe", value_name = "FILE")]
+    _recipe: Option<PathBuf>,
     /// Run directory (config.json, progress.csv, checkpoints); default runs/TASK-METHOD-sSEED
     /// (e.g. runs/BlocksChoose-v0-pggd-aggrevated-s0; a task file's stem for TASK).
     #[arg(long)]
@@ -46,6 +51,18 @@ pub(super) struct PlotArgs {
     /// Title of the --overlay figure.
     #[arg(long, default_value = "Finals success (maximum level)")]
     title: String,
+}
+
+/// The training settings of a `blockpuzzle train ...` command line (`args`
+/// from the program name on, recipes expanded), without running it.
+///
+/// # Errors
+/// A recipe that cannot be read, or flags clap refuses (its message).
+pub fn train_config(args: Vec<std::ffi::OsString>) -> Result<crate::train::TrainConfig> {
+    match super::parse(args)?.command {
+        super::Command::Train(a) => Ok(a.config),
+        _ => bail!("not a `train` command line"),
+    }
 }
 
 /// `blockpuzzle train`: one process, or one rank of an MPI job.

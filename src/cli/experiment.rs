@@ -1,0 +1,66 @@
+//! `train --config FILE`: an experiment recipe as a TOML file of `train`'s
+//! flags (`epochs = 500`, `td3 = true`, `n-step = 3`), the way the paper's
+//! runs and the study's variants are kept in `experiments/`. The file's
+//! settings are put before the command line's own flags, and a flag given on
+//! the command line wins over the file.
+
+use anyhow::{bail, Context, Result};
+use std::ffi::OsString;
+use std::path::Path;
+
+/// The command line with every `train --config FILE` replaced by the file's
+/// flags (`--key value`, `--key` for `true`), placed right after `train`.
+///
+/// # Errors
+/// An unreadable file, malformed TOML, a key that is not a flag of `train`
+/// (the error lists them), or a value that is not a number, string or boolean.
+pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<Vec<OsString>> {
+    if args.get(1).map_or(true, |a| a != "train") {
+        return Ok(args);
+    }
+    let (head, rest) = args.split_at(2);
+    let mut own = Vec::new();
+    let mut files = Vec::new();
+    let mut it = rest.iter();
+    while let Some(a) = it.next() {
+        if a == "--config" {
+            let Some(file) = it.next() else {
+                bail!("--config needs a FILE (an experiment recipe, e.g. experiments/ddpg3.toml)")
+            };
+            files.push(file.clone());
+        } else if let Some(file) = a.to_str().and_then(|s| s.strip_prefix("--config=")) {
+            files.push(file.into());
+        } else {
+            own.push(a.clone());
+        }
+    }
+    let mut out = head.to_vec();
+    for file in &files {
+        out.extend(flags(Path::new(file), train)?);
+    }
+    out.extend(own);
+    Ok(out)
+}
+
+/// The flags of one recipe file (keys in sorted order; each flag once).
+fn flags(path: &Path, train: &clap::Command) -> Result<Vec<OsString>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the recipe {}", path.display()))?;
+    let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
+    let known: Vec<&str> = train.get_arguments().filter_map(|a| a.get_long()).filter(|l| *l != "config").collect();
+    let mut out = Vec::new();
+    for (key, value) in table {
+        let flag = key.replace('_', "-");
+        if !known.contains(&flag.as_str()) {
+            bail!("{}: `{key}` is not a flag of `blockpuzzle train` (they are: {})", path.display(), known.join(", "));
+        }
+        match value {
+            toml::Value::Boolean(true) => out.push(format!("--{flag}").into()),
+            toml::Value::Boolean(false) => {}
+            toml::Value::String(s) => out.extend([format!("--{flag}").into(), s.into()]),
+            toml::Value::Integer(i) => out.extend([format!("--{flag}").into(), i.to_string().into()]),
+            toml::Value::Float(x) => out.extend([format!("--{flag}").into(), x.to_string().into()]),
+            other => bail!("{}: `{key}` = {other}: give a number, a string or true/false", path.display()),
+        }
+    }
+    Ok(out)
+}

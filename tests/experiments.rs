@@ -1,0 +1,80 @@
+//! Experiment recipes (`experiments/**/*.toml`, `train --config FILE`): every
+//! shipped recipe is a valid `train` command line, the study's variants are
+//! the settings results/headline.md reports, and the command line wins over the file.
+#![cfg(feature = "train")]
+
+use blockpuzzle::agents::ddpg::Precision;
+use blockpuzzle::cli::train_config;
+use blockpuzzle::train::{Algo, TrainConfig};
+use std::path::{Path, PathBuf};
+
+fn recipe(path: &Path, extra: &[&str]) -> anyhow::Result<TrainConfig> {
+    let mut args: Vec<std::ffi::OsString> = vec!["blockpuzzle".into(), "train".into(), "--config".into()];
+    args.push(path.into());
+    args.extend(extra.iter().map(Into::into));
+    train_config(args)
+}
+
+fn recipes() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut out = Vec::new();
+    for dir in [root.clone(), root.join("study")] {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "toml") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn every_recipe_is_a_valid_train_command_line() {
+    let all = recipes();
+    assert!(all.len() >= 20, "{all:?}");
+    for path in all {
+        // ddpg-task takes its task from `make ddpg-task TASK=ID`.
+        let env: &[&str] = if path.ends_with("ddpg-task.toml") { &["--env", "ReachAvoid-v0"] } else { &[] };
+        let c = recipe(&path, env).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
+        assert!(blockpuzzle::env::ids().contains(&c.env.as_str()), "{}: {}", path.display(), c.env);
+    }
+}
+
+#[test]
+fn the_study_recipes_are_the_reported_settings_and_flags_win() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/study");
+    let c = recipe(&dir.join("ours-nol2-pre-rho9.toml"), &["--workers", "2"]).unwrap();
+    assert_eq!((c.algo, c.env.as_str(), c.snapshot_every), (Algo::Ddpg, "BlocksChoose-v0", 10));
+    let d = &c.ddpg;
+    assert!(d.td3 && d.n_step == 3 && d.precision == Precision::Bf16, "{d:?}");
+    assert_eq!(
+        (c.level_replay, c.challenge_share, d.action_l2, d.preact_l2, d.noise_correlation),
+        (0.2, 0.25, 0.0, 0.01, 0.9)
+    );
+    // The paper's recipe is the defaults.
+    let paper = recipe(&dir.join("paper.toml"), &[]).unwrap();
+    let plain = train_config(
+        ["blockpuzzle", "train", "--env", "BlocksChoose-v0", "--snapshot-every", "10"].map(Into::into).to_vec(),
+    )
+    .unwrap();
+    assert_eq!(paper, plain);
+    // A flag on the command line wins over the file.
+    let f32 = recipe(&dir.join("ours.toml"), &["--precision", "f32", "--n-step", "5"]).unwrap();
+    assert_eq!((f32.ddpg.precision, f32.ddpg.n_step), (Precision::F32, 5));
+}
+
+#[test]
+fn a_bad_recipe_is_named_with_the_key_and_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("r.toml");
+    std::fs::write(&p, "env = \"BlocksTouch-v0\"\nepoch = 3\n").unwrap();
+    let e = format!("{:#}", recipe(&p, &[]).unwrap_err());
+    assert!(e.contains("r.toml: `epoch` is not a flag of `blockpuzzle train`") && e.contains("epochs"), "{e}");
+    std::fs::write(&p, "env = \"BlocksTouch-v0\"\nepochs = 0\n").unwrap();
+    let e = format!("{:#}", recipe(&p, &[]).unwrap_err());
+    assert!(e.contains("'0' for '--epochs"), "{e}");
+    let e = format!("{:#}", recipe(&dir.path().join("none.toml"), &[]).unwrap_err());
+    assert!(e.contains("cannot read the recipe"), "{e}");
+}
