@@ -396,30 +396,8 @@ pub fn main() -> Result<()> {
         },
     };
     match cli.command {
-        Command::Envs => {
-            for r in registry::REGISTRY {
-                let task = registry::task(r.id)?;
-                println!(
-                    "{:<24} obs {:>3}  levels 0-{:<2}  {}",
-                    r.id,
-                    crate::env::obs_dim(task.spec.objects.len()),
-                    task.max_level(),
-                    task.spec.summary
-                );
-            }
-            Ok(())
-        }
-        Command::Info => {
-            let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
-            println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
-            println!("MuJoCo {}", crate::mj::version());
-            println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
-            println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
-            println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
-            println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
-            println!("bf16 updates {}", if crate::agents::ddpg::Precision::bf16_supported() { "yes" } else { "no" });
-            Ok(())
-        }
+        Command::Envs => envs(),
+        Command::Info => info(),
         Command::Rollout(a) => rollout(a),
         Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval(a),
@@ -429,89 +407,130 @@ pub fn main() -> Result<()> {
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
         Command::Plot(a) => runs::plot(a),
-        Command::Align { reference, plot, bench_steps: Some(steps), threads } => {
-            if plot.is_some() {
-                bail!("--plot draws the replay; leave it out with --bench-steps");
-            }
-            let r = crate::align::Reference::load(&reference)?;
-            let Some(ep) = r.episodes.first() else { bail!("{} holds no episodes", reference.display()) };
-            let start = |env: &mut crate::env::BlockEnv, _: Option<u64>| {
-                let (q, v) = crate::align::start_state(env, ep)
-                    .map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
-                env.set_state(&q, &v)
-            };
-            let report =
-                crate::bench::run_with("FetchPush-like", &crate::align::fetchpush_like, &start, steps, threads)?;
-            println!("{}", serde_json::to_string(&report)?);
-            Ok(())
+        Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
+            align_bench(&reference, steps, threads)
         }
-        Command::Align { reference, plot, .. } => {
-            let r = crate::align::Reference::load(&reference)?;
-            let title = format!(
-                "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
-                r.gymnasium_robotics,
-                r.mujoco,
-                crate::mj::version()
-            );
-            println!("{title}");
-            println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
-            let all = crate::align::replay_all(&r)?;
-            for d in &all {
-                println!(
-                    "| {} {} | {} | {:.2e} | {:.2e} | {} |",
-                    d.kind, d.seed, d.steps, d.grip_max, d.object_max, d.worst_step
-                );
-            }
-            if let Some(png) = plot {
-                let episodes: Vec<(String, Vec<[f64; 2]>)> =
-                    all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
-                crate::train::plot::deviations(&png, &title, &episodes, crate::align::TOLERANCE)?;
-                println!("wrote {}", png.display());
-            }
-            Ok(())
+        Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
+            bail!("--plot draws the replay; leave it out with --bench-steps")
         }
+        Command::Align { reference, plot, .. } => align(&reference, plot.as_deref()),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             print!("{}", crate::scene::mjcf(&c.scene_spec())?);
             Ok(())
         }
-        Command::Bench(a) if a.ddpg => {
-            let r = crate::bench::ddpg::run(&crate::bench::ddpg::DdpgBenchConfig {
-                env: a.env,
-                workers: a.workers,
-                steps: a.steps,
-                updates: a.updates,
-                batch_size: a.batch_size,
-                torch_threads: a.torch_threads,
-                seed: a.seed,
-                precision: a.precision,
-            })?;
-            if a.json {
-                println!("{}", serde_json::to_string(&r)?);
-            } else {
-                println!(
-                    "DDPG on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
-                    r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
-                );
-            }
-            Ok(())
-        }
-        Command::Bench(a) => {
-            let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
-            if a.json {
-                println!("{}", serde_json::to_string(&r)?);
-            } else {
-                println!(
-                    "{}{}: {} thread(s) x {} steps in {:.2} s\n  env steps/s   {:>10.0}\n  mj_step/s     {:>10.0}\n  env overhead  {:>9.2}% of a step",
-                    r.env,
-                    if r.collision_filter { "" } else { " (no collision filter)" },
-                    r.threads,
-                    r.steps, r.seconds, r.env_steps_per_s, r.mj_steps_per_s, 100.0 * r.overhead_fraction
-                );
-            }
-            Ok(())
-        }
+        Command::Bench(a) if a.ddpg => bench_ddpg(a),
+        Command::Bench(a) => bench(&a),
     }
+}
+
+/// `blockpuzzle envs`: one line per registered id.
+fn envs() -> Result<()> {
+    for r in registry::REGISTRY {
+        let task = registry::task(r.id)?;
+        println!(
+            "{:<24} obs {:>3}  levels 0-{:<2}  {}",
+            r.id,
+            crate::env::obs_dim(task.spec.objects.len()),
+            task.max_level(),
+            task.spec.summary
+        );
+    }
+    Ok(())
+}
+
+/// `blockpuzzle info`: the engine and numeric libraries of this process.
+fn info() -> Result<()> {
+    let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
+    println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
+    println!("MuJoCo {}", crate::mj::version());
+    println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
+    println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
+    println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
+    println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
+    println!("bf16 updates {}", if crate::agents::ddpg::Precision::bf16_supported() { "yes" } else { "no" });
+    Ok(())
+}
+
+/// `align --bench-steps`: env steps/s of the FetchPush-like scene from the reference's first state.
+fn align_bench(reference: &Path, steps: usize, threads: usize) -> Result<()> {
+    let r = crate::align::Reference::load(reference)?;
+    let Some(ep) = r.episodes.first() else { bail!("{} holds no episodes", reference.display()) };
+    let start = |env: &mut crate::env::BlockEnv, _: Option<u64>| {
+        let (q, v) =
+            crate::align::start_state(env, ep).map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
+        env.set_state(&q, &v)
+    };
+    let report = crate::bench::run_with("FetchPush-like", &crate::align::fetchpush_like, &start, steps, threads)?;
+    println!("{}", serde_json::to_string(&report)?);
+    Ok(())
+}
+
+/// `blockpuzzle align`: the replay's per-episode deviations, and their plot.
+fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
+    let r = crate::align::Reference::load(reference)?;
+    let title = format!(
+        "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
+        r.gymnasium_robotics,
+        r.mujoco,
+        crate::mj::version()
+    );
+    println!("{title}");
+    println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
+    let all = crate::align::replay_all(&r)?;
+    for d in &all {
+        println!(
+            "| {} {} | {} | {:.2e} | {:.2e} | {} |",
+            d.kind, d.seed, d.steps, d.grip_max, d.object_max, d.worst_step
+        );
+    }
+    if let Some(png) = plot {
+        let episodes: Vec<(String, Vec<[f64; 2]>)> =
+            all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
+        crate::train::plot::deviations(png, &title, &episodes, crate::align::TOLERANCE)?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// `bench --ddpg`: collection env steps/s and update rate.
+fn bench_ddpg(a: BenchArgs) -> Result<()> {
+    let r = crate::bench::ddpg::run(&crate::bench::ddpg::DdpgBenchConfig {
+        env: a.env,
+        workers: a.workers,
+        steps: a.steps,
+        updates: a.updates,
+        batch_size: a.batch_size,
+        torch_threads: a.torch_threads,
+        seed: a.seed,
+        precision: a.precision,
+    })?;
+    if a.json {
+        println!("{}", serde_json::to_string(&r)?);
+    } else {
+        println!(
+            "DDPG on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
+            r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
+        );
+    }
+    Ok(())
+}
+
+/// `blockpuzzle bench`: env steps/s and mj_step/s.
+fn bench(a: &BenchArgs) -> Result<()> {
+    let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
+    if a.json {
+        println!("{}", serde_json::to_string(&r)?);
+    } else {
+        println!(
+            "{}{}: {} thread(s) x {} steps in {:.2} s\n  env steps/s   {:>10.0}\n  mj_step/s     {:>10.0}\n  env overhead  {:>9.2}% of a step",
+            r.env,
+            if r.collision_filter { "" } else { " (no collision filter)" },
+            r.threads,
+            r.steps, r.seconds, r.env_steps_per_s, r.mj_steps_per_s, 100.0 * r.overhead_fraction
+        );
+    }
+    Ok(())
 }
 
 fn rollout(a: RolloutArgs) -> Result<()> {
