@@ -451,6 +451,26 @@ pub struct Loaded {
 /// for another environment or other dimensions.
 pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result<Loaded, CheckpointError> {
     let bytes = std::fs::read(path).map_err(io(path))?;
+    let (header, payload) = parse(path, &bytes)?;
+    let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
+    let s = &header.state;
+    if s.env_id != env_id {
+        return Err(mismatch(format!("it was trained on {}, this run is {env_id}", s.env_id)));
+    }
+    if (s.obs_dim, s.act_dim) != (obs_dim, act_dim) {
+        return Err(mismatch(format!(
+            "observation/action sizes {}/{} differ from this environment's {obs_dim}/{act_dim}",
+            s.obs_dim, s.act_dim
+        )));
+    }
+    let blobs = blobs(&header, payload);
+    let agent = load_agent(path, &header, &blobs, obs_dim, act_dim)?;
+    let replays = load_replays(path, &header, &blobs, obs_dim, act_dim)?;
+    Ok(Loaded { state: header.state, agent, replays: replays.0, log: replays.1 })
+}
+
+/// The header and payload of a checkpoint file's bytes, checked (magic, sizes, checksum).
+fn parse<'b>(path: &Path, bytes: &'b [u8]) -> Result<(Header, &'b [u8]), CheckpointError> {
     let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
     if bytes.len() < 16 || &bytes[..8] != MAGIC {
         return Err(corrupt("not a blockpuzzle checkpoint"));
@@ -469,18 +489,11 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
     if crc32fast::hash(payload) != header.payload_crc32 {
         return Err(corrupt("checksum mismatch"));
     }
-    let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
-    let s = &header.state;
-    if s.env_id != env_id {
-        return Err(mismatch(format!("it was trained on {}, this run is {env_id}", s.env_id)));
-    }
-    if (s.obs_dim, s.act_dim) != (obs_dim, act_dim) {
-        return Err(mismatch(format!(
-            "observation/action sizes {}/{} differ from this environment's {obs_dim}/{act_dim}",
-            s.obs_dim, s.act_dim
-        )));
-    }
+    Ok((header, payload))
+}
 
+/// The payload's arrays by name (sizes checked by [`parse`]).
+fn blobs(header: &Header, payload: &[u8]) -> std::collections::HashMap<String, Vec<f32>> {
     let mut blobs = std::collections::HashMap::new();
     let mut off = 0;
     for (name, len) in &header.blobs {
@@ -489,9 +502,25 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         off += 4 * len;
         blobs.insert(name.clone(), v);
     }
-    let take =
-        |prefix: &str| -> Vec<Vec<f32>> { (0..).map_while(|i| blobs.get(&format!("{prefix}.{i}")).cloned()).collect() };
+    blobs
+}
 
+/// The arrays `prefix.0`, `prefix.1`, ... in order.
+fn take(blobs: &std::collections::HashMap<String, Vec<f32>>, prefix: &str) -> Vec<Vec<f32>> {
+    (0..).map_while(|i| blobs.get(&format!("{prefix}.{i}")).cloned()).collect()
+}
+
+/// The agent, exactly as saved.
+fn load_agent(
+    path: &Path,
+    header: &Header,
+    blobs: &std::collections::HashMap<String, Vec<f32>>,
+    obs_dim: usize,
+    act_dim: usize,
+) -> Result<Agent, CheckpointError> {
+    let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
+    let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
+    let take = |prefix: &str| take(blobs, prefix);
     // Network shapes come from the saved hyperparameters; the seed does not
     // matter because every value is overwritten.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
@@ -500,7 +529,7 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         return Err(mismatch("normaliser size differs".into()));
     }
     let d = &header.ddpg;
-    let agent = match header.algo {
+    Ok(match header.algo {
         Algo::Ddpg => {
             let mut a = Ddpg::new(obs_dim, act_dim, d.clone(), &mut rng);
             fill(a.actor.load_vecs(&take("actor")))?;
@@ -519,7 +548,7 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
                 (None, None) => {}
                 _ => return Err(corrupt("the TD3 critic and the --td3 setting disagree")),
             }
-            a.norm = header.normalizer;
+            a.norm = header.normalizer.clone();
             Agent::Ddpg(a)
         }
         Algo::Pggd => {
@@ -527,16 +556,28 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
             let mut a = Pggd::new(obs_dim, act_dim, shape, norm, header.pggd.clone(), &mut rng);
             fill(a.net.load_vecs(&take("actor")))?;
             fill(a.opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
-            a.norm = header.normalizer;
+            a.norm = header.normalizer.clone();
             Agent::Pggd(a)
         }
-    };
+    })
+}
 
+/// The replay buffers, exactly as saved, and their log for the next [`save`].
+fn load_replays(
+    path: &Path,
+    header: &Header,
+    blobs: &std::collections::HashMap<String, Vec<f32>>,
+    obs_dim: usize,
+    act_dim: usize,
+) -> Result<(Vec<ReplayBuffer>, ReplayLog), CheckpointError> {
+    let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
+    let take = |prefix: &str| take(blobs, prefix);
+    let d = &header.ddpg;
     if !header.replay_log.is_empty() {
         let dir = path.parent().unwrap_or(Path::new("."));
         let replays = read_log(dir, &header.replay_log, obs_dim, act_dim, &corrupt)?;
         let shards = header.replay_log.iter().map(|s| ShardLog { kept_from: s.pushed - s.len as u64, ..s.clone() });
-        return Ok(Loaded { state: header.state, agent, replays, log: ReplayLog { shards: shards.collect() } });
+        return Ok((replays, ReplayLog { shards: shards.collect() }));
     }
     let positions: Vec<(usize, usize)> = std::iter::once((header.replay_capacity, header.replay_next))
         .chain(header.more_replays.iter().copied())
@@ -564,5 +605,5 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
         }
         replays.push(ReplayBuffer::from_parts(obs_dim, act_dim, capacity, data, next).map_err(|e| corrupt(&e))?);
     }
-    Ok(Loaded { state: header.state, agent, replays, log: ReplayLog::default() })
+    Ok((replays, ReplayLog::default()))
 }
