@@ -138,6 +138,43 @@ pub struct Scene {
 const GRIPPER_BODIES: [&str; 3] =
     ["robot0:gripper_link", "robot0:r_gripper_finger_link", "robot0:l_gripper_finger_link"];
 
+/// gymnasium-robotics' reset_mocap_welds: the weld's anchor and relative
+/// pose become the identity, so the gripper is pulled onto the mocap.
+fn reset_mocap_welds(model: &mut Model) {
+    let welds: Vec<usize> =
+        model.eq_type().iter().enumerate().filter(|(_, &t)| t == crate::mj::EQ_WELD).map(|(i, _)| i).collect();
+    for i in welds {
+        model.eq_data_mut()[i][..7].copy_from_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+    }
+}
+
+/// Colours the gripper's geoms when it takes part in the task (it is not grey).
+fn colour_gripper(model: &mut Model, gripper_bodies: &[usize], colour: Colour) -> Result<(), SceneError> {
+    if colour == Colour::Grey {
+        return Ok(());
+    }
+    let mat = model.id(ObjType::Material, xml::material(colour))?;
+    let geoms: Vec<usize> =
+        (0..model.ngeom()).filter(|&g| gripper_bodies.contains(&(model.geom_bodyid()[g] as usize))).collect();
+    for g in geoms {
+        model.set_geom_material(g, mat)?;
+    }
+    Ok(())
+}
+
+/// The ids of block `i` (its body, site, geom and free joint's addresses).
+fn block_ids(model: &Model, i: usize) -> Result<BlockIds, SceneError> {
+    let name = xml::block_name(i);
+    let (qpos, dof) = joint_adr(model, &format!("{name}:joint"))?;
+    Ok(BlockIds {
+        body: model.id(ObjType::Body, &name)?,
+        site: model.id(ObjType::Site, &name)?,
+        geom: model.id(ObjType::Geom, &name)?,
+        qpos,
+        dof,
+    })
+}
+
 fn joint_adr(model: &Model, name: &str) -> Result<(usize, usize), MjError> {
     let j = model.id(ObjType::Joint, name)?;
     Ok((model.jnt_qposadr()[j] as usize, model.jnt_dofadr()[j] as usize))
@@ -176,25 +213,10 @@ impl Scene {
         let text = mjcf(spec)?;
         let mut model = Model::from_xml_string(&text, &xml::virtual_path(&dir))?;
 
-        // gymnasium-robotics' reset_mocap_welds: the weld's anchor and relative
-        // pose become the identity, so the gripper is pulled onto the mocap.
-        let welds: Vec<usize> =
-            model.eq_type().iter().enumerate().filter(|(_, &t)| t == crate::mj::EQ_WELD).map(|(i, _)| i).collect();
-        for i in welds {
-            model.eq_data_mut()[i][..7].copy_from_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
-        }
-
-        // Colour the gripper's geoms when it takes part in the task.
+        reset_mocap_welds(&mut model);
         let gripper_bodies: Vec<usize> =
             GRIPPER_BODIES.iter().map(|n| model.id(ObjType::Body, n)).collect::<Result<_, _>>()?;
-        if spec.gripper != Colour::Grey {
-            let mat = model.id(ObjType::Material, xml::material(spec.gripper))?;
-            let geoms: Vec<usize> =
-                (0..model.ngeom()).filter(|&g| gripper_bodies.contains(&(model.geom_bodyid()[g] as usize))).collect();
-            for g in geoms {
-                model.set_geom_material(g, mat)?;
-            }
-        }
+        colour_gripper(&mut model, &gripper_bodies, spec.gripper)?;
 
         let grip_site = model.id(ObjType::Site, "robot0:grip")?;
         let gripper_body = gripper_bodies[0];
@@ -209,19 +231,7 @@ impl Scene {
         }
         let table_body = model.id(ObjType::Body, "table0")?;
 
-        let mut blocks = Vec::with_capacity(spec.blocks.len());
-        for i in 0..spec.blocks.len() {
-            let name = xml::block_name(i);
-            let (qpos, dof) = joint_adr(&model, &format!("{name}:joint"))?;
-            blocks.push(BlockIds {
-                body: model.id(ObjType::Body, &name)?,
-                site: model.id(ObjType::Site, &name)?,
-                geom: model.id(ObjType::Geom, &name)?,
-                qpos,
-                dof,
-            });
-        }
-
+        let blocks = (0..spec.blocks.len()).map(|i| block_ids(&model, i)).collect::<Result<Vec<_>, _>>()?;
         let mut objects = vec![
             SceneObject { name: "gripper".into(), colour: spec.gripper },
             SceneObject { name: "table".into(), colour: spec.table },
@@ -232,12 +242,9 @@ impl Scene {
             objects.len() - 1
         });
         let floor_geom = model.id(ObjType::Geom, "floor0")?;
-        let geom_object = model
-            .geom_bodyid()
-            .iter()
-            .enumerate()
-            .map(|(g, &b)| {
-                let b = b as usize;
+        let geom_object = (0..model.ngeom())
+            .map(|g| {
+                let b = model.geom_bodyid()[g] as usize;
                 if gripper_bodies.contains(&b) {
                     GRIPPER_OBJECT as i16
                 } else if b == table_body {
