@@ -6,7 +6,7 @@
 //! touching blue, the task already solved at reset). A reset that cannot be
 //! made at all is reported with its reason.
 
-use crate::env::{registry, BlockEnv, EnvError, ResetStats};
+use crate::env::{BlockEnv, EnvError, ResetStats};
 use crate::task::Task;
 
 /// What resetting one level (or distribution) cost.
@@ -78,14 +78,15 @@ pub fn settings(task: &Task) -> Vec<(String, usize, Option<String>)> {
     out
 }
 
-/// Compiles the task `arg` (id or file) and resets it `samples` times (seeds
-/// `seed`, `seed + 1`, …) at every level and in every distribution, calling
-/// `on_reset` after each reset (a progress bar's tick).
+/// Resets `task` `samples` times (seeds `seed`, `seed + 1`, …) at every
+/// level and in every distribution, calling `on_reset` after each reset (a
+/// progress bar's tick).
 ///
 /// # Errors
-/// A task that does not compile, or a scene MuJoCo refuses.
-pub fn check(arg: &str, samples: u64, seed: u64, on_reset: &mut dyn FnMut()) -> Result<CheckReport, EnvError> {
-    let config = registry::config(arg)?;
+/// Seeds that would pass 2⁶⁴ − 1, or a scene MuJoCo refuses.
+pub fn check(task: Task, samples: u64, seed: u64, on_reset: &mut dyn FnMut()) -> Result<CheckReport, EnvError> {
+    crate::limits::seed_range(seed, samples).map_err(EnvError::Config)?;
+    let config = crate::env::EnvConfig::new(task);
     let settings = settings(&config.task);
     let mut levels = Vec::new();
     for (label, level, distribution) in settings {
@@ -94,7 +95,7 @@ pub fn check(arg: &str, samples: u64, seed: u64, on_reset: &mut dyn FnMut()) -> 
         env.set_distribution(distribution.as_deref())?;
         let mut error = None;
         for k in 0..samples {
-            let reset = env.reset(Some(seed.wrapping_add(k)));
+            let reset = env.reset(Some(seed + k));
             on_reset();
             if let Err(e) = reset {
                 error = Some(e.to_string());

@@ -183,8 +183,8 @@ pub fn seed_range(first: u64, n: u64) -> Result<(), String> {
         Ok(())
     } else {
         Err(format!(
-            "--seed {first} with {n} episodes passes the largest seed 18446744073709551615 (episode k uses seed + k); \
-             give --seed {} or less",
+            "--seed {first} with {n} seeds (episode or reset k uses seed + k) passes the largest seed \
+             18446744073709551615; give --seed {} or less",
             u64::MAX - (n - 1)
         ))
     }

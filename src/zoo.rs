@@ -209,6 +209,18 @@ pub fn is_name(arg: &Path) -> bool {
     !arg.exists() && arg.components().count() == 1 && arg.extension().is_none()
 }
 
+/// `zoo` itself, if it is a folder.
+///
+/// # Errors
+/// [`ZooError::NoZoo`].
+pub fn existing(zoo: &Path) -> Result<&Path, ZooError> {
+    if zoo.is_dir() {
+        Ok(zoo)
+    } else {
+        Err(ZooError::NoZoo { zoo: zoo.to_owned() })
+    }
+}
+
 /// The tensors file of the entry `name` in `zoo`, if it exists.
 ///
 /// # Errors
@@ -218,9 +230,7 @@ pub fn find(zoo: &Path, name: &str) -> Result<PathBuf, ZooError> {
     if path.exists() {
         return Ok(path);
     }
-    if !zoo.is_dir() {
-        return Err(ZooError::NoZoo { zoo: zoo.to_owned() });
-    }
+    existing(zoo)?;
     let known = names(zoo);
     Err(ZooError::Unknown {
         name: name.to_owned(),

@@ -598,15 +598,14 @@ fn rollout(a: RolloutArgs) -> Result<()> {
 }
 
 fn task_check(a: TaskCheckArgs) -> Result<()> {
-    crate::limits::seed_range(a.seed, a.samples).map_err(anyhow::Error::msg)?;
     if let Some(out) = &a.render {
         if out.extension().map_or(true, |e| !e.eq_ignore_ascii_case("png")) {
             bail!("--render writes a filmstrip PNG: give a FILE.png");
         }
     }
-    let settings = crate::check::settings(&registry::task(&a.file)?).len() as u64;
-    let bar = crate::progress::bar(settings * a.samples, "reset");
-    let report = crate::check::check(&a.file, a.samples, a.seed, &mut || bar.inc(1))?;
+    let task = registry::task(&a.file)?;
+    let bar = crate::progress::bar(crate::check::settings(&task).len() as u64 * a.samples, "reset");
+    let report = crate::check::check(task, a.samples, a.seed, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let task = &report.task;
     println!(

@@ -67,9 +67,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
     match c {
         ZooCommand::List { zoo } => {
             let zoo = folder(zoo);
-            if !zoo.is_dir() {
-                return Err(crate::zoo::ZooError::NoZoo { zoo }.into());
-            }
+            crate::zoo::existing(&zoo)?;
             let names = crate::zoo::names(&zoo);
             if names.is_empty() {
                 println!("the zoo in {} has no entries", zoo.display());
@@ -100,9 +98,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
         }
         ZooCommand::Check { names, zoo } => {
             let zoo = folder(zoo);
-            if !zoo.is_dir() {
-                return Err(crate::zoo::ZooError::NoZoo { zoo }.into());
-            }
+            crate::zoo::existing(&zoo)?;
             let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
             if names.is_empty() {
                 bail!("no zoo entries in {}", zoo.display());
