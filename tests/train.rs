@@ -1,13 +1,12 @@
-//! Training end to end (DDPG, PGGD, AggreVaTeD): run directory, resume,
+//! Training end to end (DDPG, PGGD, AggreVaTeD, SAC): run directory, resume,
 //! checkpoints, policies.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::ddpg::DdpgConfig;
+use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::load::load_policy;
 use blockpuzzle::train::{
-    branch, checkpoint, read_progress, train, Agent, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout,
-    TrainConfig,
+    branch, checkpoint, read_progress, train, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig,
 };
 use std::path::Path;
 
@@ -30,7 +29,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         level_replay: 0.0,
         challenge_share: 0.0,
         ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
-        algo: Algo::Ddpg,
+        algo: Algo::DDPG,
         pggd: Default::default(),
         aggrevated: Default::default(),
         task: None,
@@ -39,7 +38,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
 }
 
 fn tiny_pggd(env: &str, epochs: usize, aggrevated: AggrevatedConfig) -> TrainConfig {
-    TrainConfig { algo: Algo::Pggd, aggrevated, ..tiny(env, epochs) }
+    TrainConfig { algo: Algo::PGGD, aggrevated, ..tiny(env, epochs) }
 }
 
 fn quiet(_: &EpochRow, _: &TrainConfig) {}
@@ -250,7 +249,8 @@ fn td3_n_step_and_level_replay_resume_exactly() {
     assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), vec![0, 1, 2]);
     let ckpt = |d: &Path| checkpoint::load(&d.join("checkpoint.bin"), "BlocksTouch-v0", 48, 4).unwrap();
     let (la, lb) = (ckpt(straight.path()), ckpt(split.path()));
-    let (Agent::Ddpg(x), Agent::Ddpg(y)) = (&la.agent, &lb.agent) else { panic!("DDPG agents") };
+    let (x, y) = (la.agent.as_any().downcast_ref::<Ddpg>(), lb.agent.as_any().downcast_ref::<Ddpg>());
+    let (Some(x), Some(y)) = (x, y) else { panic!("DDPG agents") };
     let (tx, ty) = (x.twin.as_ref().expect("TD3 twin critic"), y.twin.as_ref().unwrap());
     assert_eq!(tx.critic.to_vecs(), ty.critic.to_vecs(), "second critic resumed exactly");
     assert_eq!(tx.noise_seed, ty.noise_seed);
@@ -443,6 +443,48 @@ fn bad_expert_settings_are_clear_errors() {
     };
     let err = train(&ddpg, dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--algo pggd"), "{err}");
+    // Nor does SAC; and SAC has no --td3.
+    let sac = TrainConfig { algo: Algo::named("sac").unwrap(), ..ddpg };
+    let err = train(&sac, dir.path(), false, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("SAC trains without an expert"), "{err}");
+    let td3 = TrainConfig {
+        ddpg: DdpgConfig { td3: true, ..tiny("BlocksChoose-v0", 1).ddpg },
+        ..tiny_sac("BlocksChoose-v0", 1)
+    };
+    let err = train(&td3, dir.path(), false, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("--td3 is a DDPG option"), "{err}");
+}
+
+fn tiny_sac(env: &str, epochs: usize) -> TrainConfig {
+    TrainConfig {
+        algo: Algo::named("sac").unwrap(),
+        ddpg: DdpgConfig { n_step: 2, ..tiny(env, epochs).ddpg },
+        ..tiny(env, epochs)
+    }
+}
+
+/// SAC trains through the same loop: it resumes bit for bit (its noise
+/// streams, temperature and twin critics included), saves its mean action
+/// as a deterministic actor, and its checkpoint names its algorithm.
+#[test]
+fn sac_resumes_exactly_and_saves_a_deterministic_policy() {
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&tiny_sac("GripperTouch-v0", 3), straight.path(), false, &mut quiet).unwrap();
+    let split = tempfile::tempdir().unwrap();
+    train(&tiny_sac("GripperTouch-v0", 2), split.path(), false, &mut quiet).unwrap();
+    let b = train(&tiny_sac("GripperTouch-v0", 3), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert!(a.iter().all(|r| r.critic_loss > 0.0 && r.critic_loss.is_finite()), "{a:?}");
+    let pa = load_policy(&straight.path().join("policy.json")).unwrap();
+    assert!(matches!(pa.policy, AnyPolicy::Ddpg(_)), "the mean action, as a deterministic actor");
+    assert!(pa.critic.is_some(), "Q1 saved beside it");
+    assert_eq!(pa.policy, load_policy(&split.path().join("policy.json")).unwrap().policy);
+    let loaded = checkpoint::load(&split.path().join("checkpoint.bin"), "GripperTouch-v0", 29, 4).unwrap();
+    assert_eq!(loaded.agent.algo().name(), "sac");
+    assert_eq!(tiny_sac("GripperTouch-v0", 1).default_run_dir().display().to_string(), "runs/GripperTouch-v0-sac-s7");
+    // A DDPG resume of a SAC run is refused, naming the flag that differs.
+    let err = train(&tiny("GripperTouch-v0", 4), split.path(), true, &mut quiet).unwrap_err();
+    assert!(err.to_string().contains("--algo"), "{err}");
 }
 
 #[test]
@@ -548,4 +590,35 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     let saved = blockpuzzle::load::load_policy(&run).unwrap();
     let task = blockpuzzle::env::registry::recorded(saved.task.as_ref().unwrap()).unwrap();
     assert_eq!((task.id(), task.spec.max_episode_steps), ("MyReach-v0", 50));
+}
+
+/// A checkpoint written before algorithms declared their state (Adam step
+/// counts and TD3's seed as fixed header fields, no `counters`) loads to
+/// the same agent.
+#[test]
+fn checkpoints_with_the_old_counter_fields_still_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let config =
+        TrainConfig { ddpg: DdpgConfig { td3: true, ..tiny("GripperTouch-v0", 1).ddpg }, ..tiny("GripperTouch-v0", 1) };
+    train(&config, dir.path(), false, &mut quiet).unwrap();
+    let path = dir.path().join("checkpoint.bin");
+    let now = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let hlen = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
+    let mut header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + hlen]).unwrap();
+    let counters = header["counters"].take();
+    assert!(counters["critic2_adam.t"].as_u64().unwrap() > 0, "{counters}");
+    header.as_object_mut().unwrap().remove("counters");
+    header["actor_adam_t"] = counters["actor_adam.t"].clone();
+    header["critic_adam_t"] = counters["critic_adam.t"].clone();
+    header["twin"] = serde_json::json!([counters["critic2_adam.t"], counters["critic2.noise_seed"]]);
+    let json = serde_json::to_vec(&header).unwrap();
+    let mut old = bytes[..8].to_vec();
+    old.extend_from_slice(&(json.len() as u64).to_le_bytes());
+    old.extend_from_slice(&json);
+    old.extend_from_slice(&bytes[16 + hlen..]);
+    std::fs::write(&path, old).unwrap();
+    let then = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
+    assert_eq!(then.agent.state(), now.agent.state());
+    assert_eq!(then.agent.norm(), now.agent.norm());
 }

@@ -23,16 +23,31 @@
 //!   the target networks' schedule stay as above except that the actor is
 //!   updated on every `policy_delay`-th critic update only.
 
+use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, StateDict};
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, Adam, Net};
+use super::nets::{append_grads, mlp_sizes, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
+use super::AnyPolicy;
 use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use tch::Tensor;
 
-/// DDPG hyperparameters (defaults: the paper's, i.e. Plappert et al. 2018).
+/// DDPG in the list of algorithms (`--algo ddpg`).
+pub const REGISTRATION: Registration = Registration {
+    name: "ddpg",
+    title: "DDPG",
+    about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
+    takes_expert: false,
+    new: |spec, rng| Box::new(Ddpg::new(spec.obs_dim, spec.act_dim, spec.ddpg.clone(), rng)),
+    check: |_, _| Ok(()),
+};
+
+/// DDPG hyperparameters (defaults: the paper's, i.e. Plappert et al. 2018);
+/// SAC shares the network, optimiser, discount, normaliser and n-step ones,
+/// PGGD the network shape and normaliser.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct DdpgConfig {
     /// Hidden layers of actor and critic.
@@ -260,16 +275,13 @@ pub struct Twin {
     pub noise_seed: u64,
 }
 
-fn sizes(input: usize, hidden: usize, layers: usize, output: usize) -> Vec<usize> {
-    std::iter::once(input).chain(std::iter::repeat(hidden).take(layers)).chain(std::iter::once(output)).collect()
-}
-
 impl Ddpg {
     /// A fresh learner; `rng` fixes the initial weights.
     pub fn new(obs_dim: usize, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
         let bf16 = config.precision == Precision::Bf16;
-        let actor = Net::new(&sizes(obs_dim, config.hidden, config.layers, act_dim), true, rng).with_bf16(bf16);
-        let critic = Net::new(&sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
+        let actor = Net::new(&mlp_sizes(obs_dim, config.hidden, config.layers, act_dim), true, rng).with_bf16(bf16);
+        let critic =
+            Net::new(&mlp_sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
         let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
         let actor_opt = Adam::new(&actor.params, config.lr_actor);
         let critic_opt = Adam::new(&critic.params, config.lr_critic);
@@ -277,7 +289,7 @@ impl Ddpg {
         // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
         let twin = config.td3.then(|| {
             let critic =
-                Net::new(&sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
+                Net::new(&mlp_sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
             let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, config.lr_critic));
             Twin { critic, target, opt, noise_seed: rng.gen() }
         });
@@ -305,17 +317,6 @@ impl Ddpg {
     /// Action size.
     pub fn act_dim(&self) -> usize {
         self.act_dim
-    }
-
-    /// The normalised observations as a `[n, obs_dim]` tensor.
-    fn obs_tensor(&self, rows: &[f32]) -> Tensor {
-        let mut x = rows.to_vec();
-        self.norm.normalize_in_place(&mut x);
-        Tensor::of_slice(&x).view([-1, self.obs_dim as i64])
-    }
-
-    fn q(net: &Net, obs: &Tensor, act: &Tensor) -> Tensor {
-        net.forward(&Tensor::cat(&[obs, act], 1))
     }
 
     /// The smoothed target actions clip(π'(s̄') + clip(ε, ±c), ±1), ε ~ N(0, σ²)
@@ -354,8 +355,8 @@ impl Ddpg {
     /// update (shard 0 draws the stream a single batch draws).
     pub fn gradient(&mut self, batch: &Batch, shard: u64) -> (Vec<f32>, UpdateStats) {
         let n = batch.len() as i64;
-        let obs = self.obs_tensor(&batch.obs);
-        let next_obs = self.obs_tensor(&batch.next_obs);
+        let obs = self.norm.tensor(&batch.obs);
+        let next_obs = self.norm.tensor(&batch.next_obs);
         let act = Tensor::of_slice(&batch.act).view([n, self.act_dim as i64]);
         let rew = Tensor::of_slice(&batch.rew).view([n, 1]);
         let not_done = 1.0 - Tensor::of_slice(&batch.done).view([n, 1]);
@@ -366,22 +367,22 @@ impl Ddpg {
         let target = tch::no_grad(|| {
             let next_act = self.actor_target.forward(&next_obs);
             let next_q = match &self.twin {
-                None => Self::q(&self.critic_target, &next_obs, &next_act),
+                None => self.critic_target.q(&next_obs, &next_act),
                 Some(t) => {
                     let seed = if shard == 0 { t.noise_seed } else { shard_seed(t.noise_seed, shard) };
                     let next_act = self.smoothed(next_act, seed, k);
-                    let q1 = Self::q(&self.critic_target, &next_obs, &next_act);
-                    q1.minimum(&Self::q(&t.target, &next_obs, &next_act))
+                    let q1 = self.critic_target.q(&next_obs, &next_act);
+                    q1.minimum(&t.target.q(&next_obs, &next_act))
                 }
             };
             let y: Tensor = rew + not_done * next_q * discount;
             y.clamp(-clip_return, 0.0)
         });
         self.last_targets = super::nets::tensor_to_vec(&target);
-        let q = Self::q(&self.critic, &obs, &act);
+        let q = self.critic.q(&obs, &act);
         let mut critic_loss = (&q - &target).square().mean(tch::Kind::Float);
         if let Some(t) = &self.twin {
-            critic_loss += (Self::q(&t.critic, &obs, &act) - &target).square().mean(tch::Kind::Float);
+            critic_loss += (t.critic.q(&obs, &act) - &target).square().mean(tch::Kind::Float);
         }
 
         // The actor's loss goes through the critic with its parameters
@@ -391,7 +392,7 @@ impl Ddpg {
             let u = self.actor.preactivation(&obs);
             let pi = u.tanh();
             let frozen_critic = self.critic.detached_view();
-            let loss = -Self::q(&frozen_critic, &obs, &pi).mean(tch::Kind::Float)
+            let loss = -frozen_critic.q(&obs, &pi).mean(tch::Kind::Float)
                 + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
             if self.config.preact_l2 > 0.0 {
                 loss + u.square().mean(tch::Kind::Float) * self.config.preact_l2
@@ -432,23 +433,19 @@ impl Ddpg {
     /// If `gradient` does not have that layout.
     pub fn apply_gradient(&mut self, gradient: &[f32]) {
         let actor_step = self.actor_steps();
-        let mut rest = gradient;
-        let mut take = |params: &[Tensor]| {
-            let (g, r) = rest.split_at(params.iter().map(Tensor::numel).sum::<usize>().min(rest.len()));
-            rest = r;
-            g
-        };
-        let g = take(&self.critic.params);
-        self.critic_opt.step(&mut self.critic.params, g);
+        let mut nets = vec![&self.critic];
+        nets.extend(self.twin.as_ref().map(|t| &t.critic));
+        if actor_step {
+            nets.push(&self.actor);
+        }
+        let parts = split_gradient(gradient, &nets);
+        self.critic_opt.step(&mut self.critic.params, parts[0]);
         if let Some(t) = &mut self.twin {
-            let g = take(&t.critic.params);
-            t.opt.step(&mut t.critic.params, g);
+            t.opt.step(&mut t.critic.params, parts[1]);
         }
         if actor_step {
-            let g = take(&self.actor.params);
-            self.actor_opt.step(&mut self.actor.params, g);
+            self.actor_opt.step(&mut self.actor.params, parts[parts.len() - 1]);
         }
-        assert!(rest.is_empty(), "a gradient of another layout");
     }
 
     /// The critic targets y of the last update, one per transition.
@@ -469,6 +466,122 @@ impl Ddpg {
     /// A self-contained policy for rollouts (weights and normaliser frozen).
     pub fn policy(&self) -> DdpgPolicy {
         DdpgPolicy { net: self.actor.to_plain(), norm: self.norm.clone() }
+    }
+}
+
+impl Algorithm for Ddpg {
+    fn algo(&self) -> Algo {
+        Algo::DDPG
+    }
+
+    fn norm(&self) -> &Normalizer {
+        &self.norm
+    }
+
+    fn norm_mut(&mut self) -> &mut Normalizer {
+        &mut self.norm
+    }
+
+    fn gradient(&mut self, batch: &Batch, shard: u64, _weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
+        Ddpg::gradient(self, batch, shard)
+    }
+
+    fn apply_gradient(&mut self, gradient: &[f32]) {
+        Ddpg::apply_gradient(self, gradient);
+    }
+
+    fn gradient_len(&self) -> usize {
+        let twin = self.twin.as_ref().map_or(0, |t| param_count(&[&t.critic]));
+        param_count(&[&self.critic, &self.actor]) + twin
+    }
+
+    fn end_cycle(&mut self) {
+        self.update_targets();
+    }
+
+    fn policy(&self) -> AnyPolicy {
+        AnyPolicy::Ddpg(Ddpg::policy(self))
+    }
+
+    fn explorer(&self) -> Box<dyn Explorer> {
+        let c = &self.config;
+        Box::new(DdpgExplorer {
+            policy: Ddpg::policy(self),
+            random_eps: c.random_eps,
+            noise_eps: c.noise_eps,
+            noise_correlation: c.noise_correlation,
+        })
+    }
+
+    fn critic(&self) -> Option<TanhMlp> {
+        Some(self.critic.to_plain())
+    }
+
+    fn take_branch_settings(&mut self, ddpg: &DdpgConfig) {
+        self.config.action_l2 = ddpg.action_l2;
+        self.config.preact_l2 = ddpg.preact_l2;
+    }
+
+    fn state(&self) -> StateDict {
+        let mut s = StateDict::default();
+        s.put_net("actor", &self.actor);
+        s.put_net("critic", &self.critic);
+        s.put_net("actor_target", &self.actor_target);
+        s.put_net("critic_target", &self.critic_target);
+        s.put_adam("actor_adam", &self.actor_opt);
+        s.put_adam("critic_adam", &self.critic_opt);
+        if let Some(t) = &self.twin {
+            s.put_net("critic2", &t.critic);
+            s.put_net("critic2_target", &t.target);
+            s.put_adam("critic2_adam", &t.opt);
+            s.counters.insert("critic2.noise_seed".into(), t.noise_seed);
+        }
+        s
+    }
+
+    fn load_state(&mut self, s: &StateDict) -> Result<(), String> {
+        s.load_net("actor", &mut self.actor)?;
+        s.load_net("critic", &mut self.critic)?;
+        s.load_net("actor_target", &mut self.actor_target)?;
+        s.load_net("critic_target", &mut self.critic_target)?;
+        s.load_adam("actor_adam", &mut self.actor_opt)?;
+        s.load_adam("critic_adam", &mut self.critic_opt)?;
+        match &mut self.twin {
+            Some(t) => {
+                s.load_net("critic2", &mut t.critic)?;
+                s.load_net("critic2_target", &mut t.target)?;
+                s.load_adam("critic2_adam", &mut t.opt)?;
+                t.noise_seed = s.counter("critic2.noise_seed")?;
+            }
+            None if s.tensors.contains_key("critic2.0") => {
+                return Err("the checkpoint has TD3's second critic, the settings have no --td3".into())
+            }
+            None => {}
+        }
+        Ok(())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+/// DDPG's exploration with a frozen actor: see [`DdpgPolicy::explore_correlated`].
+pub struct DdpgExplorer {
+    /// The actor.
+    pub policy: DdpgPolicy,
+    /// Probability of a uniform random action.
+    pub random_eps: f64,
+    /// Standard deviation of the Gaussian noise.
+    pub noise_eps: f64,
+    /// Correlation of the noise between consecutive steps.
+    pub noise_correlation: f64,
+}
+
+impl Explorer for DdpgExplorer {
+    fn explore(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> Vec<f32> {
+        let settings = (self.random_eps, self.noise_eps, self.noise_correlation);
+        self.policy.explore_correlated(obs, settings, noise, rng)
     }
 }
 
@@ -588,7 +701,7 @@ mod tests {
         let mut agent = Ddpg::new(6, 4, DdpgConfig { precision: Precision::Bf16, ..DdpgConfig::default() }, &mut rng);
         let b = batch(256, 6, &mut rng);
         // Same weights, products rounded to bfloat16 (8-bit mantissa): close, not equal.
-        let x = agent.obs_tensor(&b.obs);
+        let x = agent.norm.tensor(&b.obs);
         let (y16, y32) = tch::no_grad(|| (agent.actor.forward(&x), f32_agent.actor.forward(&x)));
         let err = (&y16 - &y32).abs().max().double_value(&[]);
         assert!(err > 0.0 && err < 0.05, "max |bf16 - f32| = {err}");
@@ -651,11 +764,11 @@ mod tests {
         b.rew = vec![-1.0; 8];
         b.done = vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         b.discount = vec![0.98, 0.98, 0.5, 0.5, 0.98, 0.98, 0.98, 0.98];
-        let next = agent.obs_tensor(&b.next_obs);
+        let next = agent.norm.tensor(&b.next_obs);
         let want: Vec<f32> = tch::no_grad(|| {
             let a = agent.actor_target.forward(&next);
-            let q1 = Ddpg::q(&agent.critic_target, &next, &a);
-            let q2 = Ddpg::q(&agent.twin.as_ref().unwrap().target, &next, &a);
+            let q1 = agent.critic_target.q(&next, &a);
+            let q2 = agent.twin.as_ref().unwrap().target.q(&next, &a);
             super::super::nets::tensor_to_vec(&q1.minimum(&q2))
         });
         agent.update(&b);
@@ -765,7 +878,7 @@ mod tests {
                 *x *= 100.0;
             }
             agent.actor.load_vecs(&v).unwrap();
-            let obs = agent.obs_tensor(&b.obs);
+            let obs = agent.norm.tensor(&b.obs);
             let size = |a: &Ddpg| a.actor.preactivation(&obs).abs().mean(tch::Kind::Float).double_value(&[]);
             let before = size(&agent);
             let stats: Vec<UpdateStats> = (0..40).map(|_| agent.update(&b)).collect();
@@ -810,7 +923,7 @@ mod tests {
         agent.norm.update(&b.obs);
         let policy = agent.policy();
         let obs = &b.obs[..6];
-        let want = tch::no_grad(|| super::super::nets::tensor_to_vec(&agent.actor.forward(&agent.obs_tensor(obs))));
+        let want = tch::no_grad(|| super::super::nets::tensor_to_vec(&agent.actor.forward(&agent.norm.tensor(obs))));
         let got = policy.act(obs);
         for (g, w) in got.iter().zip(&want) {
             assert!((g - w).abs() < 1e-5, "{got:?} vs {want:?}");

@@ -6,10 +6,10 @@ use super::ddpg::DdpgPolicy;
 use super::mlp::TanhMlp;
 use super::nets::{tensor_to_vec, Net};
 use super::normalizer::Normalizer;
-use super::pggd::PggdPolicy;
 use crate::env::{obs_dim, BLOCK_OBS, ROBOT_OBS};
 use crate::rules::Colour;
 use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
 /// Index of "grey" in a block's colour one-hot (red, blue, green, grey),
@@ -58,23 +58,23 @@ pub enum Actor {
 
 /// The roll-in policy β·π* + (1 − β)·π_θ: per step the expert acts with
 /// probability β on the grey-removed view, else the learner samples.
-#[derive(Debug, Clone)]
+#[derive(Clone, Copy)]
 pub struct Mixture<'a> {
     /// The expert.
     pub expert: &'a DdpgPolicy,
-    /// The learner.
-    pub learner: &'a PggdPolicy,
+    /// The learner, exploring (PGGD: sampling its Gaussian).
+    pub learner: &'a dyn super::algorithm::Explorer,
     /// Probability that the expert acts.
     pub beta: f64,
 }
 
 impl Mixture<'_> {
-    /// `(who, action before clipping)` for one step.
-    pub fn act(&self, obs: &[f32], rng: &mut impl Rng) -> (Actor, Vec<f32>) {
+    /// `(who, action before clipping)` for one step; `noise` is the learner's episode noise state.
+    pub fn act(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> (Actor, Vec<f32>) {
         if rng.gen_bool(self.beta.clamp(0.0, 1.0)) {
             (Actor::Expert, self.expert.act(&without_grey(obs)))
         } else {
-            (Actor::Learner, self.learner.sample(obs, rng))
+            (Actor::Learner, self.learner.explore(obs, noise, rng))
         }
     }
 }
@@ -163,7 +163,7 @@ mod tests {
             let m = Mixture { expert: &expert, learner: &learner, beta };
             let (mut r1, mut r2) = (ChaCha8Rng::seed_from_u64(9), ChaCha8Rng::seed_from_u64(9));
             for _ in 0..100 {
-                let (w, a) = m.act(&obs, &mut r1);
+                let (w, a) = m.act(&obs, &mut Vec::new(), &mut r1);
                 assert_eq!(w, who);
                 let expected = if who == Actor::Expert {
                     let _ = r2.gen_bool(1.0); // the mixture's draw
@@ -178,7 +178,7 @@ mod tests {
         // In between, both act, in proportion.
         let m = Mixture { expert: &expert, learner: &learner, beta: 0.3 };
         let mut r = ChaCha8Rng::seed_from_u64(2);
-        let n = (0..10_000).filter(|_| m.act(&obs, &mut r).0 == Actor::Expert).count();
+        let n = (0..10_000).filter(|_| m.act(&obs, &mut Vec::new(), &mut r).0 == Actor::Expert).count();
         assert!((2_700..3_300).contains(&n), "{n}");
     }
 

@@ -1,7 +1,8 @@
-//! Learning agents: DDPG and PGGD (with their networks, optimiser,
-//! normaliser and replay buffer), and AggreVaTeD's expert view and mixture.
+//! Learning algorithms (DDPG, PGGD, SAC: one file each, listed in
+//! `algorithm::ALGORITHMS`), their networks, optimiser, normaliser and
+//! replay buffer, and AggreVaTeD's expert view and mixture.
 
-pub mod agent;
+pub mod algorithm;
 pub mod ddpg;
 pub mod expert;
 pub mod mlp;
@@ -9,6 +10,7 @@ pub mod nets;
 pub mod normalizer;
 pub mod pggd;
 pub mod replay;
+pub mod sac;
 
 use serde::{Deserialize, Serialize};
 
@@ -17,13 +19,14 @@ use serde::{Deserialize, Serialize};
 /// file, which would act on overflowed numbers).
 pub const MAX_ABS_WEIGHT: f32 = 1e6;
 
-/// A trained policy of either algorithm, as saved in `policy.json`.
+/// A trained policy, as saved in `policy.json`: a deterministic tanh actor
+/// (DDPG, TD3, and SAC's mean action) or PGGD's Gaussian.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum AnyPolicy {
     /// PGGD (tried first: a DDPG policy lacks its `act_dim` and `sigma_min`).
     Pggd(pggd::PggdPolicy),
-    /// DDPG.
+    /// A deterministic tanh actor (DDPG, TD3, SAC).
     Ddpg(ddpg::DdpgPolicy),
 }
 
@@ -71,7 +74,8 @@ impl AnyPolicy {
         net.check(norm.dim(), outputs, MAX_ABS_WEIGHT).map_err(|e| format!("actor: {e}"))
     }
 
-    /// "ddpg" or "pggd".
+    /// The policy's kind as files record it: "ddpg" (a deterministic tanh
+    /// actor, whichever algorithm trained it) or "pggd".
     pub fn algo(&self) -> &'static str {
         match self {
             Self::Pggd(_) => "pggd",

@@ -7,6 +7,11 @@ use super::mlp::{Dense, TanhMlp};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
+/// The layer sizes of an MLP: `input`, `layers` × `hidden`, `output`.
+pub fn mlp_sizes(input: usize, hidden: usize, layers: usize, output: usize) -> Vec<usize> {
+    std::iter::once(input).chain(std::iter::repeat(hidden).take(layers)).chain(std::iter::once(output)).collect()
+}
+
 /// A fully connected network: ReLU hidden layers, linear or tanh output.
 pub struct Net {
     /// Weight `[out, in]` and bias `[out]` of each layer, input first.
@@ -83,6 +88,11 @@ impl Net {
         } else {
             h
         }
+    }
+
+    /// A critic's value Q(s̄, a): the output for the rows `[obs | act]`.
+    pub fn q(&self, obs: &Tensor, act: &Tensor) -> Tensor {
+        self.forward(&Tensor::cat(&[obs, act], 1))
     }
 
     /// The output layer's values before its `tanh` (the output itself for a linear output).

@@ -13,15 +13,37 @@
 //!   transition, or an expert's advantage), optionally standardised over the
 //!   batch (see [`WeightNorm`]); Adam, lr 1e-4.
 
+use super::algorithm::{param_count, Algo, Algorithm, Explorer, Registration, StateDict};
 use super::ddpg::UpdateStats;
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, Adam, Net};
+use super::nets::{append_grads, mlp_sizes, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
+use super::AnyPolicy;
 use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use tch::Tensor;
+
+/// PGGD in the list of algorithms (`--algo pggd`; with `--expert`, AggreVaTeD).
+pub const REGISTRATION: Registration = Registration {
+    name: "pggd",
+    title: "PGGD",
+    about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
+    takes_expert: true,
+    new: |spec, rng| {
+        let d = spec.ddpg;
+        let (shape, norm) = ((d.layers, d.hidden), (d.norm_eps, d.norm_clip));
+        Box::new(Pggd::new(spec.obs_dim, spec.act_dim, shape, norm, spec.pggd.clone(), rng))
+    },
+    check: |ddpg, _| {
+        if ddpg.n_step != 1 || ddpg.td3 {
+            return Err("--n-step and --td3 are DDPG options; PGGD uses the return-to-go".into());
+        }
+        Ok(())
+    },
+};
 
 /// What happens to the per-transition weights before the gradient.
 ///
@@ -103,11 +125,7 @@ impl Pggd {
         config: PggdConfig,
         rng: &mut impl Rng,
     ) -> Self {
-        let sizes: Vec<usize> = std::iter::once(obs_dim)
-            .chain(std::iter::repeat(hidden).take(layers))
-            .chain(std::iter::once(2 * act_dim))
-            .collect();
-        let net = Net::new(&sizes, false, rng);
+        let net = Net::new(&mlp_sizes(obs_dim, hidden, layers, 2 * act_dim), false, rng);
         let opt = Adam::new(&net.params, config.lr);
         Self { norm: Normalizer::new(obs_dim, norm_eps, norm_clip), net, opt, act_dim, config }
     }
@@ -119,9 +137,7 @@ impl Pggd {
 
     /// Mean and standard deviation for a batch of raw observations.
     pub fn distribution(&self, obs: &[f32]) -> (Tensor, Tensor) {
-        let mut x = obs.to_vec();
-        self.norm.normalize_in_place(&mut x);
-        let out = self.net.forward(&Tensor::of_slice(&x).view([-1, self.norm.dim() as i64]));
+        let out = self.net.forward(&self.norm.tensor(obs));
         let a = self.act_dim as i64;
         (out.narrow(1, 0, a), softplus_std(&out.narrow(1, a, a), self.config.sigma_min))
     }
@@ -182,6 +198,64 @@ impl Pggd {
             act_dim: self.act_dim,
             sigma_min: self.config.sigma_min,
         }
+    }
+}
+
+impl Algorithm for Pggd {
+    fn algo(&self) -> Algo {
+        Algo::PGGD
+    }
+
+    fn norm(&self) -> &Normalizer {
+        &self.norm
+    }
+
+    fn norm_mut(&mut self) -> &mut Normalizer {
+        &mut self.norm
+    }
+
+    /// Each transition's weight is `weights` (an expert's advantage) or else the stored return-to-go.
+    fn gradient(&mut self, batch: &Batch, _shard: u64, weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
+        Pggd::gradient(self, batch, weights.unwrap_or(&batch.extra))
+    }
+
+    fn apply_gradient(&mut self, gradient: &[f32]) {
+        Pggd::apply_gradient(self, gradient);
+    }
+
+    fn gradient_len(&self) -> usize {
+        param_count(&[&self.net])
+    }
+
+    fn policy(&self) -> AnyPolicy {
+        AnyPolicy::Pggd(Pggd::policy(self))
+    }
+
+    fn explorer(&self) -> Box<dyn Explorer> {
+        Box::new(Pggd::policy(self))
+    }
+
+    fn state(&self) -> StateDict {
+        let mut s = StateDict::default();
+        s.put_net("actor", &self.net);
+        s.put_adam("actor_adam", &self.opt);
+        s
+    }
+
+    fn load_state(&mut self, s: &StateDict) -> Result<(), String> {
+        s.load_net("actor", &mut self.net)?;
+        s.load_adam("actor_adam", &mut self.opt)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+/// PGGD explores by sampling its Gaussian (the action stored before clipping).
+impl Explorer for PggdPolicy {
+    fn explore(&self, obs: &[f32], _noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> Vec<f32> {
+        self.sample(obs, rng)
     }
 }
 

@@ -14,6 +14,7 @@
 //! The networks are untrained (seeded), which does not change the cost of a
 //! forward pass or an update.
 
+use crate::agents::algorithm::Algorithm;
 use crate::agents::ddpg::{Ddpg, DdpgConfig, Precision};
 use crate::agents::replay::ReplayBuffer;
 use crate::env::registry;
@@ -107,7 +108,6 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
     let ddpg = DdpgConfig { precision: c.precision, ..DdpgConfig::default() };
-    let (random_eps, noise_eps, noise_correlation) = (ddpg.random_eps, ddpg.noise_eps, ddpg.noise_correlation);
     let gamma = ddpg.gamma;
     let mut agent = Ddpg::new(obs_dim, act_dim, ddpg, &mut ChaCha8Rng::seed_from_u64(c.seed));
     let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
@@ -118,9 +118,10 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         let (mut steps, mut forward) = (0usize, 0.0);
         let t = Instant::now();
         while steps < target {
-            let policy = agent.policy();
-            let explore = Behaviour::DdpgExplore { policy: &policy, random_eps, noise_eps, noise_correlation };
-            let eps = play_all(&mut envs, &explore, 1, None, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
+            let explorer = Algorithm::explorer(agent);
+            let eps = play_all(&mut envs, &Behaviour::Explore(&*explorer), 1, None, |w, _| {
+                stream_seed(c.seed, &[9, w as u64, round])
+            })?;
             round += 1;
             for ep in &eps {
                 steps += ep.len();

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 /// Settings a branch may change besides those a resume may change: how
 /// episodes are drawn and explored, the curriculum's threshold, updates per
 /// cycle and DDPG's action penalties (the agent takes them over from its
-/// checkpoint's, [`crate::agents::agent::Agent::take_branch_settings`]).
+/// checkpoint's, [`crate::agents::algorithm::Algorithm::take_branch_settings`]).
 pub const BRANCHABLE_CHANGES: &[&str] = &[
     "level_replay",
     "challenge_share",

@@ -13,12 +13,13 @@
 //! exactly. Checkpoints written before the log hold the buffers inline;
 //! they load, and their next save starts the log.
 
-use crate::agents::agent::{Agent, Algo};
-use crate::agents::ddpg::{Ddpg, DdpgConfig};
+use crate::agents::algorithm::{Algo, Algorithm, Spec, StateDict};
+use crate::agents::ddpg::DdpgConfig;
 use crate::agents::normalizer::Normalizer;
-use crate::agents::pggd::{Pggd, PggdConfig};
+use crate::agents::pggd::PggdConfig;
 use crate::agents::replay::{Batch, ReplayBuffer};
 use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -80,16 +81,22 @@ struct Header {
     /// Absent in checkpoints written before PGGD existed: DDPG.
     #[serde(default)]
     algo: Algo,
-    /// DDPG's hyperparameters; for PGGD the source of the network shape and
-    /// the normaliser settings.
+    /// The settings the agent is built from ([`Spec`]).
     ddpg: DdpgConfig,
     #[serde(default)]
     pggd: PggdConfig,
     normalizer: Normalizer,
-    actor_adam_t: u64,
-    critic_adam_t: u64,
-    /// TD3: the second critic's Adam step count and the smoothing noise's seed.
+    /// The agent's counters by name ([`StateDict::counters`]); the arrays are blobs.
     #[serde(default)]
+    counters: BTreeMap<String, u64>,
+    /// Checkpoints written before algorithms declared their state kept
+    /// these counters instead: the Adam step counts and, for TD3, the second
+    /// critic's and the smoothing noise's seed.
+    #[serde(default, skip_serializing)]
+    actor_adam_t: u64,
+    #[serde(default, skip_serializing)]
+    critic_adam_t: u64,
+    #[serde(default, skip_serializing)]
     twin: Option<(u64, u64)>,
     /// The first replay buffer's capacity and next write position.
     replay_capacity: usize,
@@ -283,48 +290,20 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> CheckpointError + '_ {
 }
 
 /// Saves the agent, the replay buffer and the run state to `path`
-/// atomically; `ddpg` is the run's DDPG configuration (for PGGD: the network
-/// shape and normaliser settings).
+/// atomically; `ddpg` and `pggd` are the settings the agent was built from.
 ///
 /// # Errors
 /// [`CheckpointError::Io`].
 pub fn save(
     path: &Path,
     state: &RunState,
-    agent: &Agent,
-    ddpg: &DdpgConfig,
+    agent: &dyn Algorithm,
+    (ddpg, pggd): (&DdpgConfig, &PggdConfig),
     replays: &[ReplayBuffer],
     log: &mut ReplayLog,
 ) -> Result<(), CheckpointError> {
-    let mut blobs: Vec<(String, Vec<f32>)> = Vec::new();
-    let mut add = |prefix: &str, vecs: Vec<Vec<f32>>| {
-        for (i, v) in vecs.into_iter().enumerate() {
-            blobs.push((format!("{prefix}.{i}"), v));
-        }
-    };
-    let mut twin = None;
-    let (normalizer, actor_adam_t, critic_adam_t, pggd) = match agent {
-        Agent::Ddpg(a) => {
-            add("actor", a.actor.to_vecs());
-            add("critic", a.critic.to_vecs());
-            add("actor_target", a.actor_target.to_vecs());
-            add("critic_target", a.critic_target.to_vecs());
-            add("actor_adam", a.actor_opt.to_vecs());
-            add("critic_adam", a.critic_opt.to_vecs());
-            if let Some(t) = &a.twin {
-                add("critic2", t.critic.to_vecs());
-                add("critic2_target", t.target.to_vecs());
-                add("critic2_adam", t.opt.to_vecs());
-                twin = Some((t.opt.t, t.noise_seed));
-            }
-            (a.norm.clone(), a.actor_opt.t, a.critic_opt.t, PggdConfig::default())
-        }
-        Agent::Pggd(a) => {
-            add("actor", a.net.to_vecs());
-            add("actor_adam", a.opt.to_vecs());
-            (a.norm.clone(), a.opt.t, 0, a.config.clone())
-        }
-    };
+    let StateDict { tensors, counters } = agent.state();
+    let blobs: Vec<(String, Vec<f32>)> = tensors.into_iter().collect();
     let positions: Vec<(usize, usize)> = replays.iter().map(|r| (r.capacity(), r.parts().1)).collect();
     let (replay_capacity, replay_next) = positions.first().copied().unwrap_or((1, 0));
 
@@ -340,11 +319,12 @@ pub fn save(
         state: state.clone(),
         algo: agent.algo(),
         ddpg: ddpg.clone(),
-        pggd,
-        normalizer,
-        actor_adam_t,
-        critic_adam_t,
-        twin,
+        pggd: pggd.clone(),
+        normalizer: agent.norm().clone(),
+        counters,
+        actor_adam_t: 0,
+        critic_adam_t: 0,
+        twin: None,
         replay_capacity,
         replay_next,
         more_replays: positions.get(1..).unwrap_or_default().to_vec(),
@@ -437,7 +417,7 @@ pub struct Loaded {
     /// The run state.
     pub state: RunState,
     /// The agent, exactly as saved.
-    pub agent: Agent,
+    pub agent: Box<dyn Algorithm>,
     /// The replay buffers, exactly as saved.
     pub replays: Vec<ReplayBuffer>,
     /// Their log, for the next [`save`].
@@ -463,9 +443,11 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
             s.obs_dim, s.act_dim
         )));
     }
-    let blobs = blobs(&header, payload);
-    let agent = load_agent(path, &header, &blobs, obs_dim, act_dim)?;
-    let replays = load_replays(path, &header, &blobs, obs_dim, act_dim)?;
+    // Replay arrays (in checkpoints that kept them inline) apart from the agent's.
+    let (replay_blobs, agent_blobs): (HashMap<_, _>, HashMap<_, _>) =
+        blobs(&header, payload).into_iter().partition(|(name, _)| name.starts_with("replay"));
+    let agent = load_agent(path, &header, agent_blobs, obs_dim, act_dim)?;
+    let replays = load_replays(path, &header, &replay_blobs, obs_dim, act_dim)?;
     Ok(Loaded { state: header.state, agent, replays: replays.0, log: replays.1 })
 }
 
@@ -493,8 +475,8 @@ fn parse<'b>(path: &Path, bytes: &'b [u8]) -> Result<(Header, &'b [u8]), Checkpo
 }
 
 /// The payload's arrays by name (sizes checked by [`parse`]).
-fn blobs(header: &Header, payload: &[u8]) -> std::collections::HashMap<String, Vec<f32>> {
-    let mut blobs = std::collections::HashMap::new();
+fn blobs(header: &Header, payload: &[u8]) -> HashMap<String, Vec<f32>> {
+    let mut blobs = HashMap::new();
     let mut off = 0;
     for (name, len) in &header.blobs {
         let v: Vec<f32> =
@@ -506,67 +488,55 @@ fn blobs(header: &Header, payload: &[u8]) -> std::collections::HashMap<String, V
 }
 
 /// The arrays `prefix.0`, `prefix.1`, ... in order.
-fn take(blobs: &std::collections::HashMap<String, Vec<f32>>, prefix: &str) -> Vec<Vec<f32>> {
+fn take(blobs: &HashMap<String, Vec<f32>>, prefix: &str) -> Vec<Vec<f32>> {
     (0..).map_while(|i| blobs.get(&format!("{prefix}.{i}")).cloned()).collect()
 }
 
-/// The agent, exactly as saved.
+/// The agent, exactly as saved: built from the saved settings, then its
+/// state restored by name.
 fn load_agent(
     path: &Path,
     header: &Header,
-    blobs: &std::collections::HashMap<String, Vec<f32>>,
+    tensors: HashMap<String, Vec<f32>>,
     obs_dim: usize,
     act_dim: usize,
-) -> Result<Agent, CheckpointError> {
-    let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
+) -> Result<Box<dyn Algorithm>, CheckpointError> {
     let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
-    let take = |prefix: &str| take(blobs, prefix);
-    // Network shapes come from the saved hyperparameters; the seed does not
-    // matter because every value is overwritten.
-    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
-    let fill = |r: Result<(), String>| r.map_err(&mismatch);
     if header.normalizer.dim() != obs_dim {
         return Err(mismatch("normaliser size differs".into()));
     }
-    let d = &header.ddpg;
-    Ok(match header.algo {
-        Algo::Ddpg => {
-            let mut a = Ddpg::new(obs_dim, act_dim, d.clone(), &mut rng);
-            fill(a.actor.load_vecs(&take("actor")))?;
-            fill(a.critic.load_vecs(&take("critic")))?;
-            fill(a.actor_target.load_vecs(&take("actor_target")))?;
-            fill(a.critic_target.load_vecs(&take("critic_target")))?;
-            fill(a.actor_opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
-            fill(a.critic_opt.load_vecs(&take("critic_adam"), header.critic_adam_t))?;
-            match (&mut a.twin, header.twin) {
-                (Some(t), Some((adam_t, noise_seed))) => {
-                    fill(t.critic.load_vecs(&take("critic2")))?;
-                    fill(t.target.load_vecs(&take("critic2_target")))?;
-                    fill(t.opt.load_vecs(&take("critic2_adam"), adam_t))?;
-                    t.noise_seed = noise_seed;
-                }
-                (None, None) => {}
-                _ => return Err(corrupt("the TD3 critic and the --td3 setting disagree")),
-            }
-            a.norm = header.normalizer.clone();
-            Agent::Ddpg(a)
-        }
-        Algo::Pggd => {
-            let (shape, norm) = ((d.layers, d.hidden), (d.norm_eps, d.norm_clip));
-            let mut a = Pggd::new(obs_dim, act_dim, shape, norm, header.pggd.clone(), &mut rng);
-            fill(a.net.load_vecs(&take("actor")))?;
-            fill(a.opt.load_vecs(&take("actor_adam"), header.actor_adam_t))?;
-            a.norm = header.normalizer.clone();
-            Agent::Pggd(a)
-        }
-    })
+    // Network shapes come from the saved settings; the seed does not matter
+    // because every value is overwritten.
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
+    let spec = Spec { obs_dim, act_dim, ddpg: &header.ddpg, pggd: &header.pggd };
+    let mut agent = header.algo.build(&spec, &mut rng).map_err(&mismatch)?;
+    let state = StateDict { tensors: tensors.into_iter().collect(), counters: counters(header) };
+    agent.load_state(&state).map_err(&mismatch)?;
+    *agent.norm_mut() = header.normalizer.clone();
+    Ok(agent)
+}
+
+/// The agent's counters: the header's, or (older checkpoints) its fixed fields under their names.
+fn counters(header: &Header) -> BTreeMap<String, u64> {
+    if !header.counters.is_empty() {
+        return header.counters.clone();
+    }
+    let mut c = BTreeMap::from([
+        ("actor_adam.t".to_owned(), header.actor_adam_t),
+        ("critic_adam.t".to_owned(), header.critic_adam_t),
+    ]);
+    if let Some((adam_t, noise_seed)) = header.twin {
+        c.insert("critic2_adam.t".into(), adam_t);
+        c.insert("critic2.noise_seed".into(), noise_seed);
+    }
+    c
 }
 
 /// The replay buffers, exactly as saved, and their log for the next [`save`].
 fn load_replays(
     path: &Path,
     header: &Header,
-    blobs: &std::collections::HashMap<String, Vec<f32>>,
+    blobs: &HashMap<String, Vec<f32>>,
     obs_dim: usize,
     act_dim: usize,
 ) -> Result<(Vec<ReplayBuffer>, ReplayLog), CheckpointError> {

@@ -1,10 +1,10 @@
-//! The learner being trained (DDPG or PGGD) and, for AggreVaTeD, the expert.
+//! The learner being trained (any registered algorithm) and, for AggreVaTeD, the expert.
 
 use super::comm::Comm;
-use super::rollouts::Behaviour;
 use super::TrainConfig;
-pub use crate::agents::agent::{Agent, Algo};
-use crate::agents::ddpg::{DdpgPolicy, UpdateStats};
+use crate::agents::algorithm::Explorer;
+pub use crate::agents::algorithm::{Algo, Algorithm};
+use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
 use crate::agents::expert::{beta, without_grey, ExpertCritic, Mixture};
 use crate::agents::mlp::TanhMlp;
 use crate::agents::replay::Batch;
@@ -80,7 +80,11 @@ impl Expert {
             load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?
         };
         let AnyPolicy::Ddpg(policy) = saved.policy.clone() else {
-            bail!("expert {} is a {} policy; AggreVaTeD needs a DDPG expert", path.display(), saved.policy.algo());
+            bail!(
+                "expert {} is a {} policy; AggreVaTeD needs a deterministic (DDPG or SAC) expert",
+                path.display(),
+                saved.policy.algo()
+            );
         };
         if policy.norm.dim() != seen {
             bail!(
@@ -143,15 +147,15 @@ fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Resu
             loaded.state.epoch
         );
     }
-    match loaded.agent {
-        Agent::Ddpg(agent) => Ok(agent.critic.to_plain()),
-        Agent::Pggd(_) => bail!("{} is not a DDPG checkpoint", ckpt.display()),
+    match loaded.agent.as_any().downcast_ref::<Ddpg>() {
+        Some(agent) => Ok(agent.critic.to_plain()),
+        None => bail!("{} is a {} checkpoint, not DDPG", ckpt.display(), loaded.agent.algo()),
     }
 }
 
 /// What the training loop trains: the agent and, for AggreVaTeD, the expert.
 pub(crate) struct Learner {
-    pub(crate) agent: Agent,
+    pub(crate) agent: Box<dyn Algorithm>,
     pub(crate) expert: Option<Expert>,
     /// Wall seconds spent averaging gradients (under MPI: exchanging them) since last reset.
     pub(crate) reduce_seconds: f64,
@@ -184,7 +188,7 @@ impl Learner {
         stats
     }
 
-    /// End of a cycle: DDPG's target networks follow.
+    /// End of a cycle (e.g. target networks follow).
     pub(crate) fn end_cycle(&mut self) {
         self.agent.end_cycle();
     }
@@ -194,21 +198,15 @@ impl Learner {
         self.expert.as_ref().map(|_| beta(epoch, config.aggrevated.beta0, config.aggrevated.t0))
     }
 
-    /// The exploring behaviour of `frozen` (this learner's policy) at `epoch`.
-    pub(crate) fn behaviour<'a>(&'a self, frozen: &'a AnyPolicy, epoch: usize, config: &TrainConfig) -> Behaviour<'a> {
-        match (frozen, &self.expert) {
-            (AnyPolicy::Pggd(p), Some(e)) => Behaviour::Mixture(Mixture {
-                expert: &e.policy,
-                learner: p,
-                beta: self.beta(epoch, config).unwrap_or(0.0),
-            }),
-            (AnyPolicy::Pggd(p), None) => Behaviour::PggdSample(p),
-            (AnyPolicy::Ddpg(p), _) => Behaviour::DdpgExplore {
-                policy: p,
-                random_eps: config.ddpg.random_eps,
-                noise_eps: config.ddpg.noise_eps,
-                noise_correlation: config.ddpg.noise_correlation,
-            },
-        }
+    /// The roll-in of this cycle: AggreVaTeD's mixture of the expert and
+    /// `explorer` (the learner's exploration, frozen) at `epoch`; None without an expert.
+    pub(crate) fn mixture<'a>(
+        &'a self,
+        explorer: &'a dyn Explorer,
+        epoch: usize,
+        config: &TrainConfig,
+    ) -> Option<Mixture<'a>> {
+        let e = self.expert.as_ref()?;
+        Some(Mixture { expert: &e.policy, learner: explorer, beta: self.beta(epoch, config).unwrap_or(0.0) })
     }
 }

@@ -33,7 +33,7 @@ mod rundir;
 mod trainer;
 
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
-pub use learner::{Agent, AggrevatedConfig, Algo, PgWeight};
+pub use learner::{AggrevatedConfig, Algo, Algorithm, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{read_progress, RunDir};
 pub use trainer::{train, train_ranks, OnEpoch};
@@ -52,8 +52,8 @@ pub const PAPER_BATCHES: usize = 40;
 /// Training hyperparameters (defaults: the paper's set-up).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 pub struct TrainConfig {
-    /// Algorithm.
-    #[arg(long, value_enum, default_value = "ddpg")]
+    /// Algorithm (one of `agents::algorithm::ALGORITHMS`).
+    #[arg(long, default_value = "ddpg", value_parser = Algo::parser())]
     #[serde(default)]
     pub algo: Algo,
     /// Environment id or task file (.toml).
@@ -213,15 +213,16 @@ impl TrainConfig {
         self.replay.unwrap_or(ReplayLayout::Shared)
     }
 
-    /// The method as (display name, short name): DDPG, PGGD, or PGGD + AggreVaTeD.
-    fn method(&self) -> (&'static str, &'static str) {
-        match (self.algo, &self.aggrevated.expert) {
-            (Algo::Ddpg, _) => ("DDPG", "ddpg"),
-            (Algo::Pggd, None) => ("PGGD", "pggd"),
-            (Algo::Pggd, Some(_)) => match self.aggrevated.pg_weight {
-                PgWeight::Return => ("PGGD + AggreVaTeD", "pggd-aggrevated"),
-                PgWeight::ExpertAdvantage => ("PGGD + AggreVaTeD (expert advantage)", "pggd-aggrevated-adv"),
-            },
+    /// The method as (display name, short name): e.g. DDPG, or PGGD +
+    /// AggreVaTeD (`pggd-aggrevated`).
+    fn method(&self) -> (String, String) {
+        let (title, name) = (self.algo.registration().title, self.algo.name());
+        match (&self.aggrevated.expert, self.aggrevated.pg_weight) {
+            (None, _) => (title.to_owned(), name.to_owned()),
+            (Some(_), PgWeight::Return) => (format!("{title} + AggreVaTeD"), format!("{name}-aggrevated")),
+            (Some(_), PgWeight::ExpertAdvantage) => {
+                (format!("{title} + AggreVaTeD (expert advantage)"), format!("{name}-aggrevated-adv"))
+            }
         }
     }
 

@@ -1,11 +1,10 @@
-//! Playing episodes for training: the behaviour policies (exploring DDPG,
-//! sampling PGGD, AggreVaTeD's mixture, deterministic for tests), one
+//! Playing episodes for training: the behaviour policies (the algorithm's
+//! exploration, AggreVaTeD's mixture, deterministic for tests), one
 //! episode, and all workers' episodes in parallel threads.
 
-use crate::agents::ddpg::DdpgPolicy;
+use crate::agents::algorithm::Explorer;
 use crate::agents::expert::{Actor, Mixture};
 use crate::agents::normalizer::Normalizer;
-use crate::agents::pggd::PggdPolicy;
 use crate::agents::replay::ReplayBuffer;
 use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvError};
@@ -15,18 +14,14 @@ use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
 
 /// Who acts in an episode.
-#[derive(Debug, Clone)]
+#[derive(Clone, Copy)]
 pub(crate) enum Behaviour<'a> {
     /// The deterministic policy (tests and finals).
     Greedy(&'a AnyPolicy),
-    /// DDPG exploration: uniform with probability `random_eps`, else π(s) +
-    /// noise of standard deviation `noise_eps`, correlated `noise_correlation`
-    /// between consecutive steps.
-    DdpgExplore { policy: &'a DdpgPolicy, random_eps: f64, noise_eps: f64, noise_correlation: f64 },
-    /// PGGD sampling its Gaussian.
-    PggdSample(&'a PggdPolicy),
+    /// The algorithm's exploration (DDPG: actor + noise; PGGD, SAC: sampling).
+    Explore(&'a dyn Explorer),
     /// AggreVaTeD's roll-in mixture of expert and learner.
-    Mixture(Mixture<'a>),
+    Mixture(&'a Mixture<'a>),
 }
 
 impl Behaviour<'_> {
@@ -36,12 +31,9 @@ impl Behaviour<'_> {
     fn act(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> (Vec<f32>, bool) {
         match self {
             Self::Greedy(p) => (p.act(obs), false),
-            Self::DdpgExplore { policy, random_eps, noise_eps, noise_correlation } => {
-                (policy.explore_correlated(obs, (*random_eps, *noise_eps, *noise_correlation), noise, rng), false)
-            }
-            Self::PggdSample(p) => (p.sample(obs, rng), false),
+            Self::Explore(e) => (e.explore(obs, noise, rng), false),
             Self::Mixture(m) => {
-                let (who, a) = m.act(obs, rng);
+                let (who, a) = m.act(obs, noise, rng);
                 (a, who == Actor::Expert)
             }
         }

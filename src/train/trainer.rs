@@ -6,10 +6,11 @@
 
 use super::checkpoint::{self, RunState};
 use super::comm::Comm;
-use super::learner::{Agent, Expert, Learner};
+use super::learner::{Algorithm, Expert, Learner};
 use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
 use super::rundir::{read_progress, write_progress, RunDir};
-use super::{computation_differences, plot, run_task, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig};
+use super::{computation_differences, plot, run_task, EpochRow, PgWeight, ReplayLayout, TrainConfig};
+use crate::agents::algorithm::Spec;
 use crate::agents::ddpg::{Precision, UpdateStats};
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
@@ -77,17 +78,13 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
     }
-    if config.algo == Algo::Pggd && (config.ddpg.n_step != 1 || config.ddpg.td3) {
-        bail!("--n-step and --td3 are DDPG options; PGGD uses the return-to-go");
-    }
     if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
-    if config.algo == Algo::Ddpg && config.aggrevated.expert.is_some() {
-        bail!("--expert is for --algo pggd (AggreVaTeD); DDPG trains without an expert");
-    }
-    if config.algo == Algo::Ddpg && config.aggrevated.pg_weight != PgWeight::Return {
-        bail!("--pg-weight is for --algo pggd");
+    let expert = config.aggrevated.expert.is_some();
+    config.algo.check(&config.ddpg, &config.pggd, expert).map_err(anyhow::Error::msg)?;
+    if !config.algo.registration().takes_expert && config.aggrevated.pg_weight != PgWeight::Return {
+        bail!("--pg-weight is for AggreVaTeD's learners (--algo pggd)");
     }
     let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
     if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
@@ -229,7 +226,7 @@ fn run_config(
 
 /// Where a run begins: a fresh agent and empty buffers, or a checkpoint's.
 struct Begun {
-    agent: Agent,
+    agent: Box<dyn Algorithm>,
     replays: Vec<ReplayBuffer>,
     replay_log: checkpoint::ReplayLog,
     state: RunState,
@@ -241,7 +238,8 @@ impl Begun {
     /// The agent and buffers fit the run's settings.
     fn check(&self, config: &TrainConfig, mine: &RunDir) -> Result<()> {
         if self.agent.algo() != config.algo {
-            bail!("{} holds a {:?} agent, not {:?}", mine.checkpoint().display(), self.agent.algo(), config.algo);
+            let (file, held) = (mine.checkpoint(), self.agent.algo());
+            bail!("{} holds a {held:?} agent, not {:?}; pass --algo {held}", file.display(), config.algo);
         }
         let layout = config.replay_layout();
         let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
@@ -272,7 +270,8 @@ fn fresh(
         bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-    let agent = Agent::new(config.algo, &config.ddpg, &config.pggd, obs_dim, act_dim, &mut rng);
+    let spec = Spec { obs_dim, act_dim, ddpg: &config.ddpg, pggd: &config.pggd };
+    let agent = config.algo.build(&spec, &mut rng).map_err(anyhow::Error::msg)?;
     let state = RunState {
         env_id: task.id().to_owned(),
         obs_dim,
@@ -490,8 +489,12 @@ impl<'a> Trainer<'a> {
     fn collect(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
         let t = Instant::now();
         let config = &self.config;
-        let policy = self.learner.agent.policy();
-        let behaviour = self.learner.behaviour(&policy, epoch, config);
+        let explorer = self.learner.agent.explorer();
+        let mixture = self.learner.mixture(&*explorer, epoch, config);
+        let behaviour = match &mixture {
+            Some(m) => Behaviour::Mixture(m),
+            None => Behaviour::Explore(&*explorer),
+        };
         let base = self.state.episodes_per_worker;
         let draw = Draw {
             level: self.state.level.min(self.max_level),
@@ -682,8 +685,8 @@ impl<'a> Trainer<'a> {
             }
         }
         self.state.best_finals = self.state.best_finals.max(row.finals_success);
-        let (agent, ddpg) = (&self.learner.agent, &self.config.ddpg);
-        checkpoint::save(&self.mine.checkpoint(), &self.state, agent, ddpg, &self.replays, &mut self.replay_log)?;
+        let (agent, settings) = (&*self.learner.agent, (&self.config.ddpg, &self.config.pggd));
+        checkpoint::save(&self.mine.checkpoint(), &self.state, agent, settings, &self.replays, &mut self.replay_log)?;
         self.created.drain(..).for_each(crate::io::CreatedDir::keep);
         // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
         self.persist_seconds = started.elapsed().as_secs_f64();
