@@ -6,7 +6,7 @@
 //! Both read only the observation (plus, for the scripted one, which task it
 //! is playing), so they run on exactly what an agent sees.
 
-use crate::env::{EnvConfig, ACTION_DIM, BLOCK_OBS, ROBOT_OBS};
+use crate::env::{EnvConfig, ObsSpec, ACTION_DIM, ROBOT_OBS};
 use crate::rules::Colour;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -44,11 +44,14 @@ struct SeenBlock {
     colour: Colour,
 }
 
-fn read_blocks(obs: &[f32]) -> Vec<SeenBlock> {
-    obs[ROBOT_OBS..]
-        .chunks_exact(BLOCK_OBS)
-        .map(|b| {
-            let hot = &b[15..19];
+/// The blocks present in `obs` (laid out as `spec` says): position and colour.
+fn read_blocks(spec: &ObsSpec, obs: &[f32]) -> Vec<SeenBlock> {
+    let present = |k: usize| spec.mask(obs).map_or(true, |m| m.get(k).is_some_and(|&v| v > 0.5));
+    spec.objects(obs)
+        .enumerate()
+        .filter(|&(k, _)| present(k))
+        .map(|(_, b)| {
+            let hot = ObsSpec::colour(b);
             let k = (0..4).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3);
             SeenBlock { pos: [b[0] as f64, b[1] as f64, b[2] as f64], colour: Colour::ALL[k] }
         })
@@ -87,6 +90,8 @@ pub enum Script {
 /// one; with the gripper action, pick blue up and put it on green.
 pub struct ScriptedPolicy {
     script: Script,
+    /// Where the observation holds what.
+    spec: ObsSpec,
     /// Pick-and-place: the blue block has been grasped this episode.
     grasped: bool,
     /// Steps spent closing the fingers.
@@ -111,7 +116,8 @@ impl ScriptedPolicy {
                 _ => Script::Push,
             }
         };
-        Self { script, grasped: false, closing: 0, push: None, swiping: false, swiped: false }
+        let spec = config.obs_spec();
+        Self { script, spec, grasped: false, closing: 0, push: None, swiping: false, swiped: false }
     }
 
     /// The behaviour in use.
@@ -230,7 +236,7 @@ impl Policy for ScriptedPolicy {
         }
         let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
         let fingers = [obs[3] as f64, obs[4] as f64];
-        let blocks = read_blocks(obs);
+        let blocks = read_blocks(&self.spec, obs);
         match self.script {
             Script::Push => self.push(grip, &blocks),
             Script::Reach => Self::reach(grip, &blocks),

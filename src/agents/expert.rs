@@ -6,32 +6,22 @@ use super::ddpg::DdpgPolicy;
 use super::mlp::TanhMlp;
 use super::nets::{tensor_to_vec, Net};
 use super::normalizer::Normalizer;
-use crate::env::{obs_dim, BLOCK_OBS, ROBOT_OBS};
+use crate::env::{obs_dim, ObsSpec, BLOCK_OBS, ROBOT_OBS};
 use crate::rules::Colour;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
-/// Index of "grey" in a block's colour one-hot (red, blue, green, grey),
-/// counted from the end of the block's features.
-const GREY_FROM_END: usize = 1;
-
-/// Whether the block features `b` (one block's `BLOCK_OBS` values) are a grey block's.
-fn is_grey(b: &[f32]) -> bool {
-    b[BLOCK_OBS - GREY_FROM_END] > 0.5
+/// Whether an object row of the observation is a grey block's (its colour one-hot says grey).
+fn is_grey(row: &[f32]) -> bool {
+    ObsSpec::colour(row).get(Colour::Grey as usize).is_some_and(|&v| v > 0.5)
 }
 
-/// The observation with every grey block's features removed: a BlocksChoose
-/// observation becomes a BlocksTouch one (robot, blue, green).
+/// The flat observation with every grey block's features removed: a
+/// BlocksChoose observation becomes a BlocksTouch one (robot, blue, green).
 pub fn without_grey(obs: &[f32]) -> Vec<f32> {
-    let (robot, blocks) = obs.split_at(ROBOT_OBS.min(obs.len()));
-    let mut out = robot.to_vec();
-    for b in blocks.chunks(BLOCK_OBS) {
-        if b.len() < BLOCK_OBS || !is_grey(b) {
-            out.extend_from_slice(b);
-        }
-    }
-    out
+    let spec = ObsSpec::flat(obs.len().saturating_sub(ROBOT_OBS) / BLOCK_OBS);
+    spec.keep_objects(obs, |row| !is_grey(row))
 }
 
 /// Size of [`without_grey`]'s output for a scene with blocks of `colours`.

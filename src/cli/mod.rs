@@ -431,7 +431,7 @@ fn envs() -> Result<()> {
         println!(
             "{:<24} obs {:>3}  levels 0-{:<2}  {}",
             r.id,
-            crate::env::obs_dim(task.spec.objects.len()),
+            crate::env::ObsSpec::flat(task.spec.objects.len()).dim(),
             task.max_level(),
             task.spec.summary
         );

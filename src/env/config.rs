@@ -21,12 +21,15 @@ pub struct EnvConfig {
     /// velocities and contacts the observation and the rules read. Both give
     /// bit-identical trajectories (tested); the full pass is slower.
     pub full_forward: bool,
+    /// How the observation is presented (flat by default; `objects`: robot,
+    /// object rows and mask).
+    pub obs_mode: super::ObsMode,
 }
 
 impl EnvConfig {
     /// The default physics around a compiled task.
     pub fn new(task: Task) -> Self {
-        Self { task, n_substeps: 20, collision_filter: true, full_forward: false }
+        Self { task, n_substeps: 20, collision_filter: true, full_forward: false, obs_mode: super::ObsMode::Flat }
     }
 
     /// Compiles `spec` (a task made in code) with the default physics.
@@ -44,6 +47,10 @@ impl EnvConfig {
     /// Colour of each block as written in the task, in observation order.
     pub fn blocks(&self) -> Vec<Colour> {
         self.task.colours()
+    }
+    /// What the observation holds: the mode and one slot per block.
+    pub fn obs_spec(&self) -> super::ObsSpec {
+        super::ObsSpec::new(self.obs_mode, self.task.spec.objects.len())
     }
     /// Colour of the gripper.
     pub fn gripper(&self) -> Colour {

@@ -14,7 +14,7 @@ pub mod registry;
 mod reset;
 
 pub use config::{EnvConfig, EnvError};
-pub use obs::{obs_dim, BLOCK_OBS, ROBOT_OBS};
+pub use obs::{obs_dim, ObsMode, ObsSpec, BLOCK_OBS, COLOUR_FEATURE, OBJECT_FEATURES, ROBOT_FEATURES, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
 
 use crate::mj::{Data, ObjType, Warning};
@@ -186,7 +186,7 @@ impl BlockEnv {
             model.actuator_joint().iter().map(|&j| model.jnt_qposadr()[j as usize] as usize).collect();
 
         let n = scene.objects.len();
-        let obs = vec![0.0; obs_dim(scene.blocks.len())];
+        let obs = vec![0.0; config.obs_spec().dim()];
         Ok(Self {
             objects: scene.objects.clone(),
             colours: config.task.colours(),
@@ -222,10 +222,18 @@ impl BlockEnv {
     pub fn action_space(&self) -> BoxSpace {
         BoxSpace { low: vec![-1.0; ACTION_DIM], high: vec![1.0; ACTION_DIM] }
     }
-    /// Unbounded box of [`obs_dim`] dimensions.
+    /// What the observation holds ([`ObsSpec`]).
+    pub fn obs_spec(&self) -> ObsSpec {
+        self.config.obs_spec()
+    }
+    /// The observation as one box of [`ObsSpec::dim`] values: unbounded,
+    /// the `objects` mode's mask in [0, 1].
     pub fn observation_space(&self) -> BoxSpace {
-        let n = obs_dim(self.scene.blocks.len());
-        BoxSpace { low: vec![f32::NEG_INFINITY; n], high: vec![f32::INFINITY; n] }
+        let spec = self.obs_spec();
+        let (n, features) = (spec.dim(), spec.robot_dim() + spec.object_dim() * spec.max_objects);
+        let low = (0..n).map(|i| if i < features { f32::NEG_INFINITY } else { 0.0 }).collect();
+        let high = (0..n).map(|i| if i < features { f32::INFINITY } else { 1.0 }).collect();
+        BoxSpace { low, high }
     }
     /// Rule objects of the current episode: gripper, table, blocks (then the
     /// floor, when the task makes it one).
@@ -373,7 +381,7 @@ impl BlockEnv {
         self.scan_contacts();
         self.steps = 0;
         self.phase = Phase::Running;
-        obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+        obs::write(&self.config.obs_spec(), &self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
         Ok(self.obs.clone())
     }
 
@@ -448,7 +456,7 @@ impl BlockEnv {
             None => -1.0,
         };
         if !unstable {
-            obs::write(&self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+            obs::write(&self.config.obs_spec(), &self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
         } // else: keep the last finite observation; NaN never reaches the agent
         if terminated || truncated {
             self.phase = Phase::Over;

@@ -1,24 +1,177 @@
-//! The observation vector (f32), laid out as in the paper and gymnasium-robotics.
+//! The observation: what it holds ([`ObsSpec`]) and how it is read off the
+//! simulation ([`write`]), laid out as in the paper and gymnasium-robotics.
 //!
 //! Robot part (10): grip position (3), finger positions (2), grip linear
 //! velocity × dt (3), finger velocities × dt (2). Then per block, in scene
 //! order (19): position (3), position relative to the grip (3), orientation
 //! as Euler angles (3), linear velocity relative to the grip × dt (3),
 //! angular velocity × dt (3), colour one-hot (red, blue, green, grey) (4).
+//! In the `objects` mode a mask follows (1 per object slot present).
 
 use crate::math::mat2euler;
 use crate::mj::{Data, ObjType};
 use crate::rules::Colour;
 use crate::scene::Scene;
+use serde::{Deserialize, Serialize};
 
 /// Robot features.
-pub const ROBOT_OBS: usize = 10;
+pub const ROBOT_OBS: usize = ROBOT_FEATURES.len();
 /// Features per block.
-pub const BLOCK_OBS: usize = 19;
+pub const BLOCK_OBS: usize = OBJECT_FEATURES.len();
 
-/// Observation size for `n_blocks` blocks.
+/// The robot features' names, in order.
+pub const ROBOT_FEATURES: [&str; 10] = [
+    "grip_pos.x",
+    "grip_pos.y",
+    "grip_pos.z",
+    "finger_pos.0",
+    "finger_pos.1",
+    "grip_velp.x",
+    "grip_velp.y",
+    "grip_velp.z",
+    "finger_vel.0",
+    "finger_vel.1",
+];
+
+/// Each object's features' names, in order (the colour one-hot last).
+pub const OBJECT_FEATURES: [&str; 19] = [
+    "pos.x",
+    "pos.y",
+    "pos.z",
+    "rel_pos.x",
+    "rel_pos.y",
+    "rel_pos.z",
+    "euler.x",
+    "euler.y",
+    "euler.z",
+    "rel_velp.x",
+    "rel_velp.y",
+    "rel_velp.z",
+    "velr.x",
+    "velr.y",
+    "velr.z",
+    "colour.red",
+    "colour.blue",
+    "colour.green",
+    "colour.grey",
+];
+
+/// Where an object row's colour one-hot (red, blue, green, grey) begins.
+pub const COLOUR_FEATURE: usize = BLOCK_OBS - 4;
+
+/// Observation size for `n_blocks` blocks (the flat mode).
 pub const fn obs_dim(n_blocks: usize) -> usize {
     ROBOT_OBS + BLOCK_OBS * n_blocks
+}
+
+/// How an environment presents its observation, chosen per environment
+/// (like ManiSkill's `obs_mode`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObsMode {
+    /// One vector: the robot features, then each object's (the paper's; every id's default).
+    #[default]
+    Flat,
+    /// Object-centric: the robot features, a (max objects × features) array
+    /// and a mask of the slots holding an object (Gymnasium: a `Dict` of
+    /// `robot`, `objects`, `mask`); in one vector laid out robot | objects
+    /// (row by row) | mask.
+    Objects,
+}
+
+impl std::str::FromStr for ObsMode {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "flat" => Ok(Self::Flat),
+            "objects" => Ok(Self::Objects),
+            _ => Err(format!("unknown observation mode {s:?}; use \"flat\" or \"objects\"")),
+        }
+    }
+}
+
+/// What an observation holds and where: every reader (replay, normaliser,
+/// networks, the expert's view, scripted controllers, Python's spaces)
+/// takes shapes and offsets from here.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ObsSpec {
+    /// The layout.
+    pub mode: ObsMode,
+    /// Object slots (the compiled scene's blocks).
+    pub max_objects: usize,
+}
+
+impl ObsSpec {
+    /// The spec of `mode` with `max_objects` object slots.
+    pub fn new(mode: ObsMode, max_objects: usize) -> Self {
+        Self { mode, max_objects }
+    }
+
+    /// The flat spec with `n` objects.
+    pub fn flat(n: usize) -> Self {
+        Self::new(ObsMode::Flat, n)
+    }
+
+    /// Robot features.
+    pub fn robot_dim(&self) -> usize {
+        ROBOT_OBS
+    }
+
+    /// Features per object.
+    pub fn object_dim(&self) -> usize {
+        BLOCK_OBS
+    }
+
+    /// The observation vector's length.
+    pub fn dim(&self) -> usize {
+        let mask = if self.mode == ObsMode::Objects { self.max_objects } else { 0 };
+        ROBOT_OBS + BLOCK_OBS * self.max_objects + mask
+    }
+
+    /// The robot features of `obs`.
+    pub fn robot<'a>(&self, obs: &'a [f32]) -> &'a [f32] {
+        &obs[..ROBOT_OBS.min(obs.len())]
+    }
+
+    /// The object rows of `obs`, one slice of [`ObsSpec::object_dim`] values per slot.
+    pub fn objects<'a>(&self, obs: &'a [f32]) -> std::slice::ChunksExact<'a, f32> {
+        let end = (ROBOT_OBS + BLOCK_OBS * self.max_objects).min(obs.len());
+        obs[ROBOT_OBS.min(end)..end].chunks_exact(BLOCK_OBS)
+    }
+
+    /// The mask of `obs` (1 for a slot holding an object), in the `objects` mode.
+    pub fn mask<'a>(&self, obs: &'a [f32]) -> Option<&'a [f32]> {
+        (self.mode == ObsMode::Objects).then(|| &obs[(ROBOT_OBS + BLOCK_OBS * self.max_objects).min(obs.len())..])
+    }
+
+    /// The colour one-hot (red, blue, green, grey) of an object row.
+    pub fn colour(row: &[f32]) -> &[f32] {
+        &row[COLOUR_FEATURE.min(row.len())..]
+    }
+
+    /// The observation with the object rows `keep` refuses left out, in the
+    /// flat layout (e.g. AggreVaTeD's expert view without grey blocks).
+    pub fn keep_objects(&self, obs: &[f32], keep: impl Fn(&[f32]) -> bool) -> Vec<f32> {
+        let mut out = self.robot(obs).to_vec();
+        for row in self.objects(obs).filter(|r| keep(r)) {
+            out.extend_from_slice(row);
+        }
+        out
+    }
+
+    /// Every component's name, in order: `robot/grip_pos.x`, …,
+    /// `object0/pos.x`, …, and in the `objects` mode `mask/0`, ….
+    pub fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = ROBOT_FEATURES.iter().map(|f| format!("robot/{f}")).collect();
+        for k in 0..self.max_objects {
+            names.extend(OBJECT_FEATURES.iter().map(|f| format!("object{k}/{f}")));
+        }
+        if self.mode == ObsMode::Objects {
+            names.extend((0..self.max_objects).map(|k| format!("mask/{k}")));
+        }
+        names
+    }
 }
 
 fn site_velocity(data: &Data, site: usize) -> [f64; 6] {
@@ -26,9 +179,9 @@ fn site_velocity(data: &Data, site: usize) -> [f64; 6] {
     data.object_velocity(ObjType::Site, site, false).unwrap_or([0.0; 6])
 }
 
-/// Writes the observation of `data` into `out` (resized as needed), with
-/// `colours` the blocks' colours this episode.
-pub fn write(scene: &Scene, data: &Data, dt: f64, colours: &[Colour], out: &mut Vec<f32>) {
+/// Writes the observation of `data` into `out` (resized as needed) in the
+/// layout of `spec`, with `colours` the blocks' colours this episode.
+pub fn write(spec: &ObsSpec, scene: &Scene, data: &Data, dt: f64, colours: &[Colour], out: &mut Vec<f32>) {
     out.clear();
     let grip = data.site_xpos()[scene.grip_site];
     let gv = site_velocity(data, scene.grip_site);
@@ -48,5 +201,9 @@ pub fn write(scene: &Scene, data: &Data, dt: f64, colours: &[Colour], out: &mut 
         out.extend((0..3).map(|k| (bv[3 + k] * dt - grip_velp[k]) as f32));
         out.extend((0..3).map(|k| (bv[k] * dt) as f32));
         out.extend(colour.one_hot());
+    }
+    if spec.mode == ObsMode::Objects {
+        // Every slot holds an object until tasks have variable counts.
+        out.extend(std::iter::repeat(1.0).take(spec.max_objects));
     }
 }
