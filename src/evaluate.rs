@@ -1,10 +1,11 @@
 //! Evaluating a trained policy: success rate over seeded episodes with a
-//! Wilson 95% interval, episodes spread over threads (each episode's seed
-//! fixes it, so the result does not depend on the thread count).
+//! Wilson 95% interval, episodes spread over the threads of a
+//! [`VectorEnv`] (each episode's seed fixes it, so the result does not
+//! depend on the thread count).
 
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
-use crate::env::{BlockEnv, EnvConfig, ACTION_DIM};
+use crate::env::{BlockEnv, EnvConfig, VectorEnv, ACTION_DIM};
 use crate::outcome::{Outcome, Outcomes};
 use crate::policy::Policy;
 use crate::rollout::run_episode;
@@ -139,29 +140,21 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     let env = make_env(spec)?;
     let policy = trained_policy(path, saved, &env)?;
+    // One environment per thread; environment t plays episodes t, t + threads, ….
     let threads = spec.threads.clamp(1, spec.episodes);
+    let mut envs = VectorEnv::from_envs((0..threads).map(|_| make_env(spec)).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
-    let tallies: Vec<Result<Outcomes>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|t| {
-                let mut policy = policy.clone();
-                let bar = &bar;
-                s.spawn(move || -> Result<Outcomes> {
-                    let mut env = make_env(spec)?;
-                    let mut tally = Outcomes::default();
-                    for k in (t..spec.episodes).step_by(threads) {
-                        let seed = spec.seed + k as u64;
-                        let ep =
-                            run_episode(&mut env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
-                        tally.add(Outcome::of(&ep));
-                        bar.inc(1);
-                    }
-                    Ok(tally)
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| bail!("evaluation thread panicked"))).collect()
+    let tallies: Vec<Result<Outcomes>> = envs.each(|t, env| {
+        let mut policy = policy.clone();
+        let mut tally = Outcomes::default();
+        for k in (t..spec.episodes).step_by(threads) {
+            let seed = spec.seed + k as u64;
+            let ep = run_episode(env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
+            tally.add(Outcome::of(&ep));
+            bar.inc(1);
+        }
+        Ok(tally)
     });
     bar.finish_and_clear();
     let outcomes = tallies.into_iter().try_fold(Outcomes::default(), |all, t| t.map(|t| all.merge(t)))?;

@@ -8,6 +8,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
+from . import observation
 from ._native import Env as _NativeEnv
 
 
@@ -15,7 +16,9 @@ class BlockPuzzleEnv(gymnasium.Env):
     """A BlockPuzzle task on the Fetch robot.
 
     Observation: float32 vector (gripper, fingers, and per block its position, rotation, velocities
-    and colour one-hot). Action: float32 in [-1, 1]^4 (gripper displacement, finger command).
+    and colour one-hot); with ``obs_mode="objects"`` a ``Dict`` of ``robot``, ``objects`` (one row
+    per object slot) and ``mask`` (1 where a slot holds an object). ``obs_layout`` names every
+    component. Action: float32 in [-1, 1]^4 (gripper displacement, finger command).
     Reward: -1 per step, 0 on success, minus the steps left on failure. ``terminated`` when the
     colour rules end the episode (success: every blue object touches a green one; failure: red
     touches blue), ``truncated`` at the task's step limit or on numerical instability.
@@ -31,14 +34,16 @@ class BlockPuzzleEnv(gymnasium.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 25}
 
     def __init__(self, task: str | None = None, render_mode: str | None = None, width: int = 480,
-                 height: int = 480):
+                 height: int = 480, obs_mode: str = "flat"):
         if task is None:
             raise ValueError("no task: pass task='BlocksTouch-v0' (an id) or task='path/to/task.toml'")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; use one of {self.metadata['render_modes']} or None")
-        self._env = _NativeEnv(str(task), width, height)
+        self._env = _NativeEnv(str(task), width, height, observation.check_mode(obs_mode))
+        self.obs_mode = obs_mode
+        self.obs_layout = self._env.obs_layout()
         low, high = self._env.observation_bounds()
-        self.observation_space = spaces.Box(low=low, high=high, dtype=np.float32)
+        self.observation_space = observation.space(self.obs_layout, low, high)
         self.action_space = spaces.Box(low=-1.0, high=1.0, shape=(self._env.act_dim,), dtype=np.float32)
         self.render_mode = render_mode
         self.task_id = self._env.id
@@ -64,11 +69,12 @@ class BlockPuzzleEnv(gymnasium.Env):
             options.get("challenge"),
             options.get("distribution"),
         )
-        return obs, info
+        return observation.split(obs, self.obs_layout), info
 
     def step(self, action):
         action = np.ascontiguousarray(action, dtype=np.float32).reshape(-1)
-        return self._env.step(action)
+        obs, reward, terminated, truncated, info = self._env.step(action)
+        return observation.split(obs, self.obs_layout), reward, terminated, truncated, info
 
     def render(self):
         if self.render_mode is None:

@@ -11,6 +11,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from . import observation
 from ._native import Env as _NativeEnv
 from ._native import VecEnv as _NativeVecEnv
 
@@ -26,23 +27,28 @@ class BlockPuzzleVectorEnv(VectorEnv):
     ``seed[i]`` for a list); environment i's trajectory depends only on its own seeds and actions,
     so it is the same whatever ``num_envs`` and ``threads`` are. ``reset(options=...)`` takes
     ``level``, ``challenge``, ``distribution`` (for every environment reset) and ``reset_mask`` (a
-    bool array: reset only those environments).
+    bool array: reset only those environments). ``obs_mode="objects"`` gives ``Dict`` observations
+    (``robot``, ``objects``, ``mask``; see ``BlockPuzzleEnv``).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
-    def __init__(self, task: str, num_envs: int, threads: int | None = None, copy: bool = True):
+    def __init__(self, task: str, num_envs: int, threads: int | None = None, copy: bool = True,
+                 obs_mode: str = "flat"):
         if threads is None:
             threads = min(num_envs, os.cpu_count() or 1)
-        self._native = _NativeVecEnv(str(task), int(num_envs), int(threads))
-        single = _NativeEnv(str(task), 1, 1)
+        observation.check_mode(obs_mode)
+        self._native = _NativeVecEnv(str(task), int(num_envs), int(threads), obs_mode)
+        single = _NativeEnv(str(task), 1, 1, obs_mode)
         low, high = single.observation_bounds()
+        self.obs_mode = obs_mode
+        self.obs_layout = single.obs_layout()
         self.task_id = single.id
         single.close()
         self.num_envs = int(num_envs)
         self.threads = int(threads)
         self.copy = copy
-        self.single_observation_space = spaces.Box(low=low, high=high, dtype=np.float32)
+        self.single_observation_space = observation.space(self.obs_layout, low, high)
         self.single_action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -54,6 +60,9 @@ class BlockPuzzleVectorEnv(VectorEnv):
 
     def _out(self, a):
         return a.copy() if self.copy else a
+
+    def _out_obs(self):
+        return observation.split(self._out(self._obs), self.obs_layout)
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None):
         # The vector's own generator takes an int seed (a list seeds the environments only).
@@ -78,12 +87,12 @@ class BlockPuzzleVectorEnv(VectorEnv):
         if level is not None and (isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0):
             raise ValueError(f"options['level'] must be an int >= 0, not {level!r}")
         info = self._native.reset(self._obs, seeds, mask, level, options.get("challenge"), options.get("distribution"))
-        return self._out(self._obs), info
+        return self._out_obs(), info
 
     def step(self, actions):
         actions = np.ascontiguousarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
         info = self._native.step(actions, self._obs, self._rewards, self._terminated, self._truncated)
-        return (self._out(self._obs), self._out(self._rewards), self._out(self._terminated),
+        return (self._out_obs(), self._out(self._rewards), self._out(self._terminated),
                 self._out(self._truncated), info)
 
     def close_extras(self, **kwargs):
@@ -91,7 +100,7 @@ class BlockPuzzleVectorEnv(VectorEnv):
 
 
 def make_vec(task: str, num_envs: int = 1, threads: int | None = None, copy: bool = True,
-             **kwargs) -> BlockPuzzleVectorEnv:
+             obs_mode: str = "flat", **kwargs) -> BlockPuzzleVectorEnv:
     """``num_envs`` environments of ``task`` (an id, with or without ``BlockPuzzle/``, or a task
     file) stepped by ``threads`` Rust threads (default: one per core, at most ``num_envs``)."""
     if kwargs:
@@ -99,4 +108,4 @@ def make_vec(task: str, num_envs: int = 1, threads: int | None = None, copy: boo
     task = str(task)
     if task.startswith("BlockPuzzle/"):
         task = task[len("BlockPuzzle/"):]
-    return BlockPuzzleVectorEnv(task, num_envs, threads, copy)
+    return BlockPuzzleVectorEnv(task, num_envs, threads, copy, obs_mode)

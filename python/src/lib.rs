@@ -3,7 +3,7 @@
 //! holds one environment (`Env`), Rust errors as Python exceptions, and
 //! observations, images and contact matrices as numpy arrays.
 
-use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError, Info};
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError, Info, ObsMode};
 use blockpuzzle::render::{Renderer, View};
 use blockpuzzle::rules::ContactState;
 use blockpuzzle::scene::SceneError;
@@ -77,19 +77,21 @@ fn info_dict<'py>(py: Python<'py>, info: &Info, env: &BlockEnv) -> PyResult<Boun
 
 #[pymethods]
 impl Env {
-    /// `Env(task, width=480, height=480)`: `task` is a registered id (e.g.
-    /// "BlocksTouch-v0") or the path of a task file; width and height are the
-    /// size of `render()`'s images.
+    /// `Env(task, width=480, height=480, obs_mode="flat")`: `task` is a
+    /// registered id (e.g. "BlocksTouch-v0") or the path of a task file; width
+    /// and height are the size of `render()`'s images; `obs_mode` "flat" or
+    /// "objects" (robot | object rows | mask).
     #[new]
-    #[pyo3(signature = (task, width = 480, height = 480))]
-    fn new(task: &str, width: usize, height: usize) -> PyResult<Self> {
+    #[pyo3(signature = (task, width = 480, height = 480, obs_mode = "flat"))]
+    fn new(task: &str, width: usize, height: usize, obs_mode: &str) -> PyResult<Self> {
         if width == 0 || height == 0 || width > 4096 || height > 4096 {
             return Err(PyValueError::new_err(format!(
                 "render size {width} × {height}: each side must be in 1..=4096"
             )));
         }
+        let obs_mode: ObsMode = obs_mode.parse().map_err(PyValueError::new_err)?;
         let task = registry::task(task).map_err(to_py)?;
-        let env = BlockEnv::new(EnvConfig::new(task)).map_err(to_py)?;
+        let env = BlockEnv::new(EnvConfig { obs_mode, ..EnvConfig::new(task) }).map_err(to_py)?;
         Ok(Self { env: Some(env), view: View { width, height, ..View::default() }, renderer: None })
     }
 
@@ -103,6 +105,20 @@ impl Env {
     #[getter]
     fn obs_dim(&mut self) -> PyResult<usize> {
         Ok(self.env()?.observation_space().dim())
+    }
+
+    /// The observation's layout: a dict of `mode` ("flat" or "objects"),
+    /// `robot_dim`, `object_dim`, `max_objects`, `dim` and `names` (one per component).
+    fn obs_layout<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let spec = self.env()?.obs_spec();
+        let d = PyDict::new(py);
+        d.set_item("mode", if spec.mode == ObsMode::Objects { "objects" } else { "flat" })?;
+        d.set_item("robot_dim", spec.robot_dim())?;
+        d.set_item("object_dim", spec.object_dim())?;
+        d.set_item("max_objects", spec.max_objects)?;
+        d.set_item("dim", spec.dim())?;
+        d.set_item("names", spec.names())?;
+        Ok(d)
     }
 
     /// Action size (4: gripper displacement and finger command).

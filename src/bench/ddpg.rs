@@ -102,8 +102,9 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
         bail!("--torch-threads must be at least 1");
     }
     tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
-    let mut envs = (0..c.workers).map(|_| registry::make(&c.env)).collect::<Result<Vec<_>, _>>()?;
-    let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
+    let task = registry::task(&c.env)?;
+    let mut envs = crate::env::VectorEnv::new(&crate::env::EnvConfig::new(task), c.workers, c.workers)?;
+    let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
     if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }

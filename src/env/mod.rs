@@ -12,10 +12,12 @@ mod config;
 mod obs;
 pub mod registry;
 mod reset;
+pub mod vector;
 
 pub use config::{EnvConfig, EnvError};
 pub use obs::{obs_dim, ObsMode, ObsSpec, BLOCK_OBS, COLOUR_FEATURE, OBJECT_FEATURES, ROBOT_FEATURES, ROBOT_OBS};
 pub use registry::{ids, make, REGISTRY};
+pub use vector::{ResetOptions, VecError, VecStep, VectorEnv};
 
 use crate::mj::{Data, ObjType, Warning};
 use crate::rules::{Colour, ContactMatrix, Rules, Touching, Verdict};

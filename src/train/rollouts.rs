@@ -7,7 +7,7 @@ use crate::agents::expert::{Actor, Mixture};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::replay::ReplayBuffer;
 use crate::agents::AnyPolicy;
-use crate::env::{BlockEnv, EnvError};
+use crate::env::{BlockEnv, EnvError, VectorEnv};
 use anyhow::Result;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -184,26 +184,14 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
 /// Runs `per_worker` episodes on every worker's environment in parallel
 /// (each at the level and distribution `draw` picks, if given).
 pub(crate) fn play_all(
-    envs: &mut [BlockEnv],
+    envs: &mut VectorEnv,
     behaviour: &Behaviour,
     per_worker: usize,
     draw: Option<&Draw>,
     seed_of: impl Fn(usize, usize) -> u64 + Sync,
 ) -> Result<Vec<Episode>> {
-    let results: Vec<Result<Vec<Episode>, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = envs
-            .iter_mut()
-            .enumerate()
-            .map(|(w, env)| {
-                let seed_of = &seed_of;
-                s.spawn(move || (0..per_worker).map(|k| play(env, behaviour, seed_of(w, k), draw)).collect())
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("worker panicked".into()))))
-            .collect()
-    });
+    let results: Vec<Result<Vec<Episode>, EnvError>> =
+        envs.each(|w, env| (0..per_worker).map(|k| play(env, behaviour, seed_of(w, k), draw)).collect());
     let mut out = Vec::new();
     for r in results {
         out.extend(r?);

@@ -14,7 +14,7 @@ use crate::agents::algorithm::Spec;
 use crate::agents::ddpg::{Precision, UpdateStats};
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
-use crate::env::{registry, BlockEnv, EnvConfig};
+use crate::env::{registry, EnvConfig, VectorEnv};
 use crate::io::write_json;
 use crate::saved::SavedPolicy;
 use crate::task::Task;
@@ -343,7 +343,7 @@ struct Trainer<'a> {
     mine: RunDir,
     task: Task,
     /// One environment per worker of this rank.
-    envs: Vec<BlockEnv>,
+    envs: VectorEnv,
     learner: Learner,
     /// One buffer per worker (`per-worker`) or one (`shared`).
     replays: Vec<ReplayBuffer>,
@@ -397,10 +397,11 @@ impl<'a> Trainer<'a> {
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
         let (config, task) = run_config(comm, config, &run, saved_config.as_ref())?;
         let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
-        let envs: Vec<BlockEnv> =
-            (0..config.workers).map(|_| BlockEnv::new(EnvConfig::new(task.clone()))).collect::<Result<_, _>>()?;
-        let (obs_dim, act_dim) = (envs[0].observation_space().dim(), envs[0].action_space().dim());
-        let max_level = envs[0].max_level();
+        // One environment and one thread per worker.
+        let envs = VectorEnv::new(&EnvConfig::new(task.clone()), config.workers, config.workers)?;
+        let first = &envs.envs()[0];
+        let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
+        let max_level = first.max_level();
         check_memory(&config, obs_dim, act_dim, task.spec.max_episode_steps)?;
         if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
@@ -413,7 +414,7 @@ impl<'a> Trainer<'a> {
             fresh(comm, &config, &task, &run, &mine, dims)?
         };
         begun.check(&config, &mine)?;
-        let seen = crate::agents::expert::obs_dim_without_grey(&envs[0].config().blocks());
+        let seen = crate::agents::expert::obs_dim_without_grey(&first.config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
             write_json(&run.config(), &config)?;
@@ -459,7 +460,7 @@ impl<'a> Trainer<'a> {
         let started = Instant::now();
         let cpu_started = cpu_seconds();
         let level = self.state.level.min(self.max_level);
-        for env in &mut self.envs {
+        for env in self.envs.envs_mut() {
             env.set_level(level)?;
         }
         let mut tally = EpochTally::default();
@@ -567,14 +568,14 @@ impl<'a> Trainer<'a> {
         let (seed, first, n) = (self.config.seed, self.shard(0), self.config.test_episodes);
         let policy = self.learner.agent.policy();
         let greedy = Behaviour::Greedy(&policy);
-        for env in &mut self.envs {
+        for env in self.envs.envs_mut() {
             env.set_level(self.state.level.min(self.max_level))?;
             env.set_distribution(None)?;
         }
         let test = play_all(&mut self.envs, &greedy, n, None, |w, k| {
             stream_seed(seed, &[3, epoch as u64, (first + w) as u64, k as u64])
         })?;
-        for env in &mut self.envs {
+        for env in self.envs.envs_mut() {
             env.set_level(self.max_level)?;
         }
         let finals = play_all(&mut self.envs, &greedy, n, None, |w, k| {

@@ -1,0 +1,45 @@
+"""Observation layouts: the flat vector every id has by default, and the object-centric ``Dict``
+(``robot``, ``objects`` of max objects x features, ``mask``) chosen with ``obs_mode="objects"``.
+
+The Rust core describes the layout (``_native.Env.obs_layout()``); in the ``objects`` mode the
+native vector is laid out robot | object rows | mask, and ``split`` views it as the ``Dict``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium import spaces
+
+OBS_MODES = ("flat", "objects")
+
+
+def check_mode(obs_mode: str) -> str:
+    if obs_mode not in OBS_MODES:
+        raise ValueError(f"unknown obs_mode {obs_mode!r}; use one of {', '.join(OBS_MODES)}")
+    return obs_mode
+
+
+def space(layout: dict, low: np.ndarray, high: np.ndarray) -> spaces.Space:
+    """The single environment's observation space for ``layout``."""
+    if layout["mode"] == "flat":
+        return spaces.Box(low=low, high=high, dtype=np.float32)
+    r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+    return spaces.Dict({
+        "robot": spaces.Box(-np.inf, np.inf, (r,), np.float32),
+        "objects": spaces.Box(-np.inf, np.inf, (m, f), np.float32),
+        "mask": spaces.Box(0.0, 1.0, (m,), np.float32),
+    })
+
+
+def split(obs: np.ndarray, layout: dict):
+    """``obs`` (one observation or a batch: the last axis is the native vector) in ``layout``'s
+    form: itself for ``flat``, else a dict of views of it."""
+    if layout["mode"] == "flat":
+        return obs
+    r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+    lead = obs.shape[:-1]
+    return {
+        "robot": obs[..., :r],
+        "objects": obs[..., r:r + m * f].reshape(*lead, m, f),
+        "mask": obs[..., r + m * f:],
+    }
