@@ -1,7 +1,7 @@
 //! Rolling out a policy and recording headless trajectory dumps (JSON Lines:
 //! one episode per line).
 
-use crate::env::{BlockEnv, EnvError};
+use crate::env::{BlockEnv, EnvError, Step, ACTION_DIM};
 use crate::policy::Policy;
 use crate::rules::Colour;
 use serde::{Deserialize, Serialize};
@@ -127,49 +127,87 @@ fn state(env: &BlockEnv) -> StateRecord {
     }
 }
 
-/// Runs one episode of `policy` from `reset(Some(seed))`.
+/// What [`play_episode`] shows its caller.
+pub enum Event<'a> {
+    /// After the reset: the environment and its first observation.
+    Reset { env: &'a BlockEnv, obs: &'a [f32] },
+    /// After a step: the environment, the observation the action was chosen on, the action, the step.
+    Step { env: &'a BlockEnv, obs: &'a [f32], action: &'a [f32; ACTION_DIM], step: &'a Step },
+}
+
+/// The episode loop, the one every caller uses (rollouts and dumps,
+/// evaluation, training's exploration and tests): resets `env` with `seed`,
+/// resets `policy`, then steps with its actions until the episode ends,
+/// showing each [`Event`] to `on_event`.
+///
+/// # Errors
+/// Whatever the environment reports (placement, invalid scene, instability).
+pub fn play_episode(
+    env: &mut BlockEnv,
+    policy: &mut dyn Policy,
+    seed: u64,
+    mut on_event: impl FnMut(Event<'_>),
+) -> Result<(), EnvError> {
+    let (mut obs, _) = env.reset(Some(seed))?;
+    on_event(Event::Reset { env, obs: &obs });
+    policy.reset();
+    loop {
+        let action = policy.act(&obs);
+        let step = env.step(&action)?;
+        on_event(Event::Step { env, obs: &obs, action: &action, step: &step });
+        if step.terminated || step.truncated {
+            return Ok(());
+        }
+        obs = step.obs;
+    }
+}
+
+/// Runs one episode of `policy` from `reset(Some(seed))` and records it.
 ///
 /// # Errors
 /// Whatever the environment reports (placement, invalid scene).
 pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Result<EpisodeRecord, RolloutError> {
-    let (mut obs, _) = env.reset(Some(seed))?;
-    policy.reset();
-    let mut rec = EpisodeRecord {
-        env_id: env.id().to_owned(),
-        task: Some(env.config().task.source.clone()),
-        distribution: env.distribution_name().map(str::to_owned),
-        seed,
-        level: env.level(),
-        challenge: env.challenge(),
-        objects: env.objects().iter().map(|o| ObjectRecord { name: o.name.clone(), colour: o.colour }).collect(),
-        initial: state(env),
-        steps: Vec::new(),
-        success: false,
-        failure: false,
-        episode_return: 0.0,
-    };
-    loop {
-        let action = policy.act(&obs);
-        let s = env.step(&action)?;
-        rec.episode_return += s.reward;
-        rec.success |= s.info.is_success;
-        rec.failure |= s.info.is_failure;
-        rec.steps.push(StepRecord {
-            action,
-            state: state(env),
-            touching: s.info.touching.clone(),
-            reward: s.reward,
-            terminated: s.terminated,
-            truncated: s.truncated,
-            is_success: s.info.is_success,
-            is_failure: s.info.is_failure,
-            unstable: s.info.unstable,
-        });
-        obs = s.obs;
-        if s.terminated || s.truncated {
-            return Ok(rec);
+    let mut rec = None;
+    play_episode(env, policy, seed, |event| match event {
+        Event::Reset { env, .. } => {
+            rec = Some(EpisodeRecord {
+                env_id: env.id().to_owned(),
+                task: Some(env.config().task.source.clone()),
+                distribution: env.distribution_name().map(str::to_owned),
+                seed,
+                level: env.level(),
+                challenge: env.challenge(),
+                objects: env
+                    .objects()
+                    .iter()
+                    .map(|o| ObjectRecord { name: o.name.clone(), colour: o.colour })
+                    .collect(),
+                initial: state(env),
+                steps: Vec::new(),
+                success: false,
+                failure: false,
+                episode_return: 0.0,
+            })
         }
-    }
+        Event::Step { env, action, step: s, .. } => {
+            let Some(rec) = rec.as_mut() else { return };
+            rec.episode_return += s.reward;
+            rec.success |= s.info.is_success;
+            rec.failure |= s.info.is_failure;
+            rec.steps.push(StepRecord {
+                action: *action,
+                state: state(env),
+                touching: s.info.touching.clone(),
+                reward: s.reward,
+                terminated: s.terminated,
+                truncated: s.truncated,
+                is_success: s.info.is_success,
+                is_failure: s.info.is_failure,
+                unstable: s.info.unstable,
+            });
+        }
+    })?;
+    rec.ok_or_else(|| RolloutError::Env(EnvError::NotReset))
 }
 
 /// A JSON Lines file written atomically: episodes go to a temporary file

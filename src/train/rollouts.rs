@@ -7,7 +7,9 @@ use crate::agents::expert::{Actor, Mixture};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::replay::ReplayBuffer;
 use crate::agents::AnyPolicy;
-use crate::env::{BlockEnv, EnvError, VectorEnv};
+use crate::env::{BlockEnv, EnvError, VectorEnv, ACTION_DIM};
+use crate::policy::Policy;
+use crate::rollout::{play_episode, Event};
 use anyhow::Result;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -139,6 +141,32 @@ impl Draw {
     }
 }
 
+/// A behaviour acting in one episode, as a [`Policy`]: its exploration
+/// noise state and generator, and what it spent.
+struct Acting<'a> {
+    behaviour: &'a Behaviour<'a>,
+    rng: ChaCha8Rng,
+    noise: Vec<f32>,
+    /// Actions the expert chose.
+    expert_steps: usize,
+    forward_seconds: f64,
+}
+
+impl Policy for Acting<'_> {
+    fn reset(&mut self) {
+        self.noise.clear();
+    }
+
+    /// The action to store (the environment clips it to [−1, 1] itself).
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        let t = Instant::now();
+        let (a, by_expert) = self.behaviour.act(obs, &mut self.noise, &mut self.rng);
+        self.forward_seconds += t.elapsed().as_secs_f64();
+        self.expert_steps += by_expert as usize;
+        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+    }
+}
+
 /// Plays one episode with `behaviour` from the layout of `seed`; with a
 /// `draw`, at the level and in the distribution it picks for that seed
 /// (without, at the environment's current settings).
@@ -149,8 +177,8 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
         env.set_challenge(challenge)?;
     }
     // The layout comes from `seed`; the exploration noise from a stream derived from it.
-    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
-    let (mut obs, _) = env.reset(Some(seed))?;
+    let rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
+    let mut acting = Acting { behaviour, rng, noise: Vec::new(), expert_steps: 0, forward_seconds: 0.0 };
     let mut ep = Episode {
         obs: vec![],
         act: vec![],
@@ -160,25 +188,20 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
         expert_steps: 0,
         forward_seconds: 0.0,
     };
-    let mut noise = Vec::new();
-    loop {
-        let t = Instant::now();
-        let (act, by_expert) = behaviour.act(&obs, &mut noise, &mut rng);
-        ep.forward_seconds += t.elapsed().as_secs_f64();
-        ep.expert_steps += by_expert as usize;
-        let clipped: Vec<f32> = act.iter().map(|a| a.clamp(-1.0, 1.0)).collect();
-        let s = env.step(&clipped)?;
-        ep.obs.push(obs);
-        ep.act.push(act);
-        ep.rew.push(s.reward);
-        ep.success |= s.info.is_success;
-        obs = s.obs;
-        if s.terminated || s.truncated {
-            ep.terminated = s.terminated;
-            ep.obs.push(obs);
-            return Ok(ep);
+    play_episode(env, &mut acting, seed, |event| {
+        if let Event::Step { obs, action, step, .. } = event {
+            ep.obs.push(obs.to_vec());
+            ep.act.push(action.to_vec());
+            ep.rew.push(step.reward);
+            ep.success |= step.info.is_success;
+            if step.terminated || step.truncated {
+                ep.terminated = step.terminated;
+                ep.obs.push(step.obs.clone());
+            }
         }
-    }
+    })?;
+    (ep.expert_steps, ep.forward_seconds) = (acting.expert_steps, acting.forward_seconds);
+    Ok(ep)
 }
 
 /// Runs `per_worker` episodes on every worker's environment in parallel
