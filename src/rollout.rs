@@ -207,7 +207,7 @@ pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Re
             });
         }
     })?;
-    rec.ok_or_else(|| RolloutError::Env(EnvError::NotReset))
+    rec.ok_or(RolloutError::Env(EnvError::NotReset))
 }
 
 /// A JSON Lines file written atomically: episodes go to a temporary file
