@@ -5,10 +5,9 @@
 
 pub mod ddpg;
 
-use crate::env::{registry, BlockEnv, EnvError};
+use crate::env::{registry, BlockEnv, EnvError, VectorEnv};
 use crate::policy::{Policy, RandomPolicy};
 use serde::Serialize;
-use std::sync::Barrier;
 use std::time::Instant;
 
 /// Result of a benchmark run.
@@ -21,9 +20,8 @@ pub struct BenchReport {
     /// Steps per thread.
     pub steps: usize,
     /// Wall-clock seconds of the timed stepping: from the moment every
-    /// thread has built its environment and warmed up (a barrier) to the
-    /// last thread's last step, the way `bench/fetchpush_steps.py` times
-    /// FetchPush-v4's processes.
+    /// environment is built and warmed up to the last one's last step, the
+    /// way `bench/fetchpush_steps.py` times FetchPush-v4's processes.
     pub seconds: f64,
     /// Whether the robot collision filter was on.
     pub collision_filter: bool,
@@ -36,32 +34,10 @@ pub struct BenchReport {
     pub overhead_fraction: f64,
 }
 
-struct ThreadResult {
-    collision_filter: bool,
-    started: Instant,
-    ended: Instant,
-    physics_seconds: f64,
-    substeps: usize,
-}
-
-/// Makes a thread's environment.
+/// Makes an environment.
 type MakeEnv<'a> = &'a (dyn Fn() -> Result<BlockEnv, EnvError> + Sync);
 /// Starts an episode (the environment and an episode seed) and returns its first observation.
 type StartEpisode<'a> = &'a (dyn Fn(&mut BlockEnv, Option<u64>) -> Result<Vec<f32>, EnvError> + Sync);
-
-/// Builds an environment, starts an episode with `seed` and steps it 100
-/// times: the warm-up kept outside the timing.
-fn warmed_up(
-    make: MakeEnv,
-    start: StartEpisode,
-    seed: u64,
-    policy: &mut RandomPolicy,
-) -> Result<(BlockEnv, Vec<f32>), EnvError> {
-    let mut env = make()?;
-    let obs = start(&mut env, Some(seed))?;
-    let obs = random_steps(&mut env, start, policy, obs, 100)?;
-    Ok((env, obs))
-}
 
 /// Steps `env` `n` times with random actions from `obs`, starting a new
 /// episode with `start` whenever one ends; returns the last observation.
@@ -79,34 +55,11 @@ fn random_steps(
     Ok(obs)
 }
 
-/// Builds and warms up one thread's environment, waits at `ready` until every
-/// thread has, then times `steps` steps. Every thread reaches the barrier,
-/// also when its set-up fails (the error is returned after it), so a failing
-/// thread cannot leave the others waiting.
-fn one_thread(
-    make: MakeEnv,
-    start: StartEpisode,
-    steps: usize,
-    seed: u64,
-    ready: &Barrier,
-) -> Result<ThreadResult, EnvError> {
-    let mut policy = RandomPolicy::new(seed);
-    // A panic before the barrier would leave the other threads waiting: make it an error.
-    let set_up = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| warmed_up(make, start, seed, &mut policy)))
-        .unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked while building its environment".into())));
-    ready.wait();
-    let (mut env, obs) = set_up?;
-    let physics0 = env.physics_seconds();
-    let started = Instant::now();
-    random_steps(&mut env, start, &mut policy, obs, steps)?;
-    let ended = Instant::now();
-    Ok(ThreadResult {
-        collision_filter: env.config().collision_filter,
-        started,
-        ended,
-        physics_seconds: env.physics_seconds() - physics0,
-        substeps: steps * env.config().n_substeps,
-    })
+/// One environment's timed stretch.
+struct Timed {
+    started: Instant,
+    ended: Instant,
+    physics_seconds: f64,
 }
 
 /// Steps `threads` independent environments of `id` in parallel, `steps`
@@ -144,18 +97,30 @@ pub fn run_with(
             .check_usize(v)
             .map_err(|e| EnvError::Config(format!("{e} (for `align`: --bench-steps and --threads)")))?;
     }
-    let ready = Barrier::new(threads);
-    let ready = &ready;
-    let results: Vec<Result<ThreadResult, EnvError>> = std::thread::scope(|s| {
-        let handles: Vec<_> =
-            (0..threads).map(|k| s.spawn(move || one_thread(make, start, steps, k as u64, ready))).collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(EnvError::Config("benchmark thread panicked".into()))))
-            .collect()
+    // Built outside the timing (a panic while building is an error, not an abort).
+    let envs = (0..threads)
+        .map(|_| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(make))
+                .unwrap_or_else(|_| Err(EnvError::Config("a benchmark environment panicked while building".into())))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut vec = VectorEnv::from_envs(envs, threads)?;
+    // A 100-step warm-up each, untimed; then `steps` timed steps each, every environment in its thread.
+    let warm = vec.each(|k, env| -> Result<(RandomPolicy, Vec<f32>), EnvError> {
+        let mut policy = RandomPolicy::new(k as u64);
+        let obs = start(env, Some(k as u64))?;
+        let obs = random_steps(env, start, &mut policy, obs, 100)?;
+        Ok((policy, obs))
+    });
+    let mut states = warm.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let results = vec.each_with(&mut states, |_, env, (policy, obs)| -> Result<Timed, EnvError> {
+        let physics0 = env.physics_seconds();
+        let started = Instant::now();
+        random_steps(env, start, policy, std::mem::take(obs), steps)?;
+        Ok(Timed { started, ended: Instant::now(), physics_seconds: env.physics_seconds() - physics0 })
     });
     let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
-    // From the barrier (all threads start within microseconds of it) to the last finisher.
+    // From the first environment's start (all start within microseconds) to the last finisher.
     let first = results.iter().map(|r| r.started).min();
     let last = results.iter().map(|r| r.ended).max();
     let seconds = match (first, last) {
@@ -164,8 +129,9 @@ pub fn run_with(
     };
     let total_env: f64 = results.iter().map(|r| (r.ended - r.started).as_secs_f64()).sum();
     let total_phys: f64 = results.iter().map(|r| r.physics_seconds).sum();
-    let substeps: usize = results.iter().map(|r| r.substeps).sum();
-    let collision_filter = results.first().is_some_and(|r| r.collision_filter);
+    let config = vec.envs()[0].config();
+    let substeps = steps * threads * config.n_substeps;
+    let collision_filter = config.collision_filter;
     Ok(BenchReport {
         env: label.to_owned(),
         threads,
@@ -194,8 +160,8 @@ mod tests {
 
     #[test]
     fn building_the_environments_is_not_timed() {
-        // A second's set-up per thread against two steps: the timed span must leave it out
-        // (before the barrier it counted, as FetchPush-v4's side never did).
+        // A second of set-up per environment against two steps: the timed span must leave it out
+        // (as FetchPush-v4's side never counts it).
         let slow = || {
             std::thread::sleep(Duration::from_secs(1));
             gripper_touch()
@@ -206,7 +172,7 @@ mod tests {
     }
 
     #[test]
-    fn a_thread_that_cannot_build_its_environment_fails_the_run_without_a_hang() {
+    fn an_environment_that_cannot_be_built_fails_the_run_without_a_hang() {
         let built = AtomicUsize::new(0);
         let second_fails = || {
             if built.fetch_add(1, Ordering::SeqCst) == 1 {
@@ -220,7 +186,7 @@ mod tests {
     }
 
     #[test]
-    fn a_thread_that_panics_while_building_fails_the_run_without_a_hang() {
+    fn an_environment_that_panics_while_building_fails_the_run_without_a_hang() {
         let built = AtomicUsize::new(0);
         let second_panics = || {
             assert!(built.fetch_add(1, Ordering::SeqCst) != 1, "deliberate panic in the second set-up");

@@ -131,6 +131,23 @@ impl VectorEnv {
         self.pool.install(|| envs.par_iter_mut().enumerate().map(|(i, env)| f(i, env)).collect())
     }
 
+    /// [`VectorEnv::each`] with a state per environment (e.g. its policy
+    /// copy), `states[i]` given to environment i's call.
+    ///
+    /// # Panics
+    /// If `states` does not have one entry per environment.
+    pub fn each_with<S: Send, T: Send>(
+        &mut self,
+        states: &mut [S],
+        f: impl Fn(usize, &mut BlockEnv, &mut S) -> T + Sync,
+    ) -> Vec<T> {
+        assert_eq!(states.len(), self.envs.len(), "one state per environment");
+        let envs = &mut self.envs;
+        self.pool.install(|| {
+            envs.par_iter_mut().zip(states.par_iter_mut()).enumerate().map(|(i, (env, s))| f(i, env, s)).collect()
+        })
+    }
+
     /// Resets the environments whose `mask` entry is true (all when None)
     /// with their `seeds` entry (None: the environment's own generator goes
     /// on), after applying `options`; writes their first observations into
