@@ -1,4 +1,4 @@
-"""Rows of the validation table in results/headline.md, from `make validate` output.
+"""Rows of the validation table in results/headline.md, from validation evaluations (docs/training.md, former `make validate`).
 
     python3 scripts/validation_rows.py RUN LABEL EPOCH...
 
@@ -31,7 +31,7 @@ def main(argv):
         for distribution in ["", "--challenge"]:
             path = Path("results/headline/validation") / f"{run}-epoch{e}{distribution}.json"
             if not path.exists():
-                sys.exit(f"{path} not found: run `make validate RUN=runs/{run} AT={e}` first")
+                sys.exit(f"{path} not found: evaluate runs/{run} at epoch {e} first (docs/training.md#former-make-targets, make validate)")
             d = json.loads(path.read_text())
             o, n = d["outcomes"], d["episodes"]
             cells.append(f"{d['success_rate']:.3f}")

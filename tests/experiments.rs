@@ -35,7 +35,7 @@ fn every_recipe_is_a_valid_train_command_line() {
     let all = recipes();
     assert!(all.len() >= 20, "{all:?}");
     for path in all {
-        // ddpg-task takes its task from `make ddpg-task TASK=ID`.
+        // ddpg-task takes its task from the command line (--env ID).
         let env: &[&str] = if path.ends_with("ddpg-task.toml") { &["--env", "ReachAvoid-v0"] } else { &[] };
         let c = recipe(&path, env).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
         assert!(blockpuzzle::env::ids().contains(&c.env.as_str()), "{}: {}", path.display(), c.env);
