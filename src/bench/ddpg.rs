@@ -1,21 +1,23 @@
-//! DDPG throughput as training sees it, in the two numbers people compare
-//! RL libraries by: environment steps per second while collecting with the
+//! Training throughput (DDPG by default; `--algo` any registered
+//! algorithm) as training sees it, in the two numbers people compare RL
+//! libraries by: environment steps per second while collecting with the
 //! exploring actor, and gradient updates per second.
 //!
 //! * Collection runs the training loop's own path: every worker steps its
 //!   environment in its own thread with the plain-Rust actor plus
 //!   exploration noise, then the transitions go into the replay buffer and
 //!   the normaliser (timed).
-//! * Updates are full DDPG updates (critic and actor step) on batches of
-//!   `batch_size` drawn from those transitions, with libtorch using
-//!   `torch_threads` threads, plus one target update per 40 batches as in a
+//! * Updates are full updates of the algorithm (DDPG: critic and actor
+//!   step; a gradient, then its optimiser step) on batches of `batch_size`
+//!   drawn from those transitions, with libtorch using `torch_threads`
+//!   threads, plus one end of cycle (target update) per 40 batches as in a
 //!   training cycle.
 //!
 //! The networks are untrained (seeded), which does not change the cost of a
 //! forward pass or an update.
 
-use crate::agents::algorithm::Algorithm;
-use crate::agents::ddpg::{Ddpg, DdpgConfig, Precision};
+use crate::agents::algorithm::{Algo, Algorithm, Spec};
+use crate::agents::ddpg::{DdpgConfig, Precision};
 use crate::agents::replay::ReplayBuffer;
 use crate::env::registry;
 use crate::train::{play_all, stream_seed, Behaviour};
@@ -44,6 +46,8 @@ pub struct DdpgBenchConfig {
     pub seed: u64,
     /// Arithmetic of the updates' hidden-layer products.
     pub precision: Precision,
+    /// The algorithm.
+    pub algo: Algo,
 }
 
 /// Measured rates.
@@ -51,6 +55,8 @@ pub struct DdpgBenchConfig {
 pub struct DdpgBenchReport {
     /// Always "blockpuzzle".
     pub r#impl: &'static str,
+    /// The algorithm.
+    pub algo: Algo,
     /// Environment id.
     pub env: String,
     /// Collection workers.
@@ -110,47 +116,54 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     }
     let ddpg = DdpgConfig { precision: c.precision, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;
-    let mut agent = Ddpg::new(obs_dim, act_dim, ddpg, &mut ChaCha8Rng::seed_from_u64(c.seed));
+    let spec = Spec { obs_dim, act_dim, ddpg: &ddpg, pggd: &Default::default() };
+    let mut agent = c.algo.build(&spec, &mut ChaCha8Rng::seed_from_u64(c.seed)).map_err(anyhow::Error::msg)?;
     let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
 
     // Collect: one episode per worker per round, as in a training cycle.
     let mut round = 0u64;
-    let mut collect = |target: usize, replay: &mut ReplayBuffer, agent: &mut Ddpg| -> Result<(usize, f64, f64)> {
-        let (mut steps, mut forward) = (0usize, 0.0);
-        let t = Instant::now();
-        while steps < target {
-            let explorer = Algorithm::explorer(agent);
-            let eps = play_all(&mut envs, &Behaviour::Explore(&*explorer), 1, None, |w, _| {
-                stream_seed(c.seed, &[9, w as u64, round])
-            })?;
-            round += 1;
-            for ep in &eps {
-                steps += ep.len();
-                forward += ep.forward_seconds;
-                ep.store(replay, &mut agent.norm, gamma, 1);
+    let mut collect =
+        |target: usize, replay: &mut ReplayBuffer, agent: &mut dyn Algorithm| -> Result<(usize, f64, f64)> {
+            let (mut steps, mut forward) = (0usize, 0.0);
+            let t = Instant::now();
+            while steps < target {
+                let explorer = agent.explorer();
+                let eps = play_all(&mut envs, &Behaviour::Explore(&*explorer), 1, None, |w, _| {
+                    stream_seed(c.seed, &[9, w as u64, round])
+                })?;
+                round += 1;
+                for ep in &eps {
+                    steps += ep.len();
+                    forward += ep.forward_seconds;
+                    ep.store(replay, agent.norm_mut(), gamma, 1);
+                }
             }
-        }
-        Ok((steps, t.elapsed().as_secs_f64(), forward / c.workers as f64))
-    };
-    collect(WARMUP_STEPS, &mut replay, &mut agent)?;
-    let (steps, collect_seconds, forward_seconds) = collect(c.steps, &mut replay, &mut agent)?;
+            Ok((steps, t.elapsed().as_secs_f64(), forward / c.workers as f64))
+        };
+    collect(WARMUP_STEPS, &mut replay, &mut *agent)?;
+    let (steps, collect_seconds, forward_seconds) = collect(c.steps, &mut replay, &mut *agent)?;
 
     // Update.
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(c.seed, &[10]));
+    let mut update = |agent: &mut dyn Algorithm| {
+        let (gradient, _) = agent.gradient(&replay.sample(c.batch_size, &mut rng), 0, None);
+        agent.apply_gradient(&gradient);
+    };
     for _ in 0..WARMUP_UPDATES {
-        agent.update(&replay.sample(c.batch_size, &mut rng));
+        update(&mut *agent);
     }
     let t = Instant::now();
     for k in 0..c.updates {
-        agent.update(&replay.sample(c.batch_size, &mut rng));
+        update(&mut *agent);
         if (k + 1) % 40 == 0 {
-            agent.update_targets();
+            agent.end_cycle();
         }
     }
     let train_seconds = t.elapsed().as_secs_f64();
 
     Ok(DdpgBenchReport {
         r#impl: "blockpuzzle",
+        algo: c.algo,
         env: c.env.clone(),
         workers: c.workers,
         threads: c.torch_threads,

@@ -337,6 +337,9 @@ struct BenchArgs {
     /// DDPG: arithmetic of the updates' hidden-layer products.
     #[arg(long, value_enum, default_value = "f32", requires = "ddpg")]
     precision: crate::agents::ddpg::Precision,
+    /// With --ddpg: the algorithm whose collection and updates to time (any of `train --algo`).
+    #[arg(long, default_value = "ddpg", requires = "ddpg", value_parser = crate::agents::algorithm::Algo::parser())]
+    algo: crate::agents::algorithm::Algo,
 }
 
 /// The command line's definition, every value-taking flag accepting a
@@ -504,13 +507,14 @@ fn bench_ddpg(a: BenchArgs) -> Result<()> {
         torch_threads: a.torch_threads,
         seed: a.seed,
         precision: a.precision,
+        algo: a.algo,
     })?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
         println!(
-            "DDPG on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
-            r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
+            "{:?} on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
+            r.algo, r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
         );
     }
     Ok(())
