@@ -102,6 +102,8 @@ pub struct Evaluation {
     pub grey_blind: bool,
     /// Episodes per outcome: what the unsuccessful ones did ([`crate::outcome`]).
     pub outcomes: Outcomes,
+    /// Mean episode length of the successful episodes (None without one).
+    pub mean_steps_to_success: Option<f64>,
 }
 
 /// What to evaluate on.
@@ -111,6 +113,8 @@ pub struct EvalSpec<'a> {
     pub task: &'a Task,
     /// Challenge distribution (BlocksChoose-v0).
     pub challenge: bool,
+    /// A named distribution of the task (None: the curriculum's, or the challenge one with `challenge`).
+    pub distribution: Option<&'a str>,
     /// Curriculum level (None: the maximum).
     pub level: Option<usize>,
     /// Episodes.
@@ -125,6 +129,9 @@ fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
     let mut env = BlockEnv::new(EnvConfig::new(spec.task.clone()))?;
     if spec.challenge {
         env.set_challenge(true)?;
+    }
+    if spec.distribution.is_some() {
+        env.set_distribution(spec.distribution)?;
     }
     env.set_level(spec.level.unwrap_or(env.max_level()))?;
     Ok(env)
@@ -145,19 +152,26 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     let mut envs = VectorEnv::from_envs((0..threads).map(|_| make_env(spec)).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
-    let tallies: Vec<Result<Outcomes>> = envs.each(|t, env| {
+    // Each thread's outcome counts and the summed length of its successful episodes.
+    let tallies: Vec<Result<(Outcomes, usize)>> = envs.each(|t, env| {
         let mut policy = policy.clone();
-        let mut tally = Outcomes::default();
+        let (mut tally, mut success_steps) = (Outcomes::default(), 0);
         for k in (t..spec.episodes).step_by(threads) {
             let seed = spec.seed + k as u64;
             let ep = run_episode(env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
-            tally.add(Outcome::of(&ep));
+            let outcome = Outcome::of(&ep);
+            if outcome == Outcome::Success {
+                success_steps += ep.steps.len();
+            }
+            tally.add(outcome);
             bar.inc(1);
         }
-        Ok(tally)
+        Ok((tally, success_steps))
     });
     bar.finish_and_clear();
-    let outcomes = tallies.into_iter().try_fold(Outcomes::default(), |all, t| t.map(|t| all.merge(t)))?;
+    let (outcomes, success_steps) = tallies
+        .into_iter()
+        .try_fold((Outcomes::default(), 0), |(all, steps), t| t.map(|(t, s)| (all.merge(t), steps + s)))?;
     let successes = outcomes.success;
     Ok(Evaluation {
         env: spec.task.id().to_owned(),
@@ -170,7 +184,167 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
         ci95: wilson95(successes, spec.episodes),
         grey_blind: policy.grey_blind(),
         outcomes,
+        mean_steps_to_success: (successes > 0).then(|| success_steps as f64 / successes as f64),
     })
+}
+
+/// One row of a suite evaluated, or why it was skipped.
+#[derive(Debug, Clone, Serialize)]
+pub struct RowResult {
+    /// Task id.
+    pub task: String,
+    /// "normal" or the distribution's name.
+    pub distribution: String,
+    /// First seed.
+    pub seed: u64,
+    /// Episodes.
+    pub episodes: usize,
+    /// The evaluation (None: skipped).
+    pub evaluation: Option<Evaluation>,
+    /// Share of episodes that failed by red touching blue.
+    pub failure_rate: Option<f64>,
+    /// Why the row was skipped (e.g. the policy's observation does not fit the task).
+    pub skipped: Option<String>,
+}
+
+/// A split's rows and their mean success.
+#[derive(Debug, Clone, Serialize)]
+pub struct SplitResult {
+    /// `train`, `test`, or another name.
+    pub name: String,
+    /// Its rows.
+    pub rows: Vec<RowResult>,
+    /// Mean success rate over the rows evaluated (None: all skipped).
+    pub mean_success: Option<f64>,
+}
+
+/// A policy on a suite (docs/suites.md defines the scores).
+#[derive(Debug, Clone, Serialize)]
+pub struct SuiteResult {
+    /// The suite's name and the SHA-256 of its text.
+    pub suite: crate::suite::SuiteId,
+    /// What it measures.
+    pub summary: String,
+    /// The policy as given.
+    pub policy: String,
+    /// Its epoch of training.
+    pub policy_epoch: usize,
+    /// The task it was trained on.
+    pub policy_task: String,
+    /// Per split.
+    pub splits: Vec<SplitResult>,
+    /// The suite's score: the test split's mean success.
+    pub score: Option<f64>,
+    /// The generalisation gap: train's mean success − test's.
+    pub gap: Option<f64>,
+}
+
+/// Evaluates the policy in `saved` (loaded from `path`) on every row of
+/// `suite`; a row whose observation the policy cannot take (directly or
+/// with grey blocks removed) is skipped with the reason.
+///
+/// # Errors
+/// Environment failures.
+pub fn evaluate_suite(
+    path: &Path,
+    saved: &SavedPolicy,
+    suite: &crate::suite::Suite,
+    threads: usize,
+) -> Result<SuiteResult> {
+    let mut splits = Vec::new();
+    for split in &suite.splits {
+        let mut rows = Vec::new();
+        for row in &split.rows {
+            let spec = EvalSpec {
+                task: &row.task,
+                challenge: false,
+                distribution: row.distribution.as_deref(),
+                level: row.level,
+                episodes: row.episodes,
+                seed: row.seed,
+                threads,
+            };
+            let fits = make_env(&spec).and_then(|env| trained_policy(path, saved.clone(), &env).map(|_| ()));
+            let (evaluation, skipped) = match fits {
+                Err(e) => (None, Some(format!("{e:#}"))),
+                Ok(()) => (Some(evaluate(path, saved.clone(), &spec)?), None),
+            };
+            rows.push(RowResult {
+                task: row.task.id().to_owned(),
+                distribution: row.distribution_label().to_owned(),
+                seed: row.seed,
+                episodes: row.episodes,
+                failure_rate: evaluation.as_ref().map(|e| e.outcomes.failure as f64 / e.episodes as f64),
+                evaluation,
+                skipped,
+            });
+        }
+        let rates: Vec<f64> = rows.iter().filter_map(|r| r.evaluation.as_ref().map(|e| e.success_rate)).collect();
+        let mean_success = (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64);
+        splits.push(SplitResult { name: split.name.clone(), rows, mean_success });
+    }
+    let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
+    let (train, test) = (mean("train"), mean("test"));
+    Ok(SuiteResult {
+        suite: suite.id(),
+        summary: suite.summary.clone(),
+        policy: path.display().to_string(),
+        policy_epoch: saved.epoch,
+        policy_task: saved.env_id.clone(),
+        splits,
+        score: test,
+        gap: train.zip(test).map(|(a, b)| a - b),
+    })
+}
+
+impl SuiteResult {
+    /// The result as a Markdown section: a table per split, the score and the gap.
+    pub fn to_markdown(&self) -> String {
+        let pct = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.3}"));
+        let mut md = format!(
+            "### {} on suite `{}`\n\n{}\n\nPolicy trained on {} (epoch {}); suite sha256 `{}`.\n\n",
+            self.policy, self.suite.name, self.summary, self.policy_task, self.policy_epoch, self.suite.sha256
+        );
+        for split in &self.splits {
+            md += &format!("**{}** (mean success {})\n\n", split.name, pct(split.mean_success));
+            md += "| task | distribution | episodes | success [95% CI] | red–blue failure | steps to success | not successful |\n";
+            md += "|---|---|---:|---|---:|---:|---|\n";
+            for r in &split.rows {
+                match (&r.evaluation, &r.skipped) {
+                    (Some(e), _) => {
+                        md += &format!(
+                            "| {} | {} | {} | {:.3} [{:.3}, {:.3}] | {} | {} | {} |\n",
+                            r.task,
+                            r.distribution,
+                            r.episodes,
+                            e.success_rate,
+                            e.ci95.0,
+                            e.ci95.1,
+                            pct(r.failure_rate),
+                            e.mean_steps_to_success.map_or_else(|| "–".to_owned(), |s| format!("{s:.1}")),
+                            e.outcomes.summary()
+                        )
+                    }
+                    (None, reason) => {
+                        md += &format!(
+                            "| {} | {} | {} | skipped: {} | | | |\n",
+                            r.task,
+                            r.distribution,
+                            r.episodes,
+                            reason.as_deref().unwrap_or("").replace('|', "/")
+                        )
+                    }
+                }
+            }
+            md += "\n";
+        }
+        md += &format!(
+            "Score (test mean success): {}; generalisation gap (train − test): {}.\n",
+            pct(self.score),
+            pct(self.gap)
+        );
+        md
+    }
 }
 
 impl From<Evaluation> for crate::zoo::ZooEvaluation {

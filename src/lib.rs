@@ -22,6 +22,7 @@ pub mod policy;
 pub mod rollout;
 pub mod rules;
 pub mod scene;
+pub mod suite;
 pub mod task;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};

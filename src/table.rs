@@ -114,7 +114,7 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
     let run = || -> Result<RowResult> {
         let saved = load_policy(path)?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
-        let spec = |challenge| EvalSpec { task, challenge, level: None, episodes, seed, threads };
+        let spec = |challenge| EvalSpec { task, challenge, distribution: None, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
         let challenge = evaluate(path, saved, &spec(true))?;
         Ok(RowResult::Done { normal: Box::new(normal), challenge: Box::new(challenge), epoch, env_steps })

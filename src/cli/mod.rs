@@ -165,6 +165,10 @@ struct EvalArgs {
     /// A policy file, a run directory (uses best_policy.json, else policy.json) or a zoo name.
     #[arg(long)]
     checkpoint: PathBuf,
+    /// Evaluate on an evaluation suite instead: a built-in name (colour, layout, cross-task) or a
+    /// suite file; writes eval-POLICY-suite-NAME.json and .md (docs/suites.md).
+    #[arg(long, conflicts_with_all = ["env", "challenge", "level", "episodes", "seed"])]
+    suite: Option<String>,
     /// Environment id or task file (default: the one the policy was trained on).
     #[arg(long)]
     env: Option<String>,
@@ -750,7 +754,7 @@ fn table(a: TableArgs) -> Result<()> {
 /// policy's run directory (a run directory, or a policy file or snapshot in
 /// one), else in the current folder; POLICY is the file's stem or zoo name
 /// (`best_policy` for a run directory, whose best policy is evaluated).
-fn eval_out(checkpoint: &Path, task: &str, distribution: &str) -> PathBuf {
+fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
     let is_run = |d: &Path| d.join("config.json").is_file();
     let (run, policy) = if checkpoint.is_dir() {
         let best = checkpoint.join("best_policy.json").exists();
@@ -762,16 +766,59 @@ fn eval_out(checkpoint: &Path, task: &str, distribution: &str) -> PathBuf {
         let run = folder.and_then(|f| [Some(f), f.parent()].into_iter().flatten().find(|d| is_run(d)));
         (run.map(Path::to_path_buf), stem)
     };
-    run.unwrap_or_default().join(format!("eval-{policy}-{task}-{distribution}.json"))
+    run.unwrap_or_default().join(format!("eval-{policy}-{label}.json"))
+}
+
+/// `eval --suite`: every row of the suite, the JSON result and its Markdown beside it.
+fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
+    let suite = crate::suite::load(name)?;
+    let saved = crate::load::load_policy(&a.checkpoint)?;
+    let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let r = crate::evaluate::evaluate_suite(&a.checkpoint, &saved, &suite, threads)?;
+    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &format!("suite-{}", suite.name)));
+    let md = out.with_extension("md");
+    crate::io::write_json(&out, &r)?;
+    crate::io::write_file(&md, r.to_markdown().as_bytes())?;
+    for split in &r.splits {
+        for row in &split.rows {
+            match (&row.evaluation, &row.skipped) {
+                (Some(e), _) => println!(
+                    "{:<6} {} {}: success {:.3} (95% CI {:.3}-{:.3})",
+                    split.name, row.task, row.distribution, e.success_rate, e.ci95.0, e.ci95.1
+                ),
+                (None, reason) => println!(
+                    "{:<6} {} {}: skipped ({})",
+                    split.name,
+                    row.task,
+                    row.distribution,
+                    reason.as_deref().unwrap_or("")
+                ),
+            }
+        }
+    }
+    let show = |v: Option<f64>| v.map_or_else(|| "none".to_owned(), |v| format!("{v:.3}"));
+    println!(
+        "suite {}: score {} (test mean success), gap {} -> {}, {}",
+        suite.name,
+        show(r.score),
+        show(r.gap),
+        out.display(),
+        md.display()
+    );
+    Ok(())
 }
 
 fn eval(a: EvalArgs) -> Result<()> {
+    if let Some(suite) = &a.suite {
+        return eval_suite(&a, suite);
+    }
     let saved = crate::load::load_policy(&a.checkpoint)?;
     let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
     let spec = crate::evaluate::EvalSpec {
         task: &task,
+        distribution: None,
         challenge: a.challenge,
         level: a.level,
         episodes: a.episodes,
@@ -789,7 +836,7 @@ fn eval(a: EvalArgs) -> Result<()> {
         (false, Some(l)) if l < task.max_level() => format!("level{l}"),
         _ => "normal".to_owned(),
     };
-    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &id, &distribution));
+    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &format!("{id}-{distribution}")));
     crate::io::write_json(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",

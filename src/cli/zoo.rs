@@ -132,6 +132,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 let has_challenge = task.distribution("challenge").is_some();
                 for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
                     let spec = crate::evaluate::EvalSpec {
+                        distribution: None,
                         task: &task,
                         challenge,
                         level: None,

@@ -1,0 +1,255 @@
+//! Evaluation suites: frozen, named, versioned splits of what a policy is
+//! evaluated on, as files (`suites/NAME.toml`, built in like the tasks).
+//!
+//! A suite has at least a `train` and a `test` split; each split is a list
+//! of rows (task, distribution, curriculum level, first seed, episodes).
+//! The seeds of the train rows and the test rows never overlap (an overlap
+//! is an error). A suite is identified by its name and the SHA-256 of its
+//! text, which every result carries, so numbers from different versions of
+//! a suite are never mixed. The evaluator is `crate::evaluate::evaluate_suite`.
+//!
+//! ```toml
+//! version = 1
+//! name = "layout"
+//! summary = "Train on the curriculum's last level, test on the challenge layouts (the paper's own test)."
+//!
+//! [[splits.train]]
+//! task = "BlocksChoose-v0"
+//! seed = 3000000
+//! episodes = 200
+//!
+//! [[splits.test]]
+//! task = "BlocksChoose-v0"
+//! distribution = "challenge"
+//! seed = 1000000
+//! episodes = 200
+//! ```
+
+use crate::env::{registry, EnvError};
+use crate::task::Task;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The suite format this version reads.
+pub const SUITE_VERSION: u32 = 1;
+
+/// The built-in suites: (name, text).
+pub const BUILTIN: &[(&str, &str)] = &[
+    ("colour", include_str!("../suites/colour.toml")),
+    ("layout", include_str!("../suites/layout.toml")),
+    ("cross-task", include_str!("../suites/cross-task.toml")),
+];
+
+/// A suite file as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SuiteSpec {
+    version: u32,
+    name: String,
+    summary: String,
+    splits: BTreeMap<String, Vec<RowSpec>>,
+}
+
+/// One row as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RowSpec {
+    task: String,
+    distribution: Option<String>,
+    level: Option<usize>,
+    seed: u64,
+    episodes: usize,
+}
+
+/// A checked suite.
+#[derive(Debug, Clone)]
+pub struct Suite {
+    /// Its name.
+    pub name: String,
+    /// One line on what it measures.
+    pub summary: String,
+    /// SHA-256 of the file's text (hex).
+    pub sha256: String,
+    /// The splits, `train` and `test` first, then any others by name.
+    pub splits: Vec<Split>,
+}
+
+/// A named list of rows.
+#[derive(Debug, Clone)]
+pub struct Split {
+    /// `train`, `test`, or another name.
+    pub name: String,
+    /// Its rows.
+    pub rows: Vec<Row>,
+}
+
+/// What one row evaluates.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// The task.
+    pub task: Task,
+    /// A named distribution of the task (None: the curriculum's, at `level`).
+    pub distribution: Option<String>,
+    /// Curriculum level (None: the maximum).
+    pub level: Option<usize>,
+    /// First seed (episode k plays seed + k).
+    pub seed: u64,
+    /// Episodes.
+    pub episodes: usize,
+}
+
+impl Row {
+    /// "normal", or the distribution's name.
+    pub fn distribution_label(&self) -> &str {
+        self.distribution.as_deref().unwrap_or("normal")
+    }
+}
+
+/// A suite that cannot be read or checked; each names the file and the fix.
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    /// No such built-in suite and no such file.
+    #[error("unknown suite {name:?}: the built-in suites are {}; or give the path of a suite file (.toml)", known.join(", "))]
+    Unknown { name: String, known: Vec<String> },
+    /// The file could not be read.
+    #[error("cannot read suite file {path}")]
+    Read { path: PathBuf, source: std::io::Error },
+    /// Malformed TOML, a missing or unknown key.
+    #[error("suite {origin}: {message}")]
+    Parse { origin: String, message: String },
+    /// A check failed.
+    #[error("suite {origin}: {message}")]
+    Invalid { origin: String, message: String },
+}
+
+/// The built-in suite `name`, or the suite file at that path.
+///
+/// # Errors
+/// [`SuiteError`] naming what is wrong.
+pub fn load(name_or_path: &str) -> Result<Suite, SuiteError> {
+    if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
+        return parse(text, name_or_path, None);
+    }
+    let path = Path::new(name_or_path);
+    if path.extension().is_some_and(|e| e == "toml") || path.exists() {
+        let text =
+            std::fs::read_to_string(path).map_err(|source| SuiteError::Read { path: path.to_owned(), source })?;
+        return parse(&text, &path.display().to_string(), path.parent());
+    }
+    Err(SuiteError::Unknown {
+        name: name_or_path.to_owned(),
+        known: BUILTIN.iter().map(|(n, _)| (*n).to_owned()).collect(),
+    })
+}
+
+/// Parses and checks a suite's text; `origin` names it in errors, `dir` is
+/// where task file paths in it are relative to.
+///
+/// # Errors
+/// [`SuiteError::Parse`] or [`SuiteError::Invalid`].
+pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, SuiteError> {
+    let spec: SuiteSpec =
+        toml::from_str(text).map_err(|e| SuiteError::Parse { origin: origin.to_owned(), message: e.to_string() })?;
+    let invalid = |message: String| SuiteError::Invalid { origin: origin.to_owned(), message };
+    if spec.version != SUITE_VERSION {
+        return Err(invalid(format!("version {} is not one this build reads ({SUITE_VERSION})", spec.version)));
+    }
+    if spec.name.trim().is_empty() {
+        return Err(invalid("the name is empty".into()));
+    }
+    for required in ["train", "test"] {
+        if !spec.splits.contains_key(required) {
+            return Err(invalid(format!("it has no {required} split: add [[splits.{required}]] rows")));
+        }
+    }
+    let mut names: Vec<&String> = spec.splits.keys().collect();
+    names.sort_by_key(|n| (n.as_str() != "train", n.as_str() != "test", n.as_str().to_owned()));
+    let mut splits = Vec::new();
+    for name in names {
+        let rows = &spec.splits[name];
+        if rows.is_empty() {
+            return Err(invalid(format!("split {name} is empty")));
+        }
+        let rows = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| row(r, dir).map_err(|m| invalid(format!("splits.{name}[{i}] ({}): {m}", r.task))))
+            .collect::<Result<Vec<_>, _>>()?;
+        splits.push(Split { name: name.clone(), rows });
+    }
+    check_disjoint(&splits).map_err(invalid)?;
+    Ok(Suite { name: spec.name, summary: spec.summary, sha256: hex(&Sha256::digest(text.as_bytes())), splits })
+}
+
+/// One row compiled and checked.
+fn row(r: &RowSpec, dir: Option<&Path>) -> Result<Row, String> {
+    let id = if registry::is_path(&r.task) {
+        dir.map_or_else(|| PathBuf::from(&r.task), |d| d.join(&r.task)).display().to_string()
+    } else {
+        r.task.clone()
+    };
+    let task = registry::task(&id).map_err(|e: EnvError| e.to_string())?;
+    let distribution = match r.distribution.as_deref() {
+        None | Some("normal") => None,
+        Some(name) => {
+            if task.distribution(name).is_none() {
+                let known: Vec<&str> = task.spec.distributions.keys().map(String::as_str).collect();
+                return Err(format!(
+                    "the task has no distribution {name:?} (it has: normal{}{})",
+                    if known.is_empty() { "" } else { ", " },
+                    known.join(", ")
+                ));
+            }
+            Some(name.to_owned())
+        }
+    };
+    if let Some(l) = r.level {
+        if l > task.max_level() {
+            return Err(format!("level {l} is beyond the task's maximum level {}", task.max_level()));
+        }
+    }
+    crate::limits::EVAL_EPISODES.check_usize(r.episodes).map_err(|e| e.replace("--episodes", "episodes"))?;
+    crate::limits::seed_range(r.seed, r.episodes as u64)?;
+    Ok(Row { task, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
+}
+
+/// The seeds of every train row and every test row must not overlap.
+fn check_disjoint(splits: &[Split]) -> Result<(), String> {
+    let rows =
+        |name: &'static str| splits.iter().filter(move |s| s.name == name).flat_map(|s| s.rows.iter().enumerate());
+    for (i, a) in rows("train") {
+        for (j, b) in rows("test") {
+            let (a_end, b_end) = (a.seed.saturating_add(a.episodes as u64), b.seed.saturating_add(b.episodes as u64));
+            if a.seed < b_end && b.seed < a_end {
+                return Err(format!(
+                    "the seeds of splits.train[{i}] ({}..{a_end}) and splits.test[{j}] ({}..{b_end}) overlap; \
+                     train and test seeds must be disjoint",
+                    a.seed, b.seed
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// What a result records of the suite it came from.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SuiteId {
+    /// Its name.
+    pub name: String,
+    /// SHA-256 of its text.
+    pub sha256: String,
+}
+
+impl Suite {
+    /// Its name and hash, as results record them.
+    pub fn id(&self) -> SuiteId {
+        SuiteId { name: self.name.clone(), sha256: self.sha256.clone() }
+    }
+}
