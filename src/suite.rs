@@ -90,6 +90,8 @@ pub struct Split {
 pub struct Row {
     /// The task.
     pub task: Task,
+    /// The id or resolved file path the task was made from (what `registry::task` takes).
+    pub source: String,
     /// A named distribution of the task (None: the curriculum's, at `level`).
     pub distribution: Option<String>,
     /// Curriculum level (None: the maximum).
@@ -212,7 +214,7 @@ fn row(r: &RowSpec, dir: Option<&Path>) -> Result<Row, String> {
     }
     crate::limits::EVAL_EPISODES.check_usize(r.episodes).map_err(|e| e.replace("--episodes", "episodes"))?;
     crate::limits::seed_range(r.seed, r.episodes as u64)?;
-    Ok(Row { task, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
+    Ok(Row { task, source: id, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
 }
 
 /// The seeds of every train row and every test row must not overlap.

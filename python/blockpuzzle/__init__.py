@@ -12,6 +12,7 @@ Rust (``blockpuzzle._native``).
     obs, info = env.reset(seed=0, options={"level": 3})
     env = blockpuzzle.make_task("my-task.toml")           # a task file
     envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=8, threads=2)   # Rust threads
+    blockpuzzle.evaluate(policy, suite="layout")          # any callable on an evaluation suite
 
 The Fetch assets are read from ``$BLOCKPUZZLE_MODELS_DIR``, else from the ``models/`` folder of the
 checkout the package was built from (filled by ``make setup``).
@@ -23,9 +24,11 @@ import gymnasium
 
 from ._native import env_ids, mujoco_version
 from .env import BlockPuzzleEnv
+from .evaluation import evaluate
 from .vector import BlockPuzzleVectorEnv, make_vec
 
-__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "make_task", "make_vec", "mujoco_version", "NAMESPACE"]
+__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version",
+           "NAMESPACE"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"

@@ -43,6 +43,7 @@ class BlockPuzzleVectorEnv(VectorEnv):
         low, high = single.observation_bounds()
         self.obs_mode = obs_mode
         self.obs_layout = single.obs_layout()
+        self.max_level = single.max_level
         self.task_id = single.id
         single.close()
         self.num_envs = int(num_envs)

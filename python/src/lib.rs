@@ -286,12 +286,45 @@ fn mujoco_version() -> String {
     blockpuzzle::mj::version()
 }
 
+/// An evaluation suite (a built-in name or a suite file), checked: a dict of
+/// `name`, `summary`, `sha256` and `splits`, a list of (split name, rows),
+/// each row a dict of `task` (id or file path), `distribution` (None: the
+/// curriculum's), `level` (None: the last), `seed` and `episodes`.
+#[pyfunction]
+fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
+    let s = blockpuzzle::suite::load(name).map_err(|e| match e {
+        blockpuzzle::suite::SuiteError::Read { .. } => PyFileNotFoundError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("name", &s.name)?;
+    d.set_item("summary", &s.summary)?;
+    d.set_item("sha256", &s.sha256)?;
+    let splits = PyList::empty(py);
+    for split in &s.splits {
+        let rows = PyList::empty(py);
+        for r in &split.rows {
+            let row = PyDict::new(py);
+            row.set_item("task", &r.source)?;
+            row.set_item("distribution", r.distribution.as_deref())?;
+            row.set_item("level", r.level)?;
+            row.set_item("seed", r.seed)?;
+            row.set_item("episodes", r.episodes)?;
+            rows.append(row)?;
+        }
+        splits.append((split.name.as_str(), rows))?;
+    }
+    d.set_item("splits", splits)?;
+    Ok(d)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<vector::VecEnv>()?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
+    m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     Ok(())
 }
