@@ -18,18 +18,22 @@ fn the_spec_describes_each_layout() {
     assert_eq!(flat.names()[ROBOT_OBS + BLOCK_OBS], "object1/pos.x");
     assert_eq!(flat.names().last().unwrap(), "object2/colour.grey");
     let objects = ObsSpec::new(ObsMode::Objects, 3);
-    assert_eq!(objects.dim(), flat.dim() + 3);
+    assert_eq!(objects.object_dim(), BLOCK_OBS + 3);
+    assert_eq!(objects.dim(), ROBOT_OBS + 3 * (BLOCK_OBS + 3) + 3);
+    assert_eq!(objects.names().len(), objects.dim());
+    assert_eq!(objects.names()[ROBOT_OBS + BLOCK_OBS], "object0/size.x");
     assert_eq!(objects.names().last().unwrap(), "mask/2");
     assert_eq!("objects".parse::<ObsMode>(), Ok(ObsMode::Objects));
     let err = "set".parse::<ObsMode>().unwrap_err();
     assert!(err.contains("\"flat\" or \"objects\""), "{err}");
 }
 
-/// The objects mode is the flat observation plus the mask (every slot
-/// present while counts are fixed), step for step; the flat mode is what
-/// every id had (its golden digests are tests/golden.rs).
+/// The objects mode holds the flat observation's robot features and
+/// object rows, each row extended by the object's half extents, and the
+/// mask (every slot present while counts are fixed), step for step; the
+/// flat mode is what every id had (its golden digests are tests/golden.rs).
 #[test]
-fn objects_mode_is_the_flat_observation_plus_its_mask() {
+fn objects_mode_is_the_flat_observation_with_sizes_and_a_mask() {
     let (mut flat, mut objects) = (env("BlocksChoose-v0", ObsMode::Flat), env("BlocksChoose-v0", ObsMode::Objects));
     let spec = objects.obs_spec();
     assert_eq!((spec.mode, spec.max_objects), (ObsMode::Objects, 3));
@@ -42,7 +46,13 @@ fn objects_mode_is_the_flat_observation_plus_its_mask() {
     let mut flat_policy = ScriptedPolicy::for_env(flat.config());
     for _ in 0..30 {
         assert_eq!(b.len(), spec.dim());
-        assert_eq!(&b[..a.len()], &a[..]);
+        assert_eq!(spec.robot(&b), &a[..ROBOT_OBS]);
+        let flat_rows = ObsSpec::flat(3);
+        for (row, flat_row) in spec.objects(&b).zip(flat_rows.objects(&a)) {
+            assert_eq!(&row[..BLOCK_OBS], flat_row);
+            assert_eq!(&row[BLOCK_OBS..], &[0.025f32; 3], "the default half extents");
+            assert_eq!(ObsSpec::colour(row), ObsSpec::colour(flat_row));
+        }
         assert_eq!(spec.mask(&b), Some(&[1.0f32, 1.0, 1.0][..]));
         assert_eq!(spec.objects(&b).count(), 3);
         // The scripted controller reads the blocks through the spec: the same action in either layout.

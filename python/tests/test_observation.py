@@ -14,22 +14,24 @@ def test_objects_mode_is_a_dict_that_gymnasium_accepts():
     env = gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="objects")
     space = env.observation_space
     assert isinstance(space, spaces.Dict) and set(space.spaces) == {"robot", "objects", "mask"}
-    assert space["objects"].shape == (3, 19) and space["robot"].shape == (10,) and space["mask"].shape == (3,)
+    assert space["objects"].shape == (3, 22) and space["robot"].shape == (10,) and space["mask"].shape == (3,)
     layout = env.unwrapped.obs_layout
-    assert layout["mode"] == "objects" and len(layout["names"]) == layout["dim"] == 10 + 3 * 19 + 3
-    assert layout["names"][10] == "object0/pos.x" and layout["names"][-1] == "mask/2"
+    assert layout["mode"] == "objects" and len(layout["names"]) == layout["dim"] == 10 + 3 * 22 + 3
+    assert layout["names"][10] == "object0/pos.x" and layout["names"][29] == "object0/size.x"
+    assert layout["names"][-1] == "mask/2"
     check_env(env.unwrapped, skip_render_check=True)
     env.close()
 
 
-def test_objects_mode_holds_the_flat_observation_and_a_full_mask():
+def test_objects_mode_holds_the_flat_observation_sizes_and_a_full_mask():
     flat = gym.make("BlockPuzzle/BlocksChoose-v0")
     objects = gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="objects")
     a, _ = flat.reset(seed=4)
     b, _ = objects.reset(seed=4)
     for t in range(5):
         assert np.array_equal(b["robot"], a[:10])
-        assert np.array_equal(b["objects"].reshape(-1), a[10:])
+        assert np.array_equal(b["objects"][:, :19].reshape(-1), a[10:])
+        assert np.array_equal(b["objects"][:, 19:], np.full((3, 3), 0.025, np.float32))
         assert np.array_equal(b["mask"], np.ones(3, np.float32))
         action = np.random.default_rng(t).uniform(-1, 1, 4).astype(np.float32)
         a, *_ = flat.step(action)
@@ -39,14 +41,14 @@ def test_objects_mode_holds_the_flat_observation_and_a_full_mask():
 def test_vector_objects_mode_batches_the_dict():
     envs = blockpuzzle.make_vec("BlocksChoose-v0", num_envs=3, threads=2, obs_mode="objects")
     flat = blockpuzzle.make_vec("BlocksChoose-v0", num_envs=3, threads=2)
-    assert envs.single_observation_space["objects"].shape == (3, 19)
-    assert envs.observation_space["objects"].shape == (3, 3, 19)
+    assert envs.single_observation_space["objects"].shape == (3, 22)
+    assert envs.observation_space["objects"].shape == (3, 3, 22)
     obs, _ = envs.reset(seed=1)
     ref, _ = flat.reset(seed=1)
     actions = np.zeros((3, 4), np.float32)
     for _ in range(3):
-        assert obs["objects"].shape == (3, 3, 19) and obs["mask"].shape == (3, 3)
-        assert np.array_equal(obs["objects"].reshape(3, -1), ref[:, 10:])
+        assert obs["objects"].shape == (3, 3, 22) and obs["mask"].shape == (3, 3)
+        assert np.array_equal(obs["objects"][:, :, :19].reshape(3, -1), ref[:, 10:])
         assert envs.observation_space.contains(obs)
         obs, *_ = envs.step(actions)
         ref, *_ = flat.step(actions)

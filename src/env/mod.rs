@@ -145,6 +145,8 @@ pub struct BlockEnv {
     touching: Touching,
     step_touching: Touching,
     obs: Vec<f32>,
+    /// Each block's half extents (the `objects` observation holds them).
+    sizes: Vec<[f64; 3]>,
     physics: std::time::Duration,
 }
 
@@ -189,6 +191,7 @@ impl BlockEnv {
 
         let n = scene.objects.len();
         let obs = vec![0.0; config.obs_spec().dim()];
+        let config_sizes = config.task.objects().map(|o| o.half_extents).collect();
         Ok(Self {
             objects: scene.objects.clone(),
             colours: config.task.colours(),
@@ -208,6 +211,7 @@ impl BlockEnv {
             touching: Touching::new(n),
             step_touching: Touching::new(n),
             obs,
+            sizes: config_sizes,
             physics: std::time::Duration::ZERO,
         })
     }
@@ -227,6 +231,12 @@ impl BlockEnv {
     /// What the observation holds ([`ObsSpec`]).
     pub fn obs_spec(&self) -> ObsSpec {
         self.config.obs_spec()
+    }
+    /// Writes the current observation into `self.obs`.
+    fn write_obs(&mut self) {
+        let (spec, dt) = (self.config.obs_spec(), self.dt());
+        let ctx = obs::ObsContext { spec: &spec, colours: &self.colours, sizes: &self.sizes };
+        obs::write(&ctx, &self.scene, &self.data, dt, &mut self.obs);
     }
     /// The observation as one box of [`ObsSpec::dim`] values: unbounded,
     /// the `objects` mode's mask in [0, 1].
@@ -383,7 +393,7 @@ impl BlockEnv {
         self.scan_contacts();
         self.steps = 0;
         self.phase = Phase::Running;
-        obs::write(&self.config.obs_spec(), &self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+        self.write_obs();
         Ok(self.obs.clone())
     }
 
@@ -458,7 +468,7 @@ impl BlockEnv {
             None => -1.0,
         };
         if !unstable {
-            obs::write(&self.config.obs_spec(), &self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+            self.write_obs();
         } // else: keep the last finite observation; NaN never reaches the agent
         if terminated || truncated {
             self.phase = Phase::Over;

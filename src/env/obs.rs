@@ -6,7 +6,8 @@
 //! order (19): position (3), position relative to the grip (3), orientation
 //! as Euler angles (3), linear velocity relative to the grip × dt (3),
 //! angular velocity × dt (3), colour one-hot (red, blue, green, grey) (4).
-//! In the `objects` mode a mask follows (1 per object slot present).
+//! In the `objects` mode each object row also holds the object's half
+//! extents (3), and a mask follows the rows (1 per object slot present).
 
 use crate::math::mat2euler;
 use crate::mj::{Data, ObjType};
@@ -57,7 +58,10 @@ pub const OBJECT_FEATURES: [&str; 19] = [
 ];
 
 /// Where an object row's colour one-hot (red, blue, green, grey) begins.
-pub const COLOUR_FEATURE: usize = BLOCK_OBS - 4;
+pub const COLOUR_FEATURE: usize = 15;
+
+/// The features an object row has in the `objects` mode after [`OBJECT_FEATURES`]: its half extents.
+pub const SIZE_FEATURES: [&str; 3] = ["size.x", "size.y", "size.z"];
 
 /// Observation size for `n_blocks` blocks (the flat mode).
 pub const fn obs_dim(n_blocks: usize) -> usize {
@@ -118,15 +122,15 @@ impl ObsSpec {
         ROBOT_OBS
     }
 
-    /// Features per object.
+    /// Features per object: [`OBJECT_FEATURES`], and in the `objects` mode [`SIZE_FEATURES`].
     pub fn object_dim(&self) -> usize {
-        BLOCK_OBS
+        BLOCK_OBS + if self.mode == ObsMode::Objects { SIZE_FEATURES.len() } else { 0 }
     }
 
     /// The observation vector's length.
     pub fn dim(&self) -> usize {
         let mask = if self.mode == ObsMode::Objects { self.max_objects } else { 0 };
-        ROBOT_OBS + BLOCK_OBS * self.max_objects + mask
+        ROBOT_OBS + self.object_dim() * self.max_objects + mask
     }
 
     /// The robot features of `obs`.
@@ -136,18 +140,19 @@ impl ObsSpec {
 
     /// The object rows of `obs`, one slice of [`ObsSpec::object_dim`] values per slot.
     pub fn objects<'a>(&self, obs: &'a [f32]) -> std::slice::ChunksExact<'a, f32> {
-        let end = (ROBOT_OBS + BLOCK_OBS * self.max_objects).min(obs.len());
-        obs[ROBOT_OBS.min(end)..end].chunks_exact(BLOCK_OBS)
+        let end = (ROBOT_OBS + self.object_dim() * self.max_objects).min(obs.len());
+        obs[ROBOT_OBS.min(end)..end].chunks_exact(self.object_dim())
     }
 
     /// The mask of `obs` (1 for a slot holding an object), in the `objects` mode.
     pub fn mask<'a>(&self, obs: &'a [f32]) -> Option<&'a [f32]> {
-        (self.mode == ObsMode::Objects).then(|| &obs[(ROBOT_OBS + BLOCK_OBS * self.max_objects).min(obs.len())..])
+        (self.mode == ObsMode::Objects)
+            .then(|| &obs[(ROBOT_OBS + self.object_dim() * self.max_objects).min(obs.len())..])
     }
 
     /// The colour one-hot (red, blue, green, grey) of an object row.
     pub fn colour(row: &[f32]) -> &[f32] {
-        &row[COLOUR_FEATURE.min(row.len())..]
+        &row[COLOUR_FEATURE.min(row.len())..(COLOUR_FEATURE + 4).min(row.len())]
     }
 
     /// The observation with the object rows `keep` refuses left out, in the
@@ -164,8 +169,9 @@ impl ObsSpec {
     /// `object0/pos.x`, …, and in the `objects` mode `mask/0`, ….
     pub fn names(&self) -> Vec<String> {
         let mut names: Vec<String> = ROBOT_FEATURES.iter().map(|f| format!("robot/{f}")).collect();
+        let size: &[&str] = if self.mode == ObsMode::Objects { &SIZE_FEATURES } else { &[] };
         for k in 0..self.max_objects {
-            names.extend(OBJECT_FEATURES.iter().map(|f| format!("object{k}/{f}")));
+            names.extend(OBJECT_FEATURES.iter().chain(size).map(|f| format!("object{k}/{f}")));
         }
         if self.mode == ObsMode::Objects {
             names.extend((0..self.max_objects).map(|k| format!("mask/{k}")));
@@ -179,9 +185,20 @@ fn site_velocity(data: &Data, site: usize) -> [f64; 6] {
     data.object_velocity(ObjType::Site, site, false).unwrap_or([0.0; 6])
 }
 
-/// Writes the observation of `data` into `out` (resized as needed) in the
-/// layout of `spec`, with `colours` the blocks' colours this episode.
-pub fn write(spec: &ObsSpec, scene: &Scene, data: &Data, dt: f64, colours: &[Colour], out: &mut Vec<f32>) {
+/// What [`write`] reads besides the simulation: the layout, and the blocks'
+/// colours this episode and half extents.
+pub struct ObsContext<'a> {
+    /// The layout.
+    pub spec: &'a ObsSpec,
+    /// Each block's colour this episode.
+    pub colours: &'a [Colour],
+    /// Each block's half extents.
+    pub sizes: &'a [[f64; 3]],
+}
+
+/// Writes the observation of `data` into `out` (resized as needed).
+pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Vec<f32>) {
+    let (spec, colours) = (ctx.spec, ctx.colours);
     out.clear();
     let grip = data.site_xpos()[scene.grip_site];
     let gv = site_velocity(data, scene.grip_site);
@@ -191,7 +208,7 @@ pub fn write(spec: &ObsSpec, scene: &Scene, data: &Data, dt: f64, colours: &[Col
     out.extend(scene.finger_qpos.iter().map(|&a| q[a] as f32));
     out.extend(grip_velp.iter().map(|&x| x as f32));
     out.extend(scene.finger_dof.iter().map(|&a| (v[a] * dt) as f32));
-    for (block, colour) in scene.blocks.iter().zip(colours) {
+    for (k, (block, colour)) in scene.blocks.iter().zip(colours).enumerate() {
         let pos = data.site_xpos()[block.site];
         let euler = mat2euler(&data.site_xmat()[block.site]);
         let bv = site_velocity(data, block.site);
@@ -201,6 +218,9 @@ pub fn write(spec: &ObsSpec, scene: &Scene, data: &Data, dt: f64, colours: &[Col
         out.extend((0..3).map(|k| (bv[3 + k] * dt - grip_velp[k]) as f32));
         out.extend((0..3).map(|k| (bv[k] * dt) as f32));
         out.extend(colour.one_hot());
+        if spec.mode == ObsMode::Objects {
+            out.extend(ctx.sizes.get(k).map_or([0.0; 3], |s| s.map(|v| v as f32)));
+        }
     }
     if spec.mode == ObsMode::Objects {
         // Every slot holds an object until tasks have variable counts.

@@ -34,7 +34,7 @@ impl BlockEnv {
                 self.stats.resets += 1;
                 self.steps = 0;
                 self.phase = Phase::Running;
-                obs::write(&self.config.obs_spec(), &self.scene, &self.data, self.dt(), &self.colours, &mut self.obs);
+                self.write_obs();
                 let info = self.info(false, false, self.touching.pairs());
                 return Ok((self.obs.clone(), info));
             };
