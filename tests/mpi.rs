@@ -82,6 +82,23 @@ fn two_ranks_of_one_worker_learn_exactly_what_one_process_of_two_workers_learns(
     assert_eq!((s.ranks, s.rank, s.epoch), (2, 1, 2));
 }
 
+/// SAC, added through the algorithm trait, splits over ranks the same way:
+/// its per-shard noise streams, temperature and twin critics included.
+#[test]
+fn sac_over_two_ranks_learns_exactly_what_one_process_of_two_workers_learns() {
+    let dir = tempfile::tempdir().unwrap();
+    let (threads, ranks) = (dir.path().join("threads"), dir.path().join("ranks"));
+    let sac = |run: &Path, workers| {
+        let mut a = args(run, workers, 2);
+        let i = a.iter().position(|x| x == "--td3").unwrap();
+        a.splice(i - 1..=i, ["sac".to_owned()]);
+        a
+    };
+    ok(Command::new(BP).args(sac(&threads, 2)).output().unwrap());
+    ok(mpirun(2).args(sac(&ranks, 1)).output().unwrap());
+    assert_same_run(&threads, &ranks, "SAC, 2 ranks × 1 worker");
+}
+
 /// With three or four shards the order of the gradient sum matters in
 /// floating point: it is the global shard order for any split into ranks.
 #[test]
