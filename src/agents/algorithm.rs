@@ -65,6 +65,11 @@ impl Algo {
     /// PGGD (the paper's; with `--expert`, AggreVaTeD).
     pub const PGGD: Self = Self(&ALGORITHMS[1]);
 
+    /// The algorithm of a registration (an algorithm's file names itself this way).
+    pub const fn of(registration: &'static Registration) -> Self {
+        Self(registration)
+    }
+
     /// The registered algorithm called `name`.
     ///
     /// # Errors
@@ -126,6 +131,8 @@ impl Default for Algo {
     }
 }
 
+/// Two algorithms are the same when their names are (a registration's
+/// address is not unique: `const` items may be copied).
 impl PartialEq for Algo {
     fn eq(&self, other: &Self) -> bool {
         self.0.name == other.0.name
@@ -323,5 +330,6 @@ mod tests {
         let e = Algo::named("ppo").unwrap_err();
         assert!(e.contains("unknown algorithm \"ppo\"") && e.contains("ddpg, pggd"), "{e}");
         assert_eq!((Algo::DDPG.name(), Algo::PGGD.name()), ("ddpg", "pggd"));
+        assert_eq!(Algo::of(&super::super::sac::REGISTRATION), Algo::named("sac").unwrap());
     }
 }

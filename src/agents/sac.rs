@@ -202,7 +202,7 @@ impl Sac {
 
 impl Algorithm for Sac {
     fn algo(&self) -> Algo {
-        Algo::named(REGISTRATION.name).unwrap_or_default()
+        Algo::of(&REGISTRATION)
     }
 
     fn norm(&self) -> &Normalizer {
