@@ -147,8 +147,9 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     let env = make_env(spec)?;
     let policy = trained_policy(path, saved, &env)?;
-    // One environment per thread; environment t plays episodes t, t + threads, ….
-    let threads = spec.threads.clamp(1, spec.episodes);
+    // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
+    // core count, the CLI's default, may pass the vector engine's thread bound: use the bound.)
+    let threads = spec.threads.clamp(1, spec.episodes).min(crate::limits::THREADS.max as usize);
     let mut envs = VectorEnv::from_envs((0..threads).map(|_| make_env(spec)).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
