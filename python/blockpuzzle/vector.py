@@ -36,7 +36,7 @@ class BlockPuzzleVectorEnv(VectorEnv):
     def __init__(self, task: str, num_envs: int, threads: int | None = None, copy: bool = True,
                  obs_mode: str = "flat"):
         if threads is None:
-            threads = min(num_envs, os.cpu_count() or 1)
+            threads = min(num_envs, os.cpu_count() or 1, 256)  # 256: the engine's thread bound
         observation.check_mode(obs_mode)
         self._native = _NativeVecEnv(str(task), int(num_envs), int(threads), obs_mode)
         single = _NativeEnv(str(task), 1, 1, obs_mode)
