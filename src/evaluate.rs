@@ -6,6 +6,7 @@
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvConfig, VectorEnv, ACTION_DIM};
+pub use crate::outcome::wilson95;
 use crate::outcome::{Outcome, Outcomes};
 use crate::policy::Policy;
 use crate::rollout::run_episode;
@@ -64,19 +65,6 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
         saved.env_id,
         env.id()
     )
-}
-
-/// Wilson score interval for a binomial proportion at 95%.
-pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, 1.0);
-    }
-    let (z, nf) = (1.959_963_984_540_054, n as f64);
-    let p = successes as f64 / nf;
-    let denom = 1.0 + z * z / nf;
-    let centre = (p + z * z / (2.0 * nf)) / denom;
-    let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
-    ((centre - half).max(0.0), (centre + half).min(1.0))
 }
 
 /// An evaluation's outcome.
@@ -143,14 +131,21 @@ fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    crate::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(anyhow::Error::msg)?;
-    crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     let env = make_env(spec)?;
     let policy = trained_policy(path, saved, &env)?;
+    play(spec, env, policy)
+}
+
+/// Plays `spec.episodes` episodes of `policy`, which fits `env` (made by
+/// [`make_env`] from `spec`; it becomes the first of the threads' environments).
+fn play(spec: &EvalSpec, env: BlockEnv, policy: Trained) -> Result<Evaluation> {
+    crate::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(anyhow::Error::msg)?;
+    crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
     // core count, the CLI's default, may pass the vector engine's thread bound: use the bound.)
     let threads = spec.threads.clamp(1, spec.episodes).min(crate::limits::THREADS.max as usize);
-    let mut envs = VectorEnv::from_envs((0..threads).map(|_| make_env(spec)).collect::<Result<_>>()?, threads)?;
+    let more = (1..threads).map(|_| make_env(spec));
+    let mut envs = VectorEnv::from_envs(std::iter::once(Ok(env)).chain(more).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
     // Each thread's outcome counts and the summed length of its successful episodes.
@@ -177,7 +172,7 @@ pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Eval
     Ok(Evaluation {
         env: spec.task.id().to_owned(),
         challenge: spec.challenge,
-        level: env.level(),
+        level: envs.envs()[0].level(),
         episodes: spec.episodes,
         seed: spec.seed,
         successes,
@@ -245,7 +240,7 @@ pub struct SuiteResult {
 /// with grey blocks removed) is skipped with the reason.
 ///
 /// # Errors
-/// Environment failures.
+/// Environment failures (a row whose environment cannot be made is one).
 pub fn evaluate_suite(
     path: &Path,
     saved: &SavedPolicy,
@@ -265,10 +260,11 @@ pub fn evaluate_suite(
                 seed: row.seed,
                 threads,
             };
-            let fits = make_env(&spec).and_then(|env| trained_policy(path, saved.clone(), &env).map(|_| ()));
-            let (evaluation, skipped) = match fits {
+            // An environment error fails the suite; only a policy that does not fit skips the row.
+            let env = make_env(&spec)?;
+            let (evaluation, skipped) = match trained_policy(path, saved.clone(), &env) {
                 Err(e) => (None, Some(format!("{e:#}"))),
-                Ok(()) => (Some(evaluate(path, saved.clone(), &spec)?), None),
+                Ok(policy) => (Some(play(&spec, env, policy)?), None),
             };
             rows.push(RowResult {
                 task: row.task.id().to_owned(),
@@ -360,22 +356,5 @@ impl From<Evaluation> for crate::zoo::ZooEvaluation {
             ci95: e.ci95,
             outcomes: Some(e.outcomes),
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::wilson95;
-
-    #[test]
-    fn wilson_interval_matches_known_values() {
-        let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
-        let (lo, hi) = wilson95(50, 100);
-        assert!(close(lo, 0.4038) && close(hi, 0.5962), "{lo} {hi}");
-        let (lo, hi) = wilson95(0, 10);
-        assert!(close(lo, 0.0) && close(hi, 0.2775), "{lo} {hi}");
-        let (lo, hi) = wilson95(10, 10);
-        assert!(close(lo, 0.7225) && close(hi, 1.0), "{lo} {hi}");
-        assert_eq!(wilson95(0, 0), (0.0, 1.0));
     }
 }

@@ -194,6 +194,20 @@ impl<'a> FromIterator<&'a EpisodeRecord> for Outcomes {
     }
 }
 
+/// Wilson score interval for a binomial proportion at 95% (success rates of `eval`, suites and
+/// Python's `blockpuzzle.evaluate`).
+pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    let (z, nf) = (1.959_963_984_540_054, n as f64);
+    let p = successes as f64 / nf;
+    let denom = 1.0 + z * z / nf;
+    let centre = (p + z * z / (2.0 * nf)) / denom;
+    let half = z * (p * (1.0 - p) / nf + z * z / (4.0 * nf * nf)).sqrt() / denom;
+    ((centre - half).max(0.0), (centre + half).min(1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -310,5 +324,17 @@ mod tests {
     fn summary_keeps_the_common_classes_and_drops_empty_rare_ones() {
         let t = Outcomes { success: 3, timeout: 1, ..Outcomes::default() };
         assert_eq!(t.summary(), "failure 0.000, no_contact 0.000, timeout 0.250");
+    }
+
+    #[test]
+    fn wilson_interval_matches_known_values() {
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-3;
+        let (lo, hi) = wilson95(50, 100);
+        assert!(close(lo, 0.4038) && close(hi, 0.5962), "{lo} {hi}");
+        let (lo, hi) = wilson95(0, 10);
+        assert!(close(lo, 0.0) && close(hi, 0.2775), "{lo} {hi}");
+        let (lo, hi) = wilson95(10, 10);
+        assert!(close(lo, 0.7225) && close(hi, 1.0), "{lo} {hi}");
+        assert_eq!(wilson95(0, 0), (0.0, 1.0));
     }
 }

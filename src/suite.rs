@@ -212,7 +212,7 @@ fn row(r: &RowSpec, dir: Option<&Path>) -> Result<Row, String> {
             return Err(format!("level {l} is beyond the task's maximum level {}", task.max_level()));
         }
     }
-    crate::limits::EVAL_EPISODES.check_usize(r.episodes).map_err(|e| e.replace("--episodes", "episodes"))?;
+    crate::limits::Bound { name: "episodes", ..crate::limits::EVAL_EPISODES }.check_usize(r.episodes)?;
     crate::limits::seed_range(r.seed, r.episodes as u64)?;
     Ok(Row { task, source: id, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
 }

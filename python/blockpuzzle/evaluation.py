@@ -6,25 +6,11 @@ gap (train minus test)."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import _native
+from ._native import wilson95  # the CLI's interval, computed in Rust
 from .vector import make_vec
-
-_Z = 1.959963984540054
-
-
-def wilson95(successes: int, n: int) -> tuple[float, float]:
-    """Wilson score interval for a binomial proportion at 95% (the CLI's)."""
-    if n == 0:
-        return (0.0, 1.0)
-    p = successes / n
-    denom = 1 + _Z * _Z / n
-    centre = (p + _Z * _Z / (2 * n)) / denom
-    half = _Z * math.sqrt(p * (1 - p) / n + _Z * _Z / (4 * n * n)) / denom
-    return (max(centre - half, 0.0), min(centre + half, 1.0))
 
 
 def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, obs_mode: str = "flat") -> dict:

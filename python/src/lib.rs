@@ -318,6 +318,12 @@ fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
     Ok(d)
 }
 
+/// The Wilson score interval at 95% of `successes` out of `n` (the CLI's, for `evaluate`).
+#[pyfunction]
+fn wilson95(successes: usize, n: usize) -> (f64, f64) {
+    blockpuzzle::outcome::wilson95(successes, n)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
@@ -325,6 +331,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(suite, m)?)?;
+    m.add_function(wrap_pyfunction!(wilson95, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     Ok(())
 }
