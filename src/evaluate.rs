@@ -8,7 +8,7 @@ use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvConfig, VectorEnv, ACTION_DIM};
 pub use crate::outcome::wilson95;
 use crate::outcome::{Outcome, Outcomes};
-use crate::policy::Policy;
+use crate::policy::{ObsHashPolicy, Policy, ScriptedPolicy};
 use crate::rollout::run_episode;
 use crate::saved::SavedPolicy;
 use crate::task::Task;
@@ -41,6 +41,74 @@ impl Policy for Trained {
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
         let a = if self.grey_blind { self.policy.act(&without_grey(obs)) } else { self.policy.act(obs) };
         std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+    }
+}
+
+/// A policy that needs no training, evaluated as a reference point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Baseline {
+    /// The scripted controller of each task (`src/policy.rs`).
+    Scripted,
+    /// Pseudo-random actions from a hash of the observation ([`ObsHashPolicy`]), the same in Python.
+    ObsHash,
+}
+
+impl Baseline {
+    /// Its name in outputs: `scripted`, `obs-hash`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Baseline::Scripted => "scripted",
+            Baseline::ObsHash => "obs-hash",
+        }
+    }
+}
+
+/// What is evaluated: a saved policy (with where it was loaded from), or a baseline.
+#[derive(Debug, Clone, Copy)]
+pub enum Subject<'a> {
+    /// A trained policy.
+    Saved(&'a Path, &'a SavedPolicy),
+    /// A policy that needs no training.
+    Baseline(Baseline),
+}
+
+/// What acts in the episodes of one evaluation.
+#[derive(Debug, Clone)]
+enum Actor {
+    Trained(Trained),
+    Scripted(ScriptedPolicy),
+    ObsHash,
+}
+
+impl Actor {
+    /// `subject` acting in `env`: a trained policy fitted to its observation, or a baseline made for it.
+    fn fit(subject: Subject, env: &BlockEnv) -> Result<Actor> {
+        Ok(match subject {
+            Subject::Saved(path, saved) => Actor::Trained(trained_policy(path, saved.clone(), env)?),
+            Subject::Baseline(Baseline::Scripted) => Actor::Scripted(ScriptedPolicy::for_env(env.config())),
+            Subject::Baseline(Baseline::ObsHash) => Actor::ObsHash,
+        })
+    }
+
+    fn grey_blind(&self) -> bool {
+        matches!(self, Actor::Trained(t) if t.grey_blind())
+    }
+}
+
+impl Policy for Actor {
+    fn reset(&mut self) {
+        match self {
+            Actor::Trained(p) => p.reset(),
+            Actor::Scripted(p) => p.reset(),
+            Actor::ObsHash => {}
+        }
+    }
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        match self {
+            Actor::Trained(p) => p.act(obs),
+            Actor::Scripted(p) => p.act(obs),
+            Actor::ObsHash => ObsHashPolicy::action(obs),
+        }
     }
 }
 
@@ -132,13 +200,13 @@ fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
     let env = make_env(spec)?;
-    let policy = trained_policy(path, saved, &env)?;
+    let policy = Actor::Trained(trained_policy(path, saved, &env)?);
     play(spec, env, policy)
 }
 
 /// Plays `spec.episodes` episodes of `policy`, which fits `env` (made by
 /// [`make_env`] from `spec`; it becomes the first of the threads' environments).
-fn play(spec: &EvalSpec, env: BlockEnv, policy: Trained) -> Result<Evaluation> {
+fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
     crate::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(anyhow::Error::msg)?;
     crate::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
     // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
@@ -221,12 +289,14 @@ pub struct SuiteResult {
     pub suite: crate::suite::SuiteId,
     /// What it measures.
     pub summary: String,
-    /// The policy as given.
+    /// The policy as given (a baseline: `baseline:NAME`).
     pub policy: String,
-    /// Its epoch of training.
-    pub policy_epoch: usize,
-    /// The task it was trained on.
-    pub policy_task: String,
+    /// Its epoch of training (none for a baseline).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub policy_epoch: Option<usize>,
+    /// The task it was trained on (none for a baseline).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub policy_task: Option<String>,
     /// Per split.
     pub splits: Vec<SplitResult>,
     /// The suite's score: the test split's mean success.
@@ -241,12 +311,7 @@ pub struct SuiteResult {
 ///
 /// # Errors
 /// Environment failures (a row whose environment cannot be made is one).
-pub fn evaluate_suite(
-    path: &Path,
-    saved: &SavedPolicy,
-    suite: &crate::suite::Suite,
-    threads: usize,
-) -> Result<SuiteResult> {
+pub fn evaluate_suite(subject: Subject, suite: &crate::suite::Suite, threads: usize) -> Result<SuiteResult> {
     let mut splits = Vec::new();
     for split in &suite.splits {
         let mut rows = Vec::new();
@@ -262,7 +327,7 @@ pub fn evaluate_suite(
             };
             // An environment error fails the suite; only a policy that does not fit skips the row.
             let env = make_env(&spec)?;
-            let (evaluation, skipped) = match trained_policy(path, saved.clone(), &env) {
+            let (evaluation, skipped) = match Actor::fit(subject, &env) {
                 Err(e) => (None, Some(format!("{e:#}"))),
                 Ok(policy) => (Some(play(&spec, env, policy)?), None),
             };
@@ -285,9 +350,18 @@ pub fn evaluate_suite(
     Ok(SuiteResult {
         suite: suite.id(),
         summary: suite.summary.clone(),
-        policy: path.display().to_string(),
-        policy_epoch: saved.epoch,
-        policy_task: saved.env_id.clone(),
+        policy: match subject {
+            Subject::Saved(path, _) => path.display().to_string(),
+            Subject::Baseline(b) => format!("baseline:{}", b.name()),
+        },
+        policy_epoch: match subject {
+            Subject::Saved(_, saved) => Some(saved.epoch),
+            Subject::Baseline(_) => None,
+        },
+        policy_task: match subject {
+            Subject::Saved(_, saved) => Some(saved.env_id.clone()),
+            Subject::Baseline(_) => None,
+        },
         splits,
         score: test,
         gap: train.zip(test).map(|(a, b)| a - b),
@@ -298,9 +372,13 @@ impl SuiteResult {
     /// The result as a Markdown section: a table per split, the score and the gap.
     pub fn to_markdown(&self) -> String {
         let pct = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.3}"));
+        let trained = match (&self.policy_task, self.policy_epoch) {
+            (Some(task), Some(epoch)) => format!("Policy trained on {task} (epoch {epoch}); suite"),
+            _ => "A baseline (no training); suite".to_owned(),
+        };
         let mut md = format!(
-            "### {} on suite `{}`\n\n{}\n\nPolicy trained on {} (epoch {}); suite sha256 `{}`.\n\n",
-            self.policy, self.suite.name, self.summary, self.policy_task, self.policy_epoch, self.suite.sha256
+            "### {} on suite `{}`\n\n{}\n\n{trained} sha256 `{}`.\n\n",
+            self.policy, self.suite.name, self.summary, self.suite.sha256
         );
         for split in &self.splits {
             md += &format!("**{}** (mean success {})\n\n", split.name, pct(split.mean_success));

@@ -234,7 +234,7 @@ mod tests {
             seed: 0,
             level: 0,
             challenge: false,
-            objects: objects.iter().map(|&(n, c)| ObjectRecord { name: n.into(), colour: c }).collect(),
+            objects: objects.iter().map(|&(n, c)| ObjectRecord { name: n.into(), colour: c, absent: false }).collect(),
             initial: state(),
             steps: touching
                 .iter()
@@ -272,10 +272,10 @@ mod tests {
         // A floor is a surface like the table, not a block: blue falling onto a grey
         // floor is not meeting grey, and a gripper on the floor has reached nothing.
         let mut fell = episode(&[&[(0, 2)], &[(2, 5)]]);
-        fell.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey });
+        fell.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey, absent: false });
         assert_eq!(Outcome::of(&fell), Outcome::Timeout);
         let mut floor_only = episode(&[&[(0, 5), (0, 1)]]);
-        floor_only.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey });
+        floor_only.objects.push(ObjectRecord { name: "floor".into(), colour: Colour::Grey, absent: false });
         assert_eq!(Outcome::of(&floor_only), Outcome::NoContact);
 
         let mut won = grey.clone();

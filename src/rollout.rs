@@ -36,6 +36,9 @@ pub struct ObjectRecord {
     pub name: String,
     /// Its colour.
     pub colour: Colour,
+    /// Left out of this episode (a copy beyond the count drawn).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub absent: bool,
 }
 
 /// Pose of a block.
@@ -180,7 +183,8 @@ pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Re
                 objects: env
                     .objects()
                     .iter()
-                    .map(|o| ObjectRecord { name: o.name.clone(), colour: o.colour })
+                    .zip(env.absent_objects())
+                    .map(|(o, absent)| ObjectRecord { name: o.name.clone(), colour: o.colour, absent })
                     .collect(),
                 initial: state(env),
                 steps: Vec::new(),

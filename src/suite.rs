@@ -40,6 +40,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("colour", include_str!("../suites/colour.toml")),
     ("layout", include_str!("../suites/layout.toml")),
     ("cross-task", include_str!("../suites/cross-task.toml")),
+    ("count", include_str!("../suites/count.toml")),
+    ("obstacles", include_str!("../suites/obstacles.toml")),
 ];
 
 /// A suite file as written.

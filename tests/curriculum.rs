@@ -31,7 +31,9 @@ fn param(task: &Task, level: usize, name: &str) -> f64 {
 }
 
 fn draw(task: &Task, level: usize, distribution: Option<usize>, seed: u64) -> Vec<[f64; 2]> {
-    let ps: Vec<Placed> = task.sample(level, distribution, GRIP, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap();
+    let ps: Vec<Option<Placed>> = task.sample(level, distribution, GRIP, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap();
+    // These tasks have no counts: every object is placed.
+    let ps: Vec<Placed> = ps.into_iter().map(|p| p.expect("no absent objects")).collect();
     assert!(ps.iter().all(|p| p.z.is_none() && p.yaw.is_none()), "built-in blocks rest on the table unturned");
     ps.iter().map(|p| p.xy).collect()
 }

@@ -17,6 +17,9 @@ fn registry_lists_and_builds_every_id() {
         ("ReachAvoid-v0", 48, 29, 5),
         ("ToppleTower-v0", 67, 36, 3),
         ("BlocksStack-v0", 67, 36, 4),
+        ("BlocksChooseN-v0", 124, 57, 10),
+        ("BlocksAvoid-v0", 105, 50, 5),
+        ("BlocksGather-v0", 86, 43, 4),
     ];
     assert_eq!(ids(), expected.iter().map(|e| e.0).collect::<Vec<_>>());
     for (id, dim, nq, max_level) in expected {

@@ -132,3 +132,54 @@ fn eval_suite_writes_json_and_markdown_and_skips_rows_that_do_not_fit() {
         "{md}"
     );
 }
+
+#[cfg(feature = "train")]
+#[test]
+fn baselines_run_on_every_row_and_need_a_suite() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("counts.toml");
+    let text = r#"
+version = 1
+name = "counts"
+summary = "Tasks with object counts."
+[[splits.train]]
+task = "BlocksChooseN-v0"
+distribution = "few"
+seed = 3000000
+episodes = 6
+[[splits.test]]
+task = "BlocksAvoid-v0"
+seed = 1000000
+episodes = 6
+"#;
+    std::fs::write(&file, text).unwrap();
+    let run = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let o = run(&["eval", "--suite", file.to_str().unwrap(), "--baseline", "scripted", "--threads", "2"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.path().join("eval-scripted-suite-counts.json");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(r["policy"], "baseline:scripted");
+    assert!(r["policy_epoch"].is_null() && r["policy_task"].is_null());
+    // A baseline fits every task: no row skipped, and the scripted controller succeeds.
+    for split in r["splits"].as_array().unwrap() {
+        let row = &split["rows"][0];
+        assert!(row["skipped"].is_null(), "{row}");
+        assert!(row["evaluation"]["success_rate"].as_f64().unwrap() >= 0.5, "{row}");
+    }
+    let md = std::fs::read_to_string(out.with_extension("md")).unwrap();
+    assert!(md.contains("A baseline (no training)"), "{md}");
+    // --baseline needs --suite, and cannot be given with --checkpoint; neither is an error naming both.
+    let e = run(&["eval", "--baseline", "scripted"]);
+    assert!(!e.status.success() && String::from_utf8_lossy(&e.stderr).contains("--suite"));
+    let e = run(&["eval", "--suite", "count", "--baseline", "scripted", "--checkpoint", "x"]);
+    assert!(!e.status.success() && String::from_utf8_lossy(&e.stderr).contains("cannot be used with"));
+    let e = run(&["eval", "--suite", "count"]);
+    let stderr = String::from_utf8_lossy(&e.stderr);
+    assert!(!e.status.success() && stderr.contains("--checkpoint") && stderr.contains("--baseline"), "{stderr}");
+}

@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import gymnasium
 
+from . import policies
 from ._native import env_ids, mujoco_version
 from .env import BlockPuzzleEnv
 from .evaluation import evaluate
 from .vector import BlockPuzzleVectorEnv, make_vec
 
 __all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version",
-           "NAMESPACE"]
+           "policies", "NAMESPACE"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"

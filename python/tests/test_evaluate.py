@@ -1,5 +1,10 @@
 """blockpuzzle.evaluate: a callable policy on an evaluation suite, with the CLI's definitions."""
 
+import json
+import os
+import subprocess
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -71,3 +76,71 @@ def test_built_in_suites_and_bad_suites():
     with pytest.raises(FileNotFoundError):
         blockpuzzle.evaluate(policy, suite="/nonexistent/suite.toml")
     assert blockpuzzle.evaluation.wilson95(50, 100) == pytest.approx((0.4038, 0.5962), abs=1e-3)
+
+
+def test_obs_hash_is_pinned_to_the_rust_bits():
+    # The same bits src/policy.rs pins for ObsHashPolicy.
+    a = blockpuzzle.policies.obs_hash(np.array([[0.5, 1.0, -2.0], [0.0, 0.0, 0.0]], np.float32))
+    assert [int(x) for x in a.view(np.uint32).ravel()] == [
+        0x3E9CC9BC, 0xBD467480, 0x3EB28CC8, 0xBF50D8E4, 0xBF2D9F90, 0x3F5AFB30, 0x3F49A61C, 0x3ECBABCC]
+    # A batch of Dict observations: each row as if hashed alone.
+    envs = blockpuzzle.make_vec("BlocksChooseN-v0", num_envs=3, obs_mode="objects")
+    d, _ = envs.reset(seed=[4, 5, 6])
+    batch = blockpuzzle.policies.obs_hash(d)
+    rows = [blockpuzzle.policies.obs_hash({k: v[i] for k, v in d.items()}) for i in range(3)]
+    assert np.array_equal(batch, np.stack(rows)) and len({tuple(r) for r in batch.tolist()}) == 3
+
+
+def cli_binary() -> Path:
+    """The command line built from this checkout (``cargo test`` and ``cargo build`` make it)."""
+    root = Path(__file__).resolve().parents[2]
+    given = os.environ.get("BLOCKPUZZLE_BIN")
+    found = [Path(given)] if given else [root / "target" / k / "blockpuzzle" for k in ("release", "debug")]
+    found = [p for p in found if p.is_file()]
+    if not found:
+        pytest.fail("no blockpuzzle binary: run `cargo build --release` first (`make test` builds one)")
+    return max(found, key=lambda p: p.stat().st_mtime)
+
+
+PARITY = """
+version = 1
+name = "parity"
+summary = "A few episodes of tasks with and without counts."
+[[splits.train]]
+task = "BlocksTouch-v0"
+seed = 3000000
+episodes = 6
+[[splits.test]]
+task = "BlocksChooseN-v0"
+distribution = "many"
+seed = 1000000
+episodes = 6
+[[splits.test]]
+task = "BlocksAvoid-v0"
+seed = 1000000
+episodes = 6
+"""
+
+
+def test_evaluate_equals_the_cli_on_the_same_seeds(tmp_path):
+    binary = cli_binary()
+    info = subprocess.run([str(binary), "info"], capture_output=True, text=True, check=True).stdout
+    assert f"MuJoCo {blockpuzzle.mujoco_version()}" in info, f"{binary} runs another MuJoCo than the package:\n{info}"
+    suite = tmp_path / "parity.toml"
+    suite.write_text(PARITY)
+    out = tmp_path / "cli.json"
+    subprocess.run([str(binary), "eval", "--suite", str(suite), "--baseline", "obs-hash", "--threads", "2",
+                    "--out", str(out)], check=True, capture_output=True)
+    cli = json.loads(out.read_text())
+    py = blockpuzzle.evaluate(blockpuzzle.policies.obs_hash, suite=str(suite), num_envs=4, threads=2)
+    assert py["suite"] == cli["suite"]
+    assert (py["score"], py["gap"]) == (cli["score"], cli["gap"])
+    for ps, cs in zip(py["splits"], cli["splits"], strict=True):
+        for p, c in zip(ps["rows"], cs["rows"], strict=True):
+            e = c["evaluation"]
+            assert (p["task"], p["distribution"], p["successes"]) == (c["task"], c["distribution"], e["successes"])
+            assert p["failure_rate"] == c["failure_rate"]
+            assert p["mean_steps_to_success"] == e["mean_steps_to_success"]
+            assert list(p["ci95"]) == list(e["ci95"])
+    # Not a vacuous comparison: the hash policy does touch blocks and sometimes breaks the rule.
+    assert any(r["evaluation"]["outcomes"]["no_contact"] < 6 for s in cli["splits"] for r in s["rows"])

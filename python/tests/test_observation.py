@@ -61,3 +61,38 @@ def test_an_unknown_mode_is_refused_naming_the_known_ones():
         gym.make("BlockPuzzle/BlocksTouch-v0", obs_mode="pixels")
     with pytest.raises(ValueError, match="flat, objects"):
         blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, obs_mode="set")
+
+
+def test_variable_counts_mask_absent_objects_and_pass_the_checker():
+    env = gym.make("BlockPuzzle/BlocksChooseN-v0", obs_mode="objects")
+    assert env.observation_space["objects"].shape == (6, 22)
+    check_env(env.unwrapped, skip_render_check=True)
+    counts = set()
+    for seed in range(30):
+        obs, _ = env.reset(seed=seed)
+        mask = obs["mask"]
+        # blue and green always; then the greys present form a prefix of their four slots
+        assert mask[0] == mask[1] == 1.0
+        n = int(mask[2:].sum())
+        assert np.array_equal(mask[2:], np.array([1.0] * n + [0.0] * (4 - n), np.float32))
+        assert not obs["objects"][2 + n:].any(), "absent rows are zero"
+        assert (obs["objects"][:2 + n, 15:19].sum(axis=1) == 1).all(), "present rows carry a colour"
+        counts.add(n)
+    assert counts == {0, 1, 2, 3, 4}
+    env.close()
+
+
+def test_variable_counts_in_the_vector_env_do_not_depend_on_num_envs_or_threads():
+    def run(num_envs, threads):
+        envs = blockpuzzle.make_vec("BlocksChooseN-v0", num_envs=num_envs, threads=threads, obs_mode="objects")
+        obs, _ = envs.reset(seed=[20 + i for i in range(num_envs)])
+        out = [obs["mask"][1].copy(), obs["objects"][1].copy()]
+        for t in range(60):  # past one episode end: the autoreset draws a new count
+            actions = np.tile(np.float32([np.sin(t), np.cos(t), -0.3, 0.0]), (num_envs, 1))
+            obs, reward, term, trunc, _ = envs.step(actions)
+            out += [obs["mask"][1].copy(), obs["objects"][1].copy(), np.float32([reward[1], term[1], trunc[1]])]
+        envs.close()
+        return np.concatenate([o.ravel() for o in out])
+
+    a = run(2, 1)
+    assert np.array_equal(a, run(2, 2)) and np.array_equal(a, run(5, 3))

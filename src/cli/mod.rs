@@ -164,9 +164,14 @@ struct TableArgs {
 struct EvalArgs {
     /// A policy file, a run directory (uses best_policy.json, else policy.json) or a zoo name.
     #[arg(long)]
-    checkpoint: PathBuf,
-    /// Evaluate on an evaluation suite instead: a built-in name (colour, layout, cross-task) or a
-    /// suite file; writes eval-POLICY-suite-NAME.json and .md (docs/suites.md).
+    checkpoint: Option<PathBuf>,
+    /// Evaluate a policy that needs no training on the suite instead of a checkpoint: `scripted`
+    /// (each task's scripted controller) or `obs-hash` (pseudo-random actions from a hash of the
+    /// observation, the same as Python's `blockpuzzle.policies.obs_hash`).
+    #[arg(long, value_enum, requires = "suite", conflicts_with = "checkpoint")]
+    baseline: Option<crate::evaluate::Baseline>,
+    /// Evaluate on an evaluation suite instead: a built-in name (colour, layout, cross-task, count,
+    /// obstacles) or a suite file; writes eval-POLICY-suite-NAME.json and .md (docs/suites.md).
     #[arg(long, conflicts_with_all = ["env", "challenge", "level", "episodes", "seed"])]
     suite: Option<String>,
     /// Environment id or task file (default: the one the policy was trained on).
@@ -438,7 +443,7 @@ fn envs() -> Result<()> {
         println!(
             "{:<24} obs {:>3}  levels 0-{:<2}  {}",
             r.id,
-            crate::env::ObsSpec::flat(task.spec.objects.len()).dim(),
+            crate::env::ObsSpec::flat(task.object_count()).dim(),
             task.max_level(),
             task.spec.summary
         );
@@ -620,7 +625,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
         "{}: task {} is valid: {} objects, levels 0-{}, distributions: {}",
         a.file,
         task.id(),
-        task.spec.objects.len(),
+        task.object_count(),
         task.max_level(),
         if task.distribution_names().is_empty() { "none".to_owned() } else { task.distribution_names().join(", ") }
     );
@@ -638,7 +643,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
                 continue;
             }
             let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-            renderer.colour_objects(env.scene(), &colours)?;
+            renderer.colour_objects(env.scene(), &colours, &env.absent_objects())?;
             frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", task.id()), ""))));
         }
         let n = frames.len();
@@ -771,11 +776,22 @@ fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
 
 /// `eval --suite`: every row of the suite, the JSON result and its Markdown beside it.
 fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
+    use crate::evaluate::Subject;
     let suite = crate::suite::load(name)?;
-    let saved = crate::load::load_policy(&a.checkpoint)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let r = crate::evaluate::evaluate_suite(&a.checkpoint, &saved, &suite, threads)?;
-    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &format!("suite-{}", suite.name)));
+    let (r, out) = match (&a.checkpoint, a.baseline) {
+        (_, Some(b)) => {
+            let r = crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads)?;
+            (r, PathBuf::from(format!("eval-{}-suite-{}.json", b.name(), suite.name)))
+        }
+        (Some(checkpoint), None) => {
+            let saved = crate::load::load_policy(checkpoint)?;
+            let r = crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads)?;
+            (r, eval_out(checkpoint, &format!("suite-{}", suite.name)))
+        }
+        (None, None) => bail!("give --checkpoint POLICY or --baseline scripted|obs-hash"),
+    };
+    let out = a.out.clone().unwrap_or(out);
     let md = out.with_extension("md");
     crate::io::write_json(&out, &r)?;
     crate::io::write_file(&md, r.to_markdown().as_bytes())?;
@@ -812,7 +828,10 @@ fn eval(a: EvalArgs) -> Result<()> {
     if let Some(suite) = &a.suite {
         return eval_suite(&a, suite);
     }
-    let saved = crate::load::load_policy(&a.checkpoint)?;
+    let Some(checkpoint) = &a.checkpoint else {
+        bail!("give --checkpoint POLICY (a policy file, run directory or zoo name; --baseline needs --suite)")
+    };
+    let saved = crate::load::load_policy(checkpoint)?;
     let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
@@ -825,18 +844,18 @@ fn eval(a: EvalArgs) -> Result<()> {
         seed: a.seed,
         threads: a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
     };
-    let r = crate::evaluate::evaluate(&a.checkpoint, saved, &spec)?;
+    let r = crate::evaluate::evaluate(checkpoint, saved, &spec)?;
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
-        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": a.checkpoint, "policy_epoch": policy_epoch,
+        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": checkpoint, "policy_epoch": policy_epoch,
     });
     let distribution = match (a.challenge, a.level) {
         (true, _) => "challenge".to_owned(),
         (false, Some(l)) if l < task.max_level() => format!("level{l}"),
         _ => "normal".to_owned(),
     };
-    let out = a.out.clone().unwrap_or_else(|| eval_out(&a.checkpoint, &format!("{id}-{distribution}")));
+    let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
     crate::io::write_json(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",

@@ -50,7 +50,7 @@ impl EnvConfig {
     }
     /// What the observation holds: the mode and one slot per block.
     pub fn obs_spec(&self) -> super::ObsSpec {
-        super::ObsSpec::new(self.obs_mode, self.task.spec.objects.len())
+        super::ObsSpec::new(self.obs_mode, self.task.object_count())
     }
     /// Colour of the gripper.
     pub fn gripper(&self) -> Colour {

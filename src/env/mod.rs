@@ -43,6 +43,12 @@ pub const INITIAL_SLIDES: [f64; 3] = [0.405, 0.48, 0.0];
 pub const GRIPPER_SETUP_OFFSET: [f64; 3] = [-0.498, 0.005, -0.431];
 /// Actions used to settle the robot at set-up.
 pub const SETTLE_ACTIONS: usize = 10;
+/// Where absent objects wait (x, y on the floor, far from the robot and the
+/// table): slot k rests at `PARK_ORIGIN + (PARK_PITCH · k, 0)`, apart from
+/// the others, touching only the floor, which the rules do not hear from it.
+pub const PARK_ORIGIN: [f64; 2] = [-3.0, -3.0];
+/// Spacing of parked objects along x (m).
+pub const PARK_PITCH: f64 = 0.3;
 /// Deepest interpenetration of two objects a reset state may have (m):
 /// deeper, the layout is rejected as overlapping.
 pub const OVERLAP_TOLERANCE: f64 = 0.002;
@@ -147,6 +153,10 @@ pub struct BlockEnv {
     obs: Vec<f32>,
     /// Each block's half extents (the `objects` observation holds them).
     sizes: Vec<[f64; 3]>,
+    /// Which blocks take part in this episode (all, unless the task has counts).
+    present: Vec<bool>,
+    /// The task has counts: some episodes leave blocks out.
+    varies: bool,
     physics: std::time::Duration,
 }
 
@@ -192,6 +202,7 @@ impl BlockEnv {
         let n = scene.objects.len();
         let obs = vec![0.0; config.obs_spec().dim()];
         let config_sizes = config.task.objects().map(|o| o.half_extents).collect();
+        let (present, varies) = (vec![true; config.task.object_count()], !config.task.count_groups().is_empty());
         Ok(Self {
             objects: scene.objects.clone(),
             colours: config.task.colours(),
@@ -212,6 +223,8 @@ impl BlockEnv {
             step_touching: Touching::new(n),
             obs,
             sizes: config_sizes,
+            present,
+            varies,
             physics: std::time::Duration::ZERO,
         })
     }
@@ -235,7 +248,7 @@ impl BlockEnv {
     /// Writes the current observation into `self.obs`.
     fn write_obs(&mut self) {
         let (spec, dt) = (self.config.obs_spec(), self.dt());
-        let ctx = obs::ObsContext { spec: &spec, colours: &self.colours, sizes: &self.sizes };
+        let ctx = obs::ObsContext { spec: &spec, colours: &self.colours, sizes: &self.sizes, present: &self.present };
         obs::write(&ctx, &self.scene, &self.data, dt, &mut self.obs);
     }
     /// The observation as one box of [`ObsSpec::dim`] values: unbounded,
@@ -251,6 +264,20 @@ impl BlockEnv {
     /// floor, when the task makes it one).
     pub fn objects(&self) -> &[SceneObject] {
         &self.objects
+    }
+    /// Which blocks take part in the current episode, in observation order
+    /// (all of them unless the task has counts; an absent block is parked
+    /// off the scene, out of the rules, and zero in the observation).
+    pub fn present(&self) -> &[bool] {
+        &self.present
+    }
+    /// Whether each rule object (as [`BlockEnv::objects`]) is absent this episode.
+    pub fn absent_objects(&self) -> Vec<bool> {
+        (0..self.objects.len()).map(|o| self.is_absent(o)).collect()
+    }
+    /// Whether rule object `o` is a block left out of this episode.
+    fn is_absent(&self, o: usize) -> bool {
+        o.checked_sub(crate::scene::FIRST_BLOCK_OBJECT).and_then(|k| self.present.get(k)).is_some_and(|&p| !p)
     }
     /// Block colours of the current episode, in observation order (they
     /// differ from the task's between episodes only when it shuffles roles).
@@ -529,6 +556,10 @@ impl BlockEnv {
         for c in self.data.contacts() {
             let (a, b) = (self.scene.geom_object[c.geom1()], self.scene.geom_object[c.geom2()]);
             if a >= 0 && b >= 0 {
+                // Absent blocks take no part in the rules (they touch only the floor).
+                if self.varies && (self.is_absent(a as usize) || self.is_absent(b as usize)) {
+                    continue;
+                }
                 self.touching.insert(a as usize, b as usize);
             }
         }

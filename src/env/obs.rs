@@ -194,6 +194,8 @@ pub struct ObsContext<'a> {
     pub colours: &'a [Colour],
     /// Each block's half extents.
     pub sizes: &'a [[f64; 3]],
+    /// Which blocks take part in the episode (an absent one's row is zero, its mask 0).
+    pub present: &'a [bool],
 }
 
 /// Writes the observation of `data` into `out` (resized as needed).
@@ -208,7 +210,12 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
     out.extend(scene.finger_qpos.iter().map(|&a| q[a] as f32));
     out.extend(grip_velp.iter().map(|&x| x as f32));
     out.extend(scene.finger_dof.iter().map(|&a| (v[a] * dt) as f32));
+    let row = spec.object_dim();
     for (k, (block, colour)) in scene.blocks.iter().zip(colours).enumerate() {
+        if !ctx.present.get(k).copied().unwrap_or(true) {
+            out.extend(std::iter::repeat(0.0).take(row));
+            continue;
+        }
         let pos = data.site_xpos()[block.site];
         let euler = mat2euler(&data.site_xmat()[block.site]);
         let bv = site_velocity(data, block.site);
@@ -223,7 +230,6 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
         }
     }
     if spec.mode == ObsMode::Objects {
-        // Every slot holds an object until tasks have variable counts.
-        out.extend(std::iter::repeat(1.0).take(spec.max_objects));
+        out.extend((0..spec.max_objects).map(|k| if ctx.present.get(k).copied().unwrap_or(true) { 1.0 } else { 0.0 }));
     }
 }

@@ -30,6 +30,9 @@ pub const REGISTRY: &[Registration] = &[
     builtin!("ReachAvoid-v0"),
     builtin!("ToppleTower-v0"),
     builtin!("BlocksStack-v0"),
+    builtin!("BlocksChooseN-v0"),
+    builtin!("BlocksAvoid-v0"),
+    builtin!("BlocksGather-v0"),
 ];
 
 /// The registered ids.

@@ -28,6 +28,10 @@ impl BlockEnv {
         let task = &self.config.task;
         let deterministic = task.is_deterministic();
         let attempts = task.spec.placement.max_reset_attempts;
+        if self.varies {
+            // Once per reset (physics redraws keep the counts, so they stay uniform).
+            self.present = task.draw_present(self.distribution, &mut self.rng);
+        }
         let mut reasons = Tally::default();
         for _ in 0..attempts {
             let Some(reason) = self.try_layout()? else {
@@ -71,13 +75,20 @@ impl BlockEnv {
             self.level,
             self.distribution,
             origin,
+            &self.present,
             &mut self.rng,
             &mut self.stats.draws,
         )?;
         self.stats.layouts += 1;
         let mut targets = Vec::with_capacity(roles.len());
-        for (b, &role) in self.scene.blocks.iter().zip(&roles) {
-            let Placed { xy, z, yaw } = placed[role];
+        for (slot, (b, &role)) in self.scene.blocks.iter().zip(&roles).enumerate() {
+            // Absent (shuffles never move them): parked upright on the floor, away from everything.
+            let park = || Placed {
+                xy: [PARK_ORIGIN[0] + PARK_PITCH * slot as f64, PARK_ORIGIN[1]],
+                z: Some(self.sizes[slot][2]),
+                yaw: Some(0.0),
+            };
+            let Placed { xy, z, yaw } = placed[role].unwrap_or_else(park);
             let q = self.data.qpos_mut();
             q[b.qpos] = xy[0];
             q[b.qpos + 1] = xy[1];
@@ -114,11 +125,15 @@ impl BlockEnv {
     }
 
     /// The role each block slot plays this episode (identity unless the task
-    /// shuffles), with the colours, rule objects and rules set to match.
+    /// shuffles), with the colours, rule objects and rules set to match
+    /// (absent blocks count as grey in the rules).
     fn draw_roles(&mut self) -> Result<Vec<usize>, EnvError> {
         let n = self.scene.blocks.len();
         let mut roles: Vec<usize> = (0..n).collect();
         if self.config.task.shuffle.is_empty() {
+            if self.varies {
+                self.set_rules()?;
+            }
             return Ok(roles);
         }
         for group in &self.config.task.shuffle {
@@ -135,9 +150,17 @@ impl BlockEnv {
             o.colour = specs[role].colour;
             o.name.clone_from(&specs[role].name);
         }
-        let colours = self.objects.iter().map(|o| o.colour).collect();
-        self.rules = Rules::new(colours).map_err(crate::scene::SceneError::from)?;
+        self.set_rules()?;
         Ok(roles)
+    }
+
+    /// The rules of this episode's colours, absent blocks counted as grey.
+    fn set_rules(&mut self) -> Result<(), EnvError> {
+        let colours = (0..self.objects.len())
+            .map(|o| if self.is_absent(o) { Colour::Grey } else { self.objects[o].colour })
+            .collect();
+        self.rules = Rules::new(colours).map_err(crate::scene::SceneError::from)?;
+        Ok(())
     }
 
     /// Runs the task's settling time with the gripper held still; the first
@@ -169,7 +192,8 @@ impl BlockEnv {
     fn overlap(&self) -> Option<String> {
         self.data.contacts().iter().find_map(|c| {
             let (a, b) = (self.scene.geom_object[c.geom1()], self.scene.geom_object[c.geom2()]);
-            (a >= 0 && b >= 0 && a != b && c.dist() < -OVERLAP_TOLERANCE).then(|| {
+            let absent = self.varies && (self.is_absent(a.max(0) as usize) || self.is_absent(b.max(0) as usize));
+            (a >= 0 && b >= 0 && a != b && !absent && c.dist() < -OVERLAP_TOLERANCE).then(|| {
                 format!(
                     "{:?} and {:?} overlapped (deeper than {} mm)",
                     self.objects[a as usize].name,

@@ -88,7 +88,7 @@ impl Visual {
 
     /// Draws the state in `data` (its kinematics current) into a `width` ×
     /// `height` viewport, geoms listed in `recolour` (geom id, RGBA) in those
-    /// colours, with an optional caption (left and right columns) in the
+    /// colours (alpha 0: not drawn), with an optional caption (left and right columns) in the
     /// top-left corner, and reads the pixels back into `rgb` (bottom row first,
     /// `3 · width · height` bytes; a shorter buffer is left untouched).
     pub fn render(
@@ -120,14 +120,25 @@ impl Visual {
                 sys::mjtCatBit::mjCAT_ALL as i32,
                 self.scene.as_mut(),
             );
+            // Recolour; a colour of alpha 0 leaves the geom out (the scene's
+            // list is compacted in place, keeping the order of the rest).
+            let mut kept = 0;
             for i in 0..self.scene.ngeom.max(0) as usize {
                 let g = &mut *self.scene.geoms.add(i);
                 if g.objtype == sys::mjtObj::mjOBJ_GEOM as i32 {
                     if let Some((_, rgba)) = recolour.iter().find(|(id, _)| *id as i32 == g.objid) {
+                        if rgba[3] == 0.0 {
+                            continue;
+                        }
                         g.rgba = *rgba;
                     }
                 }
+                if kept != i {
+                    *self.scene.geoms.add(kept) = *self.scene.geoms.add(i);
+                }
+                kept += 1;
             }
+            self.scene.ngeom = kept as i32;
             sys::mjr_render(viewport, self.scene.as_mut(), self.context.as_ref());
             if let Some((a, b)) = caption {
                 sys::mjr_overlay(

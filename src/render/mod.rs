@@ -121,7 +121,8 @@ impl Renderer {
     /// in rule-object order: the episode's, which move between episodes when
     /// the task shuffles roles): the blocks always, the gripper, table and
     /// floor when they are not grey (the Fetch gripper's geoms carry their own
-    /// grey, which would hide a material).
+    /// grey, which would hide a material). Objects `absent` marks (indexed
+    /// like `colours`; shorter: the rest present) are not drawn.
     ///
     /// # Errors
     /// A scene without the BlockPuzzle materials.
@@ -129,10 +130,15 @@ impl Renderer {
         &mut self,
         scene: &crate::scene::Scene,
         colours: &[crate::rules::Colour],
+        absent: &[bool],
     ) -> Result<(), crate::mj::MjError> {
         self.recolour.clear();
         for (g, &o) in scene.geom_object.iter().enumerate() {
             let Some(&c) = usize::try_from(o).ok().and_then(|o| colours.get(o)) else { continue };
+            if absent.get(o as usize).copied().unwrap_or(false) {
+                self.recolour.push((g, [0.0; 4]));
+                continue;
+            }
             let block = o as usize >= crate::scene::FIRST_BLOCK_OBJECT && Some(o as usize) != scene.floor_object;
             if block || c != crate::rules::Colour::Grey {
                 self.recolour.push((g, scene.rgba(c)?));

@@ -27,7 +27,8 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
     let mut renderer = Renderer::new(&model, view)?;
     // The episode's colours (they move between episodes when the task shuffles roles).
     let colours: Vec<Colour> = ep.objects.iter().map(|o| o.colour).collect();
-    renderer.colour_objects(env.scene(), &colours)?;
+    let absent: Vec<bool> = ep.objects.iter().map(|o| o.absent).collect();
+    renderer.colour_objects(env.scene(), &colours, &absent)?;
     let n = ep.steps.len();
     let outcome = if ep.success {
         "success"

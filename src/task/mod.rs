@@ -94,13 +94,29 @@ impl TaskSource {
     }
 }
 
-/// A compiled named distribution: its level, parameter values and starts.
+/// A compiled named distribution: its level, parameter values, starts and
+/// count ranges (one per [`CountGroup`]).
 #[derive(Debug, Clone)]
 pub(crate) struct Distribution {
     pub name: String,
     pub level: usize,
     pub values: Vec<f64>,
     pub starts: Vec<sampler::Placement>,
+    pub counts: Vec<[usize; 2]>,
+}
+
+/// The copies of one object entry with a `count`: objects `first` ..
+/// `first + max`, of which the first n, drawn from `range`, take part.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CountGroup {
+    /// The entry's name (its copies are `NAME.0`, `NAME.1`, …).
+    pub entry: String,
+    /// Index of `NAME.0` among the task's objects.
+    pub first: usize,
+    /// Copies in the scene.
+    pub max: usize,
+    /// The curriculum's count range.
+    pub range: [usize; 2],
 }
 
 /// A checked, compiled task.
@@ -108,6 +124,11 @@ pub(crate) struct Distribution {
 pub struct Task {
     /// The spec as written.
     pub spec: TaskSpec,
+    /// The objects of the scene: the spec's, with every entry that has a
+    /// count expanded into its copies (`NAME.0` …).
+    objects: Vec<ObjectSpec>,
+    /// The entries with a count, in file order.
+    groups: Vec<CountGroup>,
     /// Where it came from.
     pub source: TaskSource,
     /// Parameter names, in evaluation order after `level`, `max_level`, `pi`.
@@ -275,7 +296,9 @@ impl Task {
     fn compile(spec: TaskSpec, text: &str, path: Option<&Path>, origin: &str) -> Result<Task, TaskError> {
         let c = Checker { origin, text };
         check_settings(&c, &spec)?;
-        check_objects(&c, &spec)?;
+        // Entries with a count become their copies; everything below sees the copies.
+        let (expanded, groups) = expand_counts(&c, &spec)?;
+        check_objects(&c, &expanded)?;
         let cur = &spec.curriculum;
         // Parameters in dependency order, then their values at every level.
         let order = param_order(&c, &cur.params)?;
@@ -283,15 +306,31 @@ impl Task {
         let values = (0..=cur.max_level)
             .map(|level| eval_params(&c, &order, level, cur.max_level, &BTreeMap::new()))
             .collect::<Result<Vec<_>, _>>()?;
-        let starts = compile_starts(&c, &spec, &names_all, &values)?;
-        let distributions = compile_distributions(&c, &spec, &order, &names_all, &starts)?;
-        let shuffle = compile_shuffle(&c, &spec)?;
+        let starts = compile_starts(&c, &expanded, &names_all, &values)?;
+        let distributions = compile_distributions(&c, &expanded, &order, &names_all, &starts, &groups)?;
+        let shuffle = compile_shuffle(&c, &expanded)?;
+        check_optional(&c, &expanded, &groups, &starts, &distributions, &shuffle)?;
 
         let hash = canonical_hash(&spec);
         let source = TaskSource { id: spec.id.clone(), path: path.map(Path::to_path_buf), toml: text.to_owned(), hash };
+        let fixed_counts = groups.iter().all(|g| g.range[0] == g.range[1])
+            && distributions.iter().flat_map(|d| &d.counts).all(|r| r[0] == r[1]);
         let deterministic = shuffle.is_empty()
+            && fixed_counts
             && starts.iter().chain(distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random());
-        Ok(Task { spec, source, names: names_all, values, starts, distributions, shuffle, deterministic })
+        let objects = expanded.objects.into_iter().map(Spanned::into_inner).collect();
+        Ok(Task {
+            spec,
+            objects,
+            groups,
+            source,
+            names: names_all,
+            values,
+            starts,
+            distributions,
+            shuffle,
+            deterministic,
+        })
     }
 
     /// The id.
@@ -312,11 +351,41 @@ impl Task {
     }
     /// Object colours as written (before any shuffle), in object order.
     pub fn colours(&self) -> Vec<Colour> {
-        self.spec.objects.iter().map(|o| o.get_ref().colour).collect()
+        self.objects.iter().map(|o| o.colour).collect()
     }
-    /// Object specs in order.
+    /// The scene's objects in order (an entry with a count stands for its
+    /// copies `NAME.0` …, each listed here).
     pub fn objects(&self) -> impl Iterator<Item = &ObjectSpec> {
-        self.spec.objects.iter().map(Spanned::get_ref)
+        self.objects.iter()
+    }
+    /// Number of objects in the scene (every copy of a counted entry
+    /// included): the observation's object slots.
+    pub fn object_count(&self) -> usize {
+        self.objects.len()
+    }
+    /// The entries whose number of copies varies per episode.
+    pub fn count_groups(&self) -> &[CountGroup] {
+        &self.groups
+    }
+    /// The count range of `group` in `distribution` (or the curriculum's).
+    pub fn count_range(&self, group: usize, distribution: Option<usize>) -> [usize; 2] {
+        distribution.map_or(self.groups[group].range, |d| self.distributions[d].counts[group])
+    }
+    /// Which objects take part in an episode: for each entry with a count,
+    /// n uniform in its range (one draw from `rng`, only where the range has
+    /// more than one value), then its first n copies. Tasks without counts
+    /// draw nothing (all present).
+    ///
+    /// # Panics
+    /// A `distribution` index that [`Task::distribution`] did not give.
+    pub fn draw_present(&self, distribution: Option<usize>, rng: &mut impl rand::Rng) -> Vec<bool> {
+        let mut present = vec![true; self.objects.len()];
+        for (g, group) in self.groups.iter().enumerate() {
+            let [lo, hi] = self.count_range(g, distribution);
+            let n = if lo == hi { lo } else { rng.gen_range(lo..=hi) };
+            present[group.first + n..group.first + group.max].fill(false);
+        }
+        present
     }
     /// Whether every layout is the same: no random draw, no shuffle.
     pub fn is_deterministic(&self) -> bool {
@@ -450,6 +519,102 @@ fn check_settings(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
     Ok(())
 }
 
+/// The spec with every entry that has a count replaced by its copies
+/// (`NAME.0` … `NAME.(max-1)`, the entry's fields without the count), and
+/// a distribution's start for the entry given to each copy that has none of
+/// its own; the entries with a count, in file order.
+fn expand_counts(c: &Checker, spec: &TaskSpec) -> Result<(TaskSpec, Vec<CountGroup>), TaskError> {
+    let mut out = spec.clone();
+    out.objects.clear();
+    let mut groups = Vec::new();
+    for o in &spec.objects {
+        let (span, entry) = (o.span(), o.get_ref());
+        let Some([lo, hi]) = entry.count else {
+            out.objects.push(o.clone());
+            continue;
+        };
+        if lo > hi || hi == 0 || hi > MAX_TASK_OBJECTS {
+            return Err(c.err(
+                Some(span),
+                format!(
+                    "object {:?}: count = [{lo}, {hi}]: give [min, max] with min ≤ max and 1 ≤ max ≤ \
+                     {MAX_TASK_OBJECTS}",
+                    entry.name
+                ),
+            ));
+        }
+        groups.push(CountGroup { entry: entry.name.clone(), first: out.objects.len(), max: hi, range: [lo, hi] });
+        for k in 0..hi {
+            let copy = ObjectSpec { name: format!("{}.{k}", entry.name), count: None, ..entry.clone() };
+            out.objects.push(Spanned::new(span.clone(), copy));
+        }
+    }
+    for d in out.distributions.values_mut() {
+        for g in &groups {
+            if let Some(start) = d.starts.remove(&g.entry) {
+                for k in 0..g.max {
+                    d.starts.entry(format!("{}.{k}", g.entry)).or_insert_with(|| start.clone());
+                }
+            }
+        }
+    }
+    Ok((out, groups))
+}
+
+/// Objects that may be absent (a copy beyond its entry's smallest minimum
+/// over the curriculum and the distributions) may not anchor another
+/// object's start nor be shuffled, and the objects always there must make
+/// a task (a blue and a green).
+fn check_optional(
+    c: &Checker,
+    spec: &TaskSpec,
+    groups: &[CountGroup],
+    starts: &[sampler::Placement],
+    distributions: &[Distribution],
+    shuffle: &[Vec<usize>],
+) -> Result<(), TaskError> {
+    let mut optional = vec![false; spec.objects.len()];
+    for (g, group) in groups.iter().enumerate() {
+        let least = distributions.iter().map(|d| d.counts[g][0]).fold(group.range[0], usize::min);
+        optional[group.first + least..group.first + group.max].fill(true);
+    }
+    let name = |i: usize| spec.objects[i].get_ref().name.as_str();
+    let all = std::iter::once(("", starts)).chain(distributions.iter().map(|d| (d.name.as_str(), &d.starts[..])));
+    for (dist, starts) in all {
+        for (i, s) in starts.iter().enumerate() {
+            if let Some(r) = s.references().into_iter().find(|&r| optional[r]) {
+                let place = if dist.is_empty() { String::new() } else { format!(" in distribution {dist:?}") };
+                return Err(c.err(
+                    Some(spec.objects[i].span()),
+                    format!(
+                        "object {:?}: its start{place} is placed relative to {:?}, which is absent in some \
+                     episodes (its count's minimum is below its index): anchor it to an object that is always \
+                     there",
+                        name(i),
+                        name(r)
+                    ),
+                ));
+            }
+        }
+    }
+    if let Some(&i) = shuffle.iter().flatten().find(|&&i| optional[i]) {
+        return Err(c.err(
+            None,
+            format!("shuffle names {:?}, which is absent in some episodes: shuffle only objects always there", name(i)),
+        ));
+    }
+    let mut colours = vec![spec.robot.gripper, spec.table.colour];
+    colours.extend((0..spec.objects.len()).filter(|&i| !optional[i]).map(|i| spec.objects[i].get_ref().colour));
+    colours.extend(spec.floor.as_ref().map(|f| f.colour));
+    Rules::new(colours).map_err(|e| {
+    c.err(
+            None,
+    format!("with the fewest objects its counts allow, {e}: raise the minimum of a count (the gripper, table and floor count too)"),
+        )
+    })?;
+    Ok(())
+}
+
 /// Objects: names, shapes and masses in range, and colours the rules accept.
 fn check_objects(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
     if spec.objects.is_empty() {
@@ -541,6 +706,7 @@ fn compile_distributions(
     order: &[(String, Expr)],
     names_all: &[String],
     starts: &[sampler::Placement],
+    groups: &[CountGroup],
 ) -> Result<Vec<Distribution>, TaskError> {
     let (cur, text) = (&spec.curriculum, c.text);
     let names: Vec<&str> = spec.objects.iter().map(|o| o.get_ref().name.as_str()).collect();
@@ -587,7 +753,31 @@ fn compile_distributions(
                 &format!("in distribution {name:?}"),
             )?;
         }
-        distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts });
+        let mut counts: Vec<[usize; 2]> = groups.iter().map(|g| g.range).collect();
+        for (entry, &[lo, hi]) in &d.counts {
+            let Some(g) = groups.iter().position(|g| &g.entry == entry) else {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "distribution {name:?} gives a count for {entry:?}, which is not an object entry with a count \
+                     (entries with one: {})",
+                        groups.iter().map(|g| g.entry.as_str()).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            };
+            if lo > hi || hi > groups[g].max {
+                return Err(c.err(
+                    span,
+                    format!(
+                        "distribution {name:?}: counts.{entry} = [{lo}, {hi}]: give min ≤ max within the entry's \
+                     [0, {}] (the scene holds {} copies)",
+                        groups[g].max, groups[g].max
+                    ),
+                ));
+            }
+            counts[g] = [lo, hi];
+        }
+        distributions.push(Distribution { name: name.clone(), level, values: vals, starts: dstarts, counts });
     }
     Ok(distributions)
 }

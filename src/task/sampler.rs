@@ -157,6 +157,18 @@ impl Placement {
         })
     }
 
+    /// The objects this start is placed relative to (anchor, `on`, `towards`).
+    pub fn references(&self) -> Vec<usize> {
+        let mut out = Vec::new();
+        for r in [Some(&self.anchor), self.towards.as_ref()].into_iter().flatten() {
+            if let Ref::Objects(idx) = r {
+                out.extend(idx);
+            }
+        }
+        out.extend(self.on);
+        out
+    }
+
     /// Whether drawing this start uses the random generator.
     pub fn is_random(&self) -> bool {
         self.distance.is_some() || self.rectangle.is_some() || self.yaw.as_ref().is_some_and(|y| y.1.is_some())
@@ -251,18 +263,20 @@ pub fn footprint(h: [f64; 3], yaw: Option<f64>) -> [f64; 2] {
     }
 }
 
-fn centroid(placed: &[Placed], idx: &[usize]) -> [f64; 2] {
-    let mut sum = placed[idx[0]].xy;
-    for &i in &idx[1..] {
-        sum[0] += placed[i].xy[0];
-        sum[1] += placed[i].xy[1];
+/// The centroid of the objects `idx` (each present: the task's checks keep
+/// starts from referring to objects that may be absent).
+fn centroid(placed: &[Option<Placed>], idx: &[usize]) -> [f64; 2] {
+    let mut sum = [0.0; 2];
+    for p in idx.iter().filter_map(|&i| placed[i]) {
+        sum[0] += p.xy[0];
+        sum[1] += p.xy[1];
     }
     let n = idx.len() as f64;
     [sum[0] / n, sum[1] / n]
 }
 
 impl Placement {
-    fn point(r: &Ref, placed: &[Placed], gripper: [f64; 2]) -> [f64; 2] {
+    fn point(r: &Ref, placed: &[Option<Placed>], gripper: [f64; 2]) -> [f64; 2] {
         match r {
             Ref::Gripper => gripper,
             Ref::Table => TABLE_CENTER,
@@ -275,7 +289,7 @@ impl Placement {
         &self,
         object: &ObjectSpec,
         specs: &[&ObjectSpec],
-        placed: &[Placed],
+        placed: &[Option<Placed>],
         gripper: [f64; 2],
         scope: &Scope,
         rng: &mut impl Rng,
@@ -338,7 +352,8 @@ impl Placement {
         let z = match (self.on, &self.height) {
             (Some(i), _) => {
                 let below = specs[i].half_extents[2];
-                Some(placed[i].z.unwrap_or(TABLE_TOP_Z + below) + below + object.half_extents[2])
+                let z = placed[i].and_then(|p| p.z);
+                Some(z.unwrap_or(TABLE_TOP_Z + below) + below + object.half_extents[2])
             }
             (None, Some(h)) => Some(TABLE_TOP_Z + ev(h)),
             (None, None) => None,
@@ -348,10 +363,11 @@ impl Placement {
 }
 
 impl Task {
-    /// Draws the objects' starts at `level` (clamped to the maximum) or in
-    /// `distribution`, around the gripper's initial (x, y), redrawing until
-    /// every object lies on the table and the objects resting on it are
-    /// `min_separation` apart.
+    /// Draws which objects take part ([`Task::draw_present`]), then their
+    /// starts at `level` (clamped to the maximum) or in `distribution`,
+    /// around the gripper's initial (x, y), redrawing until every object
+    /// lies on the table and the objects resting on it are `min_separation`
+    /// apart. Absent objects are `None`.
     ///
     /// # Errors
     /// [`PlacementError::Exhausted`] after `placement.max_attempts` draws, naming the constraint that failed most.
@@ -364,11 +380,14 @@ impl Task {
         distribution: Option<usize>,
         gripper: [f64; 2],
         rng: &mut impl Rng,
-    ) -> Result<Vec<Placed>, PlacementError> {
-        self.sample_counted(level, distribution, gripper, rng, &mut 0)
+    ) -> Result<Vec<Option<Placed>>, PlacementError> {
+        let present = self.draw_present(distribution, rng);
+        self.sample_counted(level, distribution, gripper, &present, rng, &mut 0)
     }
 
-    /// As [`Task::sample`], adding the number of draws (rejected ones included) to `draws`.
+    /// The starts of the objects `present` says take part (the others
+    /// `None`, drawing nothing), adding the number of draws (rejected ones
+    /// included) to `draws`.
     ///
     /// # Errors
     /// As [`Task::sample`].
@@ -377,9 +396,10 @@ impl Task {
         level: usize,
         distribution: Option<usize>,
         gripper: [f64; 2],
+        present: &[bool],
         rng: &mut impl Rng,
         draws: &mut u64,
-    ) -> Result<Vec<Placed>, PlacementError> {
+    ) -> Result<Vec<Option<Placed>>, PlacementError> {
         let (level, values, starts) = match distribution {
             Some(d) => {
                 let d = &self.distributions[d];
@@ -398,8 +418,9 @@ impl Task {
         for _ in 0..p.max_attempts {
             *draws += 1;
             placed.clear();
-            for (start, object) in starts.iter().zip(&specs) {
-                let next = start.draw(object, &specs, &placed, gripper, &scope, rng);
+            for (i, (start, object)) in starts.iter().zip(&specs).enumerate() {
+                let here = present.get(i).copied().unwrap_or(true);
+                let next = here.then(|| start.draw(object, &specs, &placed, gripper, &scope, rng));
                 placed.push(next);
             }
             match self.broken_constraint(&placed, starts, &specs) {
@@ -420,11 +441,19 @@ impl Task {
     }
 
     /// The first constraint the layout breaks, in words.
-    fn broken_constraint(&self, placed: &[Placed], starts: &[Placement], specs: &[&ObjectSpec]) -> Option<String> {
+    fn broken_constraint(
+        &self,
+        placed: &[Option<Placed>],
+        starts: &[Placement],
+        specs: &[&ObjectSpec],
+    ) -> Option<String> {
         let p = &self.spec.placement;
-        // Objects placed `at` fixed coordinates are where the file says, checked by nothing.
-        let free = |i: usize| starts[i].at.is_none();
-        for (o, s) in placed.iter().zip(specs).enumerate().filter(|(i, _)| free(*i)).map(|(_, x)| x) {
+        // Objects placed `at` fixed coordinates are where the file says, checked by nothing;
+        // absent objects are nowhere.
+        let free = |i: usize| starts[i].at.is_none() && placed[i].is_some();
+        let at = |i: usize| placed[i].unwrap_or(Placed { xy: [0.0; 2], z: None, yaw: None });
+        for (i, s) in specs.iter().enumerate().filter(|(i, _)| free(*i)) {
+            let o = at(i);
             let fp = footprint(s.half_extents, o.yaw);
             if !(0..2).all(|k| (o.xy[k] - TABLE_CENTER[k]).abs() <= TABLE_HALF[k] - (fp[k] + p.table_margin)) {
                 return Some(format!("{:?} off the table", s.name));
@@ -434,7 +463,7 @@ impl Task {
             (0..placed.len()).filter(|&i| free(i) && starts[i].on.is_none() && starts[i].height.is_none()).collect();
         for (k, &i) in resting.iter().enumerate() {
             for &j in &resting[k + 1..] {
-                let (a, b) = (placed[i].xy, placed[j].xy);
+                let (a, b) = (at(i).xy, at(j).xy);
                 if (a[0] - b[0]).hypot(a[1] - b[1]) < p.min_separation {
                     return Some(format!("{:?} and {:?} closer than min_separation", specs[i].name, specs[j].name));
                 }

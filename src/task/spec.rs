@@ -226,6 +226,13 @@ pub struct ObjectSpec {
     /// Where it starts.
     #[serde(default)]
     pub start: StartSpec,
+    /// How many copies: `[min, max]`, drawn uniformly per episode (absent:
+    /// exactly one). The entry stands for `max` objects named `NAME.0` …
+    /// `NAME.(max-1)`, of which the first `n` drawn take part in the episode;
+    /// the others are absent (no physics with the scene, no rules, not drawn,
+    /// zero rows in the observation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count: Option<[usize; 2]>,
 }
 
 fn default_kind() -> Kind {
@@ -330,9 +337,14 @@ pub struct DistributionSpec {
     /// Parameters replaced.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub params: BTreeMap<String, Spanned<Value>>,
-    /// Starts replaced, by object name.
+    /// Starts replaced, by object name (an entry with a count: all its
+    /// copies, or one copy by its name `NAME.K`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub starts: BTreeMap<String, StartSpec>,
+    /// Count ranges replaced, by the name of an entry with a count (within
+    /// that entry's `[0, max]`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub counts: BTreeMap<String, [usize; 2]>,
 }
 
 impl TaskSpec {
@@ -356,6 +368,7 @@ impl TaskSpec {
                         mass: default_mass(),
                         friction: None,
                         start: StartSpec::default(),
+                        count: None,
                     },
                 )
             })
@@ -383,6 +396,16 @@ impl TaskSpec {
     /// # Errors
     /// A number of positions other than the number of objects.
     pub fn with_fixed_layout(mut self, positions: &[[f64; 2]]) -> Result<TaskSpec, super::TaskError> {
+        if let Some(o) = self.objects.iter().find(|o| o.get_ref().count.is_some()) {
+            return Err(super::TaskError {
+                origin: self.id.clone(),
+                line: None,
+                message: format!(
+                    "object {:?} has a count: a fixed layout needs a fixed set of objects (drop the count)",
+                    o.get_ref().name
+                ),
+            });
+        }
         if positions.len() != self.objects.len() {
             return Err(super::TaskError {
                 origin: self.id.clone(),

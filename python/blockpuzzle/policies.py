@@ -1,0 +1,45 @@
+"""Policies that need no training, for checking an evaluation harness.
+
+``obs_hash`` gives pseudo-random actions that are a function of the observation alone, with the
+same integer arithmetic as the Rust ``ObsHashPolicy`` (``blockpuzzle eval --suite S --baseline
+obs-hash``): FNV-1a over each value's float32 bit pattern, then murmur3's finaliser once per
+action component, 24 bits mapped to [-1, 1). Being stateless it gives bit-identical actions one
+observation at a time or in a batch, so a Python evaluation and the CLI's play the same episodes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_FNV_OFFSET = np.uint32(0x811C9DC5)
+_FNV_PRIME = np.uint32(0x01000193)
+
+
+def _flat(obs) -> np.ndarray:
+    """The native vector(s) of ``obs``: itself, or a ``Dict`` observation joined as robot | objects | mask."""
+    if isinstance(obs, dict):
+        lead = obs["robot"].shape[:-1]
+        parts = [obs["robot"], obs["objects"].reshape(*lead, -1), obs["mask"]]
+        return np.concatenate([np.asarray(p, np.float32) for p in parts], axis=-1)
+    return np.asarray(obs, np.float32)
+
+
+def obs_hash(obs) -> np.ndarray:
+    """Actions (``(..., 4)`` float32 in [-1, 1)) for one observation or a batch (flat or ``Dict``)."""
+    x = np.ascontiguousarray(_flat(obs))
+    bits = x.view(np.uint32)
+    with np.errstate(over="ignore"):
+        h = np.full(bits.shape[:-1], _FNV_OFFSET, np.uint32)
+        for j in range(bits.shape[-1]):
+            h = (h ^ bits[..., j]) * _FNV_PRIME
+        out = []
+        for k in range(4):
+            v = h ^ np.uint32(((k + 1) * 0x9E3779B9) & 0xFFFFFFFF)
+            v ^= v >> np.uint32(16)
+            v *= np.uint32(0x85EBCA6B)
+            v ^= v >> np.uint32(13)
+            v *= np.uint32(0xC2B2AE35)
+            v ^= v >> np.uint32(16)
+            a = (v >> np.uint32(8)).astype(np.float32) * np.float32(1.0 / 16777216.0) * np.float32(2.0) - np.float32(1.0)
+            out.append(a)
+    return np.stack(out, axis=-1).astype(np.float32)
