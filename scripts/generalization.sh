@@ -1,14 +1,23 @@
 #!/usr/bin/env bash
-# Every zoo policy on every built-in evaluation suite (results/generalization.md):
-# blockpuzzle eval --suite SUITE --checkpoint ZOO_NAME -> results/generalization/ZOO_NAME.SUITE.{json,md}.
+# Every zoo policy, and the two baselines (scripted, obs-hash), on every built-in evaluation suite
+# (results/generalization.md):
+#   blockpuzzle eval --suite SUITE --checkpoint ZOO_NAME -> results/generalization/ZOO_NAME.SUITE.{json,md}
+#   blockpuzzle eval --suite SUITE --baseline NAME       -> results/generalization/baseline-NAME.SUITE.{json,md}
 # Usage: bash scripts/generalization.sh [--threads N]   (after `cargo build --release`)
+# SUITES="count obstacles" bash scripts/generalization.sh … runs only those suites.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="$ROOT/target/release/blockpuzzle"
 OUT="$ROOT/results/generalization"
+SUITES="${SUITES:-colour layout cross-task count obstacles}"
 mkdir -p "$OUT"
 for policy in $(ls "$ROOT/zoo" | sed -n 's/\.safetensors$//p'); do
-    for suite in colour layout cross-task; do
+    for suite in $SUITES; do
         "$BIN" eval --suite "$suite" --checkpoint "$policy" "$@" --out "$OUT/$policy.$suite.json"
+    done
+done
+for baseline in scripted obs-hash; do
+    for suite in $SUITES; do
+        "$BIN" eval --suite "$suite" --baseline "$baseline" "$@" --out "$OUT/baseline-$baseline.$suite.json"
     done
 done

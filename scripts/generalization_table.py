@@ -9,7 +9,8 @@ import json
 import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-SUITES = ["colour", "layout", "cross-task"]
+SUITES = ["colour", "layout", "cross-task", "count", "obstacles"]
+BASELINES = ["baseline-scripted", "baseline-obs-hash"]
 
 
 def applies(r):
@@ -20,7 +21,7 @@ def applies(r):
 
 def main():
     files = sorted((ROOT / "results" / "generalization").glob("*.json"))
-    policies = sorted({f.name.split(".")[0] for f in files})
+    policies = sorted({f.name.split(".")[0] for f in files} - set(BASELINES))
     results = {
         p: {s: json.loads((ROOT / "results" / "generalization" / f"{p}.{s}.json").read_text()) for s in SUITES}
         for p in policies
@@ -43,6 +44,17 @@ def main():
                 print(f"| {p} | {r['policy_task']} | {s} | {f(means.get('train'))} | {f(means.get('test'))} | "
                       f"{f(r['gap'])} | {skipped} of {total} |")
         print()
+    print("**Baselines (no training): the scripted controllers, and pseudo-random actions (obs-hash)**")
+    print()
+    print("| baseline | suite | train | test | gap |")
+    print("|---|---|---:|---:|---:|")
+    for b in BASELINES:
+        for s in SUITES:
+            r = json.loads((ROOT / "results" / "generalization" / f"{b}.{s}.json").read_text())
+            means = {sp["name"]: sp["mean_success"] for sp in r["splits"]}
+            f = lambda v: "–" if v is None else f"{v:.3f}"
+            print(f"| {b.removeprefix('baseline-')} | {s} | {f(means.get('train'))} | {f(means.get('test'))} | {f(r['gap'])} |")
+    print()
     shas = {s: results[policies[0]][s]["suite"]["sha256"][:12] for s in SUITES}
     print("Suite versions (sha256, first 12 hex digits): " + ", ".join(f"{s} `{h}`" for s, h in shas.items()) + ".")
 

@@ -124,7 +124,11 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
         return Ok(Trained { policy: saved.policy, grey_blind: false });
     }
     let blind = obs_dim_without_grey(&env.config().blocks());
-    if wanted == blind {
+    // Without grey blocks the view keeps every other block, so its size is fixed only where
+    // no object of another colour comes in a varying number.
+    let task = &env.config().task;
+    let fixed = task.count_groups().iter().all(|g| task.colours()[g.first] == crate::rules::Colour::Grey);
+    if wanted == blind && fixed {
         return Ok(Trained { policy: saved.policy, grey_blind: true });
     }
     bail!(

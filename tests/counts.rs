@@ -216,3 +216,17 @@ fn tasks_without_counts_draw_nothing_for_them() {
         assert!(e.present().iter().all(|&p| p), "{id}");
     }
 }
+
+#[cfg(feature = "train")]
+#[test]
+fn the_grey_blind_view_drops_absent_greys_too() {
+    use blockpuzzle::agents::expert::without_grey;
+    let mut e = env("BlocksChooseN-v0", ObsMode::Flat);
+    for seed in 0..10 {
+        let (obs, _) = e.reset(Some(seed)).unwrap();
+        // Whatever the number of greys: robot, blue, green (the BlocksTouch-v0 observation).
+        let v = without_grey(&obs);
+        assert_eq!(v.len(), blockpuzzle::env::obs_dim(2), "seed {seed}");
+        assert_eq!(&v[..], &obs[..blockpuzzle::env::obs_dim(2)]);
+    }
+}

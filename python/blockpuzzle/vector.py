@@ -45,6 +45,9 @@ class BlockPuzzleVectorEnv(VectorEnv):
         self.obs_layout = single.obs_layout()
         self.max_level = single.max_level
         self.task_id = single.id
+        #: The rule objects as the task writes them: (name, colour) of the gripper, the table, each
+        #: block slot, then the floor when it is one (the indices of ``info["contact_matrix"]``).
+        self.rule_objects = single.objects()
         single.close()
         self.num_envs = int(num_envs)
         self.threads = int(threads)

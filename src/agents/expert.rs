@@ -19,9 +19,11 @@ fn is_grey(row: &[f32]) -> bool {
 
 /// The flat observation with every grey block's features removed: a
 /// BlocksChoose observation becomes a BlocksTouch one (robot, blue, green).
+/// Rows of absent objects (no colour: a grey copy a task with counts left
+/// out) go too, so the view has the same size whatever the count.
 pub fn without_grey(obs: &[f32]) -> Vec<f32> {
     let spec = ObsSpec::flat(obs.len().saturating_sub(ROBOT_OBS) / BLOCK_OBS);
-    spec.keep_objects(obs, |row| !is_grey(row))
+    spec.keep_objects(obs, |row| !is_grey(row) && ObsSpec::colour(row).iter().any(|&v| v > 0.5))
 }
 
 /// Size of [`without_grey`]'s output for a scene with blocks of `colours`.
