@@ -13,6 +13,7 @@
 pub mod align;
 pub mod check;
 pub mod env;
+pub mod hindsight;
 pub mod io;
 pub mod limits;
 pub mod math;

@@ -318,6 +318,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         AnyPolicy::Pggd(p) => (&p.net, &p.norm, Some(p.sigma_min)),
     };
     let critic = if info.keep_critic { saved.critic.as_ref() } else { None };
+    if net.set.is_some() || critic.is_some_and(|c| c.set.is_some()) {
+        return Err(corrupt("a set network: the zoo's format holds MLPs only so far".into()));
+    }
     let mut arrays: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
     let mut add_net = |prefix: &str, net: &TanhMlp| {
         for (i, l) in net.layers.iter().enumerate() {
@@ -441,7 +444,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                 })
             })
             .collect::<Result<_, ZooError>>()?;
-        Ok(TanhMlp { layers, tanh_out: l.tanh_out })
+        Ok(TanhMlp { layers, tanh_out: l.tanh_out, set: None })
     };
     let net = read_net("actor", &meta.actor)?;
     let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;

@@ -1,6 +1,14 @@
 //! A plain-Rust copy of a policy network for rollouts: single-observation
 //! forward passes are matrix–vector products, which are several times faster
 //! here than a libtorch call on a 1×N batch (per-op overhead dominates).
+//!
+//! A network is an MLP, or a set network ([`SetLayout`]): the same layers,
+//! the first ones an encoder applied to each present object row of an
+//! `objects` observation (shared across the rows), their outputs pooled
+//! (masked mean and max), then the rest a head over the robot features,
+//! the pooled features and anything after the observation (a critic's
+//! action). Its output does not depend on the order of the object rows nor
+//! on what the rows the mask leaves out hold.
 
 use serde::{Deserialize, Serialize};
 
@@ -39,13 +47,43 @@ fn dot(a: &[f32], b: &[f32]) -> f32 {
     acc.iter().sum::<f32>() + tail
 }
 
-/// ReLU hidden layers and a tanh (or linear) output.
+/// How a set network reads its input: `robot | slots × object | mask`
+/// (an `objects` observation, [`crate::env::ObsSpec`]), then any extra inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SetLayout {
+    /// Robot features.
+    pub robot: usize,
+    /// Features per object row.
+    pub object: usize,
+    /// Object slots.
+    pub slots: usize,
+    /// Layers of the per-object encoder (the network's first ones); the rest are the head.
+    pub encoder_layers: usize,
+}
+
+impl SetLayout {
+    /// The observation's length: robot, rows and mask.
+    pub fn obs_dim(&self) -> usize {
+        self.robot + self.slots * self.object + self.slots
+    }
+
+    /// The head's input size for an encoder of `width` outputs and `extra`
+    /// inputs after the observation: robot, pooled mean and max, extra.
+    pub fn head_input(&self, width: usize, extra: usize) -> usize {
+        self.robot + 2 * width + extra
+    }
+}
+
+/// ReLU hidden layers and a tanh (or linear) output; with `set`, a set network.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TanhMlp {
     /// The layers, input first.
     pub layers: Vec<Dense>,
     /// Whether the output goes through tanh.
     pub tanh_out: bool,
+    /// A set network's layout (none: an MLP over the whole input).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub set: Option<SetLayout>,
 }
 
 impl TanhMlp {
@@ -59,8 +97,21 @@ impl TanhMlp {
         if self.layers.is_empty() {
             return Err("the network has no layers".into());
         }
-        let mut width = n_in;
+        if let Some(s) = &self.set {
+            if s.encoder_layers == 0 || s.encoder_layers >= self.layers.len() || n_in < s.obs_dim() {
+                return Err(format!(
+                    "set network: {} encoder layers of {} and an observation of {} values for {n_in} inputs",
+                    s.encoder_layers,
+                    self.layers.len(),
+                    s.obs_dim()
+                ));
+            }
+        }
+        let mut width = self.set.map_or(n_in, |s| s.object);
         for (i, l) in self.layers.iter().enumerate() {
+            if let Some(s) = self.set.filter(|s| s.encoder_layers == i) {
+                width = s.head_input(width, n_in - s.obs_dim());
+            }
             if l.n_in != width || l.b.is_empty() || l.w.len() != l.b.len() * l.n_in {
                 return Err(format!(
                     "layer {i} has {} weights, {} biases and {} inputs where {width} inputs were expected",
@@ -85,23 +136,60 @@ impl TanhMlp {
 
     /// Output for one (already normalised) input.
     pub fn forward(&self, x: &[f32]) -> Vec<f32> {
-        let (mut a, mut b) = (x.to_vec(), Vec::new());
-        for (i, layer) in self.layers.iter().enumerate() {
-            layer.forward(&a, &mut b);
-            let last = i + 1 == self.layers.len();
-            for v in b.iter_mut() {
-                *v = if !last {
-                    v.max(0.0)
-                } else if self.tanh_out {
-                    v.tanh()
-                } else {
-                    *v
-                };
-            }
-            std::mem::swap(&mut a, &mut b);
+        match &self.set {
+            None => run(&self.layers, x.to_vec(), self.tanh_out),
+            Some(s) => self.forward_set(s, x),
         }
-        a
     }
+
+    /// The set network: encode each present row, pool, then the head.
+    fn forward_set(&self, s: &SetLayout, x: &[f32]) -> Vec<f32> {
+        let (encoder, head) = self.layers.split_at(s.encoder_layers.min(self.layers.len()));
+        let width = encoder.last().map_or(0, |l| l.b.len());
+        let rows_end = s.robot + s.slots * s.object;
+        let (mut sum, mut max, mut n) = (vec![0.0f32; width], vec![0.0f32; width], 0usize);
+        for k in 0..s.slots {
+            if x.get(rows_end + k).map_or(true, |&m| m <= 0.5) {
+                continue;
+            }
+            let row = x[s.robot + k * s.object..s.robot + (k + 1) * s.object].to_vec();
+            // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
+            let h = run_hidden(encoder, row);
+            for (i, v) in h.iter().enumerate() {
+                sum[i] += v;
+                max[i] = max[i].max(*v);
+            }
+            n += 1;
+        }
+        let mut input = x[..s.robot].to_vec();
+        input.extend(sum.iter().map(|v| v / n.max(1) as f32));
+        input.extend(max);
+        input.extend_from_slice(x.get(rows_end + s.slots..).unwrap_or(&[]));
+        run(head, input, self.tanh_out)
+    }
+}
+
+/// `layers` on `x`, every output through ReLU.
+fn run_hidden(layers: &[Dense], x: Vec<f32>) -> Vec<f32> {
+    let (mut a, mut b) = (x, Vec::new());
+    for layer in layers {
+        layer.forward(&a, &mut b);
+        b.iter_mut().for_each(|v| *v = v.max(0.0));
+        std::mem::swap(&mut a, &mut b);
+    }
+    a
+}
+
+/// `layers` on `x`: ReLU between them, tanh (or nothing) after the last.
+fn run(layers: &[Dense], x: Vec<f32>, tanh_out: bool) -> Vec<f32> {
+    let Some((last, hidden)) = layers.split_last() else { return x };
+    let a = run_hidden(hidden, x);
+    let mut out = Vec::new();
+    last.forward(&a, &mut out);
+    if tanh_out {
+        out.iter_mut().for_each(|v| *v = v.tanh());
+    }
+    out
 }
 
 #[cfg(test)]
@@ -116,6 +204,7 @@ mod tests {
                 Dense { w: vec![1.0, 1.0], b: vec![0.5], n_in: 2 },
             ],
             tanh_out: true,
+            set: None,
         };
         // hidden = relu([x0, -x1]) = [2, 0]; out = tanh(2 + 0 + 0.5)
         assert!((net.forward(&[2.0, 3.0])[0] - 2.5f32.tanh()).abs() < 1e-7);

@@ -3,7 +3,7 @@
 //! all simple loops over a list of tensors), plus an Adam optimiser whose
 //! state can be saved and restored exactly.
 
-use super::mlp::{Dense, TanhMlp};
+use super::mlp::{Dense, SetLayout, TanhMlp};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
@@ -12,14 +12,33 @@ pub fn mlp_sizes(input: usize, hidden: usize, layers: usize, output: usize) -> V
     std::iter::once(input).chain(std::iter::repeat(hidden).take(layers)).chain(std::iter::once(output)).collect()
 }
 
-/// A fully connected network: ReLU hidden layers, linear or tanh output.
+/// A fully connected network: ReLU hidden layers, linear or tanh output;
+/// or, with a [`SetLayout`], a set network (see [`super::mlp`]): the same
+/// list of layers, the first ones a per-object encoder, the rest a head.
 pub struct Net {
     /// Weight `[out, in]` and bias `[out]` of each layer, input first.
     pub params: Vec<Tensor>,
-    sizes: Vec<usize>,
+    /// The network's input size.
+    input: usize,
+    /// `(in, out)` of each layer.
+    shapes: Vec<(usize, usize)>,
     tanh_out: bool,
     /// Hidden-to-hidden products in bfloat16 (see [`Net::with_bf16`]).
     bf16: bool,
+    /// A set network's layout.
+    set: Option<SetLayout>,
+}
+
+/// Glorot-uniform weights and zero biases for layers of these shapes, in order.
+fn init(shapes: &[(usize, usize)], rng: &mut impl Rng) -> Vec<Tensor> {
+    let mut params = Vec::new();
+    for &(n_in, n_out) in shapes {
+        let a = (6.0 / (n_in + n_out) as f64).sqrt() as f32;
+        let data: Vec<f32> = (0..n_in * n_out).map(|_| rng.gen_range(-a..a)).collect();
+        params.push(Tensor::of_slice(&data).view([n_out as i64, n_in as i64]).set_requires_grad(true));
+        params.push(Tensor::zeros(&[n_out as i64], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true));
+    }
+    params
 }
 
 impl Net {
@@ -27,15 +46,32 @@ impl Net {
     /// defaults, as in OpenAI baselines), drawn from `rng` so that a seed
     /// fixes the initial network.
     pub fn new(sizes: &[usize], tanh_out: bool, rng: &mut impl Rng) -> Self {
-        let mut params = Vec::new();
-        for w in sizes.windows(2) {
-            let (n_in, n_out) = (w[0], w[1]);
-            let a = (6.0 / (n_in + n_out) as f64).sqrt() as f32;
-            let data: Vec<f32> = (0..n_in * n_out).map(|_| rng.gen_range(-a..a)).collect();
-            params.push(Tensor::of_slice(&data).view([n_out as i64, n_in as i64]).set_requires_grad(true));
-            params.push(Tensor::zeros(&[n_out as i64], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true));
-        }
-        Self { params, sizes: sizes.to_vec(), tanh_out, bf16: false }
+        let shapes: Vec<(usize, usize)> = sizes.windows(2).map(|w| (w[0], w[1])).collect();
+        let params = init(&shapes, rng);
+        Self { params, input: sizes.first().copied().unwrap_or(0), shapes, tanh_out, bf16: false, set: None }
+    }
+
+    /// A set network over observations of `layout` followed by `extra`
+    /// inputs (a critic's action): an encoder of `encoder_layers` layers of
+    /// `hidden` units applied to each object row, masked mean and max
+    /// pooling, then a head of `head_layers` hidden layers of `hidden` units
+    /// and `out` outputs over the robot features, the pooled features and
+    /// the extra inputs. Initialised as [`Net::new`].
+    pub fn new_set(
+        layout: SetLayout,
+        extra: usize,
+        (hidden, encoder_layers, head_layers): (usize, usize, usize),
+        out: usize,
+        tanh_out: bool,
+        rng: &mut impl Rng,
+    ) -> Self {
+        let layout = SetLayout { encoder_layers: encoder_layers.max(1), ..layout };
+        let mut shapes = vec![(layout.object, hidden)];
+        shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.encoder_layers - 1));
+        let head = mlp_sizes(layout.head_input(hidden, extra), hidden, head_layers, out);
+        shapes.extend(head.windows(2).map(|w| (w[0], w[1])));
+        let params = init(&shapes, rng);
+        Self { params, input: layout.obs_dim() + extra, shapes, tanh_out, bf16: false, set: Some(layout) }
     }
 
     /// The libtorch twin of a plain network (the inverse of [`Net::to_plain`]),
@@ -47,22 +83,23 @@ impl Net {
         let Some(first) = mlp.layers.first() else {
             return Err("the network has no layers".into());
         };
-        let mut sizes = vec![first.n_in];
-        let mut params = Vec::new();
-        for (l, layer) in mlp.layers.iter().enumerate() {
-            let (n_in, n_out) = (layer.n_in, layer.b.len());
-            if n_in != sizes[l] || layer.w.len() != n_in * n_out {
-                return Err(format!(
-                    "layer {l}: {} weights and {n_out} biases do not fit {} inputs",
-                    layer.w.len(),
-                    sizes[l]
-                ));
+        let input = match mlp.set {
+            None => first.n_in,
+            Some(s) => {
+                let width = mlp.layers.get(s.encoder_layers.max(1) - 1).map_or(0, |l| l.b.len());
+                let head_in = mlp.layers.get(s.encoder_layers).map_or(0, |l| l.n_in);
+                s.obs_dim() + head_in.saturating_sub(s.head_input(width, 0))
             }
-            params.push(Tensor::of_slice(&layer.w).view([n_out as i64, n_in as i64]));
+        };
+        mlp.check(input, mlp.layers.last().map_or(0, |l| l.b.len()), f32::INFINITY)?;
+        let mut params = Vec::new();
+        for layer in &mlp.layers {
+            let (n_in, n_out) = (layer.n_in as i64, layer.b.len() as i64);
+            params.push(Tensor::of_slice(&layer.w).view([n_out, n_in]));
             params.push(Tensor::of_slice(&layer.b));
-            sizes.push(n_out);
         }
-        Ok(Self { params, sizes, tanh_out: mlp.tanh_out, bf16: false })
+        let shapes = mlp.layers.iter().map(|l| (l.n_in, l.b.len())).collect();
+        Ok(Self { params, input, shapes, tanh_out: mlp.tanh_out, bf16: false, set: mlp.set })
     }
 
     /// Computes the hidden-to-hidden matrix products (the bulk of the work:
@@ -75,9 +112,14 @@ impl Net {
         self
     }
 
-    /// Layer sizes, input first.
-    pub fn sizes(&self) -> &[usize] {
-        &self.sizes
+    /// Sizes: the input, then each layer's output (an MLP's layer sizes).
+    pub fn sizes(&self) -> Vec<usize> {
+        std::iter::once(self.input).chain(self.shapes.iter().map(|s| s.1)).collect()
+    }
+
+    /// The set network's layout (none for an MLP).
+    pub fn set_layout(&self) -> Option<SetLayout> {
+        self.set
     }
 
     /// Output for a batch `[n, in]`.
@@ -97,11 +139,39 @@ impl Net {
 
     /// The output layer's values before its `tanh` (the output itself for a linear output).
     pub fn preactivation(&self, x: &Tensor) -> Tensor {
+        match self.set {
+            None => self.layers(x.shallow_clone(), 0),
+            Some(s) => self.set_preactivation(&s, x),
+        }
+    }
+
+    /// A set network's head input for a batch: robot features, the masked
+    /// mean and max of the encoded rows, the extra inputs.
+    fn set_preactivation(&self, s: &SetLayout, x: &Tensor) -> Tensor {
+        let (r, f, m) = (s.robot as i64, s.object as i64, s.slots as i64);
+        let n = x.size()[0];
+        let robot = x.narrow(1, 0, r);
+        let rows = x.narrow(1, r, m * f).reshape(&[n * m, f]);
+        let mask = x.narrow(1, r + m * f, m).gt(0.5).to_kind(Kind::Float).unsqueeze(2);
+        let extra = x.narrow(1, r + m * f + m, x.size()[1] - (r + m * f + m));
+        let mut h = rows;
+        for l in 0..s.encoder_layers {
+            h = (h.matmul(&self.params[2 * l].tr()) + &self.params[2 * l + 1]).relu();
+        }
+        let h = h.reshape(&[n, m, -1]) * &mask;
+        let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
+        let mean = h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count;
+        // Encoded features are ≥ 0 (ReLU), so the max over masked rows (set to 0) is theirs, or 0.
+        let max = h.amax([1i64].as_slice(), false);
+        self.layers(Tensor::cat(&[robot, mean, max, extra], 1), s.encoder_layers)
+    }
+
+    /// The layers from `first` on, applied to `h`: ReLU between them, none after the last.
+    fn layers(&self, mut h: Tensor, first: usize) -> Tensor {
         let n_layers = self.params.len() / 2;
-        let mut h = x.shallow_clone();
-        for l in 0..n_layers {
+        for l in first..n_layers {
             let (w, b) = (&self.params[2 * l], &self.params[2 * l + 1]);
-            h = if self.bf16 && l > 0 && l + 1 < n_layers {
+            h = if self.bf16 && l > first && l + 1 < n_layers {
                 h.to_kind(Kind::BFloat16).matmul(&w.to_kind(Kind::BFloat16).tr()).to_kind(Kind::Float) + b
             } else {
                 h.matmul(&w.tr()) + b
@@ -115,23 +185,13 @@ impl Net {
 
     /// A copy with the same parameter values that tracks no gradients.
     pub fn detached_copy(&self) -> Net {
-        Net {
-            params: self.params.iter().map(|p| p.detach().copy()).collect(),
-            sizes: self.sizes.clone(),
-            tanh_out: self.tanh_out,
-            bf16: self.bf16,
-        }
+        Net { params: self.params.iter().map(|p| p.detach().copy()).collect(), shapes: self.shapes.clone(), ..*self }
     }
 
     /// The same parameters without gradient tracking (shared storage: valid
     /// until the parameters are next changed).
     pub fn detached_view(&self) -> Net {
-        Net {
-            params: self.params.iter().map(Tensor::detach).collect(),
-            sizes: self.sizes.clone(),
-            tanh_out: self.tanh_out,
-            bf16: self.bf16,
-        }
+        Net { params: self.params.iter().map(Tensor::detach).collect(), shapes: self.shapes.clone(), ..*self }
     }
 
     /// `self = polyak · self + (1 − polyak) · source` (target-network update).
@@ -170,16 +230,16 @@ impl Net {
     /// A plain-Rust copy for fast single-observation rollouts.
     pub fn to_plain(&self) -> TanhMlp {
         let layers = self
-            .sizes
-            .windows(2)
+            .shapes
+            .iter()
             .enumerate()
-            .map(|(l, w)| Dense {
+            .map(|(l, &(n_in, _))| Dense {
                 w: tensor_to_vec(&self.params[2 * l]),
                 b: tensor_to_vec(&self.params[2 * l + 1]),
-                n_in: w[0],
+                n_in,
             })
             .collect();
-        TanhMlp { layers, tanh_out: self.tanh_out }
+        TanhMlp { layers, tanh_out: self.tanh_out, set: self.set }
     }
 
     /// Sets every parameter's gradient to zero.
@@ -331,6 +391,97 @@ mod tests {
         let mut broken = plain;
         broken.layers[1].n_in = 7;
         assert!(Net::from_plain(&broken).err().is_some_and(|e| e.contains("layer 1")));
+    }
+
+    /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
+    const SET: SetLayout = SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2 };
+
+    /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
+    fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
+        let mut x: Vec<f32> = (0..SET.robot).map(|_| rng.gen_range(-1.0..1.0)).collect();
+        for &p in present {
+            x.extend((0..SET.object).map(|_| if p { rng.gen_range(-1.0..1.0) } else { fill }));
+        }
+        x.extend(present.iter().map(|&p| if p { 1.0 } else { 0.0 }));
+        x.extend((0..extra).map(|_| rng.gen_range(-1.0..1.0)));
+        x
+    }
+
+    /// `x` with the object slots (rows and mask entries) in the order `perm`.
+    fn permuted(x: &[f32], perm: &[usize; 4]) -> Vec<f32> {
+        let (r, f, m) = (SET.robot, SET.object, SET.slots);
+        let mut y = x[..r].to_vec();
+        for &k in perm {
+            y.extend_from_slice(&x[r + k * f..r + (k + 1) * f]);
+        }
+        y.extend(perm.iter().map(|&k| x[r + m * f + k]));
+        y.extend_from_slice(&x[r + m * f + m..]);
+        y
+    }
+
+    #[test]
+    fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for (extra, out, tanh) in [(0, 4, true), (4, 1, false)] {
+            // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output).
+            let net = Net::new_set(SET, extra, (16, 2, 2), out, tanh, &mut rng);
+            assert_eq!(net.sizes()[0], SET.obs_dim() + extra);
+            let plain = net.to_plain();
+            plain.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap();
+            let twin = Net::from_plain(&plain).unwrap();
+            for present in [[true, true, false, true], [true, false, false, false], [false; 4], [true; 4]] {
+                let x = set_obs(&mut rng, &present, 0.0, extra);
+                let batch = |v: &[f32]| Tensor::of_slice(v).view([1, v.len() as i64]);
+                let y = tensor_to_vec(&net.forward(&batch(&x)));
+                assert_eq!(y.len(), out);
+                // The plain-Rust copy (rollouts) and its libtorch twin give the same output.
+                for (a, b) in y.iter().zip(plain.forward(&x)) {
+                    assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+                }
+                assert_eq!(tensor_to_vec(&twin.forward(&batch(&x))), y);
+                // Any order of the slots gives the same output.
+                let p = permuted(&x, &[2, 0, 3, 1]);
+                for (a, b) in y.iter().zip(tensor_to_vec(&net.forward(&batch(&p)))) {
+                    assert!((a - b).abs() < 1e-5, "permuted: {a} vs {b}");
+                }
+                // What an absent row holds changes nothing.
+                let mut junk = x.clone();
+                for k in (0..4).filter(|&k| !present[k]) {
+                    junk[SET.robot + k * SET.object..SET.robot + (k + 1) * SET.object].fill(7.5);
+                }
+                assert_eq!(tensor_to_vec(&net.forward(&batch(&junk))), y);
+                assert_eq!(plain.forward(&junk), plain.forward(&x));
+            }
+            // A batch is row by row.
+            let rows: Vec<Vec<f32>> =
+                (0..3).map(|_| set_obs(&mut rng, &[true, false, true, true], 0.0, extra)).collect();
+            let flat: Vec<f32> = rows.concat();
+            let all = tensor_to_vec(&net.forward(&Tensor::of_slice(&flat).view([3, (SET.obs_dim() + extra) as i64])));
+            for (i, row) in rows.iter().enumerate() {
+                let one = tensor_to_vec(&net.forward(&Tensor::of_slice(row).view([1, row.len() as i64])));
+                for (a, b) in all[i * out..(i + 1) * out].iter().zip(&one) {
+                    assert!((a - b).abs() < 1e-5);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_set_network_is_the_mlp_plumbing_plus_pooling() {
+        // Its parameters are an ordinary list of [w, b] pairs: the optimiser, target averaging and
+        // checkpoints loop over them unchanged.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let net = Net::new_set(SET, 0, (8, 1, 1), 2, true, &mut rng);
+        let shapes: Vec<Vec<i64>> = net.params.iter().map(Tensor::size).collect();
+        assert_eq!(shapes, vec![vec![8, 5], vec![8], vec![8, 3 + 16], vec![8], vec![2, 8], vec![2]]);
+        let mut copy = Net::new_set(SET, 0, (8, 1, 1), 2, true, &mut rng);
+        copy.load_vecs(&net.to_vecs()).unwrap();
+        let x = Tensor::of_slice(&set_obs(&mut rng, &[true, true, false, false], 0.0, 0)).view([1, -1]);
+        assert_eq!(tensor_to_vec(&copy.forward(&x)), tensor_to_vec(&net.forward(&x)));
+        // A plain copy whose head does not fit its encoder is refused.
+        let mut broken = net.to_plain();
+        broken.layers[1].n_in = 20;
+        assert!(Net::from_plain(&broken).is_err());
     }
 
     /// Adam as libtorch tensor operations, one whole-tensor pass each (the

@@ -157,6 +157,8 @@ pub struct BlockEnv {
     present: Vec<bool>,
     /// The task has counts: some episodes leave blocks out.
     varies: bool,
+    /// The contacts of every substep of the last step, when recording (hindsight relabelling).
+    substeps: Option<Vec<Touching>>,
     physics: std::time::Duration,
 }
 
@@ -225,6 +227,7 @@ impl BlockEnv {
             sizes: config_sizes,
             present,
             varies,
+            substeps: None,
             physics: std::time::Duration::ZERO,
         })
     }
@@ -451,6 +454,9 @@ impl BlockEnv {
         let bad_before = self.bad_number_warnings();
         self.apply_action(action);
         self.step_touching.clear();
+        if let Some(record) = &mut self.substeps {
+            record.clear();
+        }
         for _ in 0..self.config.n_substeps {
             let t = std::time::Instant::now();
             let stepped = self.data.step();
@@ -569,6 +575,23 @@ impl BlockEnv {
         self.scan_contacts();
         self.step_touching.union_with(&self.touching);
         self.rules.observe(&self.touching);
+        if let Some(record) = &mut self.substeps {
+            record.push(self.touching.clone());
+        }
+    }
+
+    /// Records, from the next step on, the contacts the rules saw at every
+    /// substep of a step (`on = false` stops): what
+    /// [`crate::hindsight::replay`] needs to judge the step under other colours.
+    pub fn record_substeps(&mut self, on: bool) {
+        self.substeps = on.then(Vec::new);
+    }
+
+    /// The contacts the rules saw at each substep of the last step, in order
+    /// (the physics substeps, then the state after them); empty unless
+    /// [`BlockEnv::record_substeps`] is on.
+    pub fn substep_contacts(&self) -> &[Touching] {
+        self.substeps.as_deref().unwrap_or(&[])
     }
 
     /// Id of a model object by name (convenience for tools and tests).
