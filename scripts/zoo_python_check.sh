@@ -13,3 +13,18 @@ if ! "$VENV/bin/python" -c "import numpy, safetensors; assert numpy.__version__ 
     "$VENV/bin/pip" install -q --disable-pip-version-check "${PINS[@]}"
 fi
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$ROOT/zoo"
+
+# Set networks (format 3): a few epochs of `train --net set` (mean-max, then attention), exported to a
+# scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
+BP="$ROOT/target/release/blockpuzzle"
+if [ ! -x "$BP" ]; then (cd "$ROOT" && cargo build --release --quiet); fi
+SCRATCH="$(mktemp -d)"
+trap 'rm -rf "$SCRATCH"' EXIT
+for pooling in mean-max attention; do
+    "$BP" train --env BlocksChooseN-v0 --net set --set-pooling "$pooling" --epochs 1 --cycles 2 --batches 3 \
+        --batch-size 32 --hidden 32 --layers 2 --test-episodes 1 --torch-threads 1 \
+        --run-dir "$SCRATCH/run-$pooling" > /dev/null
+    "$BP" zoo export --from "$SCRATCH/run-$pooling" --name "set-$pooling" --description "zoo_python_check" \
+        --trained-with "scripts/zoo_python_check.sh" --zoo "$SCRATCH/zoo" > /dev/null
+done
+"$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$SCRATCH/zoo"

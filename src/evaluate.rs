@@ -5,7 +5,7 @@
 
 use crate::agents::expert::{obs_dim_without_grey, without_grey};
 use crate::agents::AnyPolicy;
-use crate::env::{BlockEnv, EnvConfig, VectorEnv, ACTION_DIM};
+use crate::env::{BlockEnv, EnvConfig, ObsMode, VectorEnv, ACTION_DIM};
 pub use crate::outcome::wilson95;
 use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{ObsHashPolicy, Policy, ScriptedPolicy};
@@ -72,6 +72,16 @@ pub enum Subject<'a> {
     Baseline(Baseline),
 }
 
+impl Subject<'_> {
+    /// The observation it reads: a saved policy's, or the flat one (baselines).
+    pub fn obs_mode(&self) -> ObsMode {
+        match self {
+            Subject::Saved(_, saved) => saved.policy.obs_mode(),
+            Subject::Baseline(_) => ObsMode::Flat,
+        }
+    }
+}
+
 /// What acts in the episodes of one evaluation.
 #[derive(Debug, Clone)]
 enum Actor {
@@ -118,6 +128,24 @@ impl Policy for Actor {
 /// # Errors
 /// The observation sizes fit neither way.
 pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result<Trained> {
+    let spec = env.obs_spec();
+    if let Some(layout) = saved.policy.net().set {
+        // A set network plays any number of objects with the same row features.
+        if spec.mode != ObsMode::Objects || (spec.robot_dim(), spec.object_dim()) != (layout.robot, layout.object) {
+            bail!(
+                "policy {} is a set network over `objects` observations ({} robot and {} object features); {} \
+                 gives {:?} observations with {} and {} (give the environment obs_mode objects)",
+                path.display(),
+                layout.robot,
+                layout.object,
+                env.id(),
+                spec.mode,
+                spec.robot_dim(),
+                spec.object_dim()
+            );
+        }
+        return Ok(Trained { policy: saved.policy.with_slots(spec.max_objects), grey_blind: false });
+    }
     let dim = env.observation_space().dim();
     let wanted = saved.policy.obs_dim();
     if wanted == dim {
@@ -185,8 +213,9 @@ pub struct EvalSpec<'a> {
     pub threads: usize,
 }
 
-fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
-    let mut env = BlockEnv::new(EnvConfig::new(spec.task.clone()))?;
+/// The environment of `spec`, its observation presented as `obs_mode` (the policy's).
+fn make_env(spec: &EvalSpec, obs_mode: ObsMode) -> Result<BlockEnv> {
+    let mut env = BlockEnv::new(EnvConfig { obs_mode, ..EnvConfig::new(spec.task.clone()) })?;
     if spec.challenge {
         env.set_challenge(true)?;
     }
@@ -203,7 +232,7 @@ fn make_env(spec: &EvalSpec) -> Result<BlockEnv> {
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    let env = make_env(spec)?;
+    let env = make_env(spec, saved.policy.obs_mode())?;
     let policy = Actor::Trained(trained_policy(path, saved, &env)?);
     play(spec, env, policy)
 }
@@ -216,7 +245,8 @@ fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
     // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
     // core count, the CLI's default, may pass the vector engine's thread bound: use the bound.)
     let threads = spec.threads.clamp(1, spec.episodes).min(crate::limits::THREADS.max as usize);
-    let more = (1..threads).map(|_| make_env(spec));
+    let mode = env.obs_spec().mode;
+    let more = (1..threads).map(|_| make_env(spec, mode));
     let mut envs = VectorEnv::from_envs(std::iter::once(Ok(env)).chain(more).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
@@ -330,7 +360,7 @@ pub fn evaluate_suite(subject: Subject, suite: &crate::suite::Suite, threads: us
                 threads,
             };
             // An environment error fails the suite; only a policy that does not fit skips the row.
-            let env = make_env(&spec)?;
+            let env = make_env(&spec, subject.obs_mode())?;
             let (evaluation, skipped) = match Actor::fit(subject, &env) {
                 Err(e) => (None, Some(format!("{e:#}"))),
                 Ok(policy) => (Some(play(&spec, env, policy)?), None),

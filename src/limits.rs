@@ -141,6 +141,11 @@ pub const TEST_EPISODES: Bound = bound("--test-episodes", 1, 100_000, "");
 pub const HIDDEN: Bound = bound("--hidden", 1, 8_192, "a layer of 8,192 units already holds 67 M weights");
 /// Hidden layers.
 pub const LAYERS: Bound = bound("--layers", 1, 32, "");
+/// Relabelled copies of an episode (hindsight colours).
+pub const HINDSIGHT_COLOURS: Bound =
+    bound("--hindsight-colours", 0, 16, "an episode's blocks offer no more colourings");
+/// Layers of a set network's per-object encoder.
+pub const SET_ENCODER_LAYERS: Bound = bound("--set-encoder-layers", 1, 32, "");
 /// Steps of an n-step return.
 pub const N_STEP: Bound = bound("--n-step", 1, 50, "an episode's length in the paper's tasks");
 /// TD3's critic updates per actor update.

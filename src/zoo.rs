@@ -38,11 +38,12 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// The format tag this blockpuzzle writes in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/2";
+pub const FORMAT: &str = "blockpuzzle-zoo/3";
 
 /// The formats it reads: version 2 added the outcome counts of evaluations
-/// (version 1 entries load with none).
-pub const READS: [&str; 2] = ["blockpuzzle-zoo/1", FORMAT];
+/// (version 1 entries load with none); version 3 set networks (a network's
+/// `set` layout and `layers` shapes; entries without them are MLPs as before).
+pub const READS: [&str; 3] = ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", FORMAT];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -75,6 +76,14 @@ pub struct NetLayout {
     pub sizes: Vec<usize>,
     /// Whether the output goes through tanh (DDPG's actor) or is linear.
     pub tanh_out: bool,
+    /// A set network's layout (absent: an MLP); its first `encoder_layers`
+    /// layers encode each object row, the next four (with `attention`) are the
+    /// attention block, the rest the head (zoo/README.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub set: Option<crate::agents::mlp::SetLayout>,
+    /// A set network's layers as `[out, in]` (its inputs do not chain as an MLP's sizes do).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<[usize; 2]>,
 }
 
 /// One evaluation of the entry (a cell of the table, or a `blockpuzzle eval`).
@@ -166,7 +175,8 @@ pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
         Some(source) => crate::env::registry::recorded(source).map_err(|e| fail(e.to_string()))?,
         None => return Err(fail("the policy does not record its task".into())),
     };
-    let mut env = crate::env::BlockEnv::new(crate::env::EnvConfig::new(task)).map_err(|e| fail(e.to_string()))?;
+    let config = crate::env::EnvConfig { obs_mode: saved.policy.obs_mode(), ..crate::env::EnvConfig::new(task) };
+    let mut env = crate::env::BlockEnv::new(config).map_err(|e| fail(e.to_string()))?;
     let level = env.max_level();
     env.set_level(level).map_err(|e| fail(e.to_string()))?;
     (0..3)
@@ -252,10 +262,15 @@ fn sha256(bytes: &[u8]) -> String {
     format!("sha256:{:x}", Sha256::digest(bytes))
 }
 
-fn layout(net: &TanhMlp) -> NetLayout {
-    let mut sizes: Vec<usize> = net.layers.first().map(|l| vec![l.n_in]).unwrap_or_default();
+/// A network's layout, `n_in` its whole input (observation, and a critic's action).
+fn layout(net: &TanhMlp, n_in: usize) -> NetLayout {
+    let mut sizes = vec![n_in];
     sizes.extend(net.layers.iter().map(|l| l.b.len()));
-    NetLayout { sizes, tanh_out: net.tanh_out }
+    let layers = match net.set {
+        None => Vec::new(),
+        Some(_) => net.layers.iter().map(|l| [l.b.len(), l.n_in]).collect(),
+    };
+    NetLayout { sizes, tanh_out: net.tanh_out, set: net.set, layers }
 }
 
 fn le_bytes(v: &[f32]) -> Vec<u8> {
@@ -318,9 +333,6 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         AnyPolicy::Pggd(p) => (&p.net, &p.norm, Some(p.sigma_min)),
     };
     let critic = if info.keep_critic { saved.critic.as_ref() } else { None };
-    if net.set.is_some() || critic.is_some_and(|c| c.set.is_some()) {
-        return Err(corrupt("a set network: the zoo's format holds MLPs only so far".into()));
-    }
     let mut arrays: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
     let mut add_net = |prefix: &str, net: &TanhMlp| {
         for (i, l) in net.layers.iter().enumerate() {
@@ -357,8 +369,8 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         norm_clip: norm.clip(),
         norm_eps: norm.eps(),
         norm_count: norm.count(),
-        actor: layout(net),
-        critic: critic.map(layout),
+        actor: layout(net, norm.dim()),
+        critic: critic.map(|c| layout(c, norm.dim() + crate::env::ACTION_DIM)),
         sigma_min,
         trained_with: info.trained_with.clone(),
         exported_from: info.exported_from.clone(),
@@ -432,19 +444,24 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         if l.sizes.len() < 2 {
             return Err(corrupt(format!("{prefix} has {} layer sizes, at least 2 needed", l.sizes.len())));
         }
-        let layers = l
-            .sizes
-            .windows(2)
+        // [out, in] of each layer: an MLP's from its chained sizes, a set network's as written.
+        let shapes: Vec<[usize; 2]> = match l.set {
+            None => l.sizes.windows(2).map(|s| [s[1], s[0]]).collect(),
+            Some(_) if l.layers.len() + 1 == l.sizes.len() => l.layers.clone(),
+            Some(_) => return Err(corrupt(format!("{prefix} is a set network without the shapes of its layers"))),
+        };
+        let layers = shapes
+            .iter()
             .enumerate()
-            .map(|(i, s)| {
+            .map(|(i, &[out, n_in])| {
                 Ok(Dense {
-                    w: read(&format!("{prefix}.{i}.weight"), &[s[1], s[0]])?,
-                    b: read(&format!("{prefix}.{i}.bias"), &[s[1]])?,
-                    n_in: s[0],
+                    w: read(&format!("{prefix}.{i}.weight"), &[out, n_in])?,
+                    b: read(&format!("{prefix}.{i}.bias"), &[out])?,
+                    n_in,
                 })
             })
             .collect::<Result<_, ZooError>>()?;
-        Ok(TanhMlp { layers, tanh_out: l.tanh_out, set: None })
+        Ok(TanhMlp { layers, tanh_out: l.tanh_out, set: l.set })
     };
     let net = read_net("actor", &meta.actor)?;
     let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;

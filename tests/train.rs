@@ -2,6 +2,7 @@
 //! checkpoints, policies.
 #![cfg(feature = "train")]
 
+use blockpuzzle::agents::arch::{NetConfig, NetKind, Pooling};
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::load::load_policy;
@@ -32,6 +33,8 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         algo: Algo::DDPG,
         pggd: Default::default(),
         aggrevated: Default::default(),
+        hindsight_colours: 0,
+        net: Default::default(),
         task: None,
         branched_from: None,
     }
@@ -621,4 +624,81 @@ fn checkpoints_with_the_old_counter_fields_still_load() {
     let then = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
     assert_eq!(then.agent.state(), now.agent.state());
     assert_eq!(then.agent.norm(), now.agent.norm());
+}
+
+/// The set network over the `objects` observation (issue 31), with hindsight colours and TD3.
+fn tiny_set(env: &str, epochs: usize, pooling: Pooling) -> TrainConfig {
+    let mut c = tiny(env, epochs);
+    c.net = NetConfig { net: NetKind::Set, set_pooling: pooling, ..NetConfig::default() };
+    c.hindsight_colours = 2;
+    c.ddpg.td3 = true;
+    c
+}
+
+#[test]
+fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_object_count() {
+    let straight = tempfile::tempdir().unwrap();
+    let a = train(&tiny_set("BlocksChooseN-v0", 3, Pooling::MeanMax), straight.path(), false, &mut quiet).unwrap();
+    let split = tempfile::tempdir().unwrap();
+    train(&tiny_set("BlocksChooseN-v0", 2, Pooling::MeanMax), split.path(), false, &mut quiet).unwrap();
+    let b = train(&tiny_set("BlocksChooseN-v0", 3, Pooling::MeanMax), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    let (pa, pb) = (
+        load_policy(&straight.path().join("policy.json")).unwrap(),
+        load_policy(&split.path().join("policy.json")).unwrap(),
+    );
+    assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
+    assert_eq!(pa.policy.obs_mode(), blockpuzzle::env::ObsMode::Objects);
+    assert!(pa.policy.net().set.is_some_and(|s| s.slots == 6), "BlocksChooseN-v0 has six object slots");
+    // Resuming with the other network is refused, naming the flag.
+    let flat = TrainConfig { net: NetConfig::default(), ..tiny_set("BlocksChooseN-v0", 4, Pooling::MeanMax) };
+    let err = train(&flat, split.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--net"), "{err}");
+    // The policy plays BlocksChoose-v0 (three slots) and BlocksTouch-v0 (two) as well.
+    for id in ["BlocksChoose-v0", "BlocksTouch-v0", "BlocksChooseN-v0"] {
+        let task = blockpuzzle::env::registry::task(id).unwrap();
+        let spec = blockpuzzle::evaluate::EvalSpec {
+            task: &task,
+            challenge: false,
+            distribution: None,
+            level: Some(0),
+            episodes: 4,
+            seed: 11,
+            threads: 2,
+        };
+        let path = straight.path().join("policy.json");
+        let r = blockpuzzle::evaluate::evaluate(&path, pa.clone(), &spec).unwrap();
+        assert_eq!(r.episodes, 4, "{id}");
+    }
+    // Hindsight colours ran: the environments recorded contacts (progress has the columns).
+    let text = std::fs::read_to_string(straight.path().join("progress.csv")).unwrap();
+    assert!(text.lines().next().unwrap().contains("hindsight/relabelled"));
+}
+
+#[test]
+fn attention_pooling_trains_and_its_policy_acts_as_saved() {
+    let dir = tempfile::tempdir().unwrap();
+    train(&tiny_set("BlocksChoose-v0", 1, Pooling::Attention), dir.path(), false, &mut quiet).unwrap();
+    let saved = load_policy(&dir.path().join("policy.json")).unwrap();
+    assert!(saved.policy.net().set.is_some_and(|s| s.attention));
+    let cfg: TrainConfig =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
+    assert_eq!(cfg.net.set_pooling, Pooling::Attention);
+    assert!(cfg.title().contains("set network + attention") && cfg.title().contains("hindsight colours 2"));
+}
+
+#[test]
+fn set_networks_refuse_what_they_cannot_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
+    c.algo = Algo::PGGD;
+    c.ddpg.td3 = false;
+    c.aggrevated.expert = Some("zoo-name-that-does-not-matter".into());
+    let err = train(&c, &dir.path().join("x"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--expert") && err.contains("--net mlp"), "{err}");
+    assert!(!dir.path().join("x").exists(), "nothing written");
+    let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
+    c.net.set_encoder_layers = 0;
+    let err = train(&c, &dir.path().join("y"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--set-encoder-layers"), "{err}");
 }

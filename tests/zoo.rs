@@ -3,6 +3,7 @@
 //! policies they were exported from.
 #![cfg(feature = "train")]
 
+use blockpuzzle::agents::arch::Arch;
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::pggd::{Pggd, PggdConfig};
 use blockpuzzle::agents::AnyPolicy;
@@ -93,7 +94,7 @@ fn pggd_entry_round_trips() {
     let dir = tempfile::tempdir().unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     let d = obs_dim();
-    let mut p = Pggd::new(d, 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
+    let mut p = Pggd::new(Arch::mlp(d), 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
     p.norm.update(&random_obs(&mut rng, 20 * d));
     let saved = SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, ..ddpg_saved(1) };
     let path = zoo::export(dir.path(), &saved, &info("pggd-test")).unwrap();
@@ -326,5 +327,8 @@ fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
     v["format"] = "blockpuzzle-zoo/9".into();
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let e = err_text(zoo::load(&entry).unwrap_err());
-    assert!(e.contains("\"blockpuzzle-zoo/9\"") && e.contains("blockpuzzle-zoo/1, blockpuzzle-zoo/2"), "{e}");
+    assert!(
+        e.contains("\"blockpuzzle-zoo/9\"") && e.contains("blockpuzzle-zoo/1, blockpuzzle-zoo/2, blockpuzzle-zoo/3"),
+        "{e}"
+    );
 }

@@ -39,13 +39,13 @@ pub struct Registration {
     pub check: fn(&DdpgConfig, &PggdConfig) -> Result<(), String>,
 }
 
-/// What an algorithm is built from: the sizes and the run's settings (the
+/// What an algorithm is built from: the networks' inputs and the run's settings (the
 /// off-policy settings in [`DdpgConfig`] are shared by DDPG and SAC, and
 /// give PGGD its network shape and normaliser).
 #[derive(Debug, Clone, Copy)]
 pub struct Spec<'a> {
-    /// Observation size.
-    pub obs_dim: usize,
+    /// What the networks read: the observation's length and, for a set network, its layout.
+    pub arch: super::arch::Arch,
     /// Action size.
     pub act_dim: usize,
     /// Network shape, optimiser, discount, normaliser, exploration, n-step, TD3.

@@ -24,8 +24,9 @@
 //!   updated on every `policy_delay`-th critic update only.
 
 use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, StateDict};
+use super::arch::Arch;
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, mlp_sizes, Adam, Net};
+use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::AnyPolicy;
@@ -41,7 +42,7 @@ pub const REGISTRATION: Registration = Registration {
     title: "DDPG",
     about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
     takes_expert: false,
-    new: |spec, rng| Box::new(Ddpg::new(spec.obs_dim, spec.act_dim, spec.ddpg.clone(), rng)),
+    new: |spec, rng| Box::new(Ddpg::build(spec.arch, spec.act_dim, spec.ddpg.clone(), rng)),
     check: |_, _| Ok(()),
 };
 
@@ -276,20 +277,25 @@ pub struct Twin {
 }
 
 impl Ddpg {
-    /// A fresh learner; `rng` fixes the initial weights.
+    /// A fresh learner with MLPs over `obs_dim`-long observations; `rng` fixes the initial weights.
     pub fn new(obs_dim: usize, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
+        Self::build(Arch::mlp(obs_dim), act_dim, config, rng)
+    }
+
+    /// A fresh learner with the networks of `arch`; `rng` fixes the initial weights.
+    pub fn build(arch: Arch, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
         let bf16 = config.precision == Precision::Bf16;
-        let actor = Net::new(&mlp_sizes(obs_dim, config.hidden, config.layers, act_dim), true, rng).with_bf16(bf16);
-        let critic =
-            Net::new(&mlp_sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
+        let shape = (config.hidden, config.layers);
+        let obs_dim = arch.obs_dim;
+        let actor = arch.net(shape, 0, act_dim, true, rng).with_bf16(bf16);
+        let critic = arch.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
         let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
         let actor_opt = Adam::new(&actor.params, config.lr_actor);
         let critic_opt = Adam::new(&critic.params, config.lr_critic);
-        let norm = Normalizer::new(obs_dim, config.norm_eps, config.norm_clip);
+        let norm = arch.normalizer(config.norm_eps, config.norm_clip);
         // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
         let twin = config.td3.then(|| {
-            let critic =
-                Net::new(&mlp_sizes(obs_dim + act_dim, config.hidden, config.layers, 1), false, rng).with_bf16(bf16);
+            let critic = arch.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
             let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, config.lr_critic));
             Twin { critic, target, opt, noise_seed: rng.gen() }
         });

@@ -122,6 +122,7 @@ impl ExpertCritic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::agents::arch::Arch;
 
     #[test]
     fn beta_follows_the_schedule() {
@@ -148,7 +149,7 @@ mod tests {
         let dim = ROBOT_OBS + 3 * BLOCK_OBS;
         let expert =
             Ddpg::new(dim - BLOCK_OBS, 4, DdpgConfig { hidden: 16, ..DdpgConfig::default() }, &mut rng).policy();
-        let learner = Pggd::new(dim, 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng).policy();
+        let learner = Pggd::new(Arch::mlp(dim), 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng).policy();
         let mut obs: Vec<f32> = (0..dim).map(|k| (k as f32 * 0.7).sin()).collect();
         obs[dim - 4..].copy_from_slice(&[0.0, 0.0, 0.0, 1.0]); // the third block is grey
         for (beta, who) in [(1.0, Actor::Expert), (0.0, Actor::Learner)] {

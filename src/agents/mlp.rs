@@ -59,9 +59,43 @@ pub struct SetLayout {
     pub slots: usize,
     /// Layers of the per-object encoder (the network's first ones); the rest are the head.
     pub encoder_layers: usize,
+    /// One self-attention block after the encoder: the next [`ATTENTION_LAYERS`] layers.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub attention: bool,
 }
 
+/// The layers of a self-attention block: query, key, value and output projections.
+pub const ATTENTION_LAYERS: usize = 4;
+
 impl SetLayout {
+    /// The layout of an `objects` observation, with `encoder_layers` encoder layers.
+    ///
+    /// # Errors
+    /// A flat observation: a set network reads object rows and a mask.
+    pub fn of(spec: &crate::env::ObsSpec, encoder_layers: usize) -> Result<Self, String> {
+        if spec.mode != crate::env::ObsMode::Objects {
+            return Err("a set network reads the `objects` observation (obs_mode objects), not the flat one".into());
+        }
+        Ok(Self {
+            robot: spec.robot_dim(),
+            object: spec.object_dim(),
+            slots: spec.max_objects,
+            encoder_layers,
+            attention: false,
+        })
+    }
+
+    /// The index of the head's first layer: after the encoder and the attention block.
+    pub fn head_start(&self) -> usize {
+        self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 }
+    }
+
+    /// The same network on observations with `slots` object slots (its
+    /// weights do not depend on the number of objects).
+    pub fn with_slots(self, slots: usize) -> Self {
+        Self { slots, ..self }
+    }
+
     /// The observation's length: robot, rows and mask.
     pub fn obs_dim(&self) -> usize {
         self.robot + self.slots * self.object + self.slots
@@ -98,10 +132,11 @@ impl TanhMlp {
             return Err("the network has no layers".into());
         }
         if let Some(s) = &self.set {
-            if s.encoder_layers == 0 || s.encoder_layers >= self.layers.len() || n_in < s.obs_dim() {
+            if s.encoder_layers == 0 || s.head_start() >= self.layers.len() || n_in < s.obs_dim() {
                 return Err(format!(
-                    "set network: {} encoder layers of {} and an observation of {} values for {n_in} inputs",
+                    "set network: {} encoder{} layers of {} and an observation of {} values for {n_in} inputs",
                     s.encoder_layers,
+                    if s.attention { " and 4 attention" } else { "" },
                     self.layers.len(),
                     s.obs_dim()
                 ));
@@ -109,7 +144,7 @@ impl TanhMlp {
         }
         let mut width = self.set.map_or(n_in, |s| s.object);
         for (i, l) in self.layers.iter().enumerate() {
-            if let Some(s) = self.set.filter(|s| s.encoder_layers == i) {
+            if let Some(s) = self.set.filter(|s| s.head_start() == i) {
                 width = s.head_input(width, n_in - s.obs_dim());
             }
             if l.n_in != width || l.b.is_empty() || l.w.len() != l.b.len() * l.n_in {
@@ -144,22 +179,24 @@ impl TanhMlp {
 
     /// The set network: encode each present row, pool, then the head.
     fn forward_set(&self, s: &SetLayout, x: &[f32]) -> Vec<f32> {
-        let (encoder, head) = self.layers.split_at(s.encoder_layers.min(self.layers.len()));
+        let (front, head) = self.layers.split_at(s.head_start().min(self.layers.len()));
+        let (encoder, attention) = front.split_at(s.encoder_layers.min(front.len()));
         let width = encoder.last().map_or(0, |l| l.b.len());
         let rows_end = s.robot + s.slots * s.object;
-        let (mut sum, mut max, mut n) = (vec![0.0f32; width], vec![0.0f32; width], 0usize);
-        for k in 0..s.slots {
-            if x.get(rows_end + k).map_or(true, |&m| m <= 0.5) {
-                continue;
-            }
-            let row = x[s.robot + k * s.object..s.robot + (k + 1) * s.object].to_vec();
-            // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
-            let h = run_hidden(encoder, row);
+        // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
+        let mut rows: Vec<Vec<f32>> = (0..s.slots)
+            .filter(|&k| x.get(rows_end + k).is_some_and(|&m| m > 0.5))
+            .map(|k| run_hidden(encoder, x[s.robot + k * s.object..s.robot + (k + 1) * s.object].to_vec()))
+            .collect();
+        if let [q, k, v, o] = attention {
+            rows = attend(&rows, (q, k, v, o));
+        }
+        let (mut sum, mut max, n) = (vec![0.0f32; width], vec![0.0f32; width], rows.len());
+        for h in &rows {
             for (i, v) in h.iter().enumerate() {
                 sum[i] += v;
                 max[i] = max[i].max(*v);
             }
-            n += 1;
         }
         let mut input = x[..s.robot].to_vec();
         input.extend(sum.iter().map(|v| v / n.max(1) as f32));
@@ -167,6 +204,39 @@ impl TanhMlp {
         input.extend_from_slice(x.get(rows_end + s.slots..).unwrap_or(&[]));
         run(head, input, self.tanh_out)
     }
+}
+
+/// One self-attention block over the encoded rows `h` (all present):
+/// `h'ᵢ = ReLU(hᵢ + O Σⱼ softmaxⱼ(qᵢ·kⱼ / √d) vⱼ)` with `q = Q h`, `k = K h`, `v = V h`.
+fn attend(h: &[Vec<f32>], (q, k, v, o): (&Dense, &Dense, &Dense, &Dense)) -> Vec<Vec<f32>> {
+    let project = |l: &Dense| -> Vec<Vec<f32>> {
+        h.iter()
+            .map(|x| {
+                let mut y = Vec::new();
+                l.forward(x, &mut y);
+                y
+            })
+            .collect()
+    };
+    let (qs, ks, vs) = (project(q), project(k), project(v));
+    let scale = 1.0 / (q.b.len() as f32).sqrt();
+    let mut out = Vec::with_capacity(h.len());
+    for (hi, qi) in h.iter().zip(&qs) {
+        let scores: Vec<f32> = ks.iter().map(|kj| dot(qi, kj) * scale).collect();
+        let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+        let total: f32 = weights.iter().sum();
+        let mut z = vec![0.0f32; vs.first().map_or(0, Vec::len)];
+        for (w, vj) in weights.iter().zip(&vs) {
+            for (zi, x) in z.iter_mut().zip(vj) {
+                *zi += w / total * x;
+            }
+        }
+        let mut y = Vec::new();
+        o.forward(&z, &mut y);
+        out.push(hi.iter().zip(&y).map(|(a, b)| (a + b).max(0.0)).collect());
+    }
+    out
 }
 
 /// `layers` on `x`, every output through ReLU.

@@ -3,6 +3,7 @@
 //! replay buffer, and AggreVaTeD's expert view and mixture.
 
 pub mod algorithm;
+pub mod arch;
 pub mod ddpg;
 pub mod expert;
 pub mod mlp;
@@ -37,6 +38,39 @@ impl AnyPolicy {
             Self::Pggd(p) => p.act(obs),
             Self::Ddpg(p) => p.act(obs),
         }
+    }
+
+    /// The policy's network.
+    pub fn net(&self) -> &mlp::TanhMlp {
+        match self {
+            Self::Pggd(p) => &p.net,
+            Self::Ddpg(p) => &p.net,
+        }
+    }
+
+    /// The observation the policy reads: flat, or `objects` for a set network.
+    pub fn obs_mode(&self) -> crate::env::ObsMode {
+        match self.net().set {
+            None => crate::env::ObsMode::Flat,
+            Some(_) => crate::env::ObsMode::Objects,
+        }
+    }
+
+    /// A set network's policy on observations with `slots` object slots: the
+    /// same weights, the normaliser's shared row statistics in every slot
+    /// (a set network's weights do not depend on the number of objects). An
+    /// MLP's policy is returned as it is.
+    pub fn with_slots(&self, slots: usize) -> Self {
+        let Some(layout) = self.net().set else { return self.clone() };
+        let layout = layout.with_slots(slots);
+        let mut out = self.clone();
+        let (net, norm) = match &mut out {
+            Self::Pggd(p) => (&mut p.net, &mut p.norm),
+            Self::Ddpg(p) => (&mut p.net, &mut p.norm),
+        };
+        net.set = Some(layout);
+        *norm = norm.with_slots(layout);
+        out
     }
 
     /// Observation size the policy expects.

@@ -68,6 +68,9 @@ impl Net {
         let layout = SetLayout { encoder_layers: encoder_layers.max(1), ..layout };
         let mut shapes = vec![(layout.object, hidden)];
         shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.encoder_layers - 1));
+        if layout.attention {
+            shapes.extend(std::iter::repeat((hidden, hidden)).take(super::mlp::ATTENTION_LAYERS));
+        }
         let head = mlp_sizes(layout.head_input(hidden, extra), hidden, head_layers, out);
         shapes.extend(head.windows(2).map(|w| (w[0], w[1])));
         let params = init(&shapes, rng);
@@ -87,7 +90,7 @@ impl Net {
             None => first.n_in,
             Some(s) => {
                 let width = mlp.layers.get(s.encoder_layers.max(1) - 1).map_or(0, |l| l.b.len());
-                let head_in = mlp.layers.get(s.encoder_layers).map_or(0, |l| l.n_in);
+                let head_in = mlp.layers.get(s.head_start()).map_or(0, |l| l.n_in);
                 s.obs_dim() + head_in.saturating_sub(s.head_input(width, 0))
             }
         };
@@ -158,12 +161,31 @@ impl Net {
         for l in 0..s.encoder_layers {
             h = (h.matmul(&self.params[2 * l].tr()) + &self.params[2 * l + 1]).relu();
         }
-        let h = h.reshape(&[n, m, -1]) * &mask;
+        let mut h = h.reshape(&[n, m, -1]);
+        if s.attention {
+            h = self.attend(&h, &mask, s.encoder_layers);
+        }
+        let h = h * &mask;
         let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
         let mean = h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count;
         // Encoded features are ≥ 0 (ReLU), so the max over masked rows (set to 0) is theirs, or 0.
         let max = h.amax([1i64].as_slice(), false);
-        self.layers(Tensor::cat(&[robot, mean, max, extra], 1), s.encoder_layers)
+        self.layers(Tensor::cat(&[robot, mean, max, extra], 1), s.head_start())
+    }
+
+    /// The self-attention block of layers `first..first + 4` over encoded rows
+    /// `h` `[n, m, d]` whose keys the mask `[n, m, 1]` leaves out where 0 (see
+    /// [`super::mlp`]); rows that are absent come out as junk, masked later.
+    fn attend(&self, h: &Tensor, mask: &Tensor, first: usize) -> Tensor {
+        let project = |l: usize| h.matmul(&self.params[2 * l].tr()) + &self.params[2 * l + 1];
+        let (q, k, v) = (project(first), project(first + 1), project(first + 2));
+        let d = h.size()[2] as f64;
+        // Absent keys get −1e9: their weight is exactly 0 wherever one key is present.
+        let absent = mask.transpose(1, 2).eq(0.0);
+        let scores = (q.matmul(&k.transpose(1, 2)) / d.sqrt()).masked_fill(&absent, -1e9);
+        let z = scores.softmax(-1, tch::Kind::Float).matmul(&v);
+        let o = first + 3;
+        (h + z.matmul(&self.params[2 * o].tr()) + &self.params[2 * o + 1]).relu()
     }
 
     /// The layers from `first` on, applied to `h`: ReLU between them, none after the last.
@@ -394,7 +416,7 @@ mod tests {
     }
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
-    const SET: SetLayout = SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2 };
+    const SET: SetLayout = SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
     fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
@@ -422,9 +444,11 @@ mod tests {
     #[test]
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for (extra, out, tanh) in [(0, 4, true), (4, 1, false)] {
-            // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output).
-            let net = Net::new_set(SET, extra, (16, 2, 2), out, tanh, &mut rng);
+        let cases = [(0, 4, true, false), (4, 1, false, false), (0, 4, true, true), (4, 1, false, true)];
+        for (extra, out, tanh, attention) in cases {
+            // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
+            // with mean-max pooling or a self-attention block first.
+            let net = Net::new_set(SetLayout { attention, ..SET }, extra, (16, 2, 2), out, tanh, &mut rng);
             assert_eq!(net.sizes()[0], SET.obs_dim() + extra);
             let plain = net.to_plain();
             plain.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap();

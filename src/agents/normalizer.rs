@@ -1,7 +1,11 @@
 //! Running observation normaliser (as in OpenAI baselines' HER DDPG):
 //! mean and standard deviation from running sums, `std = sqrt(max(eps², var))`,
-//! normalised values clipped to ±clip.
+//! normalised values clipped to ±clip. For a set network's `objects`
+//! observation the statistics are per feature, not per slot: every object
+//! row shares one mean and std per feature, counted over the rows present,
+//! and the mask passes through unchanged.
 
+use super::mlp::SetLayout;
 use serde::{Deserialize, Serialize};
 
 /// Running mean/std of each observation component.
@@ -14,6 +18,12 @@ pub struct Normalizer {
     std: Vec<f32>,
     eps: f64,
     clip: f32,
+    /// Object rows share their statistics (kept in slot 0's entries of the sums).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    set: Option<SetLayout>,
+    /// Object rows counted (present ones), with `set`.
+    #[serde(default)]
+    rows: u64,
 }
 
 impl Normalizer {
@@ -27,7 +37,15 @@ impl Normalizer {
             std: vec![1.0; dim],
             eps,
             clip,
+            set: None,
+            rows: 0,
         }
+    }
+
+    /// A normaliser of a set network's observations: per robot feature, per
+    /// object feature shared by every slot, the mask untouched.
+    pub fn for_set(layout: SetLayout, eps: f64, clip: f32) -> Self {
+        Self { set: Some(layout), ..Self::new(layout.obs_dim(), eps, clip) }
     }
 
     /// A normaliser with the given statistics (as read from a saved policy):
@@ -37,7 +55,7 @@ impl Normalizer {
         let n = count as f64;
         let sum = mean.iter().map(|&m| f64::from(m) * n).collect();
         let sumsq = mean.iter().zip(&std).map(|(&m, &s)| (f64::from(s).powi(2) + f64::from(m).powi(2)) * n).collect();
-        Self { sum, sumsq, count, mean, std, eps, clip }
+        Self { sum, sumsq, count, mean, std, eps, clip, set: None, rows: 0 }
     }
 
     /// The clip range of normalised values.
@@ -89,6 +107,9 @@ impl Normalizer {
         if d == 0 {
             return;
         }
+        if let Some(layout) = self.set {
+            return self.update_set(&layout, rows);
+        }
         for row in rows.chunks_exact(d) {
             for (k, &x) in row.iter().enumerate() {
                 let x = f64::from(x);
@@ -107,6 +128,72 @@ impl Normalizer {
             self.mean[k] = mean as f32;
             self.std[k] = var.sqrt() as f32;
         }
+    }
+
+    /// [`Normalizer::update`] with object rows sharing their statistics.
+    fn update_set(&mut self, s: &SetLayout, rows: &[f32]) {
+        let (r, f, m) = (s.robot, s.object, s.slots);
+        let d = self.dim();
+        for row in rows.chunks_exact(d) {
+            for (k, &x) in row[..r].iter().enumerate() {
+                self.sum[k] += f64::from(x);
+                self.sumsq[k] += f64::from(x) * f64::from(x);
+            }
+            for slot in (0..m).filter(|&k| row[r + m * f + k] > 0.5) {
+                for (j, &x) in row[r + slot * f..r + (slot + 1) * f].iter().enumerate() {
+                    self.sum[r + j] += f64::from(x);
+                    self.sumsq[r + j] += f64::from(x) * f64::from(x);
+                }
+                self.rows += 1;
+            }
+            self.count += 1;
+        }
+        let stats = |sum: f64, sumsq: f64, n: u64| {
+            let mean = sum / n as f64;
+            (mean as f32, (sumsq / n as f64 - mean * mean).max(self.eps * self.eps).sqrt() as f32)
+        };
+        for k in 0..r {
+            if self.count > 0 {
+                (self.mean[k], self.std[k]) = stats(self.sum[k], self.sumsq[k], self.count);
+            }
+        }
+        for j in 0..f {
+            if self.rows > 0 {
+                let (mean, std) = stats(self.sum[r + j], self.sumsq[r + j], self.rows);
+                for slot in 0..m {
+                    (self.mean[r + slot * f + j], self.std[r + slot * f + j]) = (mean, std);
+                }
+            }
+        }
+        // The mask: (x − 0) / 1, as it is.
+        self.mean[r + m * f..].fill(0.0);
+        self.std[r + m * f..].fill(1.0);
+    }
+
+    /// This normaliser of a set network's observations for `layout` (the
+    /// same robot and row features, another number of slots): the robot
+    /// statistics, slot 0's row statistics in every slot (set statistics are
+    /// shared by the slots), the mask passed unchanged. Acting only: the
+    /// running sums are rebuilt from the statistics.
+    pub fn with_slots(&self, layout: SetLayout) -> Self {
+        let (r, f) = (layout.robot, layout.object);
+        let pick = |v: &[f32], pass: f32| -> Vec<f32> {
+            let mut out = v[..r.min(v.len())].to_vec();
+            for _ in 0..layout.slots {
+                out.extend_from_slice(v.get(r..r + f).unwrap_or(&[]));
+            }
+            out.extend(std::iter::repeat(pass).take(layout.slots));
+            out
+        };
+        let mut n = Self::from_stats(pick(&self.mean, 0.0), pick(&self.std, 1.0), self.count, self.eps, self.clip);
+        n.set = Some(layout);
+        n.rows = self.rows;
+        n
+    }
+
+    /// The set network's layout whose object rows share statistics (None: per component).
+    pub fn set_layout(&self) -> Option<SetLayout> {
+        self.set
     }
 
     /// Current means.
@@ -154,6 +241,40 @@ mod tests {
             assert!((f64::from(n.mean()[k]) - mean).abs() < 1e-5, "mean {k}");
             assert!((f64::from(n.std()[k]) - var.sqrt()).abs() < 1e-4, "std {k}");
         }
+    }
+
+    #[test]
+    fn set_statistics_are_per_feature_over_the_rows_present_and_the_mask_passes() {
+        let layout = SetLayout { robot: 2, object: 3, slots: 3, encoder_layers: 1, attention: false };
+        // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
+        let a = [
+            1.0, 2.0, /**/ 1.0, 10.0, -1.0, /**/ 3.0, 20.0, 1.0, /**/ 99.0, 99.0, 99.0, /**/ 1.0,
+            1.0, 0.0,
+        ];
+        let b = [
+            3.0, 4.0, /**/ 99.0, 99.0, 99.0, /**/ 3.0, 20.0, 1.0, /**/ 1.0, 10.0, -1.0, /**/ 0.0,
+            1.0, 1.0,
+        ];
+        let mut n = Normalizer::for_set(layout, 0.01, 5.0);
+        n.update(&[a, b].concat());
+        // Object features over the four present rows: (1, 3, 3, 1), (10, 20, 20, 10), (-1, 1, 1, -1).
+        for slot in 0..3 {
+            let at = 2 + slot * 3;
+            assert_eq!(&n.mean()[at..at + 3], &[2.0, 15.0, 0.0]);
+            assert_eq!(&n.std()[at..at + 3], &[1.0, 5.0, 1.0]);
+        }
+        assert_eq!(&n.mean()[..2], &[2.0, 3.0]);
+        assert_eq!(&n.mean()[11..], &[0.0; 3]);
+        assert_eq!(&n.std()[11..], &[1.0; 3]);
+        let mut x = a.to_vec();
+        n.normalize_in_place(&mut x);
+        assert_eq!(&x[11..], &[1.0, 1.0, 0.0], "the mask passes unchanged");
+        assert_eq!(&x[2..5], &[-1.0, -1.0, -1.0]);
+        // The same rows in the other order of updates: the same statistics.
+        let mut m = Normalizer::for_set(layout, 0.01, 5.0);
+        m.update(&b);
+        m.update(&a);
+        assert_eq!((m.mean(), m.std()), (n.mean(), n.std()));
     }
 
     #[test]

@@ -14,9 +14,10 @@
 //!   batch (see [`WeightNorm`]); Adam, lr 1e-4.
 
 use super::algorithm::{param_count, Algo, Algorithm, Explorer, Registration, StateDict};
+use super::arch::Arch;
 use super::ddpg::UpdateStats;
 use super::mlp::TanhMlp;
-use super::nets::{append_grads, mlp_sizes, Adam, Net};
+use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::AnyPolicy;
@@ -35,7 +36,7 @@ pub const REGISTRATION: Registration = Registration {
     new: |spec, rng| {
         let d = spec.ddpg;
         let (shape, norm) = ((d.layers, d.hidden), (d.norm_eps, d.norm_clip));
-        Box::new(Pggd::new(spec.obs_dim, spec.act_dim, shape, norm, spec.pggd.clone(), rng))
+        Box::new(Pggd::new(spec.arch, spec.act_dim, shape, norm, spec.pggd.clone(), rng))
     },
     check: |ddpg, _| {
         if ddpg.n_step != 1 || ddpg.td3 {
@@ -115,19 +116,18 @@ pub struct Pggd {
 }
 
 impl Pggd {
-    /// A fresh learner with `layers` × `hidden` ReLU layers; `rng` fixes the
-    /// initial weights.
+    /// A fresh learner with the network of `arch` (`layers` × `hidden`); `rng` fixes the initial weights.
     pub fn new(
-        obs_dim: usize,
+        arch: Arch,
         act_dim: usize,
         (layers, hidden): (usize, usize),
         (norm_eps, norm_clip): (f64, f32),
         config: PggdConfig,
         rng: &mut impl Rng,
     ) -> Self {
-        let net = Net::new(&mlp_sizes(obs_dim, hidden, layers, 2 * act_dim), false, rng);
+        let net = arch.net((hidden, layers), 0, 2 * act_dim, false, rng);
         let opt = Adam::new(&net.params, config.lr);
-        Self { norm: Normalizer::new(obs_dim, norm_eps, norm_clip), net, opt, act_dim, config }
+        Self { norm: arch.normalizer(norm_eps, norm_clip), net, opt, act_dim, config }
     }
 
     /// Action size.
@@ -339,7 +339,7 @@ mod tests {
     fn a_positively_weighted_action_becomes_more_likely() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let mut agent = Pggd::new(
-            6,
+            Arch::mlp(6),
             4,
             (2, 32),
             (0.01, 5.0),
@@ -375,7 +375,7 @@ mod tests {
     fn better_action_gains(normalize: WeightNorm) {
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let config = PggdConfig { lr: 1e-3, normalize, ..PggdConfig::default() };
-        let mut agent = Pggd::new(3, 4, (2, 32), (0.01, 5.0), config, &mut rng);
+        let mut agent = Pggd::new(Arch::mlp(3), 4, (2, 32), (0.01, 5.0), config, &mut rng);
         let obs = vec![0.1f32, 0.2, 0.3, 0.1, 0.2, 0.3];
         let (good, bad) = ([0.5f32, 0.5, 0.5, 0.5], [-0.5f32, -0.5, -0.5, -0.5]);
         let b = batch_of(obs.clone(), good.iter().chain(&bad).copied().collect());
@@ -403,7 +403,7 @@ mod tests {
         let weights: Vec<f32> = (0..8).map(|k| -(k as f32) - 1.0).collect();
         let run = |normalize: WeightNorm, rng: &mut ChaCha8Rng| {
             let config = PggdConfig { lr: 1e-2, normalize, ..PggdConfig::default() };
-            let mut agent = Pggd::new(3, 4, (2, 32), (0.01, 5.0), config, rng);
+            let mut agent = Pggd::new(Arch::mlp(3), 4, (2, 32), (0.01, 5.0), config, rng);
             for _ in 0..300 {
                 agent.update(&b, &weights);
             }
@@ -419,7 +419,7 @@ mod tests {
     #[test]
     fn plain_policy_matches_the_tensor_one() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let agent = Pggd::new(5, 4, (3, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
+        let agent = Pggd::new(Arch::mlp(5), 4, (3, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
         let obs = [0.3f32, -0.2, 0.9, 0.0, 1.5];
         let (m, s) = agent.distribution(&obs);
         let (pm, ps) = agent.policy().distribution(&obs);

@@ -31,7 +31,7 @@
 use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, Spec, StateDict};
 use super::ddpg::{DdpgConfig, DdpgPolicy, UpdateStats};
 use super::mlp::{Dense, TanhMlp};
-use super::nets::{append_grads, mlp_sizes, Adam, Net};
+use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::AnyPolicy;
@@ -85,15 +85,15 @@ pub struct Sac {
 impl Sac {
     /// A fresh learner; `rng` fixes the initial weights and the noise seed.
     pub fn new(spec: &Spec, rng: &mut ChaCha8Rng) -> Self {
-        let (c, o, a) = (spec.ddpg.clone(), spec.obs_dim, spec.act_dim);
+        let (c, arch, a) = (spec.ddpg.clone(), spec.arch, spec.act_dim);
         let bf16 = c.precision == super::ddpg::Precision::Bf16;
         let net =
-            |rng: &mut ChaCha8Rng, i, out| Net::new(&mlp_sizes(i, c.hidden, c.layers, out), false, rng).with_bf16(bf16);
-        let actor = net(rng, o, 2 * a);
-        let (q1, q2) = (net(rng, o + a, 1), net(rng, o + a, 1));
+            |rng: &mut ChaCha8Rng, extra, out| arch.net((c.hidden, c.layers), extra, out, false, rng).with_bf16(bf16);
+        let actor = net(rng, 0, 2 * a);
+        let (q1, q2) = (net(rng, a, 1), net(rng, a, 1));
         let log_alpha = Tensor::zeros(&[1], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true);
         Self {
-            norm: Normalizer::new(o, c.norm_eps, c.norm_clip),
+            norm: arch.normalizer(c.norm_eps, c.norm_clip),
             actor_opt: Adam::new(&actor.params, c.lr_actor),
             q1_opt: Adam::new(&q1.params, c.lr_critic),
             q2_opt: Adam::new(&q2.params, c.lr_critic),
@@ -319,7 +319,7 @@ mod tests {
 
     fn spec(ddpg: &DdpgConfig, pggd: &PggdConfig) -> Spec<'static> {
         let (d, p) = (Box::leak(Box::new(ddpg.clone())), Box::leak(Box::new(pggd.clone())));
-        Spec { obs_dim: 6, act_dim: 4, ddpg: d, pggd: p }
+        Spec { arch: super::super::arch::Arch::mlp(6), act_dim: 4, ddpg: d, pggd: p }
     }
 
     fn batch(n: usize, rng: &mut ChaCha8Rng) -> Batch {

@@ -17,6 +17,7 @@
 //! forward pass or an update.
 
 use crate::agents::algorithm::{Algo, Algorithm, Spec};
+use crate::agents::arch::{Arch, NetConfig};
 use crate::agents::ddpg::{DdpgConfig, Precision};
 use crate::agents::replay::ReplayBuffer;
 use crate::env::registry;
@@ -48,6 +49,8 @@ pub struct DdpgBenchConfig {
     pub precision: Precision,
     /// The algorithm.
     pub algo: Algo,
+    /// The networks (`train --net`).
+    pub net: NetConfig,
 }
 
 /// Measured rates.
@@ -57,6 +60,8 @@ pub struct DdpgBenchReport {
     pub r#impl: &'static str,
     /// The algorithm.
     pub algo: Algo,
+    /// The networks: "mlp", "set network", "set network + attention".
+    pub net: String,
     /// Environment id.
     pub env: String,
     /// Collection workers.
@@ -109,14 +114,16 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     }
     tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let task = registry::task(&c.env)?;
-    let mut envs = crate::env::VectorEnv::new(&crate::env::EnvConfig::new(task), c.workers, c.workers)?;
+    let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
+    let mut envs = crate::env::VectorEnv::new(&env_config, c.workers, c.workers)?;
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
+    let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
     if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
     let ddpg = DdpgConfig { precision: c.precision, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;
-    let spec = Spec { obs_dim, act_dim, ddpg: &ddpg, pggd: &Default::default() };
+    let spec = Spec { arch, act_dim, ddpg: &ddpg, pggd: &Default::default() };
     let mut agent = c.algo.build(&spec, &mut ChaCha8Rng::seed_from_u64(c.seed)).map_err(anyhow::Error::msg)?;
     let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
 
@@ -164,6 +171,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     Ok(DdpgBenchReport {
         r#impl: "blockpuzzle",
         algo: c.algo,
+        net: if c.net.describe().is_empty() { "mlp".into() } else { c.net.describe() },
         env: c.env.clone(),
         workers: c.workers,
         threads: c.torch_threads,

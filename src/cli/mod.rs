@@ -349,6 +349,12 @@ struct BenchArgs {
     /// With --ddpg: the algorithm whose collection and updates to time (any of `train --algo`).
     #[arg(long, default_value = "ddpg", requires = "ddpg", value_parser = crate::agents::algorithm::Algo::parser())]
     algo: crate::agents::algorithm::Algo,
+    /// With --ddpg: the networks, `mlp` on the flat observation or `set` on the `objects` one (as `train --net`).
+    #[arg(long, value_enum, default_value = "mlp", requires = "ddpg")]
+    net: crate::agents::arch::NetKind,
+    /// With --ddpg --net set: `mean-max` or `attention` (as `train --set-pooling`).
+    #[arg(long, value_enum, default_value = "mean-max", requires = "ddpg")]
+    set_pooling: crate::agents::arch::Pooling,
 }
 
 /// The command line's definition, every value-taking flag accepting a
@@ -517,13 +523,14 @@ fn bench_ddpg(a: BenchArgs) -> Result<()> {
         seed: a.seed,
         precision: a.precision,
         algo: a.algo,
+        net: crate::agents::arch::NetConfig { net: a.net, set_pooling: a.set_pooling, ..Default::default() },
     })?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
     } else {
         println!(
-            "{:?} on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
-            r.algo, r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
+            "{:?} ({}) on {}: {} worker(s), {} torch thread(s), batch {}, {:?}\n  env steps/s (collect) {:>8.0}  ({:.0}% in the actor)\n  updates/s             {:>8.1}",
+            r.algo, r.net, r.env, r.workers, r.threads, r.batch_size, r.precision, r.env_steps_per_s, 100.0 * r.forward_fraction, r.updates_per_s
         );
     }
     Ok(())
@@ -565,11 +572,11 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     let mut policy: Box<dyn Policy> = match a.policy.as_str() {
         "random" => Box::new(RandomPolicy::new(a.seed)),
         "scripted" => Box::new(ScriptedPolicy::for_env(env.config())),
-        path => Box::new(crate::evaluate::trained_policy(
-            Path::new(path),
-            crate::load::load_policy(Path::new(path))?,
-            &env,
-        )?),
+        path => {
+            let saved = crate::load::load_policy(Path::new(path))?;
+            env.set_obs_mode(saved.policy.obs_mode());
+            Box::new(crate::evaluate::trained_policy(Path::new(path), saved, &env)?)
+        }
     };
     let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
     for k in 0..a.episodes {
@@ -667,7 +674,8 @@ fn render(a: RenderArgs) -> Result<()> {
         (None, Some(path)) => {
             let saved = crate::load::load_policy(path)?;
             let task = policy_task(a.env.as_deref(), &saved)?;
-            let mut env = BlockEnv::new(crate::env::EnvConfig::new(task))?;
+            let mode = saved.policy.obs_mode();
+            let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode: mode, ..crate::env::EnvConfig::new(task) })?;
             env.set_distribution(a.challenge.then_some("challenge"))?;
             let level = env.max_level();
             env.set_level(level)?;

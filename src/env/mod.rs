@@ -248,6 +248,14 @@ impl BlockEnv {
     pub fn obs_spec(&self) -> ObsSpec {
         self.config.obs_spec()
     }
+    /// Presents the observation as `mode` from now on (the current one is
+    /// rewritten): how a trained policy's environment takes the policy's layout.
+    pub fn set_obs_mode(&mut self, mode: ObsMode) {
+        if self.config.obs_mode != mode {
+            self.config.obs_mode = mode;
+            self.write_obs();
+        }
+    }
     /// Writes the current observation into `self.obs`.
     fn write_obs(&mut self) {
         let (spec, dt) = (self.config.obs_spec(), self.dt());
@@ -585,6 +593,11 @@ impl BlockEnv {
     /// [`crate::hindsight::replay`] needs to judge the step under other colours.
     pub fn record_substeps(&mut self, on: bool) {
         self.substeps = on.then(Vec::new);
+    }
+
+    /// Whether [`BlockEnv::record_substeps`] is on.
+    pub fn records_substeps(&self) -> bool {
+        self.substeps.is_some()
     }
 
     /// The contacts the rules saw at each substep of the last step, in order

@@ -508,7 +508,9 @@ fn load_agent(
     // Network shapes come from the saved settings; the seed does not matter
     // because every value is overwritten.
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
-    let spec = Spec { obs_dim, act_dim, ddpg: &header.ddpg, pggd: &header.pggd };
+    // A set network's layout is its normaliser's (a set network's normaliser always has one).
+    let arch = crate::agents::arch::Arch { obs_dim, set: header.normalizer.set_layout() };
+    let spec = Spec { arch, act_dim, ddpg: &header.ddpg, pggd: &header.pggd };
     let mut agent = header.algo.build(&spec, &mut rng).map_err(&mismatch)?;
     let state = StateDict { tensors: tensors.into_iter().collect(), counters: counters(header) };
     agent.load_state(&state).map_err(&mismatch)?;

@@ -38,6 +38,7 @@ pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{read_progress, RunDir};
 pub use trainer::{train, train_ranks, OnEpoch};
 
+use crate::agents::arch::{NetConfig, NetKind, Pooling};
 use crate::agents::ddpg::{DdpgConfig, Precision};
 use crate::agents::pggd::PggdConfig;
 use crate::env::registry;
@@ -117,6 +118,18 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = 0, value_parser = crate::limits::COUNT.parser::<usize>())]
     #[serde(default)]
     pub snapshot_every: usize,
+    /// Hindsight colour relabelling: besides each exploration episode, store
+    /// up to K copies in which a block that blue touched is green (the green
+    /// blocks taking its colour), observations recoloured and rewards and
+    /// terminations replayed by the colour rules over the recorded contacts
+    /// (0: off, the paper's).
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::HINDSIGHT_COLOURS.parser::<usize>())]
+    #[serde(default)]
+    pub hindsight_colours: usize,
+    /// The networks: an MLP over the flat observation, or a set network over the `objects` one.
+    #[command(flatten)]
+    #[serde(default)]
+    pub net: NetConfig,
     /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
     #[command(flatten)]
     pub ddpg: DdpgConfig,
@@ -201,6 +214,12 @@ pub struct EpochRow {
     /// AggreVaTeD: share of this epoch's exploration steps taken by the expert.
     #[serde(rename = "aggrevated/expert_share", default)]
     pub expert_share: f64,
+    /// Hindsight colours: relabelled episodes stored per exploration episode.
+    #[serde(rename = "hindsight/relabelled", default)]
+    pub relabelled: f64,
+    /// Hindsight colours: share of the relabelled episodes that succeed under their colours.
+    #[serde(rename = "hindsight/relabelled_success", default)]
+    pub relabelled_success: f64,
     /// CPU time of the process over the epoch / (wall time × cores).
     #[serde(rename = "time/cpu_utilisation", default)]
     pub cpu_utilisation: f64,
@@ -241,6 +260,13 @@ impl TrainConfig {
     pub fn options(&self) -> String {
         let d = &self.ddpg;
         let mut v = Vec::new();
+        let net = self.net.describe();
+        if !net.is_empty() {
+            v.push(net);
+        }
+        if self.hindsight_colours > 0 {
+            v.push(format!("hindsight colours {}", self.hindsight_colours));
+        }
         if d.td3 {
             v.push("TD3".to_owned());
         }
@@ -290,7 +316,12 @@ impl TrainConfig {
 
     /// The default run directory, `runs/TASK-METHOD-sSEED`.
     pub fn default_run_dir(&self) -> std::path::PathBuf {
-        format!("runs/{}-{}-s{}", self.task_id(), self.method().1, self.seed).into()
+        let net = match (self.net.net, self.net.set_pooling) {
+            (NetKind::Mlp, _) => "",
+            (NetKind::Set, Pooling::MeanMax) => "-set",
+            (NetKind::Set, Pooling::Attention) => "-set-attention",
+        };
+        format!("runs/{}-{}{net}-s{}", self.task_id(), self.method().1, self.seed).into()
     }
 }
 

@@ -165,6 +165,8 @@ mod tests {
             persist_seconds: 1.5,
             beta: 0.0,
             expert_share: 0.0,
+            relabelled: 0.0,
+            relabelled_success: 0.0,
             cpu_utilisation: 1.0,
         }
     }

@@ -7,9 +7,11 @@ use crate::agents::expert::{Actor, Mixture};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::replay::ReplayBuffer;
 use crate::agents::AnyPolicy;
-use crate::env::{BlockEnv, EnvError, VectorEnv, ACTION_DIM};
+use crate::env::{BlockEnv, EnvError, ObsSpec, VectorEnv, ACTION_DIM};
+use crate::hindsight;
 use crate::policy::Policy;
 use crate::rollout::{play_episode, Event};
+use crate::rules::{Colour, Touching};
 use anyhow::Result;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -54,6 +56,17 @@ pub(crate) struct Episode {
     pub(crate) expert_steps: usize,
     /// Seconds spent in the policy (forward passes and noise).
     pub(crate) forward_seconds: f64,
+    /// What hindsight colour relabelling needs, where the environment records
+    /// its substeps' contacts ([`BlockEnv::record_substeps`]).
+    pub(crate) contacts: Option<Contacts>,
+}
+
+/// An episode's rule objects' colours and the contacts of every substep of every step.
+pub(crate) struct Contacts {
+    /// Colours of the rule objects (gripper, table, blocks, floor) in this episode.
+    pub(crate) colours: Vec<Colour>,
+    /// `steps[t]`: the contacts of step t's substeps, in order.
+    pub(crate) steps: Vec<Vec<Touching>>,
 }
 
 impl Episode {
@@ -70,6 +83,41 @@ impl Episode {
     pub(crate) fn store(&self, replay: &mut ReplayBuffer, norm: &mut Normalizer, gamma: f64, n_step: usize) {
         self.store_transitions(replay, gamma, n_step);
         norm.update(&self.obs.concat());
+    }
+
+    /// The same episode under up to `k` other colourings of its blocks
+    /// ([`crate::hindsight::alternatives`]: a block blue touched becomes green,
+    /// the greens take its colour): the observations' colour one-hots
+    /// rewritten, the rewards and terminations replayed by the colour rules
+    /// over the recorded contacts (cut at the first terminal step under the
+    /// new colours; an episode that does not end under them ends unterminated,
+    /// as at a time limit). None without recorded contacts.
+    pub(crate) fn relabelled(&self, spec: &ObsSpec, k: usize, max_steps: usize) -> Vec<Episode> {
+        let Some(c) = &self.contacts else { return Vec::new() };
+        let mut out = Vec::new();
+        for colours in hindsight::alternatives(&c.colours, &c.steps, k) {
+            let Ok(replayed) = hindsight::replay(&colours, &c.steps, max_steps) else { continue };
+            let n = replayed.len();
+            let obs = self.obs[..=n]
+                .iter()
+                .map(|o| {
+                    let mut o = o.clone();
+                    hindsight::recolour_obs(spec, &mut o, &colours);
+                    o
+                })
+                .collect();
+            out.push(Episode {
+                obs,
+                act: self.act[..n].to_vec(),
+                rew: replayed.iter().map(|r| r.reward).collect(),
+                terminated: replayed.last().is_some_and(|r| r.terminated),
+                success: replayed.last().is_some_and(|r| r.terminated && r.reward == 0.0),
+                expert_steps: 0,
+                forward_seconds: 0.0,
+                contacts: None,
+            });
+        }
+        out
     }
 
     /// Stores the episode's transitions (n-step where `n_step` > 1); the
@@ -187,9 +235,18 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
         success: false,
         expert_steps: 0,
         forward_seconds: 0.0,
+        contacts: None,
     };
-    play_episode(env, &mut acting, seed, |event| {
-        if let Event::Step { obs, action, step, .. } = event {
+    play_episode(env, &mut acting, seed, |event| match event {
+        Event::Reset { env, .. } => {
+            ep.contacts = env
+                .records_substeps()
+                .then(|| Contacts { colours: env.objects().iter().map(|o| o.colour).collect(), steps: Vec::new() });
+        }
+        Event::Step { env, obs, action, step } => {
+            if let Some(c) = &mut ep.contacts {
+                c.steps.push(env.substep_contacts().to_vec());
+            }
             ep.obs.push(obs.to_vec());
             ep.act.push(action.to_vec());
             ep.rew.push(step.reward);
@@ -236,6 +293,7 @@ mod tests {
             success: false,
             expert_steps: 0,
             forward_seconds: 0.0,
+            contacts: None,
         }
     }
 
@@ -257,6 +315,63 @@ mod tests {
         episode(vec![-1.0, -2.0], false).store(&mut replay, &mut Normalizer::new(2, 0.01, 5.0), 0.5, 1);
         let (d, _) = replay.parts();
         assert_eq!((d.rew.clone(), d.discount.clone(), d.done.clone()), (vec![-1.0, -2.0], vec![g, g], vec![0.0, 0.0]));
+    }
+
+    #[test]
+    fn relabelled_episodes_take_the_rules_verdict_and_the_new_colours() {
+        use crate::env::{ObsMode, COLOUR_FEATURE};
+        use Colour::{Blue, Green, Grey, Red};
+        // Rule objects: gripper, table, blue, green, grey, red (four blocks); the `objects` observation.
+        let colours = vec![Grey, Grey, Blue, Green, Grey, Red];
+        let spec = ObsSpec::new(ObsMode::Objects, 4);
+        let touch = |pairs: &[(usize, usize)]| vec![Touching::from_pairs(6, pairs)];
+        // Step 0: gripper–blue; step 1: blue–grey; step 2: blue–red (the original episode's failure).
+        let steps = vec![touch(&[(0, 2)]), touch(&[(2, 4)]), touch(&[(2, 5)])];
+        let obs: Vec<Vec<f32>> = (0..4)
+            .map(|t| {
+                let mut o = vec![t as f32; spec.dim()];
+                for (k, c) in colours[2..].iter().enumerate() {
+                    let at = spec.robot_dim() + k * spec.object_dim() + COLOUR_FEATURE;
+                    o[at..at + 4].copy_from_slice(&c.one_hot());
+                }
+                o
+            })
+            .collect();
+        let ep = Episode {
+            obs,
+            act: (0..3).map(|t| vec![t as f32; 4]).collect(),
+            rew: vec![-1.0, -1.0, -48.0],
+            terminated: true,
+            success: false,
+            expert_steps: 0,
+            forward_seconds: 0.0,
+            contacts: Some(Contacts { colours: colours.clone(), steps }),
+        };
+        let others = ep.relabelled(&spec, 4, 50);
+        // Grey (touched at step 1) as the goal: success at step 1, the episode cut there. Red (step 2)
+        // as the goal: success at step 2, nothing red having touched blue before.
+        assert_eq!(others.len(), 2);
+        let (grey, red) = (&others[0], &others[1]);
+        assert_eq!((grey.rew.clone(), grey.terminated, grey.success), (vec![-1.0, 0.0], true, true));
+        assert_eq!((grey.obs.len(), grey.act.len()), (3, 2));
+        assert_eq!((red.rew.clone(), red.terminated, red.success), (vec![-1.0, -1.0, 0.0], true, true));
+        let colour_of = |o: &[f32], k: usize| {
+            let at = spec.robot_dim() + k * spec.object_dim() + COLOUR_FEATURE;
+            o[at..at + 4].to_vec()
+        };
+        // Block 2 (grey) now reads green and block 1 (green) grey, in every observation.
+        for o in &grey.obs {
+            assert_eq!((colour_of(o, 2), colour_of(o, 1)), (Green.one_hot().to_vec(), Grey.one_hot().to_vec()));
+        }
+        // The terminal transition of a relabelled success is done; the original's colours are untouched.
+        let mut replay = ReplayBuffer::new(spec.dim(), 4, 10);
+        grey.store_transitions(&mut replay, 0.98, 1);
+        assert_eq!(replay.parts().0.done, vec![0.0, 1.0]);
+        assert_eq!(colour_of(&ep.obs[0], 2), Grey.one_hot().to_vec());
+        assert!(
+            Episode { contacts: None, ..ep }.relabelled(&spec, 4, 50).is_empty(),
+            "nothing recorded, nothing relabelled"
+        );
     }
 
     #[test]

@@ -11,6 +11,7 @@ use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
 use super::rundir::{read_progress, write_progress, RunDir};
 use super::{computation_differences, plot, run_task, EpochRow, PgWeight, ReplayLayout, TrainConfig};
 use crate::agents::algorithm::Spec;
+use crate::agents::arch::Arch;
 use crate::agents::ddpg::{Precision, UpdateStats};
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
@@ -81,7 +82,11 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
+    config.net.validate().map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
+    if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
+        bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
+    }
     config.algo.check(&config.ddpg, &config.pggd, expert).map_err(anyhow::Error::msg)?;
     if !config.algo.registration().takes_expert && config.aggrevated.pg_weight != PgWeight::Return {
         bail!("--pg-weight is for AggreVaTeD's learners (--algo pggd)");
@@ -122,7 +127,8 @@ fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episo
         .saturating_mul(config.cycles as u64)
         .saturating_mul(config.rollouts as u64)
         .saturating_mul(max_episode_steps as u64)
-        .saturating_mul(workers as u64);
+        .saturating_mul(workers as u64)
+        .saturating_mul(1 + config.hindsight_colours as u64);
     let stored = collected.min(config.buffer_size as u64);
     // obs, next obs, action, reward, done, extra, discount: f32 each.
     let transition = 4 * (2 * obs_dim + act_dim + 4) as u64;
@@ -263,14 +269,15 @@ fn fresh(
     task: &Task,
     run: &RunDir,
     mine: &RunDir,
-    dims: (usize, usize),
+    dims: (Arch, usize),
 ) -> Result<Begun> {
-    let (obs_dim, act_dim) = dims;
+    let (arch, act_dim) = dims;
+    let obs_dim = arch.obs_dim;
     if mine.checkpoint().exists() || run.checkpoint().exists() {
         bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-    let spec = Spec { obs_dim, act_dim, ddpg: &config.ddpg, pggd: &config.pggd };
+    let spec = Spec { arch, act_dim, ddpg: &config.ddpg, pggd: &config.pggd };
     let agent = config.algo.build(&spec, &mut rng).map_err(anyhow::Error::msg)?;
     let state = RunState {
         env_id: task.id().to_owned(),
@@ -303,7 +310,7 @@ fn resumed(
     run: &RunDir,
     mine: &RunDir,
     saved_config: Option<TrainConfig>,
-    dims: (usize, usize),
+    dims: (Arch, usize),
 ) -> Result<Begun> {
     let path = resume_checkpoint(comm, &mine.checkpoint(), run)?;
     if comm.is_root() {
@@ -321,7 +328,10 @@ fn resumed(
             );
         }
     }
-    let mut loaded = checkpoint::load(&path, task.id(), dims.0, dims.1)?;
+    let mut loaded = checkpoint::load(&path, task.id(), dims.0.obs_dim, dims.1)?;
+    if loaded.agent.norm().set_layout() != dims.0.set {
+        bail!("--resume: {} was saved with other networks than --net asks for", path.display());
+    }
     // A resume has the checkpoint's settings; a branch's first epoch, its own.
     loaded.agent.take_branch_settings(&config.ddpg);
     let epoch = loaded.state.epoch;
@@ -372,6 +382,9 @@ struct EpochTally {
     wins: usize,
     steps: usize,
     expert_steps: usize,
+    /// Hindsight colours: relabelled episodes stored, and those that succeed under their colours.
+    relabelled: usize,
+    relabelled_wins: usize,
     stats: Vec<UpdateStats>,
 }
 
@@ -398,16 +411,20 @@ impl<'a> Trainer<'a> {
         let (config, task) = run_config(comm, config, &run, saved_config.as_ref())?;
         let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
         // One environment and one thread per worker.
-        let envs = VectorEnv::new(&EnvConfig::new(task.clone()), config.workers, config.workers)?;
+        let env_config = EnvConfig { obs_mode: config.net.obs_mode(), ..EnvConfig::new(task.clone()) };
+        let mut envs = VectorEnv::new(&env_config, config.workers, config.workers)?;
+        // Hindsight colours replay the rules over every substep's contacts: the environments record them.
+        envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
+        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
         let max_level = first.max_level();
         check_memory(&config, obs_dim, act_dim, task.spec.max_episode_steps)?;
         if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
         }
 
-        let dims = (obs_dim, act_dim);
+        let dims = (arch, act_dim);
         let begun = if resume {
             resumed(comm, &config, &task, &run, &mine, saved_config, dims)?
         } else {
@@ -511,6 +528,7 @@ impl<'a> Trainer<'a> {
         self.state.episodes_per_worker += config.rollouts as u64;
         tally.env_seconds += t.elapsed().as_secs_f64();
         let mut rows = Vec::new();
+        let max_steps = self.task.spec.max_episode_steps;
         for (i, ep) in eps.iter().enumerate() {
             tally.episodes += 1;
             tally.wins += ep.success as usize;
@@ -523,6 +541,13 @@ impl<'a> Trainer<'a> {
             };
             ep.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
             rows.extend(ep.obs.iter().flatten());
+            // Hindsight colours: the same episode under other colourings, beside the original.
+            for other in ep.relabelled(&self.envs.obs_spec(), config.hindsight_colours, max_steps) {
+                tally.relabelled += 1;
+                tally.relabelled_wins += other.success as usize;
+                other.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
+                rows.extend(other.obs.iter().flatten());
+            }
         }
         let all = self.comm.gather_f32(&rows);
         self.learner.agent.norm_mut().update(&all);
@@ -618,6 +643,8 @@ impl<'a> Trainer<'a> {
             cl.1,
             al.0,
             al.1,
+            tally.relabelled as f64,
+            tally.relabelled_wins as f64,
         ];
         let per_rank = self.comm.gather_f64(&local);
         let total = |i: usize| -> f64 {
@@ -652,6 +679,8 @@ impl<'a> Trainer<'a> {
             persist_seconds: self.persist_seconds,
             beta: self.learner.beta(epoch, &self.config).unwrap_or(0.0),
             expert_share: ratio(3, 2),
+            relabelled: total(14) / total(0).max(1.0),
+            relabelled_success: ratio(15, 14),
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         }
     }

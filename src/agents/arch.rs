@@ -1,0 +1,155 @@
+//! Which network an algorithm learns with, and what it reads: a flat MLP
+//! over the flat observation (the paper's), or a set network over the
+//! `objects` observation (issue 31): a per-object encoder shared by every
+//! object row, optionally one masked self-attention block between the rows,
+//! masked mean and max pooling, then a head over the robot features, the
+//! pooled features and (a critic) the action. Every algorithm builds its
+//! actor, critics and normaliser through [`Arch`], so `--net set` reaches
+//! DDPG, TD3, SAC and PGGD without any of them knowing which it got.
+
+use super::mlp::SetLayout;
+use super::nets::{mlp_sizes, Net};
+use super::normalizer::Normalizer;
+use crate::env::{ObsMode, ObsSpec};
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+/// The network's kind (`--net`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum NetKind {
+    /// An MLP over the flat observation (the paper's).
+    #[default]
+    Mlp,
+    /// A permutation-invariant set network over the `objects` observation.
+    Set,
+}
+
+/// How a set network combines its object rows (`--set-pooling`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pooling {
+    /// Masked mean and max of the encoded rows (Deep Sets).
+    #[default]
+    MeanMax,
+    /// One masked self-attention block between the encoded rows, then mean and max.
+    Attention,
+}
+
+/// The network settings of a run (shared by every algorithm).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::Args)]
+pub struct NetConfig {
+    /// Network: `mlp` (the flat observation; the paper's) or `set` (the `objects`
+    /// observation: a per-object encoder shared across objects, masked pooling, a head;
+    /// its output does not depend on the order or the number of objects).
+    #[arg(long = "net", value_enum, default_value = "mlp")]
+    #[serde(default)]
+    pub net: NetKind,
+    /// Set network: layers of the per-object encoder (of `--hidden` units; the head has `--layers`).
+    #[arg(long, default_value_t = 2, value_parser = crate::limits::SET_ENCODER_LAYERS.parser::<usize>())]
+    #[serde(default = "two")]
+    pub set_encoder_layers: usize,
+    /// Set network: `mean-max` pooling (Deep Sets) or `attention` (one masked
+    /// self-attention block between the encoded objects first).
+    #[arg(long, value_enum, default_value = "mean-max")]
+    #[serde(default)]
+    pub set_pooling: Pooling,
+}
+
+fn two() -> usize {
+    2
+}
+
+impl Default for NetConfig {
+    fn default() -> Self {
+        Self { net: NetKind::Mlp, set_encoder_layers: two(), set_pooling: Pooling::MeanMax }
+    }
+}
+
+impl NetConfig {
+    /// The observation mode the network reads.
+    pub fn obs_mode(&self) -> ObsMode {
+        match self.net {
+            NetKind::Mlp => ObsMode::Flat,
+            NetKind::Set => ObsMode::Objects,
+        }
+    }
+
+    /// Whether every setting is in range; the error names the flag.
+    ///
+    /// # Errors
+    /// The first setting out of range.
+    pub fn validate(&self) -> Result<(), String> {
+        crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)
+    }
+
+    /// How the run's title names the network (empty: the paper's MLP).
+    pub fn describe(&self) -> String {
+        match (self.net, self.set_pooling) {
+            (NetKind::Mlp, _) => String::new(),
+            (NetKind::Set, Pooling::MeanMax) => "set network".into(),
+            (NetKind::Set, Pooling::Attention) => "set network + attention".into(),
+        }
+    }
+}
+
+/// What an algorithm's networks read and how they are laid out: the
+/// observation's length and, for a set network, its layout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Arch {
+    /// The observation's length.
+    pub obs_dim: usize,
+    /// A set network's layout (None: MLPs).
+    pub set: Option<SetLayout>,
+}
+
+impl Arch {
+    /// MLPs over `obs_dim`-long observations.
+    pub fn mlp(obs_dim: usize) -> Self {
+        Self { obs_dim, set: None }
+    }
+
+    /// The networks `net` asks for on observations laid out as `obs`.
+    ///
+    /// # Errors
+    /// A set network on a flat observation, or the reverse.
+    pub fn of(obs: &ObsSpec, net: &NetConfig) -> Result<Self, String> {
+        net.validate()?;
+        match net.net {
+            NetKind::Mlp if obs.mode == ObsMode::Flat => Ok(Self::mlp(obs.dim())),
+            NetKind::Mlp => Err("--net mlp reads the flat observation, not the `objects` one".into()),
+            NetKind::Set => {
+                let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
+                layout.attention = net.set_pooling == Pooling::Attention;
+                Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
+            }
+        }
+    }
+
+    /// A network of `layers` hidden layers of `hidden` units (a set network:
+    /// the encoder's layers, then a head of that many) from the observation
+    /// and `extra` further inputs (a critic's action) to `out` outputs,
+    /// through tanh if `tanh_out`; initialised from `rng`.
+    pub fn net(
+        &self,
+        (hidden, layers): (usize, usize),
+        extra: usize,
+        out: usize,
+        tanh_out: bool,
+        rng: &mut impl Rng,
+    ) -> Net {
+        match self.set {
+            None => Net::new(&mlp_sizes(self.obs_dim + extra, hidden, layers, out), tanh_out, rng),
+            Some(s) => Net::new_set(s, extra, (hidden, s.encoder_layers, layers), out, tanh_out, rng),
+        }
+    }
+
+    /// The observation normaliser: per component, or for a set network per
+    /// feature shared by every object row (the mask passes unchanged).
+    pub fn normalizer(&self, eps: f64, clip: f32) -> Normalizer {
+        match self.set {
+            None => Normalizer::new(self.obs_dim, eps, clip),
+            Some(s) => Normalizer::for_set(s, eps, clip),
+        }
+    }
+}
