@@ -20,7 +20,7 @@ BP="$ROOT/target/release/blockpuzzle"
 if [ ! -x "$BP" ]; then (cd "$ROOT" && cargo build --release --quiet); fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for pooling in mean-max attention; do
+for pooling in mean-max attention colour; do
     "$BP" train --env BlocksChooseN-v0 --net set --set-pooling "$pooling" --epochs 1 --cycles 2 --batches 3 \
         --batch-size 32 --hidden 32 --layers 2 --test-episodes 1 --torch-threads 1 \
         --run-dir "$SCRATCH/run-$pooling" > /dev/null

@@ -53,7 +53,7 @@ fn padded(spec: &ObsSpec, obs: &[f32], extra: usize) -> Vec<f32> {
 
 #[test]
 fn a_set_policy_ignores_row_order_and_padding_on_real_observations() {
-    for pooling in [Pooling::MeanMax, Pooling::Attention] {
+    for pooling in [Pooling::MeanMax, Pooling::Attention, Pooling::Colour] {
         let (agent, observations) = set_agent("BlocksChooseN-v0", pooling, 1);
         let policy = AnyPolicy::Ddpg(agent.policy());
         let spec = objects_env("BlocksChooseN-v0").obs_spec();
@@ -79,7 +79,7 @@ fn a_set_policy_ignores_row_order_and_padding_on_real_observations() {
 #[test]
 fn a_set_policy_round_trips_through_the_zoo() {
     let dir = tempfile::tempdir().unwrap();
-    for (k, pooling) in [Pooling::MeanMax, Pooling::Attention].into_iter().enumerate() {
+    for (k, pooling) in [Pooling::MeanMax, Pooling::Attention, Pooling::Colour].into_iter().enumerate() {
         let (agent, observations) = set_agent("BlocksChoose-v0", pooling, 2);
         let task = registry::task("BlocksChoose-v0").unwrap();
         let saved = SavedPolicy {

@@ -19,6 +19,8 @@ from safetensors.numpy import load_file
 
 
 FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3")
+#: Where an object row's colour one-hot (red, blue, green, grey) begins.
+COLOUR_FEATURE = 15
 
 
 class ZooPolicy:
@@ -59,7 +61,8 @@ class ZooPolicy:
         r, f, e = self.set["robot"], self.set["object"], self.set["encoder_layers"]
         slots = (len(x) - r) // (f + 1)
         rows = x[r:r + slots * f].reshape(slots, f)
-        h = rows[x[r + slots * f:r + slots * f + slots] > 0.5]
+        present = x[r + slots * f:r + slots * f + slots] > 0.5
+        h, rows = rows[present], rows[present]
         for i in range(e):
             h = self._dense(i, h, relu=True)
         first = e
@@ -71,9 +74,14 @@ class ZooPolicy:
             h = np.maximum(h + self._dense(e + 3, w @ v, relu=False), 0.0)
             first = e + 4
         width = self.tensors[f"actor.{e - 1}.bias"].shape[0]
-        mean = h.mean(axis=0) if len(h) else np.zeros(width, np.float32)
-        peak = h.max(axis=0) if len(h) else np.zeros(width, np.float32)
-        return np.concatenate([x[:r], mean, peak]), first
+        if self.set.get("by_colour", False):
+            # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
+            groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]
+        else:
+            groups = [np.ones(len(h), bool)]
+        means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+        peaks = [h[g].max(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+        return np.concatenate([x[:r], *means, *peaks]), first
 
     def act(self, obs):
         x = self._normalise(np.asarray(obs, np.float32))

@@ -34,6 +34,8 @@ pub enum Pooling {
     MeanMax,
     /// One masked self-attention block between the encoded rows, then mean and max.
     Attention,
+    /// Masked mean and max of the encoded rows of each colour apart (red, blue, green, grey).
+    Colour,
 }
 
 /// The network settings of a run (shared by every algorithm).
@@ -49,8 +51,9 @@ pub struct NetConfig {
     #[arg(long, default_value_t = 2, value_parser = crate::limits::SET_ENCODER_LAYERS.parser::<usize>())]
     #[serde(default = "two")]
     pub set_encoder_layers: usize,
-    /// Set network: `mean-max` pooling (Deep Sets) or `attention` (one masked
-    /// self-attention block between the encoded objects first).
+    /// Set network: `mean-max` pooling (Deep Sets), `attention` (one masked
+    /// self-attention block between the encoded objects first) or `colour`
+    /// (mean and max of each colour's objects apart).
     #[arg(long, value_enum, default_value = "mean-max")]
     #[serde(default)]
     pub set_pooling: Pooling,
@@ -89,6 +92,7 @@ impl NetConfig {
             (NetKind::Mlp, _) => String::new(),
             (NetKind::Set, Pooling::MeanMax) => "set network".into(),
             (NetKind::Set, Pooling::Attention) => "set network + attention".into(),
+            (NetKind::Set, Pooling::Colour) => "set network, pooled by colour".into(),
         }
     }
 }
@@ -121,6 +125,7 @@ impl Arch {
             NetKind::Set => {
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;
+                layout.by_colour = net.set_pooling == Pooling::Colour;
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

@@ -62,7 +62,15 @@ pub struct SetLayout {
     /// One self-attention block after the encoder: the next [`ATTENTION_LAYERS`] layers.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub attention: bool,
+    /// Pooling per colour: the masked mean and max of the rows of each colour (red,
+    /// blue, green, grey: the row's colour one-hot, which the normaliser passes
+    /// unchanged), instead of over all rows.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub by_colour: bool,
 }
+
+/// The colours a row may have, in the order of the colour one-hot.
+pub const COLOURS: usize = 4;
 
 /// The layers of a self-attention block: query, key, value and output projections.
 pub const ATTENTION_LAYERS: usize = 4;
@@ -82,6 +90,7 @@ impl SetLayout {
             slots: spec.max_objects,
             encoder_layers,
             attention: false,
+            by_colour: false,
         })
     }
 
@@ -102,9 +111,29 @@ impl SetLayout {
     }
 
     /// The head's input size for an encoder of `width` outputs and `extra`
-    /// inputs after the observation: robot, pooled mean and max, extra.
+    /// inputs after the observation: robot, pooled mean and max (of every
+    /// colour, with `by_colour`), extra.
     pub fn head_input(&self, width: usize, extra: usize) -> usize {
-        self.robot + 2 * width + extra
+        self.robot + 2 * self.groups() * width + extra
+    }
+
+    /// The groups of rows pooled apart: one, or one per colour.
+    pub fn groups(&self) -> usize {
+        if self.by_colour {
+            COLOURS
+        } else {
+            1
+        }
+    }
+
+    /// The pooling group of an object row (as the network sees it, normalised):
+    /// 0, or its colour's index (None: no colour set, pooled nowhere).
+    pub fn group(&self, row: &[f32]) -> Option<usize> {
+        if !self.by_colour {
+            return Some(0);
+        }
+        let at = crate::env::COLOUR_FEATURE;
+        row.get(at..at + COLOURS)?.iter().position(|&v| v > 0.5)
     }
 }
 
@@ -184,22 +213,26 @@ impl TanhMlp {
         let width = encoder.last().map_or(0, |l| l.b.len());
         let rows_end = s.robot + s.slots * s.object;
         // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
-        let mut rows: Vec<Vec<f32>> = (0..s.slots)
+        let present: Vec<&[f32]> = (0..s.slots)
             .filter(|&k| x.get(rows_end + k).is_some_and(|&m| m > 0.5))
-            .map(|k| run_hidden(encoder, x[s.robot + k * s.object..s.robot + (k + 1) * s.object].to_vec()))
+            .map(|k| &x[s.robot + k * s.object..s.robot + (k + 1) * s.object])
             .collect();
+        let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, row.to_vec())).collect();
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
         }
-        let (mut sum, mut max, n) = (vec![0.0f32; width], vec![0.0f32; width], rows.len());
-        for h in &rows {
+        let groups = s.groups();
+        let (mut sum, mut max, mut n) = (vec![0.0f32; groups * width], vec![0.0f32; groups * width], vec![0; groups]);
+        for (h, row) in rows.iter().zip(&present) {
+            let Some(g) = s.group(row) else { continue };
+            n[g] += 1;
             for (i, v) in h.iter().enumerate() {
-                sum[i] += v;
-                max[i] = max[i].max(*v);
+                sum[g * width + i] += v;
+                max[g * width + i] = max[g * width + i].max(*v);
             }
         }
         let mut input = x[..s.robot].to_vec();
-        input.extend(sum.iter().map(|v| v / n.max(1) as f32));
+        input.extend(sum.iter().enumerate().map(|(i, v)| v / n[i / width.max(1)].max(1) as f32));
         input.extend(max);
         input.extend_from_slice(x.get(rows_end + s.slots..).unwrap_or(&[]));
         run(head, input, self.tanh_out)

@@ -3,7 +3,7 @@
 //! all simple loops over a list of tensors), plus an Adam optimiser whose
 //! state can be saved and restored exactly.
 
-use super::mlp::{Dense, SetLayout, TanhMlp};
+use super::mlp::{Dense, SetLayout, TanhMlp, COLOURS};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
@@ -165,11 +165,22 @@ impl Net {
         if s.attention {
             h = self.attend(&h, &mask, s.encoder_layers);
         }
-        let h = h * &mask;
-        let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
-        let mean = h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count;
         // Encoded features are ≥ 0 (ReLU), so the max over masked rows (set to 0) is theirs, or 0.
-        let max = h.amax([1i64].as_slice(), false);
+        let (mean, max) = if s.by_colour {
+            // weights [n, m, 4]: present rows of each colour (the one-hot passes the normaliser unchanged).
+            let at = crate::env::COLOUR_FEATURE as i64;
+            let hot = x.narrow(1, r, m * f).reshape(&[n, m, f]).narrow(2, at, COLOURS as i64).gt(0.5);
+            let w = hot.to_kind(Kind::Float) * &mask;
+            let count = w.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0).unsqueeze(2);
+            let mean = (w.transpose(1, 2).matmul(&h) / count).reshape(&[n, -1]);
+            let max: Vec<Tensor> =
+                (0..COLOURS as i64).map(|c| (&h * w.narrow(2, c, 1)).amax([1i64].as_slice(), false)).collect();
+            (mean, Tensor::cat(&max, 1))
+        } else {
+            let h = h * &mask;
+            let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
+            (h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count, h.amax([1i64].as_slice(), false))
+        };
         self.layers(Tensor::cat(&[robot, mean, max, extra], 1), s.head_start())
     }
 
@@ -416,7 +427,8 @@ mod tests {
     }
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
-    const SET: SetLayout = SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false };
+    const SET: SetLayout =
+        SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false, by_colour: false };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
     fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
@@ -486,6 +498,49 @@ mod tests {
                 for (a, b) in all[i * out..(i + 1) * out].iter().zip(&one) {
                     assert!((a - b).abs() < 1e-5);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn pooling_by_colour_agrees_with_its_plain_copy_and_keeps_colours_apart() {
+        use crate::env::COLOUR_FEATURE;
+        let layout = SetLayout { robot: 3, object: 22, slots: 4, encoder_layers: 1, attention: false, by_colour: true };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.
+        let obs = |rng: &mut rand_chacha::ChaCha8Rng, colours: [Option<usize>; 4]| {
+            let mut x: Vec<f32> = (0..3).map(|_| rng.gen_range(-1.0..1.0)).collect();
+            for c in colours {
+                let mut row: Vec<f32> = (0..22).map(|_| rng.gen_range(-1.0..1.0)).collect();
+                row[COLOUR_FEATURE..COLOUR_FEATURE + 4].fill(0.0);
+                if let Some(c) = c {
+                    row[COLOUR_FEATURE + c] = 1.0;
+                }
+                x.extend(row);
+            }
+            x.extend(colours.iter().map(|c| if c.is_some() { 1.0 } else { 0.0 }));
+            x
+        };
+        for (extra, out, tanh) in [(0, 4, true), (4, 1, false)] {
+            let net = Net::new_set(layout, extra, (8, 1, 1), out, tanh, &mut rng);
+            assert_eq!(net.params[2].size(), vec![8, 3 + 2 * 4 * 8 + extra as i64], "robot, mean and max per colour");
+            let plain = net.to_plain();
+            plain.check(layout.obs_dim() + extra, out, f32::INFINITY).unwrap();
+            let mut x = obs(&mut rng, [Some(0), Some(1), Some(1), None]);
+            x.extend((0..extra).map(|_| 0.3));
+            let batch = |v: &[f32]| Tensor::of_slice(v).view([1, v.len() as i64]);
+            let y = tensor_to_vec(&net.forward(&batch(&x)));
+            for (a, b) in y.iter().zip(plain.forward(&x)) {
+                assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+            }
+            assert_eq!(tensor_to_vec(&Net::from_plain(&plain).unwrap().forward(&batch(&x))), y);
+            // Recolouring the red row green changes the output: colours are pooled apart.
+            let mut green = x.clone();
+            let at = 3 + COLOUR_FEATURE;
+            green[at..at + 4].copy_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+            assert_ne!(tensor_to_vec(&net.forward(&batch(&green))), y);
+            for (a, b) in tensor_to_vec(&net.forward(&batch(&green))).iter().zip(plain.forward(&green)) {
+                assert!((a - b).abs() < 1e-5, "{a} vs {b}");
             }
         }
     }

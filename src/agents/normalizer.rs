@@ -165,9 +165,17 @@ impl Normalizer {
                 }
             }
         }
-        // The mask: (x − 0) / 1, as it is.
+        // The mask: (x − 0) / 1, as it is; so are the colour one-hots that a network pooling by
+        // colour reads.
         self.mean[r + m * f..].fill(0.0);
         self.std[r + m * f..].fill(1.0);
+        if s.by_colour {
+            for slot in 0..m {
+                let at = r + slot * f + crate::env::COLOUR_FEATURE;
+                self.mean[at..at + super::mlp::COLOURS].fill(0.0);
+                self.std[at..at + super::mlp::COLOURS].fill(1.0);
+            }
+        }
     }
 
     /// This normaliser of a set network's observations for `layout` (the
@@ -245,7 +253,7 @@ mod tests {
 
     #[test]
     fn set_statistics_are_per_feature_over_the_rows_present_and_the_mask_passes() {
-        let layout = SetLayout { robot: 2, object: 3, slots: 3, encoder_layers: 1, attention: false };
+        let layout = SetLayout { robot: 2, object: 3, slots: 3, encoder_layers: 1, attention: false, by_colour: false };
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [
             1.0, 2.0, /**/ 1.0, 10.0, -1.0, /**/ 3.0, 20.0, 1.0, /**/ 99.0, 99.0, 99.0, /**/ 1.0,

@@ -320,6 +320,7 @@ impl TrainConfig {
             (NetKind::Mlp, _) => "",
             (NetKind::Set, Pooling::MeanMax) => "-set",
             (NetKind::Set, Pooling::Attention) => "-set-attention",
+            (NetKind::Set, Pooling::Colour) => "-set-colour",
         };
         format!("runs/{}-{}{net}-s{}", self.task_id(), self.method().1, self.seed).into()
     }
