@@ -4,19 +4,21 @@
 #   blockpuzzle eval --suite SUITE --checkpoint ZOO_NAME -> results/generalization/ZOO_NAME.SUITE.{json,md}
 #   blockpuzzle eval --suite SUITE --baseline NAME       -> results/generalization/baseline-NAME.SUITE.{json,md}
 # Usage: bash scripts/generalization.sh [--threads N]   (after `cargo build --release`)
-# SUITES="count obstacles" bash scripts/generalization.sh … runs only those suites.
+# SUITES="count obstacles" bash scripts/generalization.sh … runs only those suites; POLICIES="A B" only
+# those zoo entries, and BASELINES="" no baseline.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="$ROOT/target/release/blockpuzzle"
 OUT="$ROOT/results/generalization"
 SUITES="${SUITES:-colour layout cross-task count obstacles}"
 mkdir -p "$OUT"
-for policy in $(ls "$ROOT/zoo" | sed -n 's/\.safetensors$//p'); do
+POLICIES="${POLICIES:-$(ls "$ROOT/zoo" | sed -n 's/\.safetensors$//p')}"
+for policy in $POLICIES; do
     for suite in $SUITES; do
         "$BIN" eval --suite "$suite" --checkpoint "$policy" "$@" --out "$OUT/$policy.$suite.json"
     done
 done
-for baseline in scripted obs-hash; do
+for baseline in ${BASELINES-scripted obs-hash}; do
     for suite in $SUITES; do
         "$BIN" eval --suite "$suite" --baseline "$baseline" "$@" --out "$OUT/baseline-$baseline.$suite.json"
     done
