@@ -702,3 +702,18 @@ fn set_networks_refuse_what_they_cannot_do() {
     let err = train(&c, &dir.path().join("y"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--set-encoder-layers"), "{err}");
 }
+
+#[test]
+fn sac_and_pggd_train_set_networks_too() {
+    for algo in ["sac", "pggd"] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut c = tiny_set("BlocksAvoid-v0", 1, Pooling::Colour);
+        c.algo = Algo::named(algo).unwrap();
+        c.ddpg.td3 = false;
+        train(&c, dir.path(), false, &mut quiet).unwrap();
+        let saved = load_policy(&dir.path().join("policy.json")).unwrap();
+        let set = saved.policy.net().set.expect("a set network");
+        assert!(set.by_colour && set.slots == 5, "{algo}: {set:?}");
+        assert_eq!(saved.policy.obs_mode(), blockpuzzle::env::ObsMode::Objects, "{algo}");
+    }
+}
