@@ -16,8 +16,10 @@ fi
 
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, then attention), exported to a
 # scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
-BP="$ROOT/target/release/blockpuzzle"
-if [ ! -x "$BP" ]; then (cd "$ROOT" && cargo build --release --quiet); fi
+# The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
+# the latter), else a debug build made now.
+BP="${BLOCKPUZZLE_BIN:-$(ls -t "$ROOT"/target/release/blockpuzzle "$ROOT"/target/debug/blockpuzzle 2>/dev/null | head -1)}"
+if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
 for pooling in mean-max attention colour; do
