@@ -18,7 +18,12 @@ fi
 # scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
-BP="${BLOCKPUZZLE_BIN:-$(ls -t "$ROOT"/target/release/blockpuzzle "$ROOT"/target/debug/blockpuzzle 2>/dev/null | head -1)}"
+BP="${BLOCKPUZZLE_BIN:-}"
+if [ -z "$BP" ]; then
+    for candidate in "$ROOT/target/release/blockpuzzle" "$ROOT/target/debug/blockpuzzle"; do
+        if [ -x "$candidate" ] && { [ -z "$BP" ] || [ "$candidate" -nt "$BP" ]; }; then BP="$candidate"; fi
+    done
+fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
