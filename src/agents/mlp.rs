@@ -170,6 +170,14 @@ impl TanhMlp {
                     s.obs_dim()
                 ));
             }
+            if s.by_colour && s.object < crate::env::COLOUR_FEATURE + COLOURS {
+                return Err(format!(
+                    "set network pooled by colour over rows of {} features: the colour one-hot is features {}..{}",
+                    s.object,
+                    crate::env::COLOUR_FEATURE,
+                    crate::env::COLOUR_FEATURE + COLOURS
+                ));
+            }
         }
         let mut width = self.set.map_or(n_in, |s| s.object);
         for (i, l) in self.layers.iter().enumerate() {

@@ -534,6 +534,10 @@ mod tests {
                 assert!((a - b).abs() < 1e-5, "{a} vs {b}");
             }
             assert_eq!(tensor_to_vec(&Net::from_plain(&plain).unwrap().forward(&batch(&x))), y);
+            // Rows too short to hold the colour one-hot are refused, not read out of range.
+            let short = SetLayout { object: 10, ..layout };
+            let broken = TanhMlp { set: Some(short), ..plain.clone() };
+            assert!(broken.check(short.obs_dim() + extra, out, f32::INFINITY).unwrap_err().contains("colour one-hot"));
             // Recolouring the red row green changes the output: colours are pooled apart.
             let mut green = x.clone();
             let at = 3 + COLOUR_FEATURE;
