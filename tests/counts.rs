@@ -3,7 +3,7 @@
 //! nothing and are zero in the observation (mask 0), a seed gives the same
 //! episode in any vector engine, and malformed counts are clear errors.
 
-use blockpuzzle::env::{registry, BlockEnv, EnvConfig, ObsMode, ResetOptions, VectorEnv, ACTION_DIM};
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig, ObsMode, ACTION_DIM};
 use blockpuzzle::policy::{Policy, RandomPolicy};
 use blockpuzzle::task::Task;
 
@@ -102,26 +102,14 @@ fn the_same_seed_gives_the_same_episode() {
     assert_eq!(a[0], a[2], "seed 5 again after seed 6");
 }
 
-/// Environment `index`'s observations and rewards over `steps` steps of a
-/// vector engine of `n` environments on `threads` threads.
+mod common;
+
+/// Environment `index`'s observations, rewards and flags over `steps` steps of a vector engine of
+/// `n` BlocksChooseN-v0 environments (the `objects` observation) on `threads` threads.
 fn vector_trajectory(n: usize, threads: usize, index: usize, steps: usize) -> Vec<f32> {
     let mut config = EnvConfig::new(registry::task("BlocksChooseN-v0").unwrap());
     config.obs_mode = ObsMode::Objects;
-    let mut v = VectorEnv::new(&config, n, threads).unwrap();
-    let d = v.obs_spec().dim();
-    let mut obs = vec![0.0; n * d];
-    let seeds: Vec<Option<u64>> = (0..n).map(|i| Some(40 + i as u64)).collect();
-    v.reset(&seeds, None, &ResetOptions::default(), &mut obs).unwrap();
-    let mut out = obs[index * d..(index + 1) * d].to_vec();
-    for t in 0..steps {
-        let actions: Vec<f32> = (0..n * ACTION_DIM)
-            .map(|k| ((k / ACTION_DIM * 13 + t * 7 + k % ACTION_DIM) % 9) as f32 / 4.0 - 1.0)
-            .collect();
-        let r = v.step(&actions, &mut obs).unwrap()[index].clone();
-        out.extend_from_slice(&obs[index * d..(index + 1) * d]);
-        out.extend([r.reward, r.terminated as u8 as f32, r.truncated as u8 as f32]);
-    }
-    out
+    common::vector_trajectory(&config, (n, threads), index, steps, 40)
 }
 
 #[test]

@@ -4,31 +4,16 @@
 
 use blockpuzzle::env::{registry, EnvConfig, ResetOptions, VectorEnv, ACTION_DIM};
 
+mod common;
+use common::vector_actions as actions;
+
 fn config(id: &str) -> EnvConfig {
     EnvConfig::new(registry::task(id).unwrap())
 }
 
-/// Each environment's action depends on its index and the step only.
-fn actions(n: usize, t: usize) -> Vec<f32> {
-    (0..n * ACTION_DIM)
-        .map(|k| (((k / ACTION_DIM) * 7919 + t * 104_729 + k % ACTION_DIM * 31) % 200) as f32 / 100.0 - 1.0)
-        .collect()
-}
-
 /// Environment `index`'s observations, rewards and flags over `steps` steps.
 fn trajectory(n: usize, threads: usize, index: usize, steps: usize) -> Vec<f32> {
-    let mut v = VectorEnv::new(&config("GripperTouch-v0"), n, threads).unwrap();
-    let d = v.obs_spec().dim();
-    let mut obs = vec![0.0; n * d];
-    let seeds: Vec<Option<u64>> = (0..n).map(|i| Some(10 + i as u64)).collect();
-    v.reset(&seeds, None, &ResetOptions::default(), &mut obs).unwrap();
-    let mut out = obs[index * d..(index + 1) * d].to_vec();
-    for t in 0..steps {
-        let r = v.step(&actions(n, t), &mut obs).unwrap()[index].clone();
-        out.extend_from_slice(&obs[index * d..(index + 1) * d]);
-        out.extend([r.reward, r.terminated as u8 as f32, r.truncated as u8 as f32, r.autoreset as u8 as f32]);
-    }
-    out
+    common::vector_trajectory(&config("GripperTouch-v0"), (n, threads), index, steps, 10)
 }
 
 #[test]

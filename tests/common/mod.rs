@@ -1,7 +1,7 @@
 #![allow(dead_code)]
 //! Helpers shared by the integration tests.
 
-use blockpuzzle::env::{BlockEnv, EnvError};
+use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError, ResetOptions, VectorEnv, ACTION_DIM};
 use blockpuzzle::policy::Policy;
 
 /// One recorded step: (qpos, qvel, obs, reward, terminated, truncated).
@@ -27,4 +27,34 @@ pub fn trajectory(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Res
             return Ok(out);
         }
     }
+}
+
+/// Actions for `n` environments at step `t`: each depends on its environment's index and the step only.
+pub fn vector_actions(n: usize, t: usize) -> Vec<f32> {
+    (0..n * ACTION_DIM)
+        .map(|k| (((k / ACTION_DIM) * 7919 + t * 104_729 + k % ACTION_DIM * 31) % 200) as f32 / 100.0 - 1.0)
+        .collect()
+}
+
+/// Environment `index`'s observations, rewards and flags over `steps` steps of a vector engine
+/// of `n` environments of `config` on `threads` threads, environment i reset with `first_seed + i`.
+pub fn vector_trajectory(
+    config: &EnvConfig,
+    (n, threads): (usize, usize),
+    index: usize,
+    steps: usize,
+    first_seed: u64,
+) -> Vec<f32> {
+    let mut v = VectorEnv::new(config, n, threads).unwrap();
+    let d = v.obs_spec().dim();
+    let mut obs = vec![0.0; n * d];
+    let seeds: Vec<Option<u64>> = (0..n).map(|i| Some(first_seed + i as u64)).collect();
+    v.reset(&seeds, None, &ResetOptions::default(), &mut obs).unwrap();
+    let mut out = obs[index * d..(index + 1) * d].to_vec();
+    for t in 0..steps {
+        let r = v.step(&vector_actions(n, t), &mut obs).unwrap()[index].clone();
+        out.extend_from_slice(&obs[index * d..(index + 1) * d]);
+        out.extend([r.reward, r.terminated as u8 as f32, r.truncated as u8 as f32, r.autoreset as u8 as f32]);
+    }
+    out
 }
