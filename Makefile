@@ -12,7 +12,7 @@ resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
 # Set-up, build, test, the main job, a demo and the benchmark. Every other experiment is a recipe
 # file in experiments/ run with `blockpuzzle train --config FILE` (docs/training.md lists them).
-.PHONY: setup setup-mujoco3 test-mujoco3 demo test bench train build
+.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel demo test bench train build
 
 setup:
 	bash scripts/setup.sh
@@ -30,8 +30,8 @@ demo: build
 test: setup
 	$(CARGO) test --all
 	bash scripts/zoo_python_check.sh
-	bash scripts/python_check.sh
 	$(MAKE) test-mujoco3
+	$(MAKE) test-wheel
 
 # The opt-in second engine, MuJoCo 3.11.0 from its PyPI wheel (engines/mujoco-3.11.0, sha256-pinned):
 # `cargo build --release --features mujoco3 --target-dir target/mujoco3` (its own target folder
@@ -45,6 +45,14 @@ M3 = --release --no-default-features --features mujoco3,render --target-dir targ
 test-mujoco3: setup-mujoco3
 	bash bench/align_fetchpush.sh --record
 	BLOCKPUZZLE_ALIGN_REFERENCE=$(CURDIR)/target/align/fetchpush-v4.json $(CARGO) test $(M3) --lib --tests
+
+# The Python wheel (MuJoCo 3.11.0 from the mujoco wheel, the Fetch files from gymnasium-robotics'),
+# installed into a fresh venv and tested away from the checkout; its CLI comparisons run the
+# command line built on the same engine.
+M3CLI = --release --no-default-features --features train,mujoco3 --target-dir target/mujoco3 --bin blockpuzzle
+test-wheel: setup-mujoco3
+	$(CARGO) build $(M3CLI)
+	BLOCKPUZZLE_BIN=$(CURDIR)/target/mujoco3/release/blockpuzzle bash scripts/python_check.sh
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

@@ -10,6 +10,15 @@
 //! `make setup-mujoco3`) holds `include/mujoco/mujoco.h` and `lib/libmujoco.so`.
 //! The library folder is passed on as `DEP_MUJOCO_LIB_DIR` so that the crates
 //! that link binaries can give them an rpath to it.
+//!
+//! With the `mujoco-wheel` feature (the Python package's build) the headers and
+//! the library are those of the `mujoco==3.11.0` PyPI package installed for the
+//! Python that builds (`PYO3_PYTHON`, else `python3`): `mujoco/include/mujoco/`
+//! and `mujoco/libmujoco.so.3.11.0`, linked by that exact file name, which the
+//! extension then finds at run time through an rpath into the installed package.
+//! libclang for bindgen comes from the `libclang` PyPI package of that Python
+//! when it has one (the build requirements install it), so no system package is
+//! needed.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -62,8 +71,80 @@ fn mujoco3_dirs() -> (PathBuf, PathBuf) {
     (include, lib)
 }
 
+/// The Python that builds the extension module: maturin sets `PYO3_PYTHON`.
+fn python() -> String {
+    println!("cargo:rerun-if-env-changed=PYO3_PYTHON");
+    env::var("PYO3_PYTHON").unwrap_or_else(|_| "python3".into())
+}
+
+/// Runs a snippet in [`python`]; its stdout lines, or `None` if it failed.
+fn ask_python(code: &str) -> Option<Vec<String>> {
+    let out = std::process::Command::new(python()).args(["-c", code]).output().ok()?;
+    out.status.success().then(|| String::from_utf8_lossy(&out.stdout).lines().map(str::to_owned).collect())
+}
+
+/// The installed `mujoco` PyPI package: its folder (headers under `include/`, the library beside
+/// them), and the extra clang arguments bindgen needs with the `libclang` PyPI package.
+fn mujoco_wheel_dir() -> (PathBuf, Vec<String>) {
+    let hint = format!("install it for {} with `pip install mujoco=={MUJOCO3_VERSION}`", python());
+    let lines = ask_python(
+        "import importlib.util as u, importlib.metadata as m\n\
+         s = u.find_spec('mujoco')\n\
+         print(s.submodule_search_locations[0] if s else '')\n\
+         print(m.version('mujoco') if s else '')",
+    )
+    .unwrap_or_else(|| panic!("cannot run {} to find the `mujoco` package; set PYO3_PYTHON to a Python 3", python()));
+    let (dir, version) = (lines.first().cloned().unwrap_or_default(), lines.get(1).cloned().unwrap_or_default());
+    if dir.is_empty() {
+        panic!("the `mujoco-wheel` feature builds against the `mujoco` PyPI package, which is not installed: {hint}");
+    }
+    if version != MUJOCO3_VERSION {
+        panic!("the `mujoco` package installed is {version}, this build needs exactly {MUJOCO3_VERSION}: {hint}");
+    }
+    let dir = PathBuf::from(dir);
+    for need in [dir.join("include/mujoco/mujoco.h"), dir.join(format!("libmujoco.so.{MUJOCO3_VERSION}"))] {
+        println!("cargo:rerun-if-changed={}", need.display());
+        if !need.exists() {
+            panic!("the `mujoco` package at {} lacks {}: reinstall it ({hint})", dir.display(), need.display());
+        }
+    }
+    // libclang for bindgen from the `libclang` PyPI package, when this Python has it. That package
+    // has no compiler headers (stddef.h): the C compiler's, which the build needs anyway, stand in.
+    let mut clang_args = Vec::new();
+    if env::var_os("LIBCLANG_PATH").is_none() {
+        let found = ask_python(
+            "import importlib.util as u, os\n\
+             s = u.find_spec('clang')\n\
+             print(os.path.join(s.submodule_search_locations[0], 'native') if s else '')",
+        );
+        if let Some(native) =
+            found.and_then(|l| l.into_iter().next()).filter(|d| Path::new(d).join("libclang.so").exists())
+        {
+            env::set_var("LIBCLANG_PATH", native);
+            let cc = env::var("CC").unwrap_or_else(|_| "cc".into());
+            let include = std::process::Command::new(&cc)
+                .arg("-print-file-name=include")
+                .output()
+                .ok()
+                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+                .filter(|d| Path::new(d).join("stddef.h").exists())
+                .unwrap_or_else(|| {
+                    panic!("`{cc} -print-file-name=include` names no folder with stddef.h: install a C compiler (gcc)")
+                });
+            clang_args.push(format!("-isystem{include}"));
+        }
+    }
+    (dir, clang_args)
+}
+
 fn main() {
-    let (include_dir, lib_dir) = if env::var_os("CARGO_FEATURE_MUJOCO3").is_some() {
+    let wheel = env::var_os("CARGO_FEATURE_MUJOCO_WHEEL").is_some();
+    let mut clang_args = Vec::new();
+    let (include_dir, lib_dir) = if wheel {
+        let (dir, args) = mujoco_wheel_dir();
+        clang_args = args;
+        (dir.join("include"), dir)
+    } else if env::var_os("CARGO_FEATURE_MUJOCO3").is_some() {
         mujoco3_dirs()
     } else {
         (
@@ -99,7 +180,12 @@ fn main() {
     println!("cargo:rerun-if-changed=guard.h");
     cc::Build::new().file("guard.c").include(&include_dir).warnings(true).compile("bpguard");
     println!("cargo:rustc-link-search=native={}", lib_dir.display());
-    println!("cargo:rustc-link-lib=dylib=mujoco");
+    if wheel {
+        // The wheel has only the versioned file (wheels hold no symlinks): link it by that name.
+        println!("cargo:rustc-link-lib=dylib:+verbatim=libmujoco.so.{MUJOCO3_VERSION}");
+    } else {
+        println!("cargo:rustc-link-lib=dylib=mujoco");
+    }
     println!("cargo:include={}", include_dir.display());
     println!("cargo:lib_dir={}", lib_dir.display());
     println!("cargo:rerun-if-changed=wrapper.h");
@@ -110,6 +196,7 @@ fn main() {
     let bindings = bindgen::Builder::default()
         .header("wrapper.h")
         .clang_arg(format!("-I{}", include_dir.display()))
+        .clang_args(&clang_args)
         .allowlist_function("mj.*")
         .allowlist_function("bp_.*")
         .allowlist_type("mj.*")

@@ -1,28 +1,29 @@
 #!/usr/bin/env bash
-# Builds the Python package (python/, PyO3 + maturin) into a venv and runs its pytest suite,
-# Gymnasium's env checker included. Installs (once) .venv-py (git-ignored) with pinned versions
-# from PyPI; rebuilds the package every run (cargo keeps python/target incremental).
-#
-# --mujoco3: the same against MuJoCo 3.11.0 (`make setup-mujoco3`), in .venv-py-mujoco3 with its
-# own cargo target folder (python/target-mujoco3), so that the two builds stay apart.
+# The Python package as a user gets it: builds the wheel (scripts/build_wheel.sh: against the
+# mujoco==3.11.0 wheel, repaired by auditwheel without libmujoco), installs it into a fresh venv
+# (with its dependencies from PyPI: mujoco, gymnasium-robotics, gymnasium, numpy) and runs the
+# pytest suite from another folder, with HOME temporary and BLOCKPUZZLE_MODELS_DIR unset, so
+# nothing can come from this checkout: the engine is the mujoco package's, the Fetch files are
+# gymnasium-robotics', the zoo is the package's. The suite's CLI comparisons run the command line
+# built on MuJoCo 3.11 ($BLOCKPUZZLE_BIN; `make test` builds target/mujoco3/release/blockpuzzle).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-VENV="$ROOT/.venv-py"
-BUILD=(--release --quiet)
-if [ "${1:-}" = "--mujoco3" ]; then
-    VENV="$ROOT/.venv-py-mujoco3"
-    BUILD+=(--features mujoco3)
-    export CARGO_TARGET_DIR="$ROOT/python/target-mujoco3" BLOCKPUZZLE_EXPECT_MUJOCO=3.11.0
+WHEEL="$(bash "$ROOT/scripts/build_wheel.sh")"
+echo "[python] built $(basename "$WHEEL")"
+# The extension keeps no path of the checkout's models (it would read the checkout's Fetch files).
+NATIVE="$(mktemp -d)"
+trap 'rm -rf "$NATIVE"' EXIT
+python3 -c "import sys, zipfile; zipfile.ZipFile(sys.argv[1]).extractall(sys.argv[2])" "$WHEEL" "$NATIVE"
+if grep -q -a "$ROOT/models" "$NATIVE"/blockpuzzle/_native*.so; then
+    echo "[python] the extension names $ROOT/models: a wheel must not read the checkout's files" >&2
+    exit 1
 fi
-PINS=(maturin==1.16.0 gymnasium==1.4.0 numpy==2.2.6 pytest==9.2.0)
-check="import importlib.metadata as m; assert [m.version(p.split('==')[0]) for p in '${PINS[*]}'.split()] == [p.split('==')[1] for p in '${PINS[*]}'.split()]"
-if ! "$VENV/bin/python" -c "$check" 2>/dev/null; then
-    echo "[python] creating $VENV with ${PINS[*]}"
-    rm -rf "$VENV"
-    python3 -m venv "$VENV"
-    "$VENV/bin/pip" install -q --disable-pip-version-check "${PINS[@]}"
-fi
-echo "[python] building the blockpuzzle package (python/) into $VENV"
-(cd "$ROOT/python" && VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" maturin develop "${BUILD[@]}")
-cd "$ROOT/python"
-"$VENV/bin/python" -m pytest -q tests
+WORK="$(mktemp -d)"
+trap 'rm -rf "$NATIVE" "$WORK"' EXIT
+echo "[python] installing it into a fresh venv ($WORK/venv)"
+python3 -m venv "$WORK/venv"
+"$WORK/venv/bin/pip" install -q --disable-pip-version-check "$WHEEL" pytest==9.2.0 gymnasium==1.4.0 numpy==2.2.6
+mkdir -p "$WORK/home"
+cd "$WORK"
+env -u BLOCKPUZZLE_MODELS_DIR HOME="$WORK/home" BLOCKPUZZLE_WHEEL_TEST="$ROOT" \
+    "$WORK/venv/bin/python" -m pytest -q -p no:cacheprovider "$ROOT/python/tests"

@@ -214,6 +214,50 @@ pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Re
     rec.ok_or(RolloutError::Env(EnvError::NotReset))
 }
 
+/// The digest that pins an environment's dynamics (tests/golden.json): the
+/// sha256 of three seeded episodes of `id` at `level` (the challenge
+/// distribution if `challenge`) from seed `seed` on, played by the scripted
+/// controller or by random actions seeded with `seed`. It covers every reset
+/// state, action, qpos, reward, flag and contact, and the colours drawn by a
+/// shuffling task, so any change to the simulation or the task shows.
+///
+/// # Errors
+/// [`RolloutError::Env`] for an unknown id, level or distribution.
+pub fn episode_digest(
+    id: &str,
+    scripted: bool,
+    level: usize,
+    challenge: bool,
+    seed: u64,
+) -> Result<String, RolloutError> {
+    use crate::policy::{RandomPolicy, ScriptedPolicy};
+    use sha2::{Digest, Sha256};
+    let mut env = crate::env::registry::make(id)?;
+    env.set_level(level)?;
+    env.set_challenge(challenge)?;
+    let mut policy: Box<dyn Policy> =
+        if scripted { Box::new(ScriptedPolicy::for_env(env.config())) } else { Box::new(RandomPolicy::new(seed)) };
+    let mut h = Sha256::new();
+    let f64s = |h: &mut Sha256, v: &[f64]| v.iter().for_each(|x| h.update(x.to_bits().to_le_bytes()));
+    for k in 0..3 {
+        let ep = run_episode(&mut env, policy.as_mut(), seed + k)?;
+        f64s(&mut h, &ep.initial.qpos);
+        for s in &ep.steps {
+            s.action.iter().for_each(|a| h.update(a.to_bits().to_le_bytes()));
+            f64s(&mut h, &s.state.qpos);
+            h.update(s.reward.to_bits().to_le_bytes());
+            h.update([s.terminated as u8, s.truncated as u8, s.is_success as u8, s.is_failure as u8, s.unstable as u8]);
+            for &(a, b) in &s.touching {
+                h.update([a as u8, b as u8]);
+            }
+        }
+        if !env.config().task.spec.shuffle.is_empty() {
+            h.update(env.block_colours().iter().map(|c| *c as u8).collect::<Vec<u8>>());
+        }
+    }
+    Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
+}
+
 /// A JSON Lines file written atomically: episodes go to a temporary file
 /// next to `path`, renamed onto `path` by [`DumpWriter::finish`]. If the
 /// writer is dropped unfinished (an error), the temporary file is removed

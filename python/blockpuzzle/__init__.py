@@ -13,23 +13,79 @@ Rust (``blockpuzzle._native``).
     env = blockpuzzle.make_task("my-task.toml")           # a task file
     envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=8, threads=2)   # Rust threads
     blockpuzzle.evaluate(policy, suite="layout")          # any callable on an evaluation suite
+    policy = blockpuzzle.zoo.load("BlocksTouch-v0-ddpg")  # a trained policy, numpy alone
 
-The Fetch assets are read from ``$BLOCKPUZZLE_MODELS_DIR``, else from the ``models/`` folder of the
-checkout the package was built from (filled by ``make setup``).
+The engine is the ``mujoco`` package (exactly ``MUJOCO_PIN``): the extension links its library.
+The Fetch robot's files are read from the installed ``gymnasium-robotics`` (``envs/assets``,
+checked against their sha256 at import), or from ``$BLOCKPUZZLE_MODELS_DIR`` where it is set (a
+folder with ``scene.xml`` and ``gymnasium_robotics/``, like a checkout's ``models/``).
 """
 
 from __future__ import annotations
 
-import gymnasium
+import importlib.metadata as _metadata
+import importlib.util as _util
+import os as _os
+import pathlib as _pathlib
 
-from . import policies
-from ._native import env_ids, mujoco_version
-from .env import BlockPuzzleEnv
-from .evaluation import evaluate
-from .vector import BlockPuzzleVectorEnv, make_vec
+#: The MuJoCo the extension is built against and links (``libmujoco.so.3.11.0``).
+MUJOCO_PIN = "3.11.0"
+#: The gymnasium-robotics whose Fetch files the scenes read.
+GYMNASIUM_ROBOTICS_PIN = "1.4.2"
 
-__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version",
-           "policies", "NAMESPACE"]
+
+def _check_engine() -> None:
+    """A missing or other ``mujoco`` would fail as an unreadable library: say what to install."""
+    try:
+        found = _metadata.version("mujoco")
+    except _metadata.PackageNotFoundError:
+        raise ImportError(f"blockpuzzle runs on MuJoCo {MUJOCO_PIN}, and the mujoco package is not installed: "
+                          f"pip install mujoco=={MUJOCO_PIN}") from None
+    if found != MUJOCO_PIN:
+        raise ImportError(f"blockpuzzle was built against mujoco=={MUJOCO_PIN} but mujoco {found} is installed: "
+                          f"pip install mujoco=={MUJOCO_PIN}")
+
+
+def _fetch_assets() -> _pathlib.Path | None:
+    """The installed gymnasium-robotics' assets folder (none needed under $BLOCKPUZZLE_MODELS_DIR)."""
+    spec = _util.find_spec("gymnasium_robotics")
+    if spec is None or not spec.submodule_search_locations:
+        if _os.environ.get("BLOCKPUZZLE_MODELS_DIR"):
+            return None
+        raise ImportError("blockpuzzle reads the Fetch robot's files from gymnasium-robotics, which is not installed: "
+                          f"pip install gymnasium-robotics=={GYMNASIUM_ROBOTICS_PIN}")
+    return _pathlib.Path(spec.submodule_search_locations[0]) / "envs" / "assets"
+
+
+_check_engine()
+
+import gymnasium  # noqa: E402
+
+from . import _native  # noqa: E402
+
+_assets = _fetch_assets()
+if _assets is not None:
+    try:
+        _native._use_fetch_assets(str(_assets))
+    except (FileNotFoundError, ValueError) as e:
+        if not _os.environ.get("BLOCKPUZZLE_MODELS_DIR"):
+            raise ImportError(str(e)) from None
+
+from . import policies, zoo  # noqa: E402
+from ._native import env_ids, mujoco_version  # noqa: E402
+from .env import BlockPuzzleEnv  # noqa: E402
+from .evaluation import evaluate  # noqa: E402
+from .vector import BlockPuzzleVectorEnv, make_vec  # noqa: E402
+
+
+def assets_dir() -> _pathlib.Path:
+    """The folder scenes load from: the installed gymnasium-robotics' ``envs/assets``, or
+    ``$BLOCKPUZZLE_MODELS_DIR``."""
+    return _pathlib.Path(_native.assets_dir())
+
+
+__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_ROBOTICS_PIN", "MUJOCO_PIN", "NAMESPACE",
+           "assets_dir", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version", "policies", "zoo"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"

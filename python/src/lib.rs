@@ -18,7 +18,7 @@ mod vector;
 pub(crate) fn to_py(e: EnvError) -> PyErr {
     let msg = e.to_string();
     match e {
-        EnvError::Scene(SceneError::MissingAssets { .. }) => PyFileNotFoundError::new_err(msg),
+        EnvError::Scene(SceneError::MissingAssets { .. } | SceneError::NoAssets) => PyFileNotFoundError::new_err(msg),
         EnvError::Mujoco(_) | EnvError::Scene(_) | EnvError::NotReset | EnvError::EpisodeOver => {
             PyRuntimeError::new_err(msg)
         }
@@ -212,7 +212,9 @@ impl Env {
         let Some(renderer) = self.renderer.as_mut() else { unreachable!("made above") };
         // Colours move between episodes when the task shuffles roles.
         let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-        renderer.colour_objects(env.scene(), &colours, &env.absent_objects()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        renderer
+            .colour_objects(env.scene(), &colours, &env.absent_objects())
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let image = renderer.render(env.data_mut(), None);
         let (w, h) = (image.width() as usize, image.height() as usize);
         Ok(PyArray1::from_vec(py, image.into_raw()).reshape([h, w, 3])?.into_any())
@@ -257,20 +259,27 @@ impl Env {
 #[pyfunction]
 fn _mujoco_fatal_error_selftest() -> PyResult<()> {
     use blockpuzzle::mj::{Data, Model};
-    // A stack too small for the first contact: 2.2.2 counts it in mjtNums, 3.x in bytes.
-    let size = if cfg!(feature = "mujoco3") { r#"memory="4K""# } else { r#"nstack="100""# };
-    let xml = format!(
-        r#"<mujoco><option timestep="0.002"/><size {size}/><worldbody>
+    // A stack too small for the first contact (MuJoCo 3 counts it in bytes).
+    let xml = r#"<mujoco><option timestep="0.002"/><size memory="4K"/><worldbody>
         <geom type="plane" size="1 1 0.1"/><body pos="0 0 0.5"><joint type="free"/>
-        <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#
-    );
+        <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#;
     let err = |e: blockpuzzle::mj::MjError| PyRuntimeError::new_err(e.to_string());
-    let model = Model::from_xml_string(&xml, std::path::Path::new("selftest.xml")).map_err(err)?;
+    let model = Model::from_xml_string(xml, std::path::Path::new("selftest.xml")).map_err(err)?;
     let mut data = Data::new(std::sync::Arc::new(model)).map_err(err)?;
     for _ in 0..1000 {
         data.step().map_err(err)?;
     }
     Ok(())
+}
+
+/// The digest of three seeded episodes that pins the dynamics (tests/golden.json;
+/// `blockpuzzle::rollout::episode_digest`), computed by this build.
+#[pyfunction]
+fn _golden_digest(env: &str, scripted: bool, level: usize, challenge: bool, seed: u64) -> PyResult<String> {
+    blockpuzzle::rollout::episode_digest(env, scripted, level, challenge, seed).map_err(|e| match e {
+        blockpuzzle::rollout::RolloutError::Env(e) => to_py(e),
+        e => PyRuntimeError::new_err(e.to_string()),
+    })
 }
 
 /// The registered environment ids.
@@ -279,11 +288,28 @@ fn env_ids() -> Vec<&'static str> {
     registry::ids()
 }
 
-/// The MuJoCo version the environments run on ("2.2.2", or "3.11.0" in a
-/// build with the `mujoco3` feature).
+/// The MuJoCo version the environments run on (the `mujoco` package's, 3.11.0).
 #[pyfunction]
 fn mujoco_version() -> String {
     blockpuzzle::mj::version()
+}
+
+/// Reads the Fetch assets from `root` (gymnasium-robotics' `envs/assets`)
+/// from now on, unless `$BLOCKPUZZLE_MODELS_DIR` is set; checks every file's
+/// sha256 first (FileNotFoundError / ValueError naming the file).
+#[pyfunction]
+fn _use_fetch_assets(root: std::path::PathBuf) -> PyResult<()> {
+    blockpuzzle::scene::use_fetch_assets(&root).map_err(|e| match e {
+        SceneError::MissingAssets { .. } => PyFileNotFoundError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    })
+}
+
+/// The folder the next scene loads from: the Fetch assets registered at
+/// import, or `$BLOCKPUZZLE_MODELS_DIR`.
+#[pyfunction]
+fn assets_dir() -> PyResult<std::path::PathBuf> {
+    blockpuzzle::scene::assets().map(|a| a.base).map_err(|e| to_py(EnvError::Scene(e)))
 }
 
 /// An evaluation suite (a built-in name or a suite file), checked: a dict of
@@ -333,5 +359,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
+    m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;
+    m.add_function(wrap_pyfunction!(assets_dir, m)?)?;
+    m.add_function(wrap_pyfunction!(_golden_digest, m)?)?;
     Ok(())
 }

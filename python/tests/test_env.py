@@ -1,8 +1,10 @@
 """The Gymnasium face of BlockPuzzle: registration, Gymnasium's own checker, seeding, options,
 info, rendering, task files, and errors that raise instead of ending the interpreter."""
 
+import json
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 
@@ -168,7 +170,69 @@ def test_a_fatal_mujoco_error_raises_and_the_interpreter_goes_on():
     assert run_python(code) == ["raised", "True", "alive"]
 
 
-def test_mujoco_version_is_the_engine_built_for():
-    # scripts/python_check.sh --mujoco3 builds against MuJoCo 3.11.0 and says so here.
-    want = os.environ.get("BLOCKPUZZLE_EXPECT_MUJOCO", "2.2.2")
-    assert blockpuzzle.mujoco_version() == want
+def test_mujoco_version_is_the_pinned_mujoco_package():
+    import importlib.metadata
+
+    assert blockpuzzle.mujoco_version() == blockpuzzle.MUJOCO_PIN == importlib.metadata.version("mujoco")
+
+
+GOLDEN = json.loads((ROOT / "tests" / "golden.json").read_text())["cases"]
+
+
+@pytest.mark.parametrize("case", GOLDEN, ids=lambda c: f"{c['env']}-{c['policy']}-{c['level']}-{c['seed']}")
+def test_episodes_are_bit_identical_to_the_rust_golden_digests(case):
+    # The digests the Rust tests check on the same engine (tests/golden.rs built with mujoco3).
+    engine = blockpuzzle.mujoco_version()
+    got = blockpuzzle._native._golden_digest(case["env"], case["policy"] == "scripted", case["level"],
+                                             case["challenge"], case["seed"])
+    assert got == case[engine]
+
+
+def test_the_fetch_files_come_from_the_installed_gymnasium_robotics():
+    import importlib.util
+
+    if os.environ.get("BLOCKPUZZLE_MODELS_DIR"):
+        pytest.skip("BLOCKPUZZLE_MODELS_DIR overrides the assets")
+    package = pathlib.Path(importlib.util.find_spec("gymnasium_robotics").submodule_search_locations[0])
+    assert blockpuzzle.assets_dir() == package / "envs" / "assets"
+    checkout = os.environ.get("BLOCKPUZZLE_WHEEL_TEST")
+    if checkout:  # scripts/python_check.sh: the installed wheel, nothing of the checkout
+        assert not pathlib.Path(blockpuzzle.__file__).resolve().is_relative_to(checkout)
+        assert not blockpuzzle.assets_dir().resolve().is_relative_to(checkout)
+
+
+def test_a_changed_fetch_file_is_refused_naming_it(tmp_path):
+    assets = blockpuzzle.assets_dir()
+    if not (assets / "fetch" / "shared.xml").exists():
+        pytest.skip("the assets are a models folder (BLOCKPUZZLE_MODELS_DIR)")
+    for sub in ("fetch", "stls/fetch", "textures"):
+        shutil.copytree(assets / sub, tmp_path / sub)
+    blockpuzzle._native._use_fetch_assets(str(tmp_path))  # an exact copy passes
+    blockpuzzle._native._use_fetch_assets(str(assets))
+    shared = tmp_path / "fetch" / "shared.xml"
+    original = shared.read_bytes()
+    shared.write_bytes(original + b"\n")
+    with pytest.raises(ValueError, match="shared.xml.*gymnasium-robotics==1.4.2"):
+        blockpuzzle._native._use_fetch_assets(str(tmp_path))
+    shared.write_bytes(original)
+    (tmp_path / "textures" / "block.png").unlink()
+    with pytest.raises(FileNotFoundError, match="block.png"):
+        blockpuzzle._native._use_fetch_assets(str(tmp_path))
+    assert blockpuzzle.assets_dir() == assets  # refusals change nothing
+
+
+@pytest.mark.parametrize("patch, pip", [
+    ("m.version = lambda n, v=m.version: '3.12.0' if n == 'mujoco' else v(n)", "pip install mujoco==3.11.0"),
+    ("def gone(n):\n    raise m.PackageNotFoundError(n)\nm.version = gone", "pip install mujoco==3.11.0"),
+    ("u.find_spec = lambda n, *a, f=u.find_spec: None if n == 'gymnasium_robotics' else f(n, *a)",
+     "pip install gymnasium-robotics==1.4.2"),
+])
+def test_a_missing_or_other_dependency_is_an_importerror_naming_the_pip_command(patch, pip):
+    code = (
+        "import importlib.metadata as m, importlib.util as u, os\n"
+        "os.environ.pop('BLOCKPUZZLE_MODELS_DIR', None)\n"
+        f"{patch}\n"
+        "try:\n    import blockpuzzle\nexcept ImportError as e:\n    print(str(e))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and pip in out.stdout, out.stdout + out.stderr

@@ -434,7 +434,8 @@ pub fn main() -> Result<()> {
         Command::Align { reference, plot, .. } => align(&reference, plot.as_deref()),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
-            print!("{}", crate::scene::mjcf(&c.scene_spec())?);
+            // Its includes are relative to the assets folder: save it there to load it elsewhere.
+            print!("{}", crate::scene::mjcf(&c.scene_spec())?.0);
             Ok(())
         }
         Command::Bench(a) if a.ddpg => bench_ddpg(a),

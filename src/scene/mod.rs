@@ -6,7 +6,10 @@ mod assets;
 mod filter;
 pub mod xml;
 
-pub use assets::{check_assets, models_dir, FETCH_ASSETS, MODELS_DIR_VAR};
+pub use assets::{
+    assets, check_assets, models_dir, registered_fetch_assets, use_fetch_assets, verify_fetch_files, Assets,
+    FETCH_ASSETS, FETCH_FILES, MODELS_DIR_VAR,
+};
 pub use filter::EXCLUDED_BODY_PAIRS;
 
 use crate::mj::{MjError, Model, ObjType};
@@ -19,8 +22,14 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// A file of the scene is missing: usually the Fetch assets were never fetched.
-    #[error("missing scene file {missing}: the Fetch robot assets are fetched by `make setup` (scripts/setup.sh), or set BLOCKPUZZLE_MODELS_DIR to a folder that has them")]
+    #[error("missing scene file {missing}: in a checkout `make setup` (scripts/setup.sh) fetches the Fetch robot assets; the Python package reads them from `pip install gymnasium-robotics==1.4.2`; or set BLOCKPUZZLE_MODELS_DIR to a folder that has them")]
     MissingAssets { missing: PathBuf },
+    /// A Fetch file differs from gymnasium-robotics 1.4.2's.
+    #[error("{path} is not gymnasium-robotics 1.4.2's file (sha256 {found}, expected {expected}): reinstall it with `pip install --force-reinstall gymnasium-robotics==1.4.2`, or set BLOCKPUZZLE_MODELS_DIR to a folder of your own")]
+    AssetChecksum { path: PathBuf, expected: String, found: String },
+    /// No folder of Fetch assets is known (a build without a checkout, nothing registered).
+    #[error("no Fetch robot assets: this build has no checkout to read them from; the Python package finds them in gymnasium-robotics (`pip install gymnasium-robotics==1.4.2`), or set BLOCKPUZZLE_MODELS_DIR")]
+    NoAssets,
     /// The scene template could not be read.
     #[error("cannot read {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
@@ -180,24 +189,21 @@ fn joint_adr(model: &Model, name: &str) -> Result<(usize, usize), MjError> {
     Ok((model.jnt_qposadr()[j] as usize, model.jnt_dofadr()[j] as usize))
 }
 
-/// The MJCF text of a scene: the template in [`models_dir`] with the blocks,
-/// table colour and collision exclusions filled in. Its includes are relative
-/// to the models folder, so a copy saved there loads in any MuJoCo.
+/// The MJCF text of a scene: the scene template with the blocks, table colour
+/// and collision exclusions filled in, and the folder it loads from
+/// ([`assets`]). Its includes are relative to that folder, so a copy saved
+/// there loads in any MuJoCo.
 ///
 /// # Errors
 /// [`SceneError`] for missing assets or an unreadable template.
-pub fn mjcf(spec: &SceneSpec) -> Result<String, SceneError> {
-    let dir = models_dir();
-    check_assets(&dir)?;
-    let template_path = dir.join(xml::TEMPLATE_FILE);
-    let template =
-        std::fs::read_to_string(&template_path).map_err(|source| SceneError::Io { path: template_path, source })?;
+pub fn mjcf(spec: &SceneSpec) -> Result<(String, PathBuf), SceneError> {
+    let found = assets()?;
     let excludes: &[(&str, &str)] = if spec.collision_filter { EXCLUDED_BODY_PAIRS } else { &[] };
-    xml::render(&template, spec, excludes)
+    Ok((xml::render(&found.template, spec, excludes, found.fetch_prefix)?, found.base))
 }
 
 impl Scene {
-    /// Builds the scene from the template in [`models_dir`].
+    /// Builds the scene from the template and the Fetch assets ([`assets`]).
     ///
     /// # Errors
     /// [`SceneError`] for missing assets, an invalid task, or a model MuJoCo refuses.
@@ -209,8 +215,7 @@ impl Scene {
             .chain(spec.floor)
             .collect();
         Rules::new(colours)?;
-        let dir = models_dir();
-        let text = mjcf(spec)?;
+        let (text, dir) = mjcf(spec)?;
         let mut model = Model::from_xml_string(&text, &xml::virtual_path(&dir))?;
 
         reset_mocap_welds(&mut model);

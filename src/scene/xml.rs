@@ -49,11 +49,18 @@ const FINGER_ACTUATORS: &str = r#"    <actuator>
     </actuator>
 "#;
 
-/// Renders the template with the blocks, table colour and contact exclusions.
+/// Renders the template with the blocks, table colour and contact exclusions;
+/// `{{FETCH}}` (where the template has it) becomes `fetch_prefix`, the Fetch
+/// assets' path relative to the folder the model loads from.
 ///
 /// # Errors
 /// [`SceneError::Template`] if the template lacks a placeholder.
-pub fn render(template: &str, spec: &SceneSpec, excludes: &[(&str, &str)]) -> Result<String, SceneError> {
+pub fn render(
+    template: &str,
+    spec: &SceneSpec,
+    excludes: &[(&str, &str)],
+    fetch_prefix: &str,
+) -> Result<String, SceneError> {
     let mut blocks = String::new();
     for (i, (block, [x, y])) in spec.blocks.iter().zip(parking_spots(&spec.blocks)).enumerate() {
         let name = block_name(i);
@@ -85,7 +92,7 @@ pub fn render(template: &str, spec: &SceneSpec, excludes: &[(&str, &str)]) -> Re
         contact.push_str(FINGER_ACTUATORS);
     }
     let floor = spec.floor.map_or("floor_mat", material);
-    let mut out = template.to_owned();
+    let mut out = template.replace("{{FETCH}}", fetch_prefix);
     for (key, value) in [
         ("{{BLOCKS}}", blocks.as_str()),
         ("{{CONTACT_EXCLUDES}}", &contact),
@@ -101,7 +108,7 @@ pub fn render(template: &str, spec: &SceneSpec, excludes: &[(&str, &str)]) -> Re
 }
 
 /// The name under which the generated XML is registered in MuJoCo's virtual
-/// file system: inside the models folder, so relative includes resolve.
-pub fn virtual_path(models_dir: &Path) -> std::path::PathBuf {
-    models_dir.join("blockpuzzle_generated.xml")
+/// file system: inside the folder it loads from, so relative includes resolve.
+pub fn virtual_path(base: &Path) -> std::path::PathBuf {
+    base.join("blockpuzzle_generated.xml")
 }

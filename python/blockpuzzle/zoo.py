@@ -1,0 +1,175 @@
+"""The model zoo in Python, with numpy alone: ``blockpuzzle.zoo.load(name)`` is a callable policy.
+
+An entry is ``NAME.safetensors`` (float32 tensors) and ``NAME.json`` (metadata: task, training,
+network shapes, recorded evaluations, probes); the format is zoo/README.md's. The package carries
+the checkout's zoo (``names()``); ``load`` also takes the path of an entry elsewhere.
+
+    import gymnasium as gym, blockpuzzle
+    policy = blockpuzzle.zoo.load("BlocksTouch-v0-ddpg")
+    env = gym.make(f"BlockPuzzle/{policy.task_id}", obs_mode=policy.obs_mode)
+    obs, _ = env.reset(seed=0)
+    action = policy(obs)                      # one observation, or a batch of rows
+    policy.evaluations                        # what the CLI measured at export
+
+This file imports nothing of blockpuzzle, so it also runs on its own
+(examples/python/zoo_policy.py loads it by path).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import numpy as np
+
+FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3")
+#: Where an object row's colour one-hot (red, blue, green, grey) begins.
+COLOUR_FEATURE = 15
+#: The zoo the package carries.
+FOLDER = pathlib.Path(__file__).resolve().parent / "zoo_files"
+
+
+def names(folder: str | pathlib.Path = FOLDER) -> list[str]:
+    """The entries of a zoo folder (by default the package's), sorted."""
+    return sorted(p.stem for p in pathlib.Path(folder).glob("*.json"))
+
+
+def load(name: str | pathlib.Path, folder: str | pathlib.Path = FOLDER) -> ZooPolicy:
+    """The policy of a zoo entry: a name in ``folder`` or the path of an entry's .json/.safetensors."""
+    path = pathlib.Path(name)
+    if path.suffix not in (".json", ".safetensors"):
+        path = pathlib.Path(folder) / f"{name}.json"
+        if not path.is_file():
+            raise KeyError(f"no zoo entry {name!r} in {folder}; entries: {', '.join(names(folder))}")
+    return ZooPolicy(path)
+
+
+def read_safetensors(path: str | pathlib.Path) -> dict[str, np.ndarray]:
+    """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data."""
+    raw = pathlib.Path(path).read_bytes()
+    n = int.from_bytes(raw[:8], "little")
+    header = json.loads(raw[8:8 + n])
+    data = memoryview(raw)[8 + n:]
+    out = {}
+    for key, t in header.items():
+        if key == "__metadata__":
+            continue
+        if t["dtype"] != "F32":
+            raise ValueError(f"{path}: tensor {key} is {t['dtype']}, the zoo stores F32")
+        start, end = t["data_offsets"]
+        out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(t["shape"]).astype(np.float32)
+    return out
+
+
+class ZooPolicy:
+    """The deterministic action of a zoo entry: normalise, the network, tanh (DDPG) or clip(mu) (PGGD).
+
+    The network is an MLP (ReLU layers) or, where the metadata gives a ``set`` layout, a set network
+    over the ``objects`` observation (robot | object rows | mask): a per-object encoder, optionally a
+    self-attention block, masked mean and max pooling (overall, or per colour), and a head. A set
+    network takes any number of object slots: the slot count is read from the observation's length.
+    """
+
+    def __init__(self, path):
+        json_path = pathlib.Path(path).with_suffix(".json")
+        self.meta = json.loads(json_path.read_text())
+        if self.meta["format"] not in FORMATS:
+            raise ValueError(f"{json_path}: unknown format {self.meta['format']!r}")
+        self.tensors = read_safetensors(json_path.with_suffix(".safetensors"))
+        self.layers = len(self.meta["actor"]["sizes"]) - 1
+        self.set = self.meta["actor"].get("set")
+
+    @property
+    def name(self) -> str:
+        return self.meta["name"]
+
+    @property
+    def task_id(self) -> str:
+        """The environment id (or task name) the policy was trained on."""
+        return self.meta["task"]["id"]
+
+    @property
+    def obs_mode(self) -> str:
+        """The observation mode it reads: "objects" for a set network, else "flat"."""
+        return "flat" if self.set is None else "objects"
+
+    @property
+    def evaluations(self) -> list[dict]:
+        """The evaluations recorded at export (env, distribution, episodes, seed, success_rate, ci95)."""
+        return self.meta.get("evaluations", [])
+
+    def __repr__(self) -> str:
+        return f"ZooPolicy({self.name!r}, {self.meta['algo']}, task {self.task_id}, epoch {self.meta['epoch']})"
+
+    def __call__(self, obs) -> np.ndarray:
+        """Actions for one observation (a vector or a dict of arrays) or a batch of them."""
+        if isinstance(obs, dict):
+            parts = [np.asarray(obs[k], np.float32) for k in ("robot", "objects", "mask")]
+            batch = parts[0].ndim == 2
+            n = len(parts[0]) if batch else 1
+            flat = np.concatenate([p.reshape(n, -1) for p in parts], axis=1)
+        else:
+            flat = np.asarray(obs, np.float32)
+            batch = flat.ndim == 2
+            flat = flat.reshape(-1, flat.shape[-1])
+        actions = np.stack([self.act(row) for row in flat])
+        return actions if batch else actions[0]
+
+    def _dense(self, i, x, relu):
+        y = x @ self.tensors[f"actor.{i}.weight"].T + self.tensors[f"actor.{i}.bias"]
+        return np.maximum(y, 0.0) if relu else y
+
+    def _normalise(self, x):
+        t, clip = self.tensors, self.meta["norm_clip"]
+        mean, std = t["obs_norm.mean"], t["obs_norm.std"]
+        if self.set is not None:
+            # Object rows share one mean and std per feature (slot 0's); the mask passes unchanged.
+            r, f = self.set["robot"], self.set["object"]
+            slots = (len(x) - r) // (f + 1)
+            mean = np.concatenate([mean[:r], np.tile(mean[r:r + f], slots), np.zeros(slots, np.float32)])
+            std = np.concatenate([std[:r], np.tile(std[r:r + f], slots), np.ones(slots, np.float32)])
+        return np.clip((x - mean) / std, -clip, clip)
+
+    def _pool(self, x):
+        """A set network's head input: robot features, masked mean and max of the encoded rows."""
+        r, f, e = self.set["robot"], self.set["object"], self.set["encoder_layers"]
+        slots = (len(x) - r) // (f + 1)
+        rows = x[r:r + slots * f].reshape(slots, f)
+        present = x[r + slots * f:r + slots * f + slots] > 0.5
+        h, rows = rows[present], rows[present]
+        for i in range(e):
+            h = self._dense(i, h, relu=True)
+        first = e
+        if self.set.get("attention", False):
+            q, k, v = (self._dense(e + j, h, relu=False) for j in range(3))
+            scores = q @ k.T / np.sqrt(q.shape[1], dtype=np.float32)
+            w = np.exp(scores - scores.max(axis=1, keepdims=True)) if len(h) else scores
+            w = w / w.sum(axis=1, keepdims=True) if len(h) else w
+            h = np.maximum(h + self._dense(e + 3, w @ v, relu=False), 0.0)
+            first = e + 4
+        width = self.tensors[f"actor.{e - 1}.bias"].shape[0]
+        if self.set.get("by_colour", False):
+            # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
+            groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]
+        else:
+            groups = [np.ones(len(h), bool)]
+        means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+        peaks = [h[g].max(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+        return np.concatenate([x[:r], *means, *peaks]), first
+
+    def act(self, obs) -> np.ndarray:
+        """The action for one flat observation vector."""
+        x = self._normalise(np.asarray(obs, np.float32))
+        first = 0
+        if self.set is not None:
+            x, first = self._pool(x)
+        for i in range(first, self.layers):
+            x = self._dense(i, x, relu=i < self.layers - 1)
+        if self.meta["actor"]["tanh_out"]:
+            return np.tanh(x)
+        return np.clip(x[: len(x) // 2], -1.0, 1.0)  # PGGD: [mu | sigma pre-activation]
+
+    def probe_error(self) -> float:
+        """The largest difference from the actions recorded at export for the probe observations."""
+        return max((float(np.max(np.abs(self.act(p["obs"]) - np.asarray(p["action"], np.float32))))
+                    for p in self.meta["probes"]), default=0.0)
