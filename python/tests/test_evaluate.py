@@ -92,14 +92,15 @@ def test_obs_hash_is_pinned_to_the_rust_bits():
 
 
 def cli_binary() -> Path:
-    """The command line built from this checkout (``cargo test`` and ``cargo build`` make it)."""
+    """The command line on the package's engine (MuJoCo 3.11.0): ``$BLOCKPUZZLE_BIN``, else the
+    checkout's ``target/mujoco3/release/blockpuzzle`` (``make test-wheel`` builds it)."""
     root = Path(__file__).resolve().parents[2]
     given = os.environ.get("BLOCKPUZZLE_BIN")
-    found = [Path(given)] if given else [root / "target" / k / "blockpuzzle" for k in ("release", "debug")]
-    found = [p for p in found if p.is_file()]
-    if not found:
-        pytest.fail("no blockpuzzle binary: run `cargo build --release` first (`make test` builds one)")
-    return max(found, key=lambda p: p.stat().st_mtime)
+    binary = Path(given) if given else root / "target" / "mujoco3" / "release" / "blockpuzzle"
+    if not binary.is_file():
+        pytest.fail(f"no blockpuzzle binary at {binary}: build it with `cargo build --release --no-default-features "
+                    "--features train,mujoco3 --target-dir target/mujoco3 --bin blockpuzzle` (`make test-wheel` does)")
+    return binary
 
 
 PARITY = """
