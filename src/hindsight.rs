@@ -14,6 +14,21 @@
 use crate::env::ObsSpec;
 use crate::rules::{Colour, RuleError, Rules, Touching, Verdict};
 use crate::scene::FIRST_BLOCK_OBJECT;
+use serde::{Deserialize, Serialize};
+
+/// Which other tasks an episode is relabelled as (`--hindsight-strategy`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "train", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Strategy {
+    /// A block that blue touched becomes green (the green blocks take its colour).
+    #[default]
+    BlueTouched,
+    /// That, and also: a block that touched a green one becomes blue (the blue blocks take its
+    /// colour), the task in which it was the block to move. Candidates in the order the
+    /// contacts first happened, whichever kind.
+    Pairs,
+}
 
 /// One step of an episode replayed under some colouring: the reward and
 /// termination the environment gives (see [`crate::env::Step`]).
@@ -57,33 +72,43 @@ pub fn replay(colours: &[Colour], steps: &[Vec<Touching>], max_steps: usize) -> 
 /// have gone differently, in the order the contacts first happened: for
 /// each block that is neither blue nor green and touched a blue object,
 /// the task in which it is green and every green block takes its colour
-/// (the roles swapped). The gripper, table and floor keep their colours.
+/// (the roles swapped); with [`Strategy::Pairs`] also, for each such block
+/// that touched a green object, the task in which it is blue and every blue
+/// block takes its colour. The gripper, table and floor keep their colours.
 /// Colourings equal to the original or to an earlier one are left out.
-pub fn alternatives(colours: &[Colour], steps: &[Vec<Touching>], k: usize) -> Vec<Vec<Colour>> {
+pub fn alternatives(colours: &[Colour], steps: &[Vec<Touching>], k: usize, strategy: Strategy) -> Vec<Vec<Colour>> {
     let is_block = |o: usize| o >= FIRST_BLOCK_OBJECT && o < colours.len();
-    let mut order: Vec<usize> = Vec::new();
+    // (block, the role it takes)
+    let mut order: Vec<(usize, Colour)> = Vec::new();
     for touching in steps.iter().flatten() {
         for (a, b) in touching.pairs() {
             for (x, y) in [(a, b), (b, a)] {
-                let candidate = is_block(y) && !matches!(colours[y], Colour::Blue | Colour::Green);
-                if colours[x] == Colour::Blue && candidate && !order.contains(&y) {
-                    order.push(y);
+                if !is_block(y) || matches!(colours[y], Colour::Blue | Colour::Green) {
+                    continue;
+                }
+                let role = match colours[x] {
+                    Colour::Blue => Colour::Green,
+                    Colour::Green if strategy == Strategy::Pairs => Colour::Blue,
+                    _ => continue,
+                };
+                if !order.contains(&(y, role)) {
+                    order.push((y, role));
                 }
             }
         }
     }
     let mut out: Vec<Vec<Colour>> = Vec::new();
-    for y in order {
+    for (y, role) in order {
         if out.len() == k {
             break;
         }
         let mut c = colours.to_vec();
         for (o, colour) in c.iter_mut().enumerate() {
-            if is_block(o) && *colour == Colour::Green {
+            if is_block(o) && *colour == role {
                 *colour = colours[y];
             }
         }
-        c[y] = Colour::Green;
+        c[y] = role;
         if c != colours && !out.contains(&c) {
             out.push(c);
         }
@@ -125,7 +150,7 @@ mod tests {
         let original = replay(&COLOURS, &steps, 50).unwrap();
         assert_eq!(original.len(), 3);
         assert_eq!(original[2], Replayed { reward: -48.0, terminated: true }, "red touched blue at step 3");
-        let alt = alternatives(&COLOURS, &steps, 4);
+        let alt = alternatives(&COLOURS, &steps, 4, Strategy::BlueTouched);
         // grey (4) first, then red (5): both touched blue.
         assert_eq!(alt, vec![vec![Grey, Grey, Blue, Grey, Green, Red], vec![Grey, Grey, Blue, Red, Grey, Green]]);
         let grey_green = replay(&alt[0], &steps, 50).unwrap();
@@ -136,14 +161,36 @@ mod tests {
         // Red as the goal: blue reached it at step 3, and nothing red touched blue before.
         let red_green = replay(&alt[1], &steps, 50).unwrap();
         assert_eq!(red_green.last(), Some(&Replayed { reward: 0.0, terminated: true }));
-        assert_eq!(alternatives(&COLOURS, &steps, 1).len(), 1);
+        assert_eq!(alternatives(&COLOURS, &steps, 1, Strategy::BlueTouched).len(), 1);
+    }
+
+    #[test]
+    fn with_pairs_a_block_that_touched_green_becomes_blue() {
+        // step 0: blue touches grey; step 1: grey touches green; step 2: red touches grey.
+        let steps = vec![substeps(&[&[(2, 4)]]), substeps(&[&[(3, 4)]]), substeps(&[&[(4, 5)]])];
+        assert_eq!(
+            alternatives(&COLOURS, &steps, 4, Strategy::BlueTouched),
+            vec![vec![Grey, Grey, Blue, Grey, Green, Red]]
+        );
+        let alt = alternatives(&COLOURS, &steps, 4, Strategy::Pairs);
+        // grey as green first (blue touched it first), then grey as blue (blue becomes grey).
+        assert_eq!(alt, vec![vec![Grey, Grey, Blue, Grey, Green, Red], vec![Grey, Grey, Grey, Green, Blue, Red]]);
+        let grey_blue = replay(&alt[1], &steps, 50).unwrap();
+        assert_eq!(grey_blue.len(), 2, "ends when the new blue meets green, before red touches it");
+        assert_eq!(grey_blue[1], Replayed { reward: 0.0, terminated: true });
+        // Red touching the block first makes that task a failure instead.
+        let red_first = vec![substeps(&[&[(4, 5)]]), substeps(&[&[(3, 4)]])];
+        let alt = alternatives(&COLOURS, &red_first, 4, Strategy::Pairs);
+        assert_eq!(alt, vec![vec![Grey, Grey, Grey, Green, Blue, Red]]);
+        assert_eq!(replay(&alt[0], &red_first, 50).unwrap(), vec![Replayed { reward: -50.0, terminated: true }]);
+        assert_eq!(alternatives(&COLOURS, &steps, 1, Strategy::Pairs).len(), 1, "at most k");
     }
 
     #[test]
     fn a_relabelled_red_blue_contact_is_a_failure_and_failure_wins_a_tie() {
         // Blue touches grey and, in the same substep, the block that is red.
         let steps = vec![substeps(&[&[(2, 4), (2, 5)]])];
-        let alt = alternatives(&COLOURS, &steps, 4);
+        let alt = alternatives(&COLOURS, &steps, 4, Strategy::BlueTouched);
         let as_green = replay(&alt[0], &steps, 50).unwrap();
         assert_eq!(as_green, vec![Replayed { reward: -50.0, terminated: true }]);
     }
@@ -166,7 +213,8 @@ mod tests {
                         .collect()
                 })
                 .collect();
-            for colours in std::iter::once(COLOURS.to_vec()).chain(alternatives(&COLOURS, &steps, 3)) {
+            let alts = [Strategy::BlueTouched, Strategy::Pairs].map(|s| alternatives(&COLOURS, &steps, 3, s));
+            for colours in std::iter::once(COLOURS.to_vec()).chain(alts.into_iter().flatten()) {
                 let r = replay(&colours, &steps, 50).unwrap();
                 let Some(end) = r.iter().position(|s| s.terminated) else { continue };
                 if r[end].reward != 0.0 {

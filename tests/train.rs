@@ -34,6 +34,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         pggd: Default::default(),
         aggrevated: Default::default(),
         hindsight_colours: 0,
+        hindsight_strategy: Default::default(),
         net: Default::default(),
         task: None,
         branched_from: None,
@@ -654,6 +655,12 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
     let flat = TrainConfig { net: NetConfig::default(), ..tiny_set("BlocksChooseN-v0", 4, Pooling::MeanMax) };
     let err = train(&flat, split.path(), true, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--net"), "{err}");
+    let pairs = TrainConfig {
+        hindsight_strategy: blockpuzzle::hindsight::Strategy::Pairs,
+        ..tiny_set("BlocksChooseN-v0", 4, Pooling::MeanMax)
+    };
+    let err = train(&pairs, split.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--hindsight-strategy"), "{err}");
     // The policy plays BlocksChoose-v0 (three slots) and BlocksTouch-v0 (two) as well.
     for id in ["BlocksChoose-v0", "BlocksTouch-v0", "BlocksChooseN-v0"] {
         let task = blockpuzzle::env::registry::task(id).unwrap();
@@ -678,13 +685,20 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
 #[test]
 fn attention_pooling_trains_and_its_policy_acts_as_saved() {
     let dir = tempfile::tempdir().unwrap();
-    train(&tiny_set("BlocksChoose-v0", 1, Pooling::Attention), dir.path(), false, &mut quiet).unwrap();
+    let c = TrainConfig {
+        hindsight_strategy: blockpuzzle::hindsight::Strategy::Pairs,
+        ..tiny_set("BlocksChoose-v0", 1, Pooling::Attention)
+    };
+    train(&c, dir.path(), false, &mut quiet).unwrap();
     let saved = load_policy(&dir.path().join("policy.json")).unwrap();
     assert!(saved.policy.net().set.is_some_and(|s| s.attention));
     let cfg: TrainConfig =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
     assert_eq!(cfg.net.set_pooling, Pooling::Attention);
     assert!(cfg.title().contains("set network + attention") && cfg.title().contains("hindsight colours 2"));
+    assert!(
+        cfg.hindsight_strategy == blockpuzzle::hindsight::Strategy::Pairs && cfg.title().contains("hindsight pairs")
+    );
 }
 
 #[test]

@@ -126,6 +126,11 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = 0, value_parser = crate::limits::HINDSIGHT_COLOURS.parser::<usize>())]
     #[serde(default)]
     pub hindsight_colours: usize,
+    /// Which tasks hindsight relabelling proposes: `blue-touched` (a block blue touched becomes
+    /// green) or `pairs` (also: a block that touched green becomes blue).
+    #[arg(long, value_enum, default_value_t = crate::hindsight::Strategy::BlueTouched)]
+    #[serde(default)]
+    pub hindsight_strategy: crate::hindsight::Strategy,
     /// The networks: an MLP over the flat observation, or a set network over the `objects` one.
     #[command(flatten)]
     #[serde(default)]
@@ -266,6 +271,9 @@ impl TrainConfig {
         }
         if self.hindsight_colours > 0 {
             v.push(format!("hindsight colours {}", self.hindsight_colours));
+            if self.hindsight_strategy == crate::hindsight::Strategy::Pairs {
+                v.push("hindsight pairs".into());
+            }
         }
         if d.td3 {
             v.push("TD3".to_owned());

@@ -87,15 +87,22 @@ impl Episode {
 
     /// The same episode under up to `k` other colourings of its blocks
     /// ([`crate::hindsight::alternatives`]: a block blue touched becomes green,
-    /// the greens take its colour): the observations' colour one-hots
+    /// the greens take its colour; with `pairs`, also a block that touched green
+    /// becomes blue): the observations' colour one-hots
     /// rewritten, the rewards and terminations replayed by the colour rules
     /// over the recorded contacts (cut at the first terminal step under the
     /// new colours; an episode that does not end under them ends unterminated,
     /// as at a time limit). None without recorded contacts.
-    pub(crate) fn relabelled(&self, spec: &ObsSpec, k: usize, max_steps: usize) -> Vec<Episode> {
+    pub(crate) fn relabelled(
+        &self,
+        spec: &ObsSpec,
+        k: usize,
+        strategy: hindsight::Strategy,
+        max_steps: usize,
+    ) -> Vec<Episode> {
         let Some(c) = &self.contacts else { return Vec::new() };
         let mut out = Vec::new();
-        for colours in hindsight::alternatives(&c.colours, &c.steps, k) {
+        for colours in hindsight::alternatives(&c.colours, &c.steps, k, strategy) {
             let Ok(replayed) = hindsight::replay(&colours, &c.steps, max_steps) else { continue };
             let n = replayed.len();
             let obs = self.obs[..=n]
@@ -347,7 +354,7 @@ mod tests {
             forward_seconds: 0.0,
             contacts: Some(Contacts { colours: colours.clone(), steps }),
         };
-        let others = ep.relabelled(&spec, 4, 50);
+        let others = ep.relabelled(&spec, 4, hindsight::Strategy::BlueTouched, 50);
         // Grey (touched at step 1) as the goal: success at step 1, the episode cut there. Red (step 2)
         // as the goal: success at step 2, nothing red having touched blue before.
         assert_eq!(others.len(), 2);
@@ -369,7 +376,7 @@ mod tests {
         assert_eq!(replay.parts().0.done, vec![0.0, 1.0]);
         assert_eq!(colour_of(&ep.obs[0], 2), Grey.one_hot().to_vec());
         assert!(
-            Episode { contacts: None, ..ep }.relabelled(&spec, 4, 50).is_empty(),
+            Episode { contacts: None, ..ep }.relabelled(&spec, 4, hindsight::Strategy::BlueTouched, 50).is_empty(),
             "nothing recorded, nothing relabelled"
         );
     }

@@ -542,7 +542,9 @@ impl<'a> Trainer<'a> {
             ep.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
             rows.extend(ep.obs.iter().flatten());
             // Hindsight colours: the same episode under other colourings, beside the original.
-            for other in ep.relabelled(&self.envs.obs_spec(), config.hindsight_colours, max_steps) {
+            for other in
+                ep.relabelled(&self.envs.obs_spec(), config.hindsight_colours, config.hindsight_strategy, max_steps)
+            {
                 tally.relabelled += 1;
                 tally.relabelled_wins += other.success as usize;
                 other.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
