@@ -207,7 +207,15 @@ fn main() {
         .generate_comments(true)
         .generate()
         .unwrap_or_else(|e| {
-            panic!("bindgen failed on {}: {e}; libclang-dev is needed ({SETUP_HINT})", header.display())
+            let hint = if wheel {
+                format!(
+                    "bindgen needs libclang: `pip install libclang==18.1.1` for {} (or set LIBCLANG_PATH)",
+                    python()
+                )
+            } else {
+                format!("libclang-dev is needed ({SETUP_HINT})")
+            };
+            panic!("bindgen failed on {}: {e}; {hint}", header.display())
         });
 
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("bindings.rs");
