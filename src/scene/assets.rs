@@ -7,8 +7,8 @@
 //!    assets under `gymnasium_robotics/` (the layout of this checkout's `models/`);
 //! 2. a folder registered at run time with [`use_fetch_assets`]: the Python
 //!    package registers the `envs/assets` folder of the installed
-//!    `gymnasium-robotics` wheel, whose files are checked against their sha256
-//!    once per process;
+//!    `gymnasium-robotics` wheel once, at import; its files are checked
+//!    against their sha256 when it is registered;
 //! 3. this checkout's `models/` (filled by `make setup`), except in builds for
 //!    the Python wheel, which keep no path of the checkout they were built in.
 
