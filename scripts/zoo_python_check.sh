@@ -14,7 +14,8 @@ if ! "$VENV/bin/python" -c "import numpy; assert numpy.__version__ == '2.2.6'" 2
 fi
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$ROOT/zoo"
 
-# Set networks (format 3): a few epochs of `train --net set` (mean-max, then attention), exported to a
+# Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, mean-max with
+# --set-norm), exported to a
 # scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
@@ -27,11 +28,13 @@ fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for pooling in mean-max attention colour; do
-    "$BP" train --env BlocksChooseN-v0 --net set --set-pooling "$pooling" --epochs 1 --cycles 2 --batches 3 \
+for variant in mean-max attention colour mean-max-norm; do
+    flags=(--set-pooling "${variant%-norm}")
+    if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi
+    "$BP" train --env BlocksChooseN-v0 --net set "${flags[@]}" --epochs 1 --cycles 2 --batches 3 \
         --batch-size 32 --hidden 32 --layers 2 --test-episodes 1 --torch-threads 1 \
-        --run-dir "$SCRATCH/run-$pooling" > /dev/null
-    "$BP" zoo export --from "$SCRATCH/run-$pooling" --name "set-$pooling" --description "zoo_python_check" \
+        --run-dir "$SCRATCH/run-$variant" > /dev/null
+    "$BP" zoo export --from "$SCRATCH/run-$variant" --name "set-$variant" --description "zoo_python_check" \
         --trained-with "scripts/zoo_python_check.sh" --zoo "$SCRATCH/zoo" > /dev/null
 done
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$SCRATCH/zoo"

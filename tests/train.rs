@@ -715,6 +715,29 @@ fn set_networks_refuse_what_they_cannot_do() {
     c.net.set_encoder_layers = 0;
     let err = train(&c, &dir.path().join("y"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--set-encoder-layers"), "{err}");
+    let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
+    c.net = NetConfig { set_norm: true, ..NetConfig::default() };
+    let err = train(&c, &dir.path().join("z"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--set-norm") && err.contains("--net set"), "{err}");
+    assert!(!dir.path().join("z").exists(), "nothing written");
+}
+
+#[test]
+fn a_layer_normalised_set_network_trains_saves_and_refuses_to_resume_without_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
+    c.net.set_norm = true;
+    train(&c, dir.path(), false, &mut quiet).unwrap();
+    let saved = load_policy(&dir.path().join("policy.json")).unwrap();
+    assert!(saved.policy.net().set.is_some_and(|s| s.norm), "the saved layout says so");
+    let cfg: TrainConfig =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
+    assert!(cfg.net.set_norm && cfg.title().contains("layer-normalised"), "{}", cfg.title());
+    assert!(cfg.default_run_dir().to_string_lossy().contains("-set-norm-s"));
+    let mut plain = tiny_set("BlocksChoose-v0", 2, Pooling::MeanMax);
+    plain.net.set_norm = false;
+    let err = train(&plain, dir.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--set-norm"), "{err}");
 }
 
 #[test]

@@ -24,9 +24,11 @@ def check(folder):
     worst = 0.0
     for entry in entries:
         policy = zoo.load(entry)
-        worst = max(worst, policy.probe_error())
+        error = policy.probe_error()
+        worst = max(worst, error)
+        verdict = "reproduced" if error < 1e-5 else f"NOT reproduced (action difference {error:.2e})"
         print(f"{entry.stem}: {policy.task_id} {policy.meta['algo']} epoch {policy.meta['epoch']}, "
-              f"{len(policy.meta['probes'])} probes reproduced")
+              f"{len(policy.meta['probes'])} probes {verdict}")
     print(f"{len(entries)} entries, largest action difference {worst:.2e}")
     return len(entries) > 0 and worst < 1e-5
 

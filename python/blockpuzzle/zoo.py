@@ -155,7 +155,11 @@ class ZooPolicy:
             groups = [np.ones(len(h), bool)]
         means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
         peaks = [h[g].max(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
-        return np.concatenate([x[:r], *means, *peaks]), first
+        pooled = np.concatenate([*means, *peaks])
+        if self.set.get("norm", False):
+            # Layer normalisation without gain or bias (biased variance, libtorch's 1e-5 floor).
+            pooled = (pooled - pooled.mean()) / np.sqrt(pooled.var() + np.float32(1e-5))
+        return np.concatenate([x[:r], pooled.astype(np.float32)]), first
 
     def act(self, obs) -> np.ndarray:
         """The action for one flat observation vector."""

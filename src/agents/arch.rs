@@ -57,6 +57,11 @@ pub struct NetConfig {
     #[arg(long, value_enum, default_value = "mean-max")]
     #[serde(default)]
     pub set_pooling: Pooling,
+    /// Set network: layer-normalise the pooled features (no gain or bias) before the head, so
+    /// that the head's inputs stay of unit scale however large the encoder's outputs grow.
+    #[arg(long)]
+    #[serde(default)]
+    pub set_norm: bool,
 }
 
 fn two() -> usize {
@@ -65,7 +70,7 @@ fn two() -> usize {
 
 impl Default for NetConfig {
     fn default() -> Self {
-        Self { net: NetKind::Mlp, set_encoder_layers: two(), set_pooling: Pooling::MeanMax }
+        Self { net: NetKind::Mlp, set_encoder_layers: two(), set_pooling: Pooling::MeanMax, set_norm: false }
     }
 }
 
@@ -83,16 +88,26 @@ impl NetConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
+        if self.set_norm && self.net != NetKind::Set {
+            return Err(
+                "--set-norm normalises a set network's pooled features: add --net set, or drop --set-norm".into()
+            );
+        }
         crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)
     }
 
     /// How the run's title names the network (empty: the paper's MLP).
     pub fn describe(&self) -> String {
-        match (self.net, self.set_pooling) {
-            (NetKind::Mlp, _) => String::new(),
-            (NetKind::Set, Pooling::MeanMax) => "set network".into(),
-            (NetKind::Set, Pooling::Attention) => "set network + attention".into(),
-            (NetKind::Set, Pooling::Colour) => "set network, pooled by colour".into(),
+        let kind = match (self.net, self.set_pooling) {
+            (NetKind::Mlp, _) => return String::new(),
+            (NetKind::Set, Pooling::MeanMax) => "set network",
+            (NetKind::Set, Pooling::Attention) => "set network + attention",
+            (NetKind::Set, Pooling::Colour) => "set network, pooled by colour",
+        };
+        if self.set_norm {
+            format!("{kind}, layer-normalised")
+        } else {
+            kind.into()
         }
     }
 }
@@ -126,6 +141,7 @@ impl Arch {
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;
                 layout.by_colour = net.set_pooling == Pooling::Colour;
+                layout.norm = net.set_norm;
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

@@ -67,6 +67,28 @@ pub struct SetLayout {
     /// unchanged), instead of over all rows.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub by_colour: bool,
+    /// Layer normalisation of the pooled features (no gain, no bias): the
+    /// head reads them with mean 0 and variance 1 across the features,
+    /// however large the encoder's outputs grow.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub norm: bool,
+}
+
+/// The variance floor of [`SetLayout::norm`] (libtorch's `layer_norm` default).
+pub const NORM_EPS: f32 = 1e-5;
+
+/// `x` normalised to mean 0 and variance 1 (biased variance, `NORM_EPS` added), in place.
+fn layer_norm(x: &mut [f32]) {
+    if x.is_empty() {
+        return;
+    }
+    let n = x.len() as f32;
+    let mean = x.iter().sum::<f32>() / n;
+    let var = x.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / n;
+    let scale = 1.0 / (var + NORM_EPS).sqrt();
+    for v in x.iter_mut() {
+        *v = (*v - mean) * scale;
+    }
 }
 
 /// The colours a row may have, in the order of the colour one-hot.
@@ -91,6 +113,7 @@ impl SetLayout {
             encoder_layers,
             attention: false,
             by_colour: false,
+            norm: false,
         })
     }
 
@@ -242,6 +265,9 @@ impl TanhMlp {
         let mut input = x[..s.robot].to_vec();
         input.extend(sum.iter().enumerate().map(|(i, v)| v / n[i / width.max(1)].max(1) as f32));
         input.extend(max);
+        if s.norm {
+            layer_norm(&mut input[s.robot..]);
+        }
         input.extend_from_slice(x.get(rows_end + s.slots..).unwrap_or(&[]));
         run(head, input, self.tanh_out)
     }

@@ -3,7 +3,7 @@
 //! all simple loops over a list of tensors), plus an Adam optimiser whose
 //! state can be saved and restored exactly.
 
-use super::mlp::{Dense, SetLayout, TanhMlp, COLOURS};
+use super::mlp::{Dense, SetLayout, TanhMlp, COLOURS, NORM_EPS};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
@@ -181,7 +181,12 @@ impl Net {
             let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
             (h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count, h.amax([1i64].as_slice(), false))
         };
-        self.layers(Tensor::cat(&[robot, mean, max, extra], 1), s.head_start())
+        let mut pooled = Tensor::cat(&[mean, max], 1);
+        if s.norm {
+            let width = pooled.size()[1];
+            pooled = pooled.layer_norm([width].as_slice(), None::<Tensor>, None::<Tensor>, NORM_EPS.into(), false);
+        }
+        self.layers(Tensor::cat(&[robot, pooled, extra], 1), s.head_start())
     }
 
     /// The self-attention block of layers `first..first + 4` over encoded rows
@@ -428,7 +433,7 @@ mod tests {
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
     const SET: SetLayout =
-        SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false, by_colour: false };
+        SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false, by_colour: false, norm: false };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
     fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
@@ -456,11 +461,19 @@ mod tests {
     #[test]
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let cases = [(0, 4, true, false), (4, 1, false, false), (0, 4, true, true), (4, 1, false, true)];
-        for (extra, out, tanh, attention) in cases {
+        let cases = [
+            (0, 4, true, false, false),
+            (4, 1, false, false, false),
+            (0, 4, true, true, false),
+            (4, 1, false, true, false),
+            (0, 4, true, false, true),
+            (4, 1, false, true, true),
+        ];
+        for (extra, out, tanh, attention, norm) in cases {
             // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
-            // with mean-max pooling or a self-attention block first.
-            let net = Net::new_set(SetLayout { attention, ..SET }, extra, (16, 2, 2), out, tanh, &mut rng);
+            // with mean-max pooling or a self-attention block first, the pooled features
+            // layer-normalised or not.
+            let net = Net::new_set(SetLayout { attention, norm, ..SET }, extra, (16, 2, 2), out, tanh, &mut rng);
             assert_eq!(net.sizes()[0], SET.obs_dim() + extra);
             let plain = net.to_plain();
             plain.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap();
@@ -505,7 +518,15 @@ mod tests {
     #[test]
     fn pooling_by_colour_agrees_with_its_plain_copy_and_keeps_colours_apart() {
         use crate::env::COLOUR_FEATURE;
-        let layout = SetLayout { robot: 3, object: 22, slots: 4, encoder_layers: 1, attention: false, by_colour: true };
+        let layout = SetLayout {
+            robot: 3,
+            object: 22,
+            slots: 4,
+            encoder_layers: 1,
+            attention: false,
+            by_colour: true,
+            norm: false,
+        };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.
         let obs = |rng: &mut rand_chacha::ChaCha8Rng, colours: [Option<usize>; 4]| {

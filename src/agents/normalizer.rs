@@ -253,7 +253,15 @@ mod tests {
 
     #[test]
     fn set_statistics_are_per_feature_over_the_rows_present_and_the_mask_passes() {
-        let layout = SetLayout { robot: 2, object: 3, slots: 3, encoder_layers: 1, attention: false, by_colour: false };
+        let layout = SetLayout {
+            robot: 2,
+            object: 3,
+            slots: 3,
+            encoder_layers: 1,
+            attention: false,
+            by_colour: false,
+            norm: false,
+        };
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [
             1.0, 2.0, /**/ 1.0, 10.0, -1.0, /**/ 3.0, 20.0, 1.0, /**/ 99.0, 99.0, 99.0, /**/ 1.0,

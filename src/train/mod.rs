@@ -330,7 +330,8 @@ impl TrainConfig {
             (NetKind::Set, Pooling::Attention) => "-set-attention",
             (NetKind::Set, Pooling::Colour) => "-set-colour",
         };
-        format!("runs/{}-{}{net}-s{}", self.task_id(), self.method().1, self.seed).into()
+        let norm = if self.net.set_norm { "-norm" } else { "" };
+        format!("runs/{}-{}{net}{norm}-s{}", self.task_id(), self.method().1, self.seed).into()
     }
 }
 
