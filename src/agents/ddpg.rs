@@ -79,6 +79,14 @@ pub struct DdpgConfig {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub preact_l2: f64,
+    /// With `--preact-l2`: penalise only the part of each pre-tanh output
+    /// beyond this size, `(|u| − margin)²` where `|u| > margin` (0: all of
+    /// it, `u²`). Inside the margin the actor is free (tanh(2) = 0.96), so
+    /// the penalty keeps actions off the tanh's flat ends without pulling
+    /// them towards 0.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub preact_margin: f64,
     /// Probability of a uniform random action while exploring.
     #[arg(long, default_value_t = 0.3)]
     pub random_eps: f64,
@@ -169,6 +177,7 @@ impl Default for DdpgConfig {
             polyak: 0.95,
             action_l2: 1.0,
             preact_l2: 0.0,
+            preact_margin: 0.0,
             random_eps: 0.3,
             noise_eps: 0.2,
             noise_correlation: 0.0,
@@ -197,13 +206,14 @@ impl DdpgConfig {
             bound.check_usize(v)?;
         }
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 11] = [
+        let checks: [(bool, &str); 12] = [
             (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
             (finite_pos(self.lr_critic), "--lr-critic must be a positive number"),
             ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
             ((0.0..=1.0).contains(&self.polyak), "--polyak must be in [0, 1]"),
             (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
             (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),
+            (self.preact_margin.is_finite() && self.preact_margin >= 0.0, "--preact-margin must be a number ≥ 0"),
             ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
             (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
             ((0.0..1.0).contains(&self.noise_correlation), "--noise-correlation must be in [0, 1)"),
@@ -400,10 +410,13 @@ impl Ddpg {
             let frozen_critic = self.critic.detached_view();
             let loss = -frozen_critic.q(&obs, &pi).mean(tch::Kind::Float)
                 + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
-            if self.config.preact_l2 > 0.0 {
-                loss + u.square().mean(tch::Kind::Float) * self.config.preact_l2
-            } else {
+            if self.config.preact_l2 == 0.0 {
                 loss
+            } else if self.config.preact_margin > 0.0 {
+                let beyond = (u.abs() - self.config.preact_margin).relu();
+                loss + beyond.square().mean(tch::Kind::Float) * self.config.preact_l2
+            } else {
+                loss + u.square().mean(tch::Kind::Float) * self.config.preact_l2
             }
         });
 
@@ -526,6 +539,7 @@ impl Algorithm for Ddpg {
     fn take_branch_settings(&mut self, ddpg: &DdpgConfig) {
         self.config.action_l2 = ddpg.action_l2;
         self.config.preact_l2 = ddpg.preact_l2;
+        self.config.preact_margin = ddpg.preact_margin;
     }
 
     fn state(&self) -> StateDict {
@@ -820,6 +834,7 @@ mod tests {
         bad(DdpgConfig { target_noise: f64::INFINITY, ..small() }, "--target-noise");
         bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
         bad(DdpgConfig { preact_l2: -0.1, ..small() }, "--preact-l2");
+        bad(DdpgConfig { preact_margin: f64::NAN, ..small() }, "--preact-margin");
         bad(DdpgConfig { noise_correlation: 1.0, ..small() }, "--noise-correlation");
     }
 
@@ -872,9 +887,9 @@ mod tests {
     /// critic's) has vanished; off (the default), the loss is the paper's.
     #[test]
     fn preact_penalty_pulls_saturated_actions_back() {
-        let run = |preact_l2: f64| {
+        let run = |preact_l2: f64, preact_margin: f64| {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            let mut agent = Ddpg::new(6, 4, DdpgConfig { preact_l2, ..small() }, &mut rng);
+            let mut agent = Ddpg::new(6, 4, DdpgConfig { preact_l2, preact_margin, ..small() }, &mut rng);
             let b = batch(256, 6, &mut rng);
             agent.norm.update(&b.obs);
             // Saturate: scale the output layer by 100.
@@ -890,14 +905,28 @@ mod tests {
             let stats: Vec<UpdateStats> = (0..40).map(|_| agent.update(&b)).collect();
             (before, size(&agent), stats)
         };
-        let (before, penalised, with) = run(0.01);
-        let (_, unpenalised, without) = run(0.0);
+        let (before, penalised, with) = run(0.01, 0.0);
+        let (_, unpenalised, without) = run(0.0, 0.0);
+        let (_, beyond_margin, _) = run(0.01, 2.0);
         assert!(before > 10.0, "saturated: mean |u| {before}");
         assert!(penalised < 0.8 * before, "{before} -> {penalised}");
         assert!(penalised < 0.8 * unpenalised, "{penalised} vs {unpenalised}");
         // The critic's side is untouched: the first update's critic loss is the same.
         assert_eq!(with[0].critic_loss, without[0].critic_loss);
         assert!(with[0].actor_loss > without[0].actor_loss, "the penalty is part of the actor's loss");
+        // With a margin the saturated actor is pulled back too, and an actor inside the margin
+        // (the fresh one: |u| is well below 100 there) is not penalised at all.
+        assert!(beyond_margin < 0.8 * unpenalised, "{beyond_margin} vs {unpenalised}");
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let config = DdpgConfig { preact_l2: 0.01, preact_margin: 100.0, ..small() };
+        let mut inside = Ddpg::new(6, 4, config, &mut rng);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut free = Ddpg::new(6, 4, small(), &mut rng);
+        let b = batch(256, 6, &mut rng);
+        inside.norm.update(&b.obs);
+        free.norm.update(&b.obs);
+        let (a, f) = (inside.update(&b), free.update(&b));
+        assert_eq!(a.actor_loss, f.actor_loss, "nothing beyond the margin: no penalty");
     }
 
     #[test]

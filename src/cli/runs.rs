@@ -23,8 +23,8 @@ pub(super) struct TrainArgs {
     /// Start --run-dir (new) from this run directory's latest checkpoint, with
     /// the settings given here; only --level-replay, --challenge-share,
     /// --success-threshold, --batches, --random-eps, --noise-eps,
-    /// --noise-correlation, --action-l2 and --preact-l2 may differ from the
-    /// parent's (and --epochs, the total to reach). The parent stays as it is.
+    /// --noise-correlation, --action-l2, --preact-l2 and --preact-margin may differ
+    /// from the parent's (and --epochs, the total to reach). The parent stays as it is.
     #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
     branch_from: Option<PathBuf>,
     #[command(flatten)]

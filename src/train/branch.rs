@@ -30,6 +30,7 @@ pub const BRANCHABLE_CHANGES: &[&str] = &[
     "noise_correlation",
     "action_l2",
     "preact_l2",
+    "preact_margin",
 ];
 
 /// Where a branched run came from (recorded in its `config.json`).

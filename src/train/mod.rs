@@ -299,7 +299,9 @@ impl TrainConfig {
         if d.noise_correlation > 0.0 {
             v.push(format!("noise correlation {}", d.noise_correlation));
         }
-        if d.preact_l2 > 0.0 {
+        if d.preact_l2 > 0.0 && d.preact_margin > 0.0 {
+            v.push(format!("pre-tanh penalty {} beyond {}", d.preact_l2, d.preact_margin));
+        } else if d.preact_l2 > 0.0 {
             v.push(format!("pre-tanh penalty {}", d.preact_l2));
         }
         if self.batches != PAPER_BATCHES {
