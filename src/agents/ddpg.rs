@@ -206,7 +206,7 @@ impl DdpgConfig {
             bound.check_usize(v)?;
         }
         let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 12] = [
+        let checks: [(bool, &str); 13] = [
             (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
             (finite_pos(self.lr_critic), "--lr-critic must be a positive number"),
             ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
@@ -214,6 +214,10 @@ impl DdpgConfig {
             (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
             (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),
             (self.preact_margin.is_finite() && self.preact_margin >= 0.0, "--preact-margin must be a number ≥ 0"),
+            (
+                self.preact_margin == 0.0 || self.preact_l2 > 0.0,
+                "--preact-margin sets where --preact-l2's penalty starts: give --preact-l2 W > 0 too",
+            ),
             ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
             (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
             ((0.0..1.0).contains(&self.noise_correlation), "--noise-correlation must be in [0, 1)"),
@@ -835,6 +839,7 @@ mod tests {
         bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
         bad(DdpgConfig { preact_l2: -0.1, ..small() }, "--preact-l2");
         bad(DdpgConfig { preact_margin: f64::NAN, ..small() }, "--preact-margin");
+        bad(DdpgConfig { preact_margin: 2.0, preact_l2: 0.0, ..small() }, "--preact-l2 W > 0");
         bad(DdpgConfig { noise_correlation: 1.0, ..small() }, "--noise-correlation");
     }
 
