@@ -14,6 +14,7 @@ use std::path::Path;
 fn tiny(env: &str, epochs: usize) -> TrainConfig {
     TrainConfig {
         env: env.into(),
+        counts: None,
         workers: 2,
         epochs,
         cycles: 3,
@@ -753,4 +754,30 @@ fn sac_and_pggd_train_set_networks_too() {
         assert!(set.by_colour && set.slots == 5, "{algo}: {set:?}");
         assert_eq!(saved.policy.obs_mode(), blockpuzzle::env::ObsMode::Objects, "{algo}");
     }
+}
+
+#[test]
+fn counts_train_recorded_refuse_to_change_on_resume_and_bad_ones_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = tiny("BlocksAvoid-v0", 1);
+    c.counts = Some("red=0".parse().unwrap());
+    train(&c, dir.path(), false, &mut quiet).unwrap();
+    let cfg: TrainConfig =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("config.json")).unwrap()).unwrap();
+    assert_eq!(cfg.counts.as_ref().map(ToString::to_string).as_deref(), Some("red=0"));
+    assert!(cfg.title().contains("counts red=0"), "{}", cfg.title());
+    assert_eq!(cfg.default_run_dir().display().to_string(), "runs/BlocksAvoid-v0-ddpg-red0-s7");
+    // The policy keeps the task as written (its three red slots).
+    let saved = load_policy(&dir.path().join("policy.json")).unwrap();
+    assert_eq!(saved.task.as_ref().map(|t| t.id.as_str()), Some("BlocksAvoid-v0"));
+    let mut other = tiny("BlocksAvoid-v0", 2);
+    other.counts = None;
+    let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--counts"), "{err}");
+    // A range the scene cannot hold is refused before anything is written.
+    let mut bad = tiny("BlocksChooseN-v0", 1);
+    bad.counts = Some("grey=0-9".parse().unwrap());
+    let err = train(&bad, &dir.path().join("x"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("holds 4 copies of grey") && err.contains("0-4"), "{err}");
+    assert!(!dir.path().join("x").exists(), "nothing written");
 }

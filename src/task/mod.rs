@@ -6,10 +6,12 @@
 //! environments are task files too (`tasks/*.toml`, embedded in the binary)
 //! and go through the same code.
 
+pub mod counts;
 pub mod expr;
 pub mod sampler;
 pub mod spec;
 
+pub use counts::Counts;
 pub use sampler::{Placed, PlacementError};
 pub use spec::{
     Anchor, CurriculumSpec, Density, DistributionSpec, Kind, ObjectSpec, PlacementSpec, RobotSpec, StartSpec,

@@ -60,6 +60,15 @@ pub struct TrainConfig {
     /// Environment id or task file (.toml).
     #[arg(long)]
     pub env: String,
+    /// Count ranges for the task's entries with a count, in every training
+    /// episode (every level, challenge episodes included), e.g. `grey=0-2`
+    /// or `red=0` (comma-separated for several): the count suite's train
+    /// counts on BlocksChooseN-v0, the obstacles suite's on BlocksAvoid-v0.
+    /// The scene and the observation layout stay the task's. Default: the
+    /// task's own ranges.
+    #[arg(long)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub counts: Option<crate::task::Counts>,
     /// Parallel workers (the paper's MPI workers), one environment each.
     #[arg(long, default_value_t = 2, value_parser = crate::limits::WORKERS.parser::<usize>())]
     pub workers: usize,
@@ -269,6 +278,9 @@ impl TrainConfig {
         if !net.is_empty() {
             v.push(net);
         }
+        if let Some(c) = &self.counts {
+            v.push(format!("counts {c}"));
+        }
         if self.hindsight_colours > 0 {
             v.push(format!("hindsight colours {}", self.hindsight_colours));
             if self.hindsight_strategy == crate::hindsight::Strategy::Pairs {
@@ -333,7 +345,12 @@ impl TrainConfig {
             (NetKind::Set, Pooling::Colour) => "-set-colour",
         };
         let norm = if self.net.set_norm { "-norm" } else { "" };
-        format!("runs/{}-{}{net}{norm}-s{}", self.task_id(), self.method().1, self.seed).into()
+        // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
+        let counts = self
+            .counts
+            .as_ref()
+            .map_or(String::new(), |c| format!("-{}", c.to_string().replace('=', "").replace(',', "-")));
+        format!("runs/{}-{}{net}{norm}{counts}-s{}", self.task_id(), self.method().1, self.seed).into()
     }
 }
 

@@ -213,6 +213,10 @@ fn run_config(
     saved: Option<&TrainConfig>,
 ) -> Result<(TrainConfig, Task)> {
     let task = shared_task(comm, config, run, saved)?;
+    let task = match &config.counts {
+        Some(counts) => task.with_counts(counts)?,
+        None => task,
+    };
     let mut config = config.clone();
     config.task = Some(task.source.clone());
     if let Some(saved) = saved {
