@@ -355,6 +355,9 @@ struct BenchArgs {
     /// With --ddpg --net set: `mean-max` or `attention` (as `train --set-pooling`).
     #[arg(long, value_enum, default_value = "mean-max", requires = "ddpg")]
     set_pooling: crate::agents::arch::Pooling,
+    /// With --ddpg --net set: layer-normalise the pooled features (as `train --set-norm`).
+    #[arg(long, requires = "ddpg")]
+    set_norm: bool,
 }
 
 /// The command line's definition, every value-taking flag accepting a
@@ -524,7 +527,12 @@ fn bench_ddpg(a: BenchArgs) -> Result<()> {
         seed: a.seed,
         precision: a.precision,
         algo: a.algo,
-        net: crate::agents::arch::NetConfig { net: a.net, set_pooling: a.set_pooling, ..Default::default() },
+        net: crate::agents::arch::NetConfig {
+            net: a.net,
+            set_pooling: a.set_pooling,
+            set_norm: a.set_norm,
+            ..Default::default()
+        },
     })?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
