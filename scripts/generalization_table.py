@@ -4,9 +4,13 @@
 the gap, and the rows skipped.
 
 Usage: python3 scripts/generalization_table.py
+       python3 scripts/generalization_table.py --agents   # issue 31's training snapshots
+                                                         # (results/generalization/agents/RUN-epochE.SUITE.json)
 """
 import json
+import math
 import pathlib
+import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SUITES = ["colour", "layout", "cross-task", "count", "obstacles"]
@@ -59,5 +63,46 @@ def main():
     print("Suite versions (sha256, first 12 hex digits): " + ", ".join(f"{s} `{h}`" for s, h in shas.items()) + ".")
 
 
+def wilson(k, n, z=1.96):
+    """The Wilson score interval of k successes in n episodes."""
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def split_cell(split):
+    """Mean success of a split's evaluated rows and the Wilson interval of their pooled episodes."""
+    rows = [r["evaluation"] for r in split["rows"] if r["skipped"] is None]
+    if not rows:
+        return "–"
+    k, n = sum(r["successes"] for r in rows), sum(r["episodes"] for r in rows)
+    lo, hi = wilson(k, n)
+    return f"{split['mean_success']:.3f} [{lo:.2f}, {hi:.2f}]"
+
+
+def agents():
+    """One row per (snapshot, suite) of results/generalization/agents/: train and test success with
+    95% intervals (pooled over the split's evaluated rows), the gap, test / train, rows skipped."""
+    files = sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json"))
+    print("| agent (run, epoch) | trained on | suite | train [95%] | test [95%] | gap | test / train | rows skipped |")
+    print("|---|---|---|---:|---:|---:|---:|---:|")
+    for f in files:
+        agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
+        r = json.loads(f.read_text())
+        splits = {sp["name"]: sp for sp in r["splits"]}
+        means = {k: sp["mean_success"] for k, sp in splits.items()}
+        skipped = sum(row["skipped"] is not None for sp in r["splits"] for row in sp["rows"])
+        total = sum(len(sp["rows"]) for sp in r["splits"])
+        train, test = means.get("train"), means.get("test")
+        ratio = "–" if not train or test is None else f"{test / train:.2f}"
+        gap = "–" if r["gap"] is None else f"{r['gap']:.3f}"
+        where = "" if applies(r) else " (elsewhere)"
+        print(f"| {agent} | {r['policy_task']}{where} | {suite} | {split_cell(splits['train'])} | "
+              f"{split_cell(splits['test'])} | {gap} | {ratio} | {skipped} of {total} |")
+
+
 if __name__ == "__main__":
-    main()
+    agents() if sys.argv[1:] == ["--agents"] else main()
