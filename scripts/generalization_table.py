@@ -6,6 +6,7 @@ the gap, and the rows skipped.
 Usage: python3 scripts/generalization_table.py
        python3 scripts/generalization_table.py --agents   # issue 31's training snapshots
                                                          # (results/generalization/agents/RUN-epochE.SUITE.json)
+       python3 scripts/generalization_table.py --agents-summary [EPOCH]   # one row per snapshot
 """
 import json
 import math
@@ -104,5 +105,34 @@ def agents():
               f"{split_cell(splits['test'])} | {gap} | {ratio} | {skipped} of {total} |")
 
 
+def agents_summary(epoch=None):
+    """One row per snapshot evaluated on every suite (of `epoch` only, if given): each suite's
+    train -> test mean success, `(el.)` where the train split is not the policy's training task."""
+    found = {}
+    for f in sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json")):
+        agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
+        found.setdefault(agent, {})[suite] = json.loads(f.read_text())
+    print("| agent (run, epoch) | " + " | ".join(SUITES) + " |")
+    print("|---|" + "---:|" * len(SUITES))
+    for agent, results in found.items():
+        if set(results) != set(SUITES) or (epoch and not agent.endswith(f"-epoch{epoch}")):
+            continue
+        cells = []
+        for s in SUITES:
+            r = results[s]
+            means = {sp["name"]: sp["mean_success"] for sp in r["splits"]}
+            if means.get("train") is None or means.get("test") is None:
+                cells.append("skipped")
+                continue
+            where = "" if applies(r) else " (el.)"
+            cells.append(f"{means['train']:.3f} → {means['test']:.3f}{where}")
+        print(f"| {agent} | " + " | ".join(cells) + " |")
+
+
 if __name__ == "__main__":
-    agents() if sys.argv[1:] == ["--agents"] else main()
+    if sys.argv[1:2] == ["--agents"]:
+        agents()
+    elif sys.argv[1:2] == ["--agents-summary"]:
+        agents_summary(sys.argv[2] if len(sys.argv) > 2 else None)
+    else:
+        main()
