@@ -18,7 +18,7 @@ fn recipe(path: &Path, extra: &[&str]) -> anyhow::Result<TrainConfig> {
 fn recipes() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
     let mut out = Vec::new();
-    for dir in [root.clone(), root.join("study")] {
+    for dir in [root.clone(), root.join("study"), root.join("generalization")] {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
             if p.extension().is_some_and(|x| x == "toml") {
@@ -34,11 +34,22 @@ fn recipes() -> Vec<PathBuf> {
 fn every_recipe_is_a_valid_train_command_line() {
     let all = recipes();
     assert!(all.len() >= 20, "{all:?}");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for path in all {
+        // A task file kept beside the recipes that train on it is not a recipe.
+        if blockpuzzle::task::Task::from_file(&path).is_ok() {
+            continue;
+        }
         // ddpg-task takes its task from the command line (--env ID).
         let env: &[&str] = if path.ends_with("ddpg-task.toml") { &["--env", "ReachAvoid-v0"] } else { &[] };
         let c = recipe(&path, env).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
-        assert!(blockpuzzle::env::ids().contains(&c.env.as_str()), "{}: {}", path.display(), c.env);
+        let known = blockpuzzle::env::ids().contains(&c.env.as_str()) || root.join(&c.env).is_file();
+        assert!(known, "{}: {}", path.display(), c.env);
+        // Counts name entries the task has, in range.
+        if let Some(counts) = &c.counts {
+            let task = blockpuzzle::env::registry::task(&c.env).unwrap();
+            task.with_counts(counts).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        }
     }
 }
 
