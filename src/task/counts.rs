@@ -102,16 +102,8 @@ impl Task {
                 d.counts[g] = [lo, hi];
             }
         }
-        let fixed = task.groups.iter().all(|g| g.range[0] == g.range[1])
-            && task.distributions.iter().flat_map(|d| &d.counts).all(|r| r[0] == r[1]);
-        task.deterministic = fixed && self.is_fixed_apart_from_counts();
+        task.deterministic = super::draws_nothing(&task.groups, &task.distributions, &task.shuffle, &task.starts);
         Ok(task)
-    }
-
-    /// Whether nothing but the counts is drawn: no shuffle and no random start.
-    fn is_fixed_apart_from_counts(&self) -> bool {
-        self.shuffle.is_empty()
-            && self.starts.iter().chain(self.distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random())
     }
 }
 

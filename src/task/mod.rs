@@ -199,6 +199,20 @@ fn field_span(text: &str, key: &str) -> Option<std::ops::Range<usize>> {
     None
 }
 
+/// Whether a task with these compiled parts draws nothing: every count range
+/// one value, no shuffle, no random start (its layouts are all the same).
+fn draws_nothing(
+    groups: &[CountGroup],
+    distributions: &[Distribution],
+    shuffle: &[Vec<usize>],
+    starts: &[sampler::Placement],
+) -> bool {
+    groups.iter().all(|g| g.range[0] == g.range[1])
+        && distributions.iter().flat_map(|d| &d.counts).all(|r| r[0] == r[1])
+        && shuffle.is_empty()
+        && starts.iter().chain(distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random())
+}
+
 /// Whether a task id is safe in file names: `Name-vN`, a letter first, then
 /// letters, digits, '_' and '-', at most 64 characters.
 pub fn is_safe_id(id: &str) -> bool {
@@ -315,11 +329,7 @@ impl Task {
 
         let hash = canonical_hash(&spec);
         let source = TaskSource { id: spec.id.clone(), path: path.map(Path::to_path_buf), toml: text.to_owned(), hash };
-        let fixed_counts = groups.iter().all(|g| g.range[0] == g.range[1])
-            && distributions.iter().flat_map(|d| &d.counts).all(|r| r[0] == r[1]);
-        let deterministic = shuffle.is_empty()
-            && fixed_counts
-            && starts.iter().chain(distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random());
+        let deterministic = draws_nothing(&groups, &distributions, &shuffle, &starts);
         let objects = expanded.objects.into_iter().map(Spanned::into_inner).collect();
         Ok(Task {
             spec,
