@@ -110,8 +110,13 @@ impl Task {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::registry;
     use rand::SeedableRng;
+
+    /// A built-in task from its file (the registry lives above this module).
+    fn builtin(id: &str) -> Task {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks").join(format!("{id}.toml"));
+        Task::from_file(&path).unwrap()
+    }
 
     fn counts(s: &str) -> Counts {
         s.parse().unwrap()
@@ -133,7 +138,7 @@ mod tests {
 
     #[test]
     fn every_draw_keeps_to_the_given_range_and_the_scene_is_unchanged() {
-        let task = registry::task("BlocksChooseN-v0").unwrap();
+        let task = builtin("BlocksChooseN-v0");
         let few = task.with_counts(&counts("grey=0-2")).unwrap();
         assert_eq!(few.object_count(), task.object_count(), "the scene keeps its four greys");
         assert_eq!(few.source, task.source);
@@ -162,16 +167,16 @@ mod tests {
 
     #[test]
     fn bad_counts_are_refused_naming_the_fix() {
-        let choose_n = registry::task("BlocksChooseN-v0").unwrap();
+        let choose_n = builtin("BlocksChooseN-v0");
         let e = choose_n.with_counts(&counts("red=0")).unwrap_err().to_string();
         assert!(e.contains("\"red\" is not an entry with a count") && e.contains("grey"), "{e}");
         let e = choose_n.with_counts(&counts("grey=0-5")).unwrap_err().to_string();
         assert!(e.contains("holds 4 copies") && e.contains("0-4"), "{e}");
-        let choose = registry::task("BlocksChoose-v0").unwrap();
+        let choose = builtin("BlocksChoose-v0");
         let e = choose.with_counts(&counts("grey=0")).unwrap_err().to_string();
         assert!(e.contains("no entry with a count") && e.contains("drop --counts"), "{e}");
         // BlocksAvoid-v0 draws 1-3 red blocks, and 0 in its `clear` distribution: 0 is allowed.
-        let avoid = registry::task("BlocksAvoid-v0").unwrap();
+        let avoid = builtin("BlocksAvoid-v0");
         let clear = avoid.with_counts(&counts("red=0")).unwrap();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
         let g = &clear.count_groups()[0];
