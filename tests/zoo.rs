@@ -218,7 +218,9 @@ fn shipped_entries_load_and_act_as_their_source() {
         assert!(!meta.probes.is_empty() && !meta.trained_with.is_empty(), "{name}");
         // The probes are reset observations of the recorded task.
         let task = registry::recorded(&meta.task).unwrap();
-        let mut env = blockpuzzle::BlockEnv::new(blockpuzzle::EnvConfig::new(task)).unwrap();
+        // In the observation the policy reads (a set network's is the `objects` one).
+        let config = blockpuzzle::EnvConfig { obs_mode: saved.policy.obs_mode(), ..blockpuzzle::EnvConfig::new(task) };
+        let mut env = blockpuzzle::BlockEnv::new(config).unwrap();
         let level = env.max_level();
         env.set_level(level).unwrap();
         assert_eq!(env.reset(Some(0)).unwrap().0.to_vec(), meta.probes[0].obs, "{name}");
