@@ -84,15 +84,19 @@ def split_cell(split):
     return f"{split['mean_success']:.3f} [{lo:.2f}, {hi:.2f}]"
 
 
+def agent_results():
+    """(agent, suite, result) of every results/generalization/agents/AGENT.SUITE.json, by file name."""
+    for f in sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json")):
+        agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
+        yield agent, suite, json.loads(f.read_text())
+
+
 def agents():
     """One row per (snapshot, suite) of results/generalization/agents/: train and test success with
     95% intervals (pooled over the split's evaluated rows), the gap, test / train, rows skipped."""
-    files = sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json"))
     print("| agent (run, epoch) | trained on | suite | train [95%] | test [95%] | gap | test / train | rows skipped |")
     print("|---|---|---|---:|---:|---:|---:|---:|")
-    for f in files:
-        agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
-        r = json.loads(f.read_text())
+    for agent, suite, r in agent_results():
         splits = {sp["name"]: sp for sp in r["splits"]}
         means = {k: sp["mean_success"] for k, sp in splits.items()}
         skipped = sum(row["skipped"] is not None for sp in r["splits"] for row in sp["rows"])
@@ -109,9 +113,8 @@ def agents_summary(epoch=None):
     """One row per snapshot evaluated on every suite (of `epoch` only, if given): each suite's
     train -> test mean success, `(el.)` where the train split is not the policy's training task."""
     found = {}
-    for f in sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json")):
-        agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
-        found.setdefault(agent, {})[suite] = json.loads(f.read_text())
+    for agent, suite, r in agent_results():
+        found.setdefault(agent, {})[suite] = r
     print("| agent (run, epoch) | " + " | ".join(SUITES) + " |")
     print("|---|" + "---:|" * len(SUITES))
     for agent, results in found.items():
