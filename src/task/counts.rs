@@ -89,7 +89,7 @@ impl Task {
                     "{name}={lo}-{hi}: the scene holds {max} copies of {name}; give a range within 0-{max}"
                 )));
             }
-            let least = self.distributions.iter().map(|d| d.counts[g][0]).fold(self.groups[g].range[0], usize::min);
+            let least = super::least_count(&self.groups, &self.distributions, g);
             if lo < least {
                 return Err(err(format!(
                     "{name}={lo}-{hi}: the task lets no fewer than {least} copies of {name} take part anywhere \

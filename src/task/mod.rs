@@ -213,6 +213,12 @@ fn draws_nothing(
         && starts.iter().chain(distributions.iter().flat_map(|d| &d.starts)).all(|s| !s.is_random())
 }
 
+/// The fewest copies of count group `g` that take part anywhere: in the
+/// curriculum or in a named distribution.
+fn least_count(groups: &[CountGroup], distributions: &[Distribution], g: usize) -> usize {
+    distributions.iter().map(|d| d.counts[g][0]).fold(groups[g].range[0], usize::min)
+}
+
 /// Whether a task id is safe in file names: `Name-vN`, a letter first, then
 /// letters, digits, '_' and '-', at most 64 characters.
 pub fn is_safe_id(id: &str) -> bool {
@@ -587,7 +593,7 @@ fn check_optional(
 ) -> Result<(), TaskError> {
     let mut optional = vec![false; spec.objects.len()];
     for (g, group) in groups.iter().enumerate() {
-        let least = distributions.iter().map(|d| d.counts[g][0]).fold(group.range[0], usize::min);
+        let least = least_count(groups, distributions, g);
         optional[group.first + least..group.first + group.max].fill(true);
     }
     let name = |i: usize| spec.objects[i].get_ref().name.as_str();
