@@ -28,10 +28,11 @@ rows = [json.loads(l) for l in open(sys.argv[1])]
 rates = {}
 for r in rows:
     rates.setdefault((r["precision"], r["net"]), []).append(r["updates_per_s"])
-print("| network | precision | updates/s (median) | × the MLP's (same precision) |")
-print("|---|---|---:|---:|")
+print("| network | precision | updates/s (median) | × the MLP's (same precision) | × its f32 rate |")
+print("|---|---|---:|---:|---:|")
 for (precision, net), v in rates.items():
     base = statistics.median(rates[(precision, "mlp")])
-    print(f"| {net} | {precision} | {statistics.median(v):.1f} | {statistics.median(v) / base:.2f} |")
+    f32 = statistics.median(rates.get(("f32", net), v))
+    print(f"| {net} | {precision} | {statistics.median(v):.1f} | {statistics.median(v) / base:.2f} | {statistics.median(v) / f32:.2f} |")
 PY
 rm -f "$OUT"

@@ -202,20 +202,25 @@ fn ddpg_bench_collects_whole_episodes_and_times_updates() {
 }
 
 #[test]
-fn ddpg_bench_times_a_layer_normalised_set_network_and_refuses_the_norm_without_one() {
-    let args = |net: &'static str| {
-        ["bench", "--ddpg", "--env", "BlocksTouch-v0", "--net", net, "--set-norm", "--steps", "60", "--updates", "2"]
-            .into_iter()
-            .chain(["--batch-size", "16", "--json"])
-            .collect::<Vec<_>>()
-    };
-    let o = bp(&args("set"));
-    assert!(o.status.success(), "{}", text(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert!(v["net"].as_str().unwrap().contains("layer-normalised"), "{v}");
-    let o = bp(&args("mlp"));
-    assert!(!o.status.success());
-    assert!(text(&o).contains("--set-norm") && text(&o).contains("--net set"), "{}", text(&o));
+fn ddpg_bench_times_set_network_options_and_refuses_them_without_a_set_network() {
+    // `--set-norm` (the pooled features layer-normalised) and `--flat-critic` (MLP critics).
+    for (flag, named) in
+        [("--set-norm", "set network, layer-normalised"), ("--flat-critic", "set network, flat critics")]
+    {
+        let args = |net: &'static str| {
+            ["bench", "--ddpg", "--env", "BlocksTouch-v0", "--net", net, flag, "--steps", "60", "--updates", "2"]
+                .into_iter()
+                .chain(["--batch-size", "16", "--json"])
+                .collect::<Vec<_>>()
+        };
+        let o = bp(&args("set"));
+        assert!(o.status.success(), "{}", text(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["net"].as_str().unwrap(), named, "{v}");
+        let o = bp(&args("mlp"));
+        assert!(!o.status.success());
+        assert!(text(&o).contains(flag) && text(&o).contains("--net set"), "{}", text(&o));
+    }
 }
 
 #[test]

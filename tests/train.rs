@@ -742,6 +742,46 @@ fn a_layer_normalised_set_network_trains_saves_and_refuses_to_resume_without_it(
 }
 
 #[test]
+fn flat_critics_train_a_set_actor_resume_exactly_and_are_refused_where_they_mean_nothing() {
+    // TD3 (two critics) and SAC (two Q networks), each split by a resume.
+    for algo in ["ddpg", "sac"] {
+        let flat = |epochs| {
+            let mut c = tiny_set("BlocksChoose-v0", epochs, Pooling::MeanMax);
+            c.algo = Algo::named(algo).unwrap();
+            c.ddpg.td3 = algo == "ddpg";
+            c.ddpg.flat_critic = true;
+            c
+        };
+        let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+        let a = train(&flat(2), straight.path(), false, &mut quiet).unwrap();
+        train(&flat(1), split.path(), false, &mut quiet).unwrap();
+        let b = train(&flat(2), split.path(), true, &mut quiet).unwrap();
+        assert_eq!(comparable(&a), comparable(&b), "{algo}");
+        let saved = load_policy(&straight.path().join("policy.json")).unwrap();
+        assert!(saved.policy.net().set.is_some(), "{algo}: the policy is the set actor");
+        let cfg: TrainConfig =
+            serde_json::from_str(&std::fs::read_to_string(straight.path().join("config.json")).unwrap()).unwrap();
+        assert!(cfg.title().contains("flat critics"), "{}", cfg.title());
+        assert!(cfg.default_run_dir().to_string_lossy().contains("-set-flatcritic-s"));
+        // Resuming with set critics is refused, naming the flag.
+        let mut same = flat(3);
+        same.ddpg.flat_critic = false;
+        let err = train(&same, split.path(), true, &mut quiet).unwrap_err().to_string();
+        assert!(err.contains("--flat-critic"), "{algo}: {err}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = tiny("BlocksChoose-v0", 1);
+    c.ddpg.flat_critic = true;
+    let err = train(&c, &dir.path().join("mlp"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--flat-critic") && err.contains("--net set"), "{err}");
+    let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
+    (c.algo, c.ddpg.td3, c.ddpg.flat_critic) = (Algo::PGGD, false, true);
+    let err = train(&c, &dir.path().join("pggd"), false, &mut quiet).unwrap_err().to_string();
+    assert!(err.contains("--flat-critic") && err.contains("PGGD"), "{err}");
+    assert!(!dir.path().join("mlp").exists() && !dir.path().join("pggd").exists(), "nothing written");
+}
+
+#[test]
 fn sac_and_pggd_train_set_networks_too() {
     for algo in ["sac", "pggd"] {
         let dir = tempfile::tempdir().unwrap();

@@ -165,6 +165,16 @@ impl Arch {
         }
     }
 
+    /// What the critics are: these networks, or with `flat` MLPs over the
+    /// same observation (a set actor's asymmetric critics; `--flat-critic`).
+    pub fn critics(&self, flat: bool) -> Self {
+        if flat {
+            Self::mlp(self.obs_dim)
+        } else {
+            *self
+        }
+    }
+
     /// The observation normaliser: per component, or for a set network per
     /// feature shared by every object row (the mask passes unchanged).
     pub fn normalizer(&self, eps: f64, clip: f32) -> Normalizer {

@@ -115,6 +115,12 @@ pub struct DdpgConfig {
     #[arg(long, default_value_t = 1, value_parser = crate::limits::N_STEP.parser::<usize>())]
     #[serde(default = "one")]
     pub n_step: usize,
+    /// With `--net set`: the critics are MLPs over the same `objects` observation (its rows in
+    /// the environment's order), only the actor a set network (an asymmetric actor-critic: the
+    /// critics serve training alone; the policy saved is the set actor).
+    #[arg(long)]
+    #[serde(default)]
+    pub flat_critic: bool,
     /// TD3's changes: twin critics (clipped double Q), target policy smoothing, delayed actor updates.
     #[arg(long)]
     #[serde(default)]
@@ -189,6 +195,7 @@ impl Default for DdpgConfig {
             target_noise: target_noise(),
             target_noise_clip: target_noise_clip(),
             policy_delay: policy_delay(),
+            flat_critic: false,
         }
     }
 }
@@ -302,14 +309,15 @@ impl Ddpg {
         let shape = (config.hidden, config.layers);
         let obs_dim = arch.obs_dim;
         let actor = arch.net(shape, 0, act_dim, true, rng).with_bf16(bf16);
-        let critic = arch.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
+        let critics = arch.critics(config.flat_critic);
+        let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
         let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
         let actor_opt = Adam::new(&actor.params, config.lr_actor);
         let critic_opt = Adam::new(&critic.params, config.lr_critic);
         let norm = arch.normalizer(config.norm_eps, config.norm_clip);
         // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
         let twin = config.td3.then(|| {
-            let critic = arch.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
+            let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
             let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, config.lr_critic));
             Twin { critic, target, opt, noise_seed: rng.gen() }
         });
@@ -735,6 +743,49 @@ mod tests {
         for _ in 0..50 {
             last = agent.update(&b);
         }
+        assert!(last.critic_loss < first.critic_loss * 0.5, "{first:?} -> {last:?}");
+    }
+
+    #[test]
+    fn flat_critics_read_the_rows_in_order_while_the_set_actor_ignores_it() {
+        use super::super::mlp::SetLayout;
+        // 3 robot features, 3 slots of 4 features, a mask.
+        let layout = SetLayout {
+            robot: 3,
+            object: 4,
+            slots: 3,
+            encoder_layers: 1,
+            attention: false,
+            by_colour: false,
+            norm: false,
+        };
+        let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let config = DdpgConfig { td3: true, flat_critic: true, ..small() };
+        let mut agent = Ddpg::build(arch, 4, config, &mut rng);
+        assert!(agent.actor.set_layout().is_some());
+        let twin = agent.twin.as_ref().unwrap();
+        assert!(agent.critic.set_layout().is_none() && twin.critic.set_layout().is_none());
+        assert_eq!(agent.critic.sizes()[0], layout.obs_dim() + 4, "the whole observation and the action");
+        let row = |v: &[f32]| Tensor::of_slice(v).view([1, v.len() as i64]);
+        let x: Vec<f32> = (0..layout.obs_dim()).map(|i| if i >= 15 { 1.0 } else { (i as f32 * 0.37).sin() }).collect();
+        let mut swapped = x.clone();
+        swapped[3..7].copy_from_slice(&x[7..11]);
+        swapped[7..11].copy_from_slice(&x[3..7]);
+        let a = Tensor::of_slice(&[0.1f32, -0.2, 0.3, 0.0]).view([1, 4]);
+        let (pi, pi_swapped) = (agent.actor.forward(&row(&x)), agent.actor.forward(&row(&swapped)));
+        assert!((pi - pi_swapped).abs().max().double_value(&[]) < 1e-6, "the actor: a set");
+        let (q, q_swapped) = (agent.critic.q(&row(&x), &a), agent.critic.q(&row(&swapped), &a));
+        assert!((q - q_swapped).abs().max().double_value(&[]) > 1e-6, "the critic: slots in order");
+        // It learns as any agent does.
+        let b = batch(64, layout.obs_dim(), &mut rng);
+        let before = agent.actor.to_vecs();
+        let first = agent.update(&b);
+        let mut last = first;
+        for _ in 0..50 {
+            last = agent.update(&b);
+        }
+        assert_ne!(agent.actor.to_vecs(), before);
         assert!(last.critic_loss < first.critic_loss * 0.5, "{first:?} -> {last:?}");
     }
 

@@ -42,6 +42,9 @@ pub const REGISTRATION: Registration = Registration {
         if ddpg.n_step != 1 || ddpg.td3 {
             return Err("--n-step and --td3 are DDPG options; PGGD uses the return-to-go".into());
         }
+        if ddpg.flat_critic {
+            return Err("--flat-critic is for the critics of DDPG, TD3 and SAC; PGGD has none".into());
+        }
         Ok(())
     },
 };

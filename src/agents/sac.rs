@@ -29,6 +29,7 @@
 //! so a run resumes bit for bit and the shards draw independent noise.
 
 use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, Spec, StateDict};
+use super::arch::Arch;
 use super::ddpg::{DdpgConfig, DdpgPolicy, UpdateStats};
 use super::mlp::{Dense, TanhMlp};
 use super::nets::{append_grads, Adam, Net};
@@ -87,10 +88,12 @@ impl Sac {
     pub fn new(spec: &Spec, rng: &mut ChaCha8Rng) -> Self {
         let (c, arch, a) = (spec.ddpg.clone(), spec.arch, spec.act_dim);
         let bf16 = c.precision == super::ddpg::Precision::Bf16;
-        let net =
-            |rng: &mut ChaCha8Rng, extra, out| arch.net((c.hidden, c.layers), extra, out, false, rng).with_bf16(bf16);
-        let actor = net(rng, 0, 2 * a);
-        let (q1, q2) = (net(rng, a, 1), net(rng, a, 1));
+        let net = |arch: Arch, rng: &mut ChaCha8Rng, extra, out| {
+            arch.net((c.hidden, c.layers), extra, out, false, rng).with_bf16(bf16)
+        };
+        let actor = net(arch, rng, 0, 2 * a);
+        let critics = arch.critics(c.flat_critic);
+        let (q1, q2) = (net(critics, rng, a, 1), net(critics, rng, a, 1));
         let log_alpha = Tensor::zeros(&[1], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true);
         Self {
             norm: arch.normalizer(c.norm_eps, c.norm_clip),

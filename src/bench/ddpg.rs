@@ -51,6 +51,8 @@ pub struct DdpgBenchConfig {
     pub algo: Algo,
     /// The networks (`train --net`).
     pub net: NetConfig,
+    /// A set actor's critics are MLPs (`train --flat-critic`).
+    pub flat_critic: bool,
 }
 
 /// Measured rates.
@@ -121,7 +123,10 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
-    let ddpg = DdpgConfig { precision: c.precision, ..DdpgConfig::default() };
+    if c.flat_critic && arch.set.is_none() {
+        bail!("--flat-critic makes a set actor's critics MLPs: add --net set, or drop --flat-critic");
+    }
+    let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;
     let spec = Spec { arch, act_dim, ddpg: &ddpg, pggd: &Default::default() };
     let mut agent = c.algo.build(&spec, &mut ChaCha8Rng::seed_from_u64(c.seed)).map_err(anyhow::Error::msg)?;
@@ -171,7 +176,11 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     Ok(DdpgBenchReport {
         r#impl: "blockpuzzle",
         algo: c.algo,
-        net: if c.net.describe().is_empty() { "mlp".into() } else { c.net.describe() },
+        net: match (c.net.describe(), c.flat_critic) {
+            (d, _) if d.is_empty() => "mlp".into(),
+            (d, true) => format!("{d}, flat critics"),
+            (d, false) => d,
+        },
         env: c.env.clone(),
         workers: c.workers,
         threads: c.torch_threads,

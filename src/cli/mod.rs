@@ -358,6 +358,9 @@ struct BenchArgs {
     /// With --ddpg --net set: layer-normalise the pooled features (as `train --set-norm`).
     #[arg(long, requires = "ddpg")]
     set_norm: bool,
+    /// With --ddpg --net set: the critics are MLPs (as `train --flat-critic`).
+    #[arg(long, requires = "ddpg")]
+    flat_critic: bool,
 }
 
 /// The command line's definition, every value-taking flag accepting a
@@ -533,6 +536,7 @@ fn bench_ddpg(a: BenchArgs) -> Result<()> {
             set_norm: a.set_norm,
             ..Default::default()
         },
+        flat_critic: a.flat_critic,
     })?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);

@@ -278,6 +278,9 @@ impl TrainConfig {
         if !net.is_empty() {
             v.push(net);
         }
+        if d.flat_critic {
+            v.push("flat critics".into());
+        }
         if let Some(c) = &self.counts {
             v.push(format!("counts {c}"));
         }
@@ -345,12 +348,13 @@ impl TrainConfig {
             (NetKind::Set, Pooling::Colour) => "-set-colour",
         };
         let norm = if self.net.set_norm { "-norm" } else { "" };
+        let critic = if self.ddpg.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self
             .counts
             .as_ref()
             .map_or(String::new(), |c| format!("-{}", c.to_string().replace('=', "").replace(',', "-")));
-        format!("runs/{}-{}{net}{norm}{counts}-s{}", self.task_id(), self.method().1, self.seed).into()
+        format!("runs/{}-{}{net}{norm}{critic}{counts}-s{}", self.task_id(), self.method().1, self.seed).into()
     }
 }
 
