@@ -15,7 +15,7 @@ if "$BP" info 2>/dev/null | grep -q "bf16 updates yes"; then PRECISIONS+=(bf16);
 OUT="$(mktemp)"
 for _ in $(seq "$ROUNDS"); do
     for precision in "${PRECISIONS[@]}"; do
-        for net in "mlp mean-max" "set mean-max" "set mean-max --set-norm" "set attention" "set colour"; do
+        for net in "mlp mean-max" "set mean-max" "set mean-max --set-norm" "set mean-max --flat-critic" "set attention" "set colour"; do
             set -- $net
             "$BP" bench --ddpg --json --env BlocksChoose-v0 --net "$1" --set-pooling "$2" ${3:-} --precision "$precision" \
                 --updates "$UPDATES" --steps 500 --torch-threads 1 | tee -a "$OUT"
