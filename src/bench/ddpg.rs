@@ -62,7 +62,7 @@ pub struct DdpgBenchReport {
     pub r#impl: &'static str,
     /// The algorithm.
     pub algo: Algo,
-    /// The networks: "mlp", "set network", "set network + attention".
+    /// The networks: "mlp", "set network", "set network + attention", "set network, flat critics", ….
     pub net: String,
     /// Environment id.
     pub env: String,
