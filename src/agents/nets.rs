@@ -197,24 +197,27 @@ impl Net {
         // The head's first (hidden) layer in three products, the pooled features' in bfloat16.
         let (w, b) = (&self.params[2 * first], &self.params[2 * first + 1]);
         let width = pooled.size()[1];
-        let part = |h: &Tensor, at: i64, len: i64| h.matmul(&w.narrow(1, at, len).tr());
-        let low = pooled.to_kind(Kind::BFloat16).matmul(&w.narrow(1, r, width).to_kind(Kind::BFloat16).tr());
-        let mut h = part(&robot, 0, r) + low.to_kind(Kind::Float) + b;
+        let part = |h: &Tensor, at: i64, hidden: bool| self.product(h, &w.narrow(1, at, h.size()[1]), hidden);
+        let mut h = part(&robot, 0, false) + part(&pooled, r, true) + b;
         if extra.size()[1] > 0 {
-            h += part(&extra, r + width, extra.size()[1]);
+            h += part(&extra, r + width, false);
         }
         self.layers(h.relu(), first + 1, first + 1)
     }
 
-    /// `h · Wₗᵀ + bₗ`, the product in bfloat16 with float accumulation where
-    /// `hidden` (its input is hidden features) and the network is bf16.
-    fn affine(&self, h: &Tensor, l: usize, hidden: bool) -> Tensor {
-        let (w, b) = (&self.params[2 * l], &self.params[2 * l + 1]);
+    /// `h · wᵀ`, in bfloat16 with float accumulation where `hidden` (its
+    /// input is hidden features) and the network is bf16.
+    fn product(&self, h: &Tensor, w: &Tensor, hidden: bool) -> Tensor {
         if self.bf16 && hidden {
-            h.to_kind(Kind::BFloat16).matmul(&w.to_kind(Kind::BFloat16).tr()).to_kind(Kind::Float) + b
+            h.to_kind(Kind::BFloat16).matmul(&w.to_kind(Kind::BFloat16).tr()).to_kind(Kind::Float)
         } else {
-            h.matmul(&w.tr()) + b
+            h.matmul(&w.tr())
         }
+    }
+
+    /// Layer `l` applied to `h`, `h · Wₗᵀ + bₗ` (see [`Net::product`]).
+    fn affine(&self, h: &Tensor, l: usize, hidden: bool) -> Tensor {
+        self.product(h, &self.params[2 * l], hidden) + &self.params[2 * l + 1]
     }
 
     /// The self-attention block of layers `first..first + 4` over encoded rows
