@@ -114,6 +114,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     if c.torch_threads == 0 {
         bail!("--torch-threads must be at least 1");
     }
+    c.net.check_flat_critic(c.flat_critic).map_err(anyhow::Error::msg)?;
     tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let task = registry::task(&c.env)?;
     let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
@@ -122,9 +123,6 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
     if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
-    }
-    if c.flat_critic && arch.set.is_none() {
-        bail!("--flat-critic makes a set actor's critics MLPs: add --net set, or drop --flat-critic");
     }
     let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;

@@ -83,9 +83,7 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
     }
     config.net.validate().map_err(anyhow::Error::msg)?;
-    if config.ddpg.flat_critic && config.net.net != crate::agents::arch::NetKind::Set {
-        bail!("--flat-critic makes a set actor's critics MLPs: add --net set, or drop --flat-critic");
-    }
+    config.net.check_flat_critic(config.ddpg.flat_critic).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
         bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
