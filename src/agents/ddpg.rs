@@ -170,6 +170,20 @@ impl Precision {
             .map(|c| c.split_whitespace().any(|f| f == "amx_bf16" || f == "avx512_bf16"))
             .unwrap_or(false)
     }
+
+    /// Whether this CPU can run this precision.
+    ///
+    /// # Errors
+    /// bf16 on a CPU without AMX or AVX512-BF16, naming the fix.
+    pub fn check(self) -> Result<(), String> {
+        if self == Self::Bf16 && !Self::bf16_supported() {
+            return Err(
+                "--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
 }
 
 impl Default for DdpgConfig {

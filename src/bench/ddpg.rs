@@ -121,9 +121,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     let mut envs = crate::env::VectorEnv::new(&env_config, c.workers, c.workers)?;
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
     let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
-    if c.precision == Precision::Bf16 && !Precision::bf16_supported() {
-        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
-    }
+    c.precision.check().map_err(anyhow::Error::msg)?;
     let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;
     let spec = Spec { arch, act_dim, ddpg: &ddpg, pggd: &Default::default() };

@@ -12,7 +12,7 @@ use super::rundir::{read_progress, write_progress, RunDir};
 use super::{computation_differences, plot, run_task, EpochRow, PgWeight, ReplayLayout, TrainConfig};
 use crate::agents::algorithm::Spec;
 use crate::agents::arch::Arch;
-use crate::agents::ddpg::{Precision, UpdateStats};
+use crate::agents::ddpg::UpdateStats;
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
 use crate::env::{registry, EnvConfig, VectorEnv};
@@ -79,9 +79,7 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
     }
-    if config.ddpg.precision == Precision::Bf16 && !Precision::bf16_supported() {
-        bail!("--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32");
-    }
+    config.ddpg.precision.check().map_err(anyhow::Error::msg)?;
     config.net.validate().map_err(anyhow::Error::msg)?;
     config.net.check_flat_critic(config.ddpg.flat_critic).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
