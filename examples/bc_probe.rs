@@ -446,10 +446,10 @@ fn evaluate(env: &mut BlockEnv, policy: &mut dyn Policy, episodes: u64, challeng
     Ok(tally)
 }
 
-/// Success rate with its Wilson 95% interval, then every outcome's count.
+/// Success rate with its Wilson 95% interval, then the unsuccessful outcomes' shares as `eval` prints them.
 fn describe(tally: &Outcomes) -> String {
     let n = tally.total();
     let (low, high) = wilson95(tally.success, n);
-    let counts: Vec<String> = Outcome::ALL.iter().map(|&o| format!("{} {}", o.name(), tally.count(o))).collect();
-    format!("success {:.3} [{low:.3}, {high:.3}]  ({})", tally.success as f64 / n.max(1) as f64, counts.join(", "))
+    let rate = tally.success as f64 / n.max(1) as f64;
+    format!("success {rate:.3} [{low:.3}, {high:.3}] ({}/{n}); not successful: {}", tally.success, tally.summary())
 }
