@@ -3,8 +3,7 @@
 //! [`VectorEnv`] (each episode's seed fixes it, so the result does not
 //! depend on the thread count).
 
-use crate::agents::expert::{obs_dim_without_grey, without_grey};
-use crate::agents::AnyPolicy;
+use crate::actor::{obs_dim_without_grey, without_grey, AnyPolicy};
 use crate::env::{BlockEnv, EnvConfig, ObsMode, VectorEnv, ACTION_DIM};
 pub use crate::outcome::wilson95;
 use crate::outcome::{Outcome, Outcomes};
@@ -13,7 +12,8 @@ use crate::rollout::run_episode;
 use crate::saved::SavedPolicy;
 use crate::task::Task;
 use anyhow::{bail, Context, Result};
-use serde::Serialize;
+use crate::provenance::{Harness, PolicyId, Provenance};
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The first seed of the test episodes (episode k uses seed + k): the default of
@@ -45,7 +45,8 @@ impl Policy for Trained {
 }
 
 /// A policy that needs no training, evaluated as a reference point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "train", derive(clap::ValueEnum))]
 pub enum Baseline {
     /// The scripted controller of each task (`src/policy.rs`).
     Scripted,
@@ -73,6 +74,15 @@ pub enum Subject<'a> {
 }
 
 impl Subject<'_> {
+    /// How results name it: a saved policy by the name it was given and its
+    /// content hash, a baseline as `baseline:NAME`.
+    pub fn id(&self) -> PolicyId {
+        match self {
+            Subject::Saved(path, saved) => saved.policy_id(&path.display().to_string()),
+            Subject::Baseline(b) => PolicyId { name: format!("baseline:{}", b.name()), sha256: None },
+        }
+    }
+
     /// The observation it reads: a saved policy's, or the flat one (baselines).
     pub fn obs_mode(&self) -> ObsMode {
         match self {
@@ -168,10 +178,12 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
 }
 
 /// An evaluation's outcome.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Evaluation {
     /// Environment id.
     pub env: String,
+    /// The task's content hash (`sha256:`).
+    pub task_sha256: String,
     /// Challenge distribution.
     pub challenge: bool,
     /// Curriculum level.
@@ -273,6 +285,7 @@ fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
     let successes = outcomes.success;
     Ok(Evaluation {
         env: spec.task.id().to_owned(),
+        task_sha256: spec.task.source.hash.clone(),
         challenge: spec.challenge,
         level: envs.envs()[0].level(),
         episodes: spec.episodes,
@@ -287,10 +300,13 @@ fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
 }
 
 /// One row of a suite evaluated, or why it was skipped.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RowResult {
     /// Task id.
     pub task: String,
+    /// The compiled task's content hash (`sha256:`; [`crate::task::TaskSource::hash`]):
+    /// an edited task file changes it even where the suite's text stays the same.
+    pub task_sha256: String,
     /// "normal" or the distribution's name.
     pub distribution: String,
     /// First seed.
@@ -306,7 +322,7 @@ pub struct RowResult {
 }
 
 /// A split's rows and their mean success.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SplitResult {
     /// `train`, `test`, or another name.
     pub name: String,
@@ -317,8 +333,10 @@ pub struct SplitResult {
 }
 
 /// A policy on a suite (docs/suites.md defines the scores).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SuiteResult {
+    /// What made it.
+    pub provenance: Provenance,
     /// The suite's name and the SHA-256 of its text.
     pub suite: crate::suite::SuiteId,
     /// What it measures.
@@ -345,7 +363,12 @@ pub struct SuiteResult {
 ///
 /// # Errors
 /// Environment failures (a row whose environment cannot be made is one).
-pub fn evaluate_suite(subject: Subject, suite: &crate::suite::Suite, threads: usize) -> Result<SuiteResult> {
+pub fn evaluate_suite(
+    subject: Subject,
+    suite: &crate::suite::Suite,
+    threads: usize,
+    harness: Harness,
+) -> Result<SuiteResult> {
     let mut splits = Vec::new();
     for split in &suite.splits {
         let mut rows = Vec::new();
@@ -367,6 +390,7 @@ pub fn evaluate_suite(subject: Subject, suite: &crate::suite::Suite, threads: us
             };
             rows.push(RowResult {
                 task: row.task.id().to_owned(),
+                task_sha256: row.task.source.hash.clone(),
                 distribution: row.distribution_label().to_owned(),
                 seed: row.seed,
                 episodes: row.episodes,
@@ -382,6 +406,7 @@ pub fn evaluate_suite(subject: Subject, suite: &crate::suite::Suite, threads: us
     let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
     let (train, test) = (mean("train"), mean("test"));
     Ok(SuiteResult {
+        provenance: Provenance::new(harness, subject.id(), Some(suite.id())),
         suite: suite.id(),
         summary: suite.summary.clone(),
         policy: match subject {
@@ -411,8 +436,8 @@ impl SuiteResult {
             _ => "A baseline (no training); suite".to_owned(),
         };
         let mut md = format!(
-            "### {} on suite `{}`\n\n{}\n\n{trained} sha256 `{}`.\n\n",
-            self.policy, self.suite.name, self.summary, self.suite.sha256
+            "### {} on suite `{}` (MuJoCo {})\n\n{}\n\n{trained} sha256 `{}`.\n\n",
+            self.policy, self.suite.name, self.provenance.build.mujoco, self.summary, self.suite.sha256
         );
         for split in &self.splits {
             md += &format!("**{}** (mean success {})\n\n", split.name, pct(split.mean_success));
@@ -448,17 +473,30 @@ impl SuiteResult {
             md += "\n";
         }
         md += &format!(
-            "Score (test mean success): {}; generalisation gap (train − test): {}.\n",
+            "Score (test mean success): {}; generalisation gap (train − test): {}.\n\n",
             pct(self.score),
             pct(self.gap)
         );
+        md += &self.provenance.markdown();
+        md += " Tasks by content:";
+        let mut seen = std::collections::BTreeSet::new();
+        for r in self.splits.iter().flat_map(|s| &s.rows) {
+            if seen.insert((&r.task, &r.task_sha256)) {
+                md += &format!(" {} {};", r.task, r.task_sha256);
+            }
+        }
+        md.pop();
+        md += ".\n";
         md
     }
 }
 
-impl From<Evaluation> for crate::zoo::ZooEvaluation {
-    fn from(e: Evaluation) -> Self {
+impl crate::zoo::ZooEvaluation {
+    /// `e` as a zoo entry records it, with what made it.
+    pub fn new(e: Evaluation, provenance: Provenance) -> Self {
         Self {
+            provenance: Some(provenance),
+            task_sha256: Some(e.task_sha256),
             env: e.env,
             distribution: if e.challenge { "challenge" } else { "normal" }.into(),
             grey_blind: e.grey_blind,

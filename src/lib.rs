@@ -5,26 +5,34 @@
 //! every blue object touches a green one. The environments put coloured blocks
 //! in front of the OpenAI Fetch robot in MuJoCo.
 //!
-//! Without cargo features the crate is the environment core (no libtorch,
-//! EGL or plotting); `render` adds headless rendering, `train` the training
+//! Without cargo features the crate is the environment core, trained
+//! policies and their evaluation (no libtorch, EGL or plotting); `render` adds headless rendering, `train` the training
 //! stack and command line, `mpi` training under `mpirun`.
 
 // The environment core.
+pub mod actor;
 pub mod align;
 pub mod check;
 pub mod env;
+pub mod evaluate;
 pub mod hindsight;
 pub mod io;
 pub mod limits;
+pub mod load;
 pub mod math;
 pub mod mj;
 pub mod outcome;
 pub mod policy;
+pub mod progress;
+pub mod provenance;
+pub mod results;
 pub mod rollout;
 pub mod rules;
+pub mod saved;
 pub mod scene;
 pub mod suite;
 pub mod task;
+pub mod zoo;
 
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
@@ -42,16 +50,6 @@ pub mod blas;
 #[cfg(feature = "train")]
 pub mod cli;
 #[cfg(feature = "train")]
-pub mod evaluate;
-#[cfg(feature = "train")]
-pub mod load;
-#[cfg(feature = "train")]
-pub mod progress;
-#[cfg(feature = "train")]
-pub mod saved;
-#[cfg(feature = "train")]
 pub mod table;
 #[cfg(feature = "train")]
 pub mod train;
-#[cfg(feature = "train")]
-pub mod zoo;

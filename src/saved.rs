@@ -4,8 +4,8 @@
 //! safetensors form is `crate::zoo`; a policy named on the command line
 //! (file, run directory or zoo name) is resolved by `crate::load`.
 
-use crate::agents::mlp::TanhMlp;
-use crate::agents::AnyPolicy;
+use crate::actor::mlp::TanhMlp;
+use crate::actor::AnyPolicy;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -50,9 +50,21 @@ impl SavedPolicy {
         self.policy.check()?;
         if let Some(c) = &self.critic {
             let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
-            c.check(n_in, 1, crate::agents::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
+            c.check(n_in, 1, crate::actor::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
         }
         Ok(())
+    }
+}
+
+impl SavedPolicy {
+    /// The policy as results name it: `name` as the user gave it and the
+    /// `sha256:` of what acts ([`AnyPolicy::canonical`]) with the task it was
+    /// trained on (its content hash; the environment id for policies saved
+    /// before tasks were files).
+    pub fn policy_id(&self, name: &str) -> crate::provenance::PolicyId {
+        let task = self.task.as_ref().map_or(self.env_id.as_str(), |t| t.hash.as_str());
+        let text = format!("{}\ntask {task}", self.policy.canonical());
+        crate::provenance::PolicyId { name: name.to_owned(), sha256: Some(crate::provenance::sha256(text.as_bytes())) }
     }
 }
 

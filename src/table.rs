@@ -100,7 +100,14 @@ pub enum RowResult {
     /// The policy could not be loaded or evaluated (the message says why).
     Missing(String),
     /// Evaluated: (Normal, Challenge), the policy's epoch and env steps (where recorded).
-    Done { normal: Box<Evaluation>, challenge: Box<Evaluation>, epoch: usize, env_steps: Option<u64> },
+    Done {
+        normal: Box<Evaluation>,
+        challenge: Box<Evaluation>,
+        epoch: usize,
+        env_steps: Option<u64>,
+        /// The policy by content.
+        policy: crate::provenance::PolicyId,
+    },
 }
 
 /// Evaluates one row.
@@ -114,10 +121,11 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
     let run = || -> Result<RowResult> {
         let saved = load_policy(path)?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
+        let policy = saved.policy_id(&path.display().to_string());
         let spec = |challenge| EvalSpec { task, challenge, distribution: None, level: None, episodes, seed, threads };
         let normal = evaluate(path, saved.clone(), &spec(false))?;
         let challenge = evaluate(path, saved, &spec(true))?;
-        Ok(RowResult::Done { normal: Box::new(normal), challenge: Box::new(challenge), epoch, env_steps })
+        Ok(RowResult::Done { normal: Box::new(normal), challenge: Box::new(challenge), epoch, env_steps, policy })
     };
     match run() {
         Ok(done) => done,
@@ -170,7 +178,7 @@ pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64
                     why.replace('|', "/").replace('\n', " ")
                 );
             }
-            RowResult::Done { normal, challenge, epoch, env_steps } => {
+            RowResult::Done { normal, challenge, epoch, env_steps, .. } => {
                 let steps = env_steps.map_or(String::new(), |n| format!(", {:.2} M env steps", n as f64 / 1e6));
                 let _ = writeln!(
                     s,
@@ -205,6 +213,19 @@ pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64
                 normal.outcomes.summary(),
                 challenge.outcomes.summary()
             );
+        }
+    }
+    // What made the numbers (crate::provenance): the engine above all.
+    let _ = writeln!(s, "\nMade on {}, harness cli.", crate::provenance::Build::current().describe());
+    let mut first = true;
+    for (row, r) in rows {
+        if let RowResult::Done { normal, policy, .. } = r {
+            if first {
+                let _ = writeln!(s, "Task {} {}; policies by content:\n", normal.env, normal.task_sha256);
+                first = false;
+            }
+            let hash = policy.sha256.as_deref().unwrap_or("none");
+            let _ = writeln!(s, "- {}: `{}` {hash}", row.method, policy.name);
         }
     }
     s

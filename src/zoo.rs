@@ -23,11 +23,9 @@
 //! --policy`, `table`, AggreVaTeD's `--expert`) takes a zoo name as well as
 //! a file or run directory: [`crate::load::load_policy`].
 
-use crate::agents::ddpg::DdpgPolicy;
-use crate::agents::mlp::{Dense, TanhMlp};
-use crate::agents::normalizer::Normalizer;
-use crate::agents::pggd::PggdPolicy;
-use crate::agents::AnyPolicy;
+use crate::actor::mlp::{Dense, TanhMlp};
+use crate::actor::normalizer::Normalizer;
+use crate::actor::{AnyPolicy, DdpgPolicy, PggdPolicy};
 use crate::saved::SavedPolicy;
 use crate::task::TaskSource;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
@@ -38,12 +36,13 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// The format tag this blockpuzzle writes in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/3";
+pub const FORMAT: &str = "blockpuzzle-zoo/4";
 
 /// The formats it reads: version 2 added the outcome counts of evaluations
 /// (version 1 entries load with none); version 3 set networks (a network's
-/// `set` layout and `layers` shapes; entries without them are MLPs as before).
-pub const READS: [&str; 3] = ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", FORMAT];
+/// `set` layout and `layers` shapes; entries without them are MLPs as before);
+/// version 4 each evaluation's provenance and task hash (one record per engine).
+pub const READS: [&str; 4] = ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", FORMAT];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -80,7 +79,7 @@ pub struct NetLayout {
     /// layers encode each object row, the next four (with `attention`) are the
     /// attention block, the rest the head (zoo/README.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub set: Option<crate::agents::mlp::SetLayout>,
+    pub set: Option<crate::actor::mlp::SetLayout>,
     /// A set network's layers as `[out, in]` (its inputs do not chain as an MLP's sizes do).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub layers: Vec<[usize; 2]>,
@@ -107,6 +106,26 @@ pub struct ZooEvaluation {
     /// Episodes per outcome ([`crate::outcome`]; absent in format 1 entries).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outcomes: Option<crate::outcome::Outcomes>,
+    /// The task's content hash (absent in entries written before evaluations recorded it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task_sha256: Option<String>,
+    /// What made it: the engine above all, since numbers of different engines differ
+    /// (absent in entries written before evaluations recorded it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<crate::provenance::Provenance>,
+}
+
+impl ZooEvaluation {
+    /// The MuJoCo version that made it, where recorded.
+    pub fn mujoco(&self) -> Option<&str> {
+        self.provenance.as_ref().map(|p| p.build.mujoco.as_str())
+    }
+
+    /// Whether `other` measures the same thing (task, distribution, view, episodes, seeds) on the same engine.
+    pub fn same_measurement(&self, other: &ZooEvaluation) -> bool {
+        (&self.env, &self.distribution, self.grey_blind, self.episodes, self.seed, self.mujoco())
+            == (&other.env, &other.distribution, other.grey_blind, other.episodes, other.seed, other.mujoco())
+    }
 }
 
 /// `NAME.json`: everything about an entry but its tensors.
@@ -386,6 +405,56 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let json = serde_json::to_vec_pretty(&meta).map_err(|e| corrupt(e.to_string()))?;
     crate::io::write_file(&tensors_path.with_extension("json"), &json).map_err(|e| corrupt(format!("{e:#}")))?;
     Ok(tensors_path)
+}
+
+/// What [`record_evaluations`] did with each evaluation.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Recorded {
+    /// Added: the entry had no record of the measurement on this engine.
+    Added,
+    /// Replaced the record of the same measurement on the same engine.
+    Replaced,
+    /// Replaced a record that named no engine and had exactly these numbers (so it was this engine's).
+    Confirmed,
+    /// Added beside a record that names no engine and has other numbers (so it was another engine's,
+    /// or another version's); that record is kept as it was.
+    Disagrees,
+}
+
+/// Records `new` evaluations in the entry at `path`, in its metadata only (the
+/// tensors and their checksum stay): see [`Recorded`] for each. The metadata
+/// is rewritten atomically in this blockpuzzle's [`FORMAT`].
+///
+/// # Errors
+/// The entry cannot be read or written.
+pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Recorded>, ZooError> {
+    let json_path = path.with_extension("json");
+    let mut meta = read_meta(&json_path)?;
+    let mut done = Vec::new();
+    for e in new {
+        let numbers = |r: &ZooEvaluation| (r.success_rate, r.outcomes);
+        let unlabelled = |r: &ZooEvaluation| {
+            r.provenance.is_none()
+                && (&r.env, &r.distribution, r.grey_blind, r.episodes, r.seed)
+                    == (&e.env, &e.distribution, e.grey_blind, e.episodes, e.seed)
+        };
+        if let Some(r) = meta.evaluations.iter_mut().find(|r| r.same_measurement(&e)) {
+            *r = e;
+            done.push(Recorded::Replaced);
+        } else if let Some(r) = meta.evaluations.iter_mut().find(|r| unlabelled(r) && numbers(r) == numbers(&e)) {
+            *r = e;
+            done.push(Recorded::Confirmed);
+        } else {
+            done.push(if meta.evaluations.iter().any(unlabelled) { Recorded::Disagrees } else { Recorded::Added });
+            meta.evaluations.push(e);
+        }
+    }
+    meta.format = FORMAT.into();
+    let json = serde_json::to_vec_pretty(&meta)
+        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
+    crate::io::write_file(&json_path, &json)
+        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("{e:#}") })?;
+    Ok(done)
 }
 
 /// Reads an entry's metadata (`X.json`, or the one beside `X.safetensors`).

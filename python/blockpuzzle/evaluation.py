@@ -3,9 +3,16 @@ observations per call) on an evaluation suite (docs/suites.md), with the CLI's d
 row the success rate with its Wilson 95% interval, the red-blue failure rate, the mean steps to
 success and the outcome counts (why episodes ended: success, failure, unstable, no_contact,
 off_table, blue_met_grey, timeout); per split the mean success; the suite's score (test mean
-success) and generalisation gap (train minus test)."""
+success) and generalisation gap (train minus test).
+
+A zoo policy (``blockpuzzle.zoo.load``) is evaluated by the command line's own evaluator and
+forward pass (in the extension), so its numbers are the CLI's on the same engine, outcome count
+for outcome count; any other callable plays through this module's loop. Every result carries a
+``provenance`` block: package, commit, MuJoCo version, harness, policy, suite."""
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 
@@ -14,26 +21,46 @@ from ._native import wilson95  # the CLI's interval, computed in Rust
 from .vector import make_vec
 
 
-def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, obs_mode: str = "flat") -> dict:
+def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, obs_mode: str | None = None,
+             name: str | None = None) -> dict:
     """Evaluates ``policy`` on ``suite`` (a built-in name such as "layout", or a suite file).
 
-    ``policy(obs) -> actions`` receives a batch of observations (``num_envs`` rows, or a dict of
-    batches with ``obs_mode="objects"``) and returns a ``(num_envs, 4)`` array; rows of
-    environments with no episode left to play are ignored. Episode k of a row plays seed
-    ``seed + k``, so the numbers do not depend on ``num_envs`` or ``threads``.
-    Returns a dict shaped like ``blockpuzzle eval --suite``'s JSON (``suite`` with its sha256,
-    ``splits`` of ``rows``, ``score``, ``gap``).
+    ``policy`` is a zoo policy (``blockpuzzle.zoo.load(...)``), evaluated exactly as
+    ``blockpuzzle eval --suite`` evaluates it (its own observation mode; a policy trained without
+    grey blocks sees them removed; rows whose observation it cannot read are skipped, with the
+    reason), or any callable ``policy(obs) -> actions``: it receives a batch of observations
+    (``num_envs`` rows, or a dict of batches with ``obs_mode="objects"``) and returns a
+    ``(num_envs, 4)`` array; rows of environments with no episode left to play are ignored.
+    Episode k of a row plays seed ``seed + k``, so the numbers do not depend on ``num_envs`` or
+    ``threads``. ``name`` names the policy in the result (default: the zoo entry's name, else the
+    callable's ``__name__``).
+
+    Returns the dict ``blockpuzzle eval --suite`` writes as JSON: ``provenance`` (``blockpuzzle``,
+    ``commit``, ``mujoco``, ``harness`` "python", ``policy`` name and sha256, ``suite``),
+    ``suite`` with its sha256, ``splits`` of ``rows`` (each with its ``task_sha256`` and its
+    ``evaluation``), ``score`` and ``gap``.
     """
+    actor = getattr(policy, "native", None)
+    if actor is not None:
+        if obs_mode is not None and obs_mode != policy.obs_mode:
+            raise ValueError(f"{policy.name} reads {policy.obs_mode!r} observations, not obs_mode={obs_mode!r}: "
+                             "leave obs_mode out for a zoo policy")
+        return json.loads(_native.evaluate_saved(str(policy.path), name or policy.name, str(suite), threads))
     s = _native.suite(str(suite))
+    name = name or getattr(policy, "__name__", type(policy).__name__)
     splits = []
-    for name, rows in s["splits"]:
-        results = [_row(policy, row, num_envs, threads, obs_mode) for row in rows]
-        rates = [r["success_rate"] for r in results]
-        splits.append({"name": name, "rows": results, "mean_success": sum(rates) / len(rates)})
+    for split, rows in s["splits"]:
+        results = [_row(policy, row, num_envs, threads, obs_mode or "flat") for row in rows]
+        rates = [r["evaluation"]["success_rate"] for r in results]
+        splits.append({"name": split, "rows": results, "mean_success": sum(rates) / len(rates)})
     mean = {sp["name"]: sp["mean_success"] for sp in splits}
+    suite_id = {"name": s["name"], "sha256": s["sha256"]}
     return {
-        "suite": {"name": s["name"], "sha256": s["sha256"]},
+        "provenance": {**_native.build_info(), "harness": "python", "policy": {"name": name, "sha256": None},
+                       "suite": suite_id},
+        "suite": suite_id,
         "summary": s["summary"],
+        "policy": name,
         "splits": splits,
         "score": mean["test"],
         "gap": mean["train"] - mean["test"],
@@ -95,7 +122,8 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
     rule = [(name, names[c]) for name, c in envs.rule_objects]
     surfaces = [rule[0][1], rule[1][1]] + ([rule[-1][1]] if rule[-1][0] == "floor" else [])
     # As the CLI: the row's level, else the task's last; the row's distribution if it names one.
-    options = {"level": envs.max_level if row["level"] is None else row["level"]}
+    level = envs.max_level if row["level"] is None else row["level"]
+    options = {"level": level}
     if row["distribution"] is not None:
         options["distribution"] = row["distribution"]
     obs, _ = envs.reset(seed=[first + i for i in range(n)], options=options)
@@ -140,15 +168,27 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
                 if mask[i]:
                     colour0[i], z0[i] = colour[i], z[i]
     envs.close()
+    # The CLI's row (src/evaluate.rs RowResult), field for field.
     return {
-        "task": row["task"],
+        "task": row["task_id"],
+        "task_sha256": row["task_sha256"],
         "distribution": row["distribution"] or "normal",
         "seed": first,
         "episodes": episodes,
-        "successes": successes,
-        "success_rate": successes / episodes,
-        "ci95": wilson95(successes, episodes),
+        "evaluation": {
+            "env": row["task_id"],
+            "task_sha256": row["task_sha256"],
+            "challenge": False,
+            "level": level,
+            "episodes": episodes,
+            "seed": first,
+            "successes": successes,
+            "success_rate": successes / episodes,
+            "ci95": list(wilson95(successes, episodes)),
+            "grey_blind": False,
+            "outcomes": outcomes,
+            "mean_steps_to_success": success_steps / successes if successes else None,
+        },
         "failure_rate": failures / episodes,
-        "mean_steps_to_success": success_steps / successes if successes else None,
-        "outcomes": outcomes,
+        "skipped": None,
     }

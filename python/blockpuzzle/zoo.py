@@ -9,10 +9,14 @@ the checkout's zoo (``names()``); ``load`` also takes the path of an entry elsew
     env = gym.make(f"BlockPuzzle/{policy.task_id}", obs_mode=policy.obs_mode)
     obs, _ = env.reset(seed=0)
     action = policy(obs)                      # one observation, or a batch of rows
-    policy.evaluations                        # what the CLI measured at export
+    policy.evaluations                        # what the CLI measured, on this MuJoCo
 
-This file imports nothing of blockpuzzle, so it also runs on its own
-(examples/python/zoo_policy.py loads it by path).
+Inside the package a policy acts through the extension, with the command line's own forward pass
+(``policy.native``), so that it plays exactly the episodes the CLI plays; the numpy forward pass
+here (``policy.act_numpy``) is the reference for reading the format in your own code, equal to it
+to about 1e-6 (float32 sums in another order), which can turn one episode in a few hundred. This
+file imports nothing of blockpuzzle but that extension, and runs on its own without it
+(examples/python/zoo_policy.py loads it by path): then the numpy pass acts.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import pathlib
 
 import numpy as np
 
-FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3")
+FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4")
 #: Where an object row's colour one-hot (red, blue, green, grey) begins.
 COLOUR_FEATURE = 15
 #: The zoo the package carries.
@@ -34,14 +38,26 @@ def names(folder: str | pathlib.Path = FOLDER) -> list[str]:
     return sorted(p.stem for p in pathlib.Path(folder).glob("*.json"))
 
 
-def load(name: str | pathlib.Path, folder: str | pathlib.Path = FOLDER) -> ZooPolicy:
-    """The policy of a zoo entry: a name in ``folder`` or the path of an entry's .json/.safetensors."""
+def load(name: str | pathlib.Path, folder: str | pathlib.Path = FOLDER, native: bool | None = None) -> ZooPolicy:
+    """The policy of a zoo entry: a name in ``folder`` or the path of an entry's .json/.safetensors.
+    ``native``: act through the extension (the CLI's arithmetic; None: where it can be imported)."""
     path = pathlib.Path(name)
     if path.suffix not in (".json", ".safetensors"):
         path = pathlib.Path(folder) / f"{name}.json"
         if not path.is_file():
             raise KeyError(f"no zoo entry {name!r} in {folder}; entries: {', '.join(names(folder))}")
-    return ZooPolicy(path)
+    return ZooPolicy(path, native=native)
+
+
+def _native_actor(path: pathlib.Path, required: bool):
+    """The extension's actor of the entry, or None where the extension cannot be imported."""
+    try:
+        from blockpuzzle import _native
+    except ImportError:
+        if required:
+            raise
+        return None
+    return _native.ZooActor(str(path))
 
 
 def read_safetensors(path: str | pathlib.Path) -> dict[str, np.ndarray]:
@@ -70,14 +86,17 @@ class ZooPolicy:
     network takes any number of object slots: the slot count is read from the observation's length.
     """
 
-    def __init__(self, path):
+    def __init__(self, path, native: bool | None = None):
         json_path = pathlib.Path(path).with_suffix(".json")
+        self.path = json_path
         self.meta = json.loads(json_path.read_text())
         if self.meta["format"] not in FORMATS:
             raise ValueError(f"{json_path}: unknown format {self.meta['format']!r}")
         self.tensors = read_safetensors(json_path.with_suffix(".safetensors"))
         self.layers = len(self.meta["actor"]["sizes"]) - 1
         self.set = self.meta["actor"].get("set")
+        #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts.
+        self.native = None if native is False else _native_actor(json_path, required=bool(native))
 
     @property
     def name(self) -> str:
@@ -95,14 +114,26 @@ class ZooPolicy:
 
     @property
     def evaluations(self) -> list[dict]:
-        """The evaluations recorded at export (env, distribution, episodes, seed, success_rate, ci95)."""
+        """The evaluations recorded on the MuJoCo this package runs (env, distribution, episodes, seed,
+        success_rate, ci95, outcomes, provenance); ``all_evaluations`` has every engine's."""
+        try:
+            from blockpuzzle import _native
+            engine = _native.mujoco_version()
+        except ImportError:
+            engine = "3.11.0"  # the package's pinned engine (blockpuzzle.MUJOCO_PIN)
+        return [e for e in self.all_evaluations if (e.get("provenance") or {}).get("mujoco") == engine]
+
+    @property
+    def all_evaluations(self) -> list[dict]:
+        """Every recorded evaluation, each with the ``provenance`` (engine) that made it where recorded."""
         return self.meta.get("evaluations", [])
 
     def __repr__(self) -> str:
         return f"ZooPolicy({self.name!r}, {self.meta['algo']}, task {self.task_id}, epoch {self.meta['epoch']})"
 
     def __call__(self, obs) -> np.ndarray:
-        """Actions for one observation (a vector or a dict of arrays) or a batch of them."""
+        """Actions for one observation (a vector or a dict of arrays) or a batch of them: the
+        extension's forward pass where there is one (``native``), else ``act_numpy``."""
         if isinstance(obs, dict):
             parts = [np.asarray(obs[k], np.float32) for k in ("robot", "objects", "mask")]
             batch = parts[0].ndim == 2
@@ -112,7 +143,10 @@ class ZooPolicy:
             flat = np.asarray(obs, np.float32)
             batch = flat.ndim == 2
             flat = flat.reshape(-1, flat.shape[-1])
-        actions = np.stack([self.act(row) for row in flat])
+        if self.native is not None:
+            actions = self.native.act(np.ascontiguousarray(flat, np.float32))
+        else:
+            actions = np.stack([self.act_numpy(row) for row in flat])
         return actions if batch else actions[0]
 
     def _dense(self, i, x, relu):
@@ -162,7 +196,11 @@ class ZooPolicy:
         return np.concatenate([x[:r], pooled.astype(np.float32)]), first
 
     def act(self, obs) -> np.ndarray:
-        """The action for one flat observation vector."""
+        """The action for one flat observation vector (as ``__call__`` computes it)."""
+        return self(np.asarray(obs, np.float32))
+
+    def act_numpy(self, obs) -> np.ndarray:
+        """The action for one flat observation vector by the numpy reference pass."""
         x = self._normalise(np.asarray(obs, np.float32))
         first = 0
         if self.set is not None:
@@ -175,5 +213,5 @@ class ZooPolicy:
 
     def probe_error(self) -> float:
         """The largest difference from the actions recorded at export for the probe observations."""
-        return max((float(np.max(np.abs(self.act(p["obs"]) - np.asarray(p["action"], np.float32))))
+        return max((float(np.max(np.abs(self.act_numpy(p["obs"]) - np.asarray(p["action"], np.float32))))
                     for p in self.meta["probes"]), default=0.0)

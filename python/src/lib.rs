@@ -12,6 +12,7 @@ use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
+mod policy;
 mod vector;
 
 /// A Rust error as the Python exception a Gymnasium user expects, with the same message.
@@ -312,16 +313,22 @@ fn assets_dir() -> PyResult<std::path::PathBuf> {
     blockpuzzle::scene::assets().map(|a| a.base).map_err(|e| to_py(EnvError::Scene(e)))
 }
 
+/// A suite that cannot be read (FileNotFoundError) or checked (ValueError).
+pub(crate) fn suite_err(e: blockpuzzle::suite::SuiteError) -> PyErr {
+    match e {
+        blockpuzzle::suite::SuiteError::Read { .. } => PyFileNotFoundError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
 /// An evaluation suite (a built-in name or a suite file), checked: a dict of
 /// `name`, `summary`, `sha256` and `splits`, a list of (split name, rows),
-/// each row a dict of `task` (id or file path), `distribution` (None: the
+/// each row a dict of `task` (id or file path), `task_id`, `task_sha256` (the compiled task's
+/// content hash), `distribution` (None: the
 /// curriculum's), `level` (None: the last), `seed` and `episodes`.
 #[pyfunction]
 fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
-    let s = blockpuzzle::suite::load(name).map_err(|e| match e {
-        blockpuzzle::suite::SuiteError::Read { .. } => PyFileNotFoundError::new_err(e.to_string()),
-        _ => PyValueError::new_err(e.to_string()),
-    })?;
+    let s = blockpuzzle::suite::load(name).map_err(suite_err)?;
     let d = PyDict::new(py);
     d.set_item("name", &s.name)?;
     d.set_item("summary", &s.summary)?;
@@ -332,6 +339,8 @@ fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
         for r in &split.rows {
             let row = PyDict::new(py);
             row.set_item("task", &r.source)?;
+            row.set_item("task_id", r.task.id())?;
+            row.set_item("task_sha256", &r.task.source.hash)?;
             row.set_item("distribution", r.distribution.as_deref())?;
             row.set_item("level", r.level)?;
             row.set_item("seed", r.seed)?;
@@ -354,6 +363,9 @@ fn wilson95(successes: usize, n: usize) -> (f64, f64) {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Env>()?;
     m.add_class::<vector::VecEnv>()?;
+    m.add_class::<policy::ZooActor>()?;
+    m.add_function(wrap_pyfunction!(policy::evaluate_saved, m)?)?;
+    m.add_function(wrap_pyfunction!(policy::build_info, m)?)?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(suite, m)?)?;

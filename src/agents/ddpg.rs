@@ -631,23 +631,10 @@ impl Explorer for DdpgExplorer {
     }
 }
 
-/// A frozen DDPG actor for rollouts: plain Rust, `Send + Sync`, cheap to clone.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DdpgPolicy {
-    /// The actor.
-    pub net: TanhMlp,
-    /// The observation normaliser it was trained with.
-    pub norm: Normalizer,
-}
+pub use crate::actor::DdpgPolicy;
 
+/// DDPG's exploration (training only: the policy itself is the core's).
 impl DdpgPolicy {
-    /// The deterministic action π(s).
-    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
-        let mut x = obs.to_vec();
-        self.norm.normalize_in_place(&mut x);
-        self.net.forward(&x)
-    }
-
     /// The exploration action with noise correlated across an episode's
     /// steps: uniform with probability `random_eps`, else π(s) + n, clipped to
     /// [−1, 1], where n follows n ← ρ n + √(1 − ρ²) noise_eps z, z ~ N(0, I),

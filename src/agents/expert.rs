@@ -6,30 +6,11 @@ use super::ddpg::DdpgPolicy;
 use super::mlp::TanhMlp;
 use super::nets::{tensor_to_vec, Net};
 use super::normalizer::Normalizer;
-use crate::env::{obs_dim, ObsSpec, BLOCK_OBS, ROBOT_OBS};
-use crate::rules::Colour;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
-/// Whether an object row of the observation is a grey block's (its colour one-hot says grey).
-fn is_grey(row: &[f32]) -> bool {
-    ObsSpec::colour(row).get(Colour::Grey as usize).is_some_and(|&v| v > 0.5)
-}
-
-/// The flat observation with every grey block's features removed: a
-/// BlocksChoose observation becomes a BlocksTouch one (robot, blue, green).
-/// Rows of absent objects (no colour: a grey copy a task with counts left
-/// out) go too, so the view has the same size whatever the count.
-pub fn without_grey(obs: &[f32]) -> Vec<f32> {
-    let spec = ObsSpec::flat(obs.len().saturating_sub(ROBOT_OBS) / BLOCK_OBS);
-    spec.keep_objects(obs, |row| !is_grey(row) && ObsSpec::colour(row).iter().any(|&v| v > 0.5))
-}
-
-/// Size of [`without_grey`]'s output for a scene with blocks of `colours`.
-pub fn obs_dim_without_grey(colours: &[Colour]) -> usize {
-    obs_dim(colours.iter().filter(|&&c| c != Colour::Grey).count())
-}
+pub use crate::actor::{obs_dim_without_grey, without_grey};
 
 /// β at `epoch`: β0 + (1 − β0)·exp(−epoch / t0) (t0 = 0: β0 from the start).
 pub fn beta(epoch: usize, beta0: f64, t0: f64) -> f64 {

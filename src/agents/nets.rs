@@ -723,3 +723,12 @@ mod tests {
         assert!(again.load_vecs(&adam.to_vecs()[1..], 3).unwrap_err().contains("expected 12 optimiser moments"));
     }
 }
+
+impl super::normalizer::Normalizer {
+    /// Rows of raw observations, normalised, as a `[n, dim]` tensor.
+    pub fn tensor(&self, rows: &[f32]) -> Tensor {
+        let mut x = rows.to_vec();
+        self.normalize_in_place(&mut x);
+        Tensor::of_slice(&x).view([-1, self.dim() as i64])
+    }
+}

@@ -16,7 +16,6 @@
 use super::algorithm::{param_count, Algo, Algorithm, Explorer, Registration, StateDict};
 use super::arch::Arch;
 use super::ddpg::UpdateStats;
-use super::mlp::TanhMlp;
 use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
@@ -262,36 +261,10 @@ impl Explorer for PggdPolicy {
     }
 }
 
-/// A frozen PGGD policy: plain Rust, `Send + Sync`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PggdPolicy {
-    /// The network, outputs `[μ | σ pre-activation]`.
-    pub net: TanhMlp,
-    /// The observation normaliser it was trained with.
-    pub norm: Normalizer,
-    /// Action size.
-    pub act_dim: usize,
-    /// Floor of σ.
-    pub sigma_min: f64,
-}
+pub use crate::actor::PggdPolicy;
 
+/// PGGD's exploration (training only: the policy itself is the core's).
 impl PggdPolicy {
-    /// μ(s) and σ(s).
-    pub fn distribution(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
-        let mut x = obs.to_vec();
-        self.norm.normalize_in_place(&mut x);
-        let out = self.net.forward(&x);
-        let (mean, pre) = out.split_at(self.act_dim);
-        let std = pre.iter().map(|&v| (v.max(0.0) + (-v.abs()).exp().ln_1p()) + self.sigma_min as f32).collect();
-        (mean.to_vec(), std)
-    }
-
-    /// The deterministic action clip(μ(s), ±1) (testing, finals, evaluation).
-    pub fn act(&self, obs: &[f32]) -> Vec<f32> {
-        let (mean, _) = self.distribution(obs);
-        mean.iter().map(|m| m.clamp(-1.0, 1.0)).collect()
-    }
-
     /// A sampled action `a ~ N(μ, σ²)`, before clipping.
     pub fn sample(&self, obs: &[f32], rng: &mut impl Rng) -> Vec<f32> {
         let (mean, std) = self.distribution(obs);

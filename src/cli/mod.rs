@@ -60,9 +60,13 @@ enum Command {
     /// Task files: `task check FILE` validates a task and samples its layouts.
     #[command(subcommand)]
     Task(TaskCommand),
-    /// The model zoo (trained policies shipped in zoo/): list, check, export.
+    /// The model zoo (trained policies shipped in zoo/): list, check, export, evaluate.
     #[command(subcommand)]
     Zoo(ZooCommand),
+    /// Suite results side by side (`compare`) or as a leaderboard (`leaderboard`); numbers of
+    /// different engines, suites or task contents are never put in one column.
+    #[command(subcommand)]
+    Results(ResultsCommand),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -89,6 +93,30 @@ enum Command {
         /// Threads of --bench-steps, each stepping its own environment.
         #[arg(long, default_value_t = 1, value_parser = crate::limits::THREADS.parser::<usize>())]
         threads: usize,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum ResultsCommand {
+    /// Suite results (JSON of `eval --suite` or Python's `evaluate`) side by side, one column per
+    /// file; refused, naming the field, when their engines, suites or task contents differ.
+    Compare {
+        /// The result files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+    /// A Markdown leaderboard of suite results: one table per suite and engine, rows per policy
+    /// by score with 95% intervals and gaps, the provenance in footnotes.
+    Leaderboard {
+        /// Result files, or folders of them (`*.json`).
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Write it here (atomically) instead of printing it.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Instead of writing --out, check that it holds exactly what the files give (exit 1 if stale).
+        #[arg(long, requires = "out")]
+        check: bool,
     },
 }
 
@@ -427,6 +455,7 @@ pub fn main() -> Result<()> {
         Command::Eval(a) => eval(a),
         Command::Render(a) => render(a),
         Command::Zoo(c) => zoo::run(c),
+        Command::Results(c) => results(c),
         Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
@@ -465,10 +494,41 @@ fn envs() -> Result<()> {
 }
 
 /// `blockpuzzle info`: the engine and numeric libraries of this process.
+/// `blockpuzzle results compare | leaderboard`.
+fn results(c: ResultsCommand) -> Result<()> {
+    match c {
+        ResultsCommand::Compare { files } => {
+            let files = files.iter().map(|f| crate::results::read(f)).collect::<Result<Vec<_>>>()?;
+            print!("{}", crate::results::compare(&files)?);
+        }
+        ResultsCommand::Leaderboard { paths, out, check } => {
+            let md = crate::results::leaderboard(&crate::results::read_all(&paths)?)?;
+            match (out, check) {
+                (Some(out), true) => {
+                    let now = std::fs::read_to_string(&out).with_context(|| format!("cannot read {}", out.display()))?;
+                    if now != md {
+                        bail!("{} is stale: regenerate it with the same command without --check", out.display());
+                    }
+                    println!("{} is up to date", out.display());
+                }
+                (Some(out), false) => {
+                    crate::io::write_file(&out, md.as_bytes())?;
+                    println!("wrote {}", out.display());
+                }
+                (None, _) => print!("{md}"),
+            }
+        }
+    }
+    Ok(())
+}
+
 fn info() -> Result<()> {
     let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
     println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
-    println!("MuJoCo {}", crate::mj::version());
+    if let Some(commit) = crate::provenance::commit() {
+        println!("commit {commit}");
+    }
+    println!("MuJoCo {} (the engine every number this build writes is made on)", crate::mj::version());
     println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
     println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
     println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
@@ -798,16 +858,17 @@ fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
 /// `eval --suite`: every row of the suite, the JSON result and its Markdown beside it.
 fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     use crate::evaluate::Subject;
+    use crate::provenance::Harness;
     let suite = crate::suite::load(name)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let (r, out) = match (&a.checkpoint, a.baseline) {
         (_, Some(b)) => {
-            let r = crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads)?;
+            let r = crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli)?;
             (r, PathBuf::from(format!("eval-{}-suite-{}.json", b.name(), suite.name)))
         }
         (Some(checkpoint), None) => {
             let saved = crate::load::load_policy(checkpoint)?;
-            let r = crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads)?;
+            let r = crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads, Harness::Cli)?;
             (r, eval_out(checkpoint, &format!("suite-{}", suite.name)))
         }
         (None, None) => bail!("give --checkpoint POLICY or --baseline scripted|obs-hash"),
@@ -856,6 +917,11 @@ fn eval(a: EvalArgs) -> Result<()> {
     let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
+    let provenance = crate::provenance::Provenance::new(
+        crate::provenance::Harness::Cli,
+        saved.policy_id(&checkpoint.display().to_string()),
+        None,
+    );
     let spec = crate::evaluate::EvalSpec {
         task: &task,
         distribution: None,
@@ -870,6 +936,7 @@ fn eval(a: EvalArgs) -> Result<()> {
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
         "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": checkpoint, "policy_epoch": policy_epoch,
+        "task_sha256": task.source.hash, "provenance": provenance,
     });
     let distribution = match (a.challenge, a.level) {
         (true, _) => "challenge".to_owned(),

@@ -215,6 +215,14 @@ pub(super) fn report(run_dirs: &[PathBuf], target: f64) -> Result<()> {
         let (config, rows) = read_run(dir)?;
         let title = format!("{} ({} workers, {})", config.title(), config.workers, dir.display());
         print!("{}", crate::train::report::text(&title, &rows, run_max_level(&config)?, target));
+        // What made the numbers: the builds and engines that ran the epochs.
+        let spans = crate::train::RunDir { dir: dir.clone() }.read_provenance()?;
+        if spans.is_empty() {
+            println!("  made by: not recorded (the run started before runs recorded their engine)");
+        }
+        for s in &spans {
+            println!("  made by: from epoch {} on, {}", s.from_epoch + 1, s.build.describe());
+        }
     }
     Ok(())
 }

@@ -22,6 +22,19 @@ pub(super) enum ZooCommand {
     },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
     Export(ZooExportArgs),
+    /// Evaluate entries on this build's engine and record the results in their metadata: each
+    /// evaluation the entry records (task, distribution, episodes, seeds) is played again here
+    /// and kept beside the other engines' records (`zoo list` shows this engine's).
+    Evaluate {
+        /// Entries to evaluate (default: all).
+        names: Vec<String>,
+        /// The zoo folder.
+        #[arg(long)]
+        zoo: Option<PathBuf>,
+        /// Threads playing episodes (default: all cores); the result does not depend on it.
+        #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+        threads: Option<usize>,
+    },
 }
 
 #[derive(Debug, clap::Args)]
@@ -77,7 +90,17 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
                 println!("{name:<36} {:<24} {} epoch {:>3}, {steps} env steps", meta.task.id, meta.algo, meta.epoch);
                 println!("    {}", meta.description);
-                for e in &meta.evaluations {
+                // Numbers of different engines differ: this build's engine's only, the others counted.
+                let engine = crate::mj::version();
+                let others: std::collections::BTreeSet<&str> =
+                    meta.evaluations.iter().map(|e| e.mujoco().unwrap_or("not recorded")).filter(|m| *m != engine).collect();
+                if !others.is_empty() {
+                    println!(
+                        "    (evaluations on MuJoCo {engine} below; also recorded for: {}; see {name}.json)",
+                        others.into_iter().collect::<Vec<_>>().join(", ")
+                    );
+                }
+                for e in meta.evaluations.iter().filter(|e| e.mujoco() == Some(engine.as_str())) {
                     println!(
                         "    {} {}{}: {:.3} ({:.3}-{:.3}), {} episodes from seed {}",
                         e.env,
@@ -109,6 +132,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             }
             Ok(())
         }
+        ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
         ZooCommand::Export(a) => {
             if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
                 bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
@@ -140,7 +164,13 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                         seed: crate::evaluate::TEST_SEED,
                         threads,
                     };
-                    let r = crate::zoo::ZooEvaluation::from(crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?);
+                    let provenance = crate::provenance::Provenance::new(
+                        crate::provenance::Harness::Cli,
+                        saved.policy_id(&a.name),
+                        None,
+                    );
+                    let e = crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
+                    let r = crate::zoo::ZooEvaluation::new(e, provenance);
                     eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
                     evaluations.push(r);
                 }
@@ -176,6 +206,10 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         grey_blind: bool,
         #[serde(default)]
         outcomes: Option<crate::outcome::Outcomes>,
+        #[serde(default)]
+        task_sha256: Option<String>,
+        #[serde(default)]
+        provenance: Option<crate::provenance::Provenance>,
     }
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read evaluation {}", path.display()))?;
     let w: Written = serde_json::from_str(&text)
@@ -189,7 +223,67 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         success_rate: w.success_rate,
         ci95: w.ci95,
         outcomes: w.outcomes,
+        task_sha256: w.task_sha256,
+        provenance: w.provenance,
     })
+}
+
+/// `zoo evaluate`: every recorded measurement of the entries, played on this build's engine.
+fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> Result<()> {
+    crate::zoo::existing(zoo)?;
+    let names = if names.is_empty() { crate::zoo::names(zoo) } else { names };
+    if names.is_empty() {
+        bail!("no zoo entries in {}", zoo.display());
+    }
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    for name in &names {
+        let path = crate::zoo::find(zoo, name)?;
+        let (meta, saved) = crate::zoo::load(&path)?;
+        // Each measurement once (an entry may hold it for several engines).
+        let mut wanted: Vec<&crate::zoo::ZooEvaluation> = Vec::new();
+        for e in &meta.evaluations {
+            let key = |r: &crate::zoo::ZooEvaluation| (r.env.clone(), r.distribution.clone(), r.episodes, r.seed);
+            if !wanted.iter().any(|w| key(w) == key(e)) {
+                wanted.push(e);
+            }
+        }
+        let mut fresh = Vec::new();
+        for w in wanted {
+            let env = (w.env != saved.env_id).then_some(w.env.as_str());
+            let task = super::policy_task(env, &saved)?;
+            if !matches!(w.distribution.as_str(), "normal" | "challenge") {
+                bail!("{name}: evaluation on distribution {:?}: zoo evaluations are normal or challenge", w.distribution);
+            }
+            let spec = crate::evaluate::EvalSpec {
+                task: &task,
+                challenge: w.distribution == "challenge",
+                distribution: None,
+                level: None,
+                episodes: w.episodes,
+                seed: w.seed,
+                threads,
+            };
+            let provenance =
+                crate::provenance::Provenance::new(crate::provenance::Harness::Cli, saved.policy_id(name), None);
+            let e = crate::evaluate::evaluate(Path::new(name), saved.clone(), &spec)?;
+            let r = crate::zoo::ZooEvaluation::new(e, provenance);
+            println!(
+                "{name} {} {} on MuJoCo {}: {:.3} ({}/{})",
+                r.env,
+                r.distribution,
+                crate::mj::version(),
+                r.success_rate,
+                r.outcomes.map_or(0, |o| o.success),
+                r.episodes
+            );
+            fresh.push(r);
+        }
+        let what = crate::zoo::record_evaluations(&path, fresh)?;
+        for w in what.iter().filter(|w| **w == crate::zoo::Recorded::Disagrees) {
+            println!("    {w:?}: a record naming no engine has other numbers; it is kept beside this engine's");
+        }
+    }
+    Ok(())
 }
 
 /// Environment steps behind a policy of `epoch` epochs: from the

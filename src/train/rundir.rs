@@ -52,11 +52,51 @@ impl RunDir {
         let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("{} is not a training config", path.display()))
     }
+    /// `provenance.json`: the builds and engines that ran the run's epochs ([`Span`]).
+    pub fn provenance(&self) -> PathBuf {
+        self.dir.join("provenance.json")
+    }
+    /// The builds that ran the run's epochs, in order (empty for runs started before runs recorded them).
+    ///
+    /// # Errors
+    /// A malformed file, named.
+    pub fn read_provenance(&self) -> Result<Vec<Span>> {
+        let path = self.provenance();
+        if !path.exists() {
+            return Ok(Vec::new());
+        }
+        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("{} is not a run's provenance", path.display()))
+    }
+    /// Records that the epochs from `from_epoch` on run on this build (rank 0; nothing is written when the
+    /// last recorded build is this one).
+    ///
+    /// # Errors
+    /// The file cannot be read or written.
+    pub fn record_provenance(&self, from_epoch: usize) -> Result<()> {
+        let mut spans = self.read_provenance()?;
+        let build = crate::provenance::Build::current();
+        if spans.last().is_some_and(|s| s.build == build) {
+            return Ok(());
+        }
+        spans.push(Span { from_epoch, build });
+        crate::io::write_json(&self.provenance(), &spans)
+    }
     /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
     /// (a resumed run uses this copy, so the expert cannot change under it).
     pub fn expert_policy(&self) -> PathBuf {
         self.dir.join("expert_policy.json")
     }
+}
+
+/// The build that ran a run's epochs from `from_epoch` on (until the next span's).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Span {
+    /// The first epoch it ran (0-based: the number of epochs done before).
+    pub from_epoch: usize,
+    /// Package, commit and engine.
+    #[serde(flatten)]
+    pub build: crate::provenance::Build,
 }
 
 pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {

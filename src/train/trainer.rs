@@ -438,6 +438,7 @@ impl<'a> Trainer<'a> {
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
             write_json(&run.config(), &config)?;
+            run.record_provenance(begun.state.epoch)?;
         }
         if comm.is_root() && comm.size() > 1 {
             let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());

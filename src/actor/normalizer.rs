@@ -214,13 +214,6 @@ impl Normalizer {
         &self.std
     }
 
-    /// Rows of raw observations, normalised, as a `[n, dim]` tensor.
-    pub fn tensor(&self, rows: &[f32]) -> tch::Tensor {
-        let mut x = rows.to_vec();
-        self.normalize_in_place(&mut x);
-        tch::Tensor::of_slice(&x).view([-1, self.dim() as i64])
-    }
-
     /// Normalises rows in place: `clip((x - mean) / std, ±clip)`.
     pub fn normalize_in_place(&self, rows: &mut [f32]) {
         let d = self.dim();

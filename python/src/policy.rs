@@ -1,0 +1,105 @@
+//! Trained policies and their evaluation, by the command line's own code: a
+//! zoo entry acts through the core's plain-Rust forward pass (bit for bit the
+//! CLI's), and `evaluate_saved` runs the CLI's suite evaluator, so the same
+//! policy on the same engine gives the same numbers from Python and the CLI.
+
+use blockpuzzle::actor::AnyPolicy;
+use blockpuzzle::provenance::{Build, Harness};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::Path;
+
+fn zoo_err(e: blockpuzzle::zoo::ZooError) -> PyErr {
+    match e {
+        blockpuzzle::zoo::ZooError::Io { .. } => PyFileNotFoundError::new_err(e.to_string()),
+        _ => PyValueError::new_err(e.to_string()),
+    }
+}
+
+/// A zoo entry's deterministic actor (`.json` or `.safetensors` path), acting with the CLI's arithmetic.
+#[pyclass(frozen, module = "blockpuzzle._native")]
+pub(crate) struct ZooActor {
+    policy: AnyPolicy,
+    sha256: String,
+}
+
+#[pymethods]
+impl ZooActor {
+    #[new]
+    fn new(path: std::path::PathBuf) -> PyResult<Self> {
+        let (meta, saved) = blockpuzzle::zoo::load(&path).map_err(zoo_err)?;
+        let sha256 = saved.policy_id(&meta.name).sha256.unwrap_or_default();
+        Ok(Self { policy: saved.policy, sha256 })
+    }
+
+    /// `sha256:` of what acts and the task it was trained on (results' `provenance.policy.sha256`).
+    #[getter]
+    fn sha256(&self) -> &str {
+        &self.sha256
+    }
+
+    /// Actions for a batch of flat observations (`(n, obs_dim)` float32; a set network's
+    /// observation is robot | object rows | mask, any number of rows): `(n, 4)` float32.
+    fn act<'py>(&self, py: Python<'py>, obs: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let (n, dim) = (obs.shape()[0], obs.shape()[1]);
+        let policy = match self.policy.net().set {
+            Some(layout) => {
+                let row = layout.object + 1;
+                let rows = dim.checked_sub(layout.robot).filter(|r| r % row == 0).ok_or_else(|| {
+                    PyValueError::new_err(format!(
+                        "the set policy reads {} robot features and rows of {} object features and a mask entry; \
+                         observations of {dim} values do not split so",
+                        layout.robot, layout.object
+                    ))
+                })?;
+                self.policy.with_slots(rows / row)
+            }
+            None if dim != self.policy.obs_dim() => {
+                return Err(PyValueError::new_err(format!(
+                    "the policy reads observations of {} values, these have {dim}",
+                    self.policy.obs_dim()
+                )))
+            }
+            None => self.policy.clone(),
+        };
+        let x = obs.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec();
+        let actions: Vec<Vec<f32>> = py.allow_threads(|| x.chunks_exact(dim.max(1)).map(|o| policy.act(o)).collect());
+        let flat: Vec<f32> = actions.into_iter().flat_map(|a| (0..4).map(move |k| a.get(k).copied().unwrap_or(0.0))).collect();
+        PyArray2::from_vec(py, n, 4, flat)
+    }
+}
+
+/// A saved policy (a zoo entry's file) on a suite by the CLI's evaluator, named `name` in the
+/// result: the result as JSON text, `harness` "python".
+#[pyfunction]
+#[pyo3(signature = (path, name, suite, threads=None))]
+pub(crate) fn evaluate_saved(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    name: &str,
+    suite: &str,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    let (_, saved) = blockpuzzle::zoo::load(&path).map_err(zoo_err)?;
+    let suite = blockpuzzle::suite::load(suite).map_err(crate::suite_err)?;
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let subject = blockpuzzle::evaluate::Subject::Saved(Path::new(name), &saved);
+    let result = py
+        .allow_threads(|| blockpuzzle::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python))
+        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    serde_json::to_string(&result).map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
+
+/// What this build is: `blockpuzzle` (version), `commit` (None unless built from a checkout) and
+/// `mujoco` (the engine's version): the `provenance` of the results it makes.
+#[pyfunction]
+pub(crate) fn build_info(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let b = Build::current();
+    let d = PyDict::new(py);
+    d.set_item("blockpuzzle", b.blockpuzzle)?;
+    d.set_item("commit", b.commit)?;
+    d.set_item("mujoco", b.mujoco)?;
+    Ok(d)
+}
