@@ -12,7 +12,7 @@ resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
 # Set-up, build, test, the main job, a demo and the benchmark. Every other experiment is a recipe
 # file in experiments/ run with `blockpuzzle train --config FILE` (docs/training.md lists them).
-.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel demo test bench train build
+.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel demo test bench train build leaderboard
 
 setup:
 	bash scripts/setup.sh
@@ -62,3 +62,9 @@ train: build
 # Throughput against gymnasium-robotics FetchPush-v4 (installs a Python venv under bench/).
 bench: build
 	bash bench/fetchpush.sh
+
+# results/leaderboard.md from the suite results of both engines (scripts/generalization.sh writes them;
+# tests/provenance.rs fails when the page is stale).
+LEADERBOARD_RESULTS = results/generalization/mujoco-2.2.2 results/generalization/mujoco-3.11.0
+leaderboard: build
+	$(BP) results leaderboard $(LEADERBOARD_RESULTS) --out results/leaderboard.md

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Every zoo policy, and the two baselines (scripted, obs-hash), on every built-in evaluation suite
-# (results/generalization.md):
-#   blockpuzzle eval --suite SUITE --checkpoint ZOO_NAME -> results/generalization/ZOO_NAME.SUITE.{json,md}
-#   blockpuzzle eval --suite SUITE --baseline NAME       -> results/generalization/baseline-NAME.SUITE.{json,md}
+# (results/generalization.md), into one folder per engine (numbers of different engines differ):
+#   blockpuzzle eval --suite SUITE --checkpoint ZOO_NAME -> results/generalization/mujoco-M/ZOO_NAME.SUITE.{json,md}
+#   blockpuzzle eval --suite SUITE --baseline NAME       -> results/generalization/mujoco-M/baseline-NAME.SUITE.{json,md}
+# where M is the MuJoCo version of the binary: $BIN, by default target/release/blockpuzzle (2.2.2);
+# BIN=target/mujoco3/release/blockpuzzle for 3.11.0. Then `make leaderboard` redraws results/leaderboard.md.
 # Usage: bash scripts/generalization.sh [--threads N]   (after `cargo build --release`)
 # SUITES="count obstacles" bash scripts/generalization.sh … runs only those suites; POLICIES="A B" only
 # those zoo entries, and BASELINES="" no baseline.
@@ -11,8 +13,10 @@
 # keeping results already there; with AGENTS set, no zoo policy or baseline runs unless named too.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="$ROOT/target/release/blockpuzzle"
-OUT="$ROOT/results/generalization"
+BIN="${BIN:-$ROOT/target/release/blockpuzzle}"
+ENGINE="$("$BIN" info | sed -n 's/^MuJoCo \([0-9.]*\).*/\1/p')"
+[ -n "$ENGINE" ] || { echo "$BIN info names no MuJoCo version" >&2; exit 1; }
+OUT="$ROOT/results/generalization/mujoco-$ENGINE"
 SUITES="${SUITES:-colour layout cross-task count obstacles}"
 mkdir -p "$OUT"
 if [ -n "${AGENTS:-}" ]; then

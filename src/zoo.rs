@@ -30,7 +30,7 @@ use crate::saved::SavedPolicy;
 use crate::task::TaskSource;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
+
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -277,10 +277,6 @@ pub fn is_zoo_file(path: &Path) -> bool {
     }
 }
 
-fn sha256(bytes: &[u8]) -> String {
-    format!("sha256:{:x}", Sha256::digest(bytes))
-}
-
 /// A network's layout, `n_in` its whole input (observation, and a critic's action).
 fn layout(net: &TanhMlp, n_in: usize) -> NetLayout {
     let mut sizes = vec![n_in];
@@ -395,7 +391,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         exported_from: info.exported_from.clone(),
         evaluations: info.evaluations.clone(),
         probes: probes(saved)?,
-        tensors_sha256: sha256(&bytes),
+        tensors_sha256: crate::provenance::sha256(&bytes),
     };
     if zoo.exists() && !zoo.is_dir() {
         return Err(ZooError::NotAFolder { zoo: zoo.to_owned() });
@@ -491,7 +487,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let tensors_path = path.with_extension("safetensors");
     let bytes = std::fs::read(&tensors_path).map_err(io(&tensors_path))?;
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
-    if sha256(&bytes) != meta.tensors_sha256 {
+    if crate::provenance::sha256(&bytes) != meta.tensors_sha256 {
         return Err(corrupt(format!(
             "its checksum does not match {} (damaged, or the tensors of another entry); restore both files of the entry together",
             tensors_path.with_extension("json").display()

@@ -71,6 +71,9 @@ if _assets is not None:
         if not _os.environ.get("BLOCKPUZZLE_MODELS_DIR"):
             raise ImportError(str(e)) from None
 
+#: The package version (the Rust crate's; results record it in their ``provenance``).
+__version__ = _native.build_info()["blockpuzzle"]
+
 from . import policies, zoo  # noqa: E402
 from ._native import env_ids, mujoco_version  # noqa: E402
 from .env import BlockPuzzleEnv  # noqa: E402
@@ -84,7 +87,7 @@ def assets_dir() -> _pathlib.Path:
     return _pathlib.Path(_native.assets_dir())
 
 
-__all__ = ["BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_ROBOTICS_PIN", "MUJOCO_PIN", "NAMESPACE",
+__all__ = ["__version__", "BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_ROBOTICS_PIN", "MUJOCO_PIN", "NAMESPACE",
            "assets_dir", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version", "policies", "zoo"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.

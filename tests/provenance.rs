@@ -1,0 +1,205 @@
+//! Every result says what made it (crate::provenance), and results of
+//! different engines, suites or task contents are never put in one column:
+//! the writers' provenance blocks, the task hash of a suite row, `results
+//! compare` and `results leaderboard`, and the committed leaderboard is what
+//! its result files give.
+#![cfg(feature = "train")]
+
+use blockpuzzle::evaluate::{evaluate_suite, Baseline, Subject, SuiteResult};
+use blockpuzzle::provenance::Harness;
+use blockpuzzle::results::{self, ResultFile};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bp(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// A suite of one row each way on the task file `task.toml` beside it.
+const SUITE: &str = r#"
+version = 1
+name = "edited"
+summary = "A task file that may change under the suite."
+[[splits.train]]
+task = "task.toml"
+seed = 3000000
+episodes = 3
+[[splits.test]]
+task = "task.toml"
+seed = 1000000
+episodes = 3
+"#;
+
+fn obs_hash_on(suite: &Path) -> SuiteResult {
+    let suite = blockpuzzle::suite::load(suite.to_str().unwrap()).unwrap();
+    evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli).unwrap()
+}
+
+#[test]
+fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
+    let dir = tempfile::tempdir().unwrap();
+    let task = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml")).unwrap();
+    std::fs::write(dir.path().join("task.toml"), &task).unwrap();
+    let suite = dir.path().join("edited.toml");
+    std::fs::write(&suite, SUITE).unwrap();
+    let a = obs_hash_on(&suite);
+    let p = &a.provenance;
+    assert_eq!(p.build.mujoco, blockpuzzle::mj::version());
+    assert_eq!(p.build.blockpuzzle, env!("CARGO_PKG_VERSION"));
+    assert_eq!((p.harness, p.policy.name.as_str(), p.policy.sha256.as_deref()), (Harness::Cli, "baseline:obs-hash", None));
+    assert_eq!(p.suite.as_ref(), Some(&a.suite));
+    let built_in = blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().source.hash;
+    for row in a.splits.iter().flat_map(|s| &s.rows) {
+        // A file with the built-in's content is the built-in task, by content.
+        assert_eq!(row.task_sha256, built_in);
+        assert_eq!(row.evaluation.as_ref().unwrap().task_sha256, built_in);
+    }
+
+    // The task file edited (one more step per episode), the suite's text untouched: the suite hash
+    // stays, the rows' task hash changes, and the two results are refused in one column.
+    std::fs::write(dir.path().join("task.toml"), task.replace("max_episode_steps = 50", "max_episode_steps = 51")).unwrap();
+    let b = obs_hash_on(&suite);
+    assert_eq!(a.suite, b.suite);
+    assert_ne!(a.splits[0].rows[0].task_sha256, b.splits[0].rows[0].task_sha256);
+    let m = results::comparable(&a, &b).unwrap_err();
+    assert!(m.field.contains("task_sha256") && m.field.contains("train"), "{m}");
+    assert!(results::comparable(&a, &a.clone()).is_ok());
+}
+
+#[test]
+fn compare_refuses_other_engines_and_suites_naming_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("edited.toml");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"), dir.path().join("task.toml"))
+        .unwrap();
+    std::fs::write(&suite, SUITE).unwrap();
+    let a = dir.path().join("a.json");
+    let o = bp(&["eval", "--suite", suite.to_str().unwrap(), "--baseline", "scripted", "--out", a.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
+    assert_eq!(v["provenance"]["harness"], "cli");
+    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::mj::version().as_str());
+    assert_eq!(v["provenance"]["policy"]["name"], "baseline:scripted");
+    let md = std::fs::read_to_string(a.with_extension("md")).unwrap();
+    assert!(md.contains(&format!("Made on MuJoCo {}", blockpuzzle::mj::version())), "{md}");
+
+    // The same file twice compares; the copy claiming another engine or suite text is refused.
+    let o = bp(&["results", "compare", a.to_str().unwrap(), a.to_str().unwrap()]);
+    assert!(o.status.success() && text(&o).contains("**score**"), "{}", text(&o));
+    for (field, value, named) in [("mujoco", "9.9.9", "provenance.mujoco"), ("suite", "x", "provenance.suite.sha256")] {
+        let mut w = v.clone();
+        match field {
+            "mujoco" => w["provenance"]["mujoco"] = value.into(),
+            _ => w["provenance"]["suite"]["sha256"] = value.into(),
+        }
+        let b = dir.path().join(format!("{field}.json"));
+        std::fs::write(&b, serde_json::to_vec(&w).unwrap()).unwrap();
+        let o = bp(&["results", "compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+        let t = text(&o);
+        assert!(!o.status.success() && t.contains(named) && t.contains(value), "{field}: {t}");
+        // The leaderboard keeps them apart: another engine, or another suite text, is another table.
+        let board = bp(&["results", "leaderboard", a.to_str().unwrap(), b.to_str().unwrap()]);
+        assert!(board.status.success(), "{}", text(&board));
+        assert_eq!(String::from_utf8_lossy(&board.stdout).matches("\n## `edited`").count(), 2, "{field}");
+    }
+    // A file without provenance (written before results carried it) is refused with the fix.
+    let mut old = v.clone();
+    old.as_object_mut().unwrap().remove("provenance");
+    let b = dir.path().join("old.json");
+    std::fs::write(&b, serde_json::to_vec(&old).unwrap()).unwrap();
+    let t = text(&bp(&["results", "compare", a.to_str().unwrap(), b.to_str().unwrap()]));
+    assert!(t.contains("records no provenance") && t.contains("eval --suite"), "{t}");
+    // The same policy with other numbers on one engine and suite: the leaderboard refuses it.
+    let mut other = v.clone();
+    other["splits"][1]["rows"][0]["evaluation"]["outcomes"]["timeout"] = 99.into();
+    let b = dir.path().join("other.json");
+    std::fs::write(&b, serde_json::to_vec(&other).unwrap()).unwrap();
+    let t = text(&bp(&["results", "leaderboard", a.to_str().unwrap(), b.to_str().unwrap()]));
+    assert!(t.contains("different outcome counts"), "{t}");
+}
+
+#[test]
+fn eval_table_and_zoo_evaluations_carry_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("e.json");
+    let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "2", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let (meta, saved) = blockpuzzle::zoo::load(&blockpuzzle::zoo::find(&blockpuzzle::zoo::dir(), "ReachAvoid-v0-ddpg").unwrap())
+        .unwrap();
+    assert_eq!(v["task_sha256"], meta.task.hash.as_str());
+    assert_eq!(v["provenance"]["policy"]["sha256"], saved.policy_id("x").sha256.unwrap().as_str());
+    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::mj::version().as_str());
+
+    // The paper's table says which engine, and each policy by content.
+    let table = dir.path().join("t.md");
+    let o = bp(&["table", "--ddpg", "BlocksChoose-v0-ddpg", "--episodes", "2", "--out", table.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let md = std::fs::read_to_string(&table).unwrap();
+    assert!(md.contains(&format!("Made on MuJoCo {}", blockpuzzle::mj::version())) && md.contains("sha256:"), "{md}");
+
+    // A zoo entry exported with an evaluation records it with its engine; `zoo evaluate` plays it
+    // again on this engine and replaces it; a record without provenance with the same numbers is
+    // confirmed as this engine's.
+    let z = dir.path().join("zoo");
+    let mut args = vec!["zoo", "export", "--from", "ReachAvoid-v0-ddpg", "--name", "r", "--description", "d"];
+    args.extend(["--trained-with", "t", "--evaluate", "3", "--zoo", z.to_str().unwrap()]);
+    assert!(bp(&args).status.success());
+    let entry = z.join("r.json");
+    let (meta, _) = blockpuzzle::zoo::load(&entry).unwrap();
+    let first = meta.evaluations[0].clone();
+    assert_eq!(first.mujoco(), Some(blockpuzzle::mj::version().as_str()));
+    assert_eq!(first.task_sha256.as_deref(), Some(meta.task.hash.as_str()));
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    v["evaluations"][0].as_object_mut().unwrap().remove("provenance");
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let o = bp(&["zoo", "evaluate", "r", "--zoo", z.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let (meta, _) = blockpuzzle::zoo::load(&entry).unwrap();
+    assert_eq!(meta.evaluations.len(), 1, "confirmed, not added: {:?}", meta.evaluations);
+    assert_eq!(meta.evaluations[0], first);
+    // `zoo list` shows this engine's evaluations, and names the others.
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    let mut other = v["evaluations"][0].clone();
+    other["provenance"]["mujoco"] = "9.9.9".into();
+    other["success_rate"] = 0.123456.into();
+    v["evaluations"].as_array_mut().unwrap().push(other);
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let listed = text(&bp(&["zoo", "list", "--zoo", z.to_str().unwrap()]));
+    assert!(listed.contains("also recorded for: 9.9.9") && !listed.contains("0.123"), "{listed}");
+}
+
+/// The committed leaderboard and the result files it is drawn from.
+fn committed() -> (PathBuf, Vec<PathBuf>) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let folders = std::fs::read_dir(root.join("results/generalization"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir() && p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("mujoco-")))
+        .collect::<Vec<_>>();
+    (root.join("results/leaderboard.md"), folders)
+}
+
+#[test]
+fn the_committed_leaderboard_is_what_its_result_files_give() {
+    let (board, mut folders) = committed();
+    folders.sort();
+    assert!(folders.len() >= 2, "results for both engines: {folders:?}");
+    let files: Vec<ResultFile> = results::read_all(&folders).unwrap();
+    // Rebuilt with the command make leaderboard runs (paths relative to the checkout).
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let files: Vec<ResultFile> = files
+        .into_iter()
+        .map(|f| ResultFile { path: f.path.strip_prefix(root).unwrap().to_owned(), result: f.result })
+        .collect();
+    let md = results::leaderboard(&files).unwrap();
+    let now = std::fs::read_to_string(&board).unwrap();
+    assert!(now == md, "results/leaderboard.md is stale: run `make leaderboard`");
+    for engine in ["2.2.2", "3.11.0"] {
+        assert!(md.contains(&format!("` on MuJoCo {engine}")), "no table for MuJoCo {engine}");
+    }
+}
