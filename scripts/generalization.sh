@@ -9,7 +9,7 @@
 # SUITES="count obstacles" bash scripts/generalization.sh … runs only those suites; POLICIES="A B" only
 # those zoo entries, and BASELINES="" no baseline.
 # Training runs' snapshots (issue 31's agents): AGENTS="RUN:EPOCH …" evaluates
-# runs/RUN/snapshots/epoch-00EPOCH.json on every suite -> results/generalization/agents/RUN-epochEPOCH.SUITE.{json,md},
+# runs/RUN/snapshots/epoch-00EPOCH.json on every suite -> results/generalization/mujoco-2.2.2/agents/RUN-epochEPOCH.SUITE.{json,md},
 # keeping results already there; with AGENTS set, no zoo policy or baseline runs unless named too.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

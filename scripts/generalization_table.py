@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
-"""The summary table of results/generalization.md from results/generalization/*.json
-(written by scripts/generalization.sh): per zoo policy and suite, train and test mean success,
-the gap, and the rows skipped.
+"""The summary tables of results/generalization.md from results/generalization/mujoco-M/*.json
+(written by scripts/generalization.sh, one folder per engine): per zoo policy and suite, train and
+test mean success, the gap, and the rows skipped. Numbers of two engines are never in one table.
 
-Usage: python3 scripts/generalization_table.py
+Usage: python3 scripts/generalization_table.py [--engine 3.11.0]   # default: 2.2.2
        python3 scripts/generalization_table.py --agents   # issue 31's training snapshots
-                                                         # (results/generalization/agents/RUN-epochE.SUITE.json)
+                                                         # (results/generalization/mujoco-2.2.2/agents/RUN-epochE.SUITE.json)
        python3 scripts/generalization_table.py --agents-summary [EPOCH]   # one row per snapshot
 """
 import json
@@ -16,6 +16,8 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SUITES = ["colour", "layout", "cross-task", "count", "obstacles"]
 BASELINES = ["baseline-scripted", "baseline-obs-hash"]
+ENGINE = sys.argv[sys.argv.index("--engine") + 1] if "--engine" in sys.argv else "2.2.2"
+DIR = ROOT / "results" / "generalization" / f"mujoco-{ENGINE}"
 
 
 def applies(r):
@@ -25,10 +27,10 @@ def applies(r):
 
 
 def main():
-    files = sorted((ROOT / "results" / "generalization").glob("*.json"))
+    files = sorted(DIR.glob("*.json"))
     policies = sorted({f.name.split(".")[0] for f in files} - set(BASELINES))
     results = {
-        p: {s: json.loads((ROOT / "results" / "generalization" / f"{p}.{s}.json").read_text()) for s in SUITES}
+        p: {s: json.loads((DIR / f"{p}.{s}.json").read_text()) for s in SUITES}
         for p in policies
     }
     for title, keep in [("Where the suite applies (the policy was trained on a task of its train split)", True),
@@ -55,13 +57,16 @@ def main():
     print("|---|---|---:|---:|---:|")
     for b in BASELINES:
         for s in SUITES:
-            r = json.loads((ROOT / "results" / "generalization" / f"{b}.{s}.json").read_text())
+            r = json.loads((DIR / f"{b}.{s}.json").read_text())
             means = {sp["name"]: sp["mean_success"] for sp in r["splits"]}
             f = lambda v: "–" if v is None else f"{v:.3f}"
             print(f"| {b.removeprefix('baseline-')} | {s} | {f(means.get('train'))} | {f(means.get('test'))} | {f(r['gap'])} |")
     print()
     shas = {s: results[policies[0]][s]["suite"]["sha256"][:12] for s in SUITES}
     print("Suite versions (sha256, first 12 hex digits): " + ", ".join(f"{s} `{h}`" for s, h in shas.items()) + ".")
+    engines = {results[p][s]["provenance"]["mujoco"] for p in policies for s in SUITES}
+    assert engines == {ENGINE}, f"{DIR} holds results of MuJoCo {engines}"
+    print(f"All on MuJoCo {ENGINE} (each file's `provenance`).")
 
 
 def wilson(k, n, z=1.96):
@@ -85,14 +90,14 @@ def split_cell(split):
 
 
 def agent_results():
-    """(agent, suite, result) of every results/generalization/agents/AGENT.SUITE.json, by file name."""
-    for f in sorted((ROOT / "results" / "generalization" / "agents").glob("*-epoch*.*.json")):
+    """(agent, suite, result) of every results/generalization/mujoco-2.2.2/agents/AGENT.SUITE.json, by file name."""
+    for f in sorted((DIR / "agents").glob("*-epoch*.*.json")):
         agent, suite = f.name.removesuffix(".json").rsplit(".", 1)
         yield agent, suite, json.loads(f.read_text())
 
 
 def agents():
-    """One row per (snapshot, suite) of results/generalization/agents/: train and test success with
+    """One row per (snapshot, suite) of results/generalization/mujoco-2.2.2/agents/: train and test success with
     95% intervals (pooled over the split's evaluated rows), the gap, test / train, rows skipped."""
     print("| agent (run, epoch) | trained on | suite | train [95%] | test [95%] | gap | test / train | rows skipped |")
     print("|---|---|---|---:|---:|---:|---:|---:|")

@@ -5,7 +5,7 @@
 
 use blockpuzzle::actor::AnyPolicy;
 use blockpuzzle::provenance::{Build, Harness};
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -67,7 +67,7 @@ impl ZooActor {
         let x = obs.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec();
         let actions: Vec<Vec<f32>> = py.allow_threads(|| x.chunks_exact(dim.max(1)).map(|o| policy.act(o)).collect());
         let flat: Vec<f32> = actions.into_iter().flat_map(|a| (0..4).map(move |k| a.get(k).copied().unwrap_or(0.0))).collect();
-        PyArray2::from_vec(py, n, 4, flat)
+        PyArray1::from_vec(py, flat).reshape([n, 4])
     }
 }
 
