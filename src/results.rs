@@ -53,6 +53,12 @@ pub fn read(path: &Path) -> Result<ResultFile> {
     }
     let result: SuiteResult =
         serde_json::from_value(value).with_context(|| format!("{} is not a well-formed suite result", path.display()))?;
+    if result.provenance.suite.as_ref() != Some(&result.suite) {
+        bail!(
+            "{}: its provenance names another suite than its `suite` field (an edited or damaged file); evaluate again",
+            path.display()
+        );
+    }
     Ok(ResultFile { path: path.to_owned(), result })
 }
 

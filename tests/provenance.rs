@@ -94,7 +94,10 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
         let mut w = v.clone();
         match field {
             "mujoco" => w["provenance"]["mujoco"] = value.into(),
-            _ => w["provenance"]["suite"]["sha256"] = value.into(),
+            _ => {
+                w["provenance"]["suite"]["sha256"] = value.into();
+                w["suite"]["sha256"] = value.into();
+            }
         }
         let b = dir.path().join(format!("{field}.json"));
         std::fs::write(&b, serde_json::to_vec(&w).unwrap()).unwrap();
@@ -106,6 +109,13 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
         assert!(board.status.success(), "{}", text(&board));
         assert_eq!(String::from_utf8_lossy(&board.stdout).matches("\n## `edited`").count(), 2, "{field}");
     }
+    // A file whose provenance and suite disagree is refused as edited.
+    let mut edited = v.clone();
+    edited["suite"]["sha256"] = "y".into();
+    let b = dir.path().join("edited.json");
+    std::fs::write(&b, serde_json::to_vec(&edited).unwrap()).unwrap();
+    let t = text(&bp(&["results", "compare", a.to_str().unwrap(), b.to_str().unwrap()]));
+    assert!(t.contains("provenance names another suite"), "{t}");
     // A file without provenance (written before results carried it) is refused with the fix.
     let mut old = v.clone();
     old.as_object_mut().unwrap().remove("provenance");
