@@ -96,6 +96,10 @@ fn short_run_writes_every_run_directory_file() {
     let task = cfg.task.expect("the run records its task");
     assert_eq!(task.id, "BlocksTouch-v0");
     assert_eq!(task.hash, blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().source.hash);
+    // The builds and engines that ran its epochs (one here, from epoch 0).
+    let spans = blockpuzzle::train::RunDir { dir: dir.path().to_owned() }.read_provenance().unwrap();
+    assert_eq!(spans.len(), 1);
+    assert_eq!((spans[0].from_epoch, spans[0].build.mujoco.clone()), (0, blockpuzzle::mj::version()));
     // a second fresh run into the same directory is refused
     let err = train(&tiny("BlocksTouch-v0", 2), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--resume"), "{err}");
@@ -114,6 +118,8 @@ fn resume_restores_the_exact_state() {
         load_policy(&split.path().join("policy.json")).unwrap(),
     );
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
+    // A resume on the same build records no new span.
+    assert_eq!(blockpuzzle::train::RunDir { dir: split.path().to_owned() }.read_provenance().unwrap().len(), 1);
 }
 
 /// A branch continues its parent's state exactly (no change: the same run

@@ -35,7 +35,7 @@ mod trainer;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use learner::{AggrevatedConfig, Algo, Algorithm, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{read_progress, RunDir};
+pub use rundir::{read_progress, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch};
 
 use crate::agents::arch::{NetConfig, NetKind, Pooling};
