@@ -303,10 +303,13 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
                 harnesses.join(", ")
             );
             let files: Vec<String> = same.iter().map(|f| format!("`{}`", f.path.display())).collect();
+            let p = &r.provenance;
+            let hash = p.policy.sha256.as_deref().map_or_else(|| "a baseline".to_owned(), |h| format!("policy {h}"));
+            let commit = p.build.commit.as_deref().map_or_else(String::new, |c| format!(" (commit `{c}`)"));
             notes.push(format!(
-                "[^{label}-{}]: {} Files: {}.",
+                "[^{label}-{}]: {hash}; made by blockpuzzle {}{commit}; {}.",
                 rank + 1,
-                r.provenance.markdown(),
+                p.build.blockpuzzle,
                 files.join(", ")
             ));
         }
