@@ -1,5 +1,5 @@
 //! The model zoo: trained policies shipped in the repository, so that every
-//! row of `results/table.md` can be checked in minutes without training.
+//! row of `results/table-mujoco-*.md` can be checked in minutes without training.
 //!
 //! An entry is two files in `zoo/` (or `$BLOCKPUZZLE_ZOO`):
 //!
