@@ -181,7 +181,7 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     v["evaluations"].as_array_mut().unwrap().push(other);
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let listed = text(&bp(&["zoo", "list", "--zoo", z.to_str().unwrap()]));
-    assert!(listed.contains("also recorded for: 9.9.9") && !listed.contains("0.123"), "{listed}");
+    assert!(listed.contains("r.json also has MuJoCo 9.9.9") && !listed.contains("0.123"), "{listed}");
 }
 
 /// The committed leaderboard and the result files it is drawn from.

@@ -212,3 +212,22 @@ pub fn obs_dim_without_grey(colours: &[Colour]) -> usize {
     obs_dim(colours.iter().filter(|&&c| c != Colour::Grey).count())
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grey_blocks_are_cut_out_whole() {
+        let mut obs: Vec<f32> = (0..ROBOT_OBS).map(|k| k as f32).collect();
+        for (tag, one_hot) in
+            [(100.0, [0.0, 1.0, 0.0, 0.0]), (200.0, [0.0, 0.0, 0.0, 1.0]), (300.0, [0.0, 0.0, 1.0, 0.0])]
+        {
+            obs.extend((0..BLOCK_OBS - 4).map(|k| tag + k as f32));
+            obs.extend(one_hot);
+        }
+        let v = without_grey(&obs);
+        assert_eq!(v.len(), ROBOT_OBS + 2 * BLOCK_OBS);
+        assert_eq!(&v[..ROBOT_OBS + BLOCK_OBS], &obs[..ROBOT_OBS + BLOCK_OBS]);
+        assert_eq!(&v[ROBOT_OBS + BLOCK_OBS..], &obs[ROBOT_OBS + 2 * BLOCK_OBS..]);
+    }
+}

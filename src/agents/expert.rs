@@ -104,6 +104,7 @@ impl ExpertCritic {
 mod tests {
     use super::*;
     use crate::agents::arch::Arch;
+    use crate::env::{BLOCK_OBS, ROBOT_OBS};
 
     #[test]
     fn beta_follows_the_schedule() {
@@ -193,20 +194,5 @@ mod tests {
         // A critic of another shape is refused.
         let other = Ddpg::new(5, 4, DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &mut rng);
         assert!(ExpertCritic::new(&ddpg.policy(), &other.critic.to_plain()).is_err());
-    }
-
-    #[test]
-    fn grey_blocks_are_cut_out_whole() {
-        let mut obs: Vec<f32> = (0..ROBOT_OBS).map(|k| k as f32).collect();
-        for (tag, one_hot) in
-            [(100.0, [0.0, 1.0, 0.0, 0.0]), (200.0, [0.0, 0.0, 0.0, 1.0]), (300.0, [0.0, 0.0, 1.0, 0.0])]
-        {
-            obs.extend((0..BLOCK_OBS - 4).map(|k| tag + k as f32));
-            obs.extend(one_hot);
-        }
-        let v = without_grey(&obs);
-        assert_eq!(v.len(), ROBOT_OBS + 2 * BLOCK_OBS);
-        assert_eq!(&v[..ROBOT_OBS + BLOCK_OBS], &obs[..ROBOT_OBS + BLOCK_OBS]);
-        assert_eq!(&v[ROBOT_OBS + BLOCK_OBS..], &obs[ROBOT_OBS + 2 * BLOCK_OBS..]);
     }
 }

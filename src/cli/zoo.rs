@@ -92,11 +92,15 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 println!("    {}", meta.description);
                 // Numbers of different engines differ: this build's engine's only, the others counted.
                 let engine = crate::mj::version();
-                let others: std::collections::BTreeSet<&str> =
-                    meta.evaluations.iter().map(|e| e.mujoco().unwrap_or("not recorded")).filter(|m| *m != engine).collect();
+                let others: std::collections::BTreeSet<String> = meta
+                    .evaluations
+                    .iter()
+                    .filter(|e| e.mujoco() != Some(engine.as_str()))
+                    .map(|e| e.mujoco().map_or_else(|| "ones that name no engine".to_owned(), |m| format!("MuJoCo {m}")))
+                    .collect();
                 if !others.is_empty() {
                     println!(
-                        "    (evaluations on MuJoCo {engine} below; also recorded for: {}; see {name}.json)",
+                        "    (evaluations on MuJoCo {engine} below; {name}.json also has {})",
                         others.into_iter().collect::<Vec<_>>().join(", ")
                     );
                 }
