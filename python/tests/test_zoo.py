@@ -3,7 +3,6 @@ evaluations on the package's MuJoCo (test_provenance.py: a zoo policy scores wha
 built on the same MuJoCo, scores)."""
 
 import os
-import pathlib
 
 import gymnasium as gym
 import numpy as np
@@ -12,7 +11,6 @@ import pytest
 import blockpuzzle
 from blockpuzzle import zoo
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def test_the_package_carries_the_zoo_and_each_entry_reproduces_its_probes():
