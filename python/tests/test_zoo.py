@@ -12,7 +12,6 @@ import blockpuzzle
 from blockpuzzle import zoo
 
 
-
 def test_the_package_carries_the_zoo_and_each_entry_reproduces_its_probes():
     names = zoo.names()
     assert "BlocksTouch-v0-ddpg" in names and len(names) >= 10
