@@ -410,7 +410,8 @@ pub enum Recorded {
     Added,
     /// Replaced the record of the same measurement on the same engine.
     Replaced,
-    /// Replaced a record that named no engine and had exactly these numbers (so it was this engine's).
+    /// Replaced a record that named no engine and had these numbers (the same success rate, and
+    /// the same outcome counts where it has them), so it was this engine's.
     Confirmed,
     /// Added beside a record that names no engine and has other numbers (so it was another engine's,
     /// or another version's); that record is kept as it was.
@@ -428,22 +429,30 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
     let mut meta = read_meta(&json_path)?;
     let mut done = Vec::new();
     for e in new {
-        let numbers = |r: &ZooEvaluation| (r.success_rate, r.outcomes);
         let unlabelled = |r: &ZooEvaluation| {
             r.provenance.is_none()
                 && (&r.env, &r.distribution, r.grey_blind, r.episodes, r.seed)
                     == (&e.env, &e.distribution, e.grey_blind, e.episodes, e.seed)
         };
-        if let Some(r) = meta.evaluations.iter_mut().find(|r| r.same_measurement(&e)) {
+        // The same numbers: the same success rate, and the same outcome counts where the record has them
+        // (format 1 entries do not).
+        let agrees = |r: &ZooEvaluation| r.success_rate == e.success_rate && (r.outcomes.is_none() || r.outcomes == e.outcomes);
+        let before = meta.evaluations.len();
+        meta.evaluations.retain(|r| !(unlabelled(r) && agrees(r)));
+        let confirmed = meta.evaluations.len() < before;
+        let what = if let Some(r) = meta.evaluations.iter_mut().find(|r| r.same_measurement(&e)) {
             *r = e;
-            done.push(Recorded::Replaced);
-        } else if let Some(r) = meta.evaluations.iter_mut().find(|r| unlabelled(r) && numbers(r) == numbers(&e)) {
-            *r = e;
-            done.push(Recorded::Confirmed);
+            Recorded::Replaced
         } else {
-            done.push(if meta.evaluations.iter().any(unlabelled) { Recorded::Disagrees } else { Recorded::Added });
+            let disagrees = meta.evaluations.iter().any(unlabelled);
             meta.evaluations.push(e);
-        }
+            match (confirmed, disagrees) {
+                (_, true) => Recorded::Disagrees,
+                (true, false) => Recorded::Confirmed,
+                (false, false) => Recorded::Added,
+            }
+        };
+        done.push(what);
     }
     meta.format = FORMAT.into();
     let json = serde_json::to_vec_pretty(&meta)

@@ -172,7 +172,7 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     assert!(o.status.success(), "{}", text(&o));
     let (meta, _) = blockpuzzle::zoo::load(&entry).unwrap();
     assert_eq!(meta.evaluations.len(), recorded, "confirmed, not added: {:?}", meta.evaluations);
-    assert_eq!(meta.evaluations[0], first);
+    assert!(meta.evaluations.contains(&first), "{:?}", meta.evaluations);
     // `zoo list` shows this engine's evaluations, and names the others.
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
     let mut other = v["evaluations"][0].clone();
