@@ -217,16 +217,21 @@ pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64
     }
     // What made the numbers (crate::provenance): the engine above all.
     let _ = writeln!(s, "\nMade on {}, harness cli.", crate::provenance::Build::current().describe());
-    let mut first = true;
-    for (row, r) in rows {
-        if let RowResult::Done { normal, policy, .. } = r {
-            if first {
-                let _ = writeln!(s, "Task {} {}; policies by content:\n", normal.env, normal.task_sha256);
-                first = false;
+    let done: Vec<String> = rows
+        .iter()
+        .filter_map(|(row, r)| match r {
+            RowResult::Done { policy, .. } => {
+                Some(format!("{}: `{}` {}", row.method, policy.name, policy.sha256.as_deref().unwrap_or("none")))
             }
-            let hash = policy.sha256.as_deref().unwrap_or("none");
-            let _ = writeln!(s, "- {}: `{}` {hash}", row.method, policy.name);
-        }
+            _ => None,
+        })
+        .collect();
+    let task = rows.iter().find_map(|(_, r)| match r {
+        RowResult::Done { normal, .. } => Some(format!("{} {}", normal.env, normal.task_sha256)),
+        _ => None,
+    });
+    if let Some(task) = task {
+        let _ = writeln!(s, "Task {task}. Policies by content: {}.", done.join("; "));
     }
     s
 }
