@@ -99,7 +99,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
         };
         let path = zoo::export(dir.path(), &saved, &info).unwrap();
         let (meta, loaded) = zoo::load(&path).unwrap();
-        assert_eq!(meta.format, "blockpuzzle-zoo/3");
+        assert_eq!(meta.format, zoo::FORMAT);
         assert_eq!(meta.actor.set, saved.policy.net().set);
         assert_eq!(meta.actor.sizes[0], observations[0].len(), "the observation's length");
         assert_eq!(loaded.policy.obs_mode(), ObsMode::Objects);
