@@ -8,11 +8,11 @@ use crate::env::{BlockEnv, EnvConfig, ObsMode, VectorEnv, ACTION_DIM};
 pub use crate::outcome::wilson95;
 use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{ObsHashPolicy, Policy, ScriptedPolicy};
+use crate::provenance::{Harness, PolicyId, Provenance};
 use crate::rollout::run_episode;
 use crate::saved::SavedPolicy;
 use crate::task::Task;
 use anyhow::{bail, Context, Result};
-use crate::provenance::{Harness, PolicyId, Provenance};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

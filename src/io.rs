@@ -1,12 +1,123 @@
-//! The one way this crate writes a file: into a temporary file beside it,
-//! flushed to disk, renamed over the target, and the folder's entry flushed
-//! too. A reader sees the old file or the new one, never a part; after a
-//! crash or power loss the file is one of the two. A failed write leaves no
-//! temporary file behind.
+//! The one way this crate writes and reads a file.
+//!
+//! **Writing.** [`Output`] decides once, from what is at the path, how it is
+//! written:
+//! - nothing there yet, or a regular file: into a temporary file beside it,
+//!   flushed to disk, renamed over the target, and the folder's entry flushed
+//!   too. A reader sees the old file or the new one, never a part; after a
+//!   crash or power loss the file is one of the two; a failed write leaves no
+//!   temporary file behind. A symbolic link is followed (the file it points at
+//!   is replaced, the link stays), and the old file's permissions are kept;
+//! - a character device or a pipe (`/dev/null`, `/dev/stdout`, a FIFO that a
+//!   process reads): written in place, never renamed over, and nothing is
+//!   created beside it;
+//! - anything else is refused with the reason: a folder, a block device, a
+//!   socket, a read-only file (renaming over it would defeat its protection), a
+//!   link to nowhere, a FIFO nobody reads (the write would wait forever).
+//!
+//! **Reading.** [`read_text`] and [`read_bytes`] read an input whole, with a
+//! size bound, so that no input file can drive memory or an echoed excerpt
+//! without end, and refuse a folder, a device and a text with NUL bytes.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::fs::{File, Permissions};
+use std::io::{BufWriter, Read, Write};
+use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
+
+/// How an output path is written (see the module).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    /// Replaced through a temporary file beside `path` (the file a link points at),
+    /// with the permissions of the file it replaces.
+    File {
+        /// Where the file goes, symbolic links resolved.
+        path: PathBuf,
+        /// The replaced file's permissions.
+        permissions: Option<Permissions>,
+    },
+    /// Written in place: a character device or a pipe.
+    Stream,
+}
+
+/// An error saying why `_path` is refused ("it is a folder; ..."); the caller names the path.
+fn refuse(_path: &Path, why: &str) -> std::io::Error {
+    std::io::Error::other(format!("it {why}"))
+}
+
+/// How `path` would be written, or why it may not be.
+///
+/// # Errors
+/// What is at `path` is not ours to write (see the module), each with the fix.
+pub fn target(path: &Path) -> std::io::Result<Target> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            if !parent.is_dir() {
+                return Err(refuse(
+                    path,
+                    &format!("cannot be created: the folder {} does not exist (create it first)", parent.display()),
+                ));
+            }
+            return Ok(Target::File { path: path.to_owned(), permissions: None });
+        }
+        Err(e) => return Err(e),
+    };
+    if meta.file_type().is_symlink() {
+        return match std::fs::canonicalize(path) {
+            Ok(real) => match target(&real)? {
+                Target::File { permissions, .. } => Ok(Target::File { path: real, permissions }),
+                Target::Stream => Ok(Target::Stream),
+            },
+            Err(_) => Err(refuse(
+                path,
+                "is a symbolic link to a path that does not exist; remove the link or give another path",
+            )),
+        };
+    }
+    let t = meta.file_type();
+    if t.is_file() {
+        if meta.permissions().readonly() {
+            return Err(refuse(path, "is read-only; make it writable (chmod u+w) or give another path"));
+        }
+        Ok(Target::File { path: path.to_owned(), permissions: Some(meta.permissions()) })
+    } else if t.is_dir() {
+        Err(refuse(path, "is a folder; give a file path (for example a name inside it)"))
+    } else if t.is_char_device() || t.is_fifo() {
+        Ok(Target::Stream)
+    } else if t.is_block_device() {
+        Err(refuse(path, "is a block device; blockpuzzle writes only files, character devices and pipes"))
+    } else {
+        Err(refuse(path, "is a socket; blockpuzzle writes only files, character devices and pipes"))
+    }
+}
+
+/// Checks before any work is done that `path` can be written as [`Output`] would.
+///
+/// # Errors
+/// As [`target`], naming the path.
+pub fn check_output(path: &Path) -> anyhow::Result<()> {
+    target(path).map(drop).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
+}
+
+/// Opens a character device or a pipe for writing in place. A FIFO that no
+/// process holds open for reading is refused at once (the open would wait
+/// for one forever).
+fn open_stream(path: &Path) -> std::io::Result<File> {
+    let probe = std::fs::OpenOptions::new().write(true).custom_flags(libc::O_NONBLOCK).open(path);
+    match probe {
+        Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+            Err(refuse(path, "is a FIFO that no process reads; start its reader first (a write would wait forever)"))
+        }
+        Err(e) => Err(e),
+        // A reader holds it: the ordinary (blocking) open returns at once.
+        Ok(probe) => {
+            let file = std::fs::OpenOptions::new().write(true).open(path)?;
+            drop(probe);
+            Ok(file)
+        }
+    }
+}
 
 /// The temporary file for `path`: `.STEM.tmp-PID.EXT` in the same folder
 /// (the rename stays on one file system, two processes never share one, and
@@ -25,7 +136,7 @@ pub fn temp_path(path: &Path) -> PathBuf {
 ///
 /// # Errors
 /// The first I/O error (`tmp` is then removed).
-pub fn commit(tmp: &Path, path: &Path) -> std::io::Result<()> {
+fn commit(tmp: &Path, path: &Path) -> std::io::Result<()> {
     let result = (|| {
         File::open(tmp)?.sync_all()?;
         std::fs::rename(tmp, path)?;
@@ -49,40 +160,95 @@ fn sync_dir(path: &Path) -> std::io::Result<()> {
     }
 }
 
-/// Writes `path` atomically with `write`, which fills a buffered writer.
-///
-/// # Errors
-/// The first I/O error; `path` is then unchanged.
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let tmp = temp_path(path);
-    let result = (|| {
-        let mut f = BufWriter::new(File::create(&tmp)?);
-        write(&mut f)?;
-        f.flush()?;
+/// An output being written (see the module): bytes go through [`Write`], and
+/// [`Output::finish`] puts them in place. Dropped unfinished (an error), it
+/// leaves nothing behind: the temporary file is removed.
+#[derive(Debug)]
+pub struct Output {
+    target: Target,
+    /// The temporary file of a [`Target::File`], until it is committed.
+    tmp: Option<PathBuf>,
+    file: BufWriter<File>,
+}
+
+impl Output {
+    /// Opens `path` for writing (so an unwritable destination fails before any work).
+    ///
+    /// # Errors
+    /// As [`target`], or the OS's error creating the temporary file.
+    pub fn create(path: &Path) -> std::io::Result<Self> {
+        let target = target(path)?;
+        let (tmp, file) = match &target {
+            Target::File { path: real, .. } => {
+                let tmp = temp_path(real);
+                let file = File::create(&tmp)?;
+                (Some(tmp), file)
+            }
+            Target::Stream => (None, open_stream(path)?),
+        };
+        Ok(Self { target, tmp, file: BufWriter::new(file) })
+    }
+
+    /// Whether the output is written in place (a device or a pipe).
+    pub fn is_stream(&self) -> bool {
+        self.target == Target::Stream
+    }
+
+    /// Flushes and puts the output in place.
+    ///
+    /// # Errors
+    /// The first I/O error; a replaced file is then unchanged.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        self.file.flush()?;
+        if let (Target::File { path, permissions }, Some(tmp)) = (&self.target, self.tmp.take()) {
+            let kept = permissions.clone().map_or(Ok(()), |p| std::fs::set_permissions(&tmp, p));
+            if let Err(e) = kept {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(e);
+            }
+            commit(&tmp, path)?;
+        }
         Ok(())
-    })();
-    match result {
-        Ok(()) => commit(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
+    }
+}
+
+impl Write for Output {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.file.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl Drop for Output {
+    fn drop(&mut self) {
+        if let Some(tmp) = self.tmp.take() {
+            let _ = std::fs::remove_file(tmp);
         }
     }
 }
 
-/// Writes `bytes` to `path` atomically.
+/// Writes `path` with `write`, which fills the output (see the module).
+///
+/// # Errors
+/// The first I/O error; `path` is then unchanged (a device or pipe may hold a part).
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut Output) -> std::io::Result<()>) -> std::io::Result<()> {
+    let mut out = Output::create(path)?;
+    write(&mut out)?;
+    out.finish()
+}
+
+/// Writes `bytes` to `path` (see the module).
 ///
 /// # Errors
 /// I/O errors, naming the path.
 pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    use anyhow::Context;
-    write_atomic(path, |f| f.write_all(bytes)).with_context(|| format!("cannot write {}", path.display()))
+    write_atomic(path, |f| f.write_all(bytes)).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
 }
 
-/// Writes `value` to `path` atomically as pretty JSON.
+/// Writes `value` to `path` as pretty JSON (see the module).
 ///
 /// # Errors
 /// Encoding or I/O errors, naming the path.
@@ -90,22 +256,105 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<
     write_file(path, &serde_json::to_vec_pretty(value)?)
 }
 
-/// Writes `path` atomically through a library that writes to a path of its
-/// own choosing (images, plots, CSV): `write` gets the temporary path.
+/// Writes `path` through a library that writes to a path of its own
+/// choosing (images, plots, CSV): `write` gets a temporary path with
+/// `path`'s extension, beside `path` for a file and in the system's
+/// temporary folder for a device or pipe (whose bytes are then copied in).
 ///
 /// # Errors
 /// `write`'s error or an I/O error, naming `path`; `path` is then unchanged.
 pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
     use anyhow::Context;
-    let tmp = temp_path(path);
+    let name = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {}", path.display(), e);
+    let tmp = match target(path).map_err(name)? {
+        Target::File { path: real, .. } => temp_path(&real),
+        Target::Stream => {
+            let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
+            std::env::temp_dir().join(format!("blockpuzzle-{}-{}{ext}", std::process::id(), unique()))
+        }
+    };
     // Whether the folder takes a file at all, in the OS's words, before the
     // library tries and reports it in its own.
-    File::create(&tmp).with_context(|| format!("cannot write {}", path.display()))?;
-    let result = write(&tmp).and_then(|()| Ok(commit(&tmp, path)?));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
+    File::create(&tmp).map_err(name)?;
+    let result = write(&tmp).and_then(|()| {
+        let bytes = std::fs::read(&tmp)?;
+        Ok(write_atomic(path, |f| f.write_all(&bytes)).map_err(name)?)
+    });
+    let _ = std::fs::remove_file(&tmp);
     result.with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// A number no other call in this process gets.
+fn unique() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    NEXT.fetch_add(1, Ordering::Relaxed)
+}
+
+/// Reads `path` whole as bytes, refusing more than `max` bytes and anything
+/// that is not a regular file or a pipe; `what` names the input in messages
+/// ("suite file").
+///
+/// # Errors
+/// The OS's error, or the bound or kind refused, each naming the path.
+pub fn read_bytes(path: &Path, what: &str, max: u64) -> std::io::Result<Vec<u8>> {
+    let meta = std::fs::metadata(path)?;
+    let t = meta.file_type();
+    if t.is_dir() {
+        return Err(refuse(path, &format!("is a folder; give the {what} itself")));
+    }
+    if !(t.is_file() || t.is_fifo() || t.is_char_device()) {
+        return Err(refuse(path, &format!("is not a regular file; give the {what} itself")));
+    }
+    if t.is_file() && meta.len() > max {
+        return Err(refuse(path, &format!("is {}; a {what} is at most {}", size(meta.len()), size(max))));
+    }
+    // A pipe is opened without waiting for a writer, and read until every
+    // writer has closed it (none at all: it reads as empty).
+    let nonblock = if t.is_fifo() { libc::O_NONBLOCK } else { 0 };
+    let mut file = std::fs::OpenOptions::new().read(true).custom_flags(nonblock).open(path)?.take(max + 1);
+    let mut bytes = Vec::new();
+    loop {
+        match file.read_to_end(&mut bytes) {
+            Ok(_) => break,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    if bytes.len() as u64 > max {
+        return Err(refuse(path, &format!("holds more than {}; a {what} is at most that", size(max))));
+    }
+    Ok(bytes)
+}
+
+/// As [`read_bytes`], as UTF-8 text without NUL bytes.
+///
+/// # Errors
+/// As [`read_bytes`], or text that is not UTF-8 or holds a NUL byte.
+pub fn read_text(path: &Path, what: &str, max: u64) -> std::io::Result<String> {
+    let bytes = read_bytes(path, what, max)?;
+    if let Some(at) = bytes.iter().position(|&b| b == 0) {
+        return Err(refuse(path, &format!("is not a text file (a NUL byte at offset {at}); give the {what} itself")));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        refuse(
+            path,
+            &format!("is not UTF-8 text (byte offset {}); give the {what} itself", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
+/// `1.5 MB` for 1_500_000.
+fn size(bytes: u64) -> String {
+    match bytes {
+        b if b >= 1 << 30 => format!("{:.1} GiB", b as f64 / f64::from(1u32 << 30)),
+        b if b >= 1 << 20 => format!("{:.1} MiB", b as f64 / f64::from(1u32 << 20)),
+        b if b >= 1 << 10 => format!("{:.1} KiB", b as f64 / 1024.0),
+        b => format!("{b} bytes"),
+    }
 }
 
 /// A folder this process made (with the parents it lacked), removed again

@@ -164,6 +164,46 @@ pub const EPISODE_STEPS: Bound =
 /// Layout draws and whole resets tried before a reset gives up (task files).
 pub const PLACEMENT_ATTEMPTS: Bound = bound("placement attempts", 1, 100_000, "a reset must end");
 
+/// Input files are read whole, so each kind has a size bound (bytes) that a
+/// real file stays far below and that keeps memory and echoed excerpts small.
+/// Task files, suites, recipes: the largest built-in is about 4 KiB.
+pub const TEXT_FILE_BYTES: u64 = 4 << 20;
+/// Result files and zoo metadata: a suite result of 1,000 rows is about 2 MiB.
+pub const RESULT_FILE_BYTES: u64 = 64 << 20;
+/// Policy files and zoo tensors: a policy of 8 layers of 8,192 units (the
+/// `--hidden` and `--layers` bounds' corner) as JSON text is about 6 GiB, so
+/// this bounds memory, not what training can make; the zoo's largest is 2 MiB.
+pub const POLICY_FILE_BYTES: u64 = 2 << 30;
+/// Trajectory dumps: 10,000 episodes of 50 steps are about 1 GiB.
+pub const DUMP_FILE_BYTES: u64 = 4 << 30;
+
+/// The longest line of a message shown to a user: an excerpt of an input
+/// (a parser's echo of the offending line) is cut there.
+pub const MESSAGE_LINE_CHARS: usize = 2_000;
+
+/// `text` with every line longer than [`MESSAGE_LINE_CHARS`] cut short and
+/// saying how much was left out.
+pub fn cut_long_lines(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(64 << 10));
+    for (i, line) in text.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        match line.char_indices().nth(MESSAGE_LINE_CHARS) {
+            Some((at, _)) => {
+                out.push_str(&line[..at]);
+                out.push_str(&format!("… ({} more characters)", line[at..].chars().count()));
+            }
+            None => out.push_str(line),
+        }
+    }
+    out
+}
+
+/// The camera's distance from the point it looks at, metres (`--distance`).
+pub const CAMERA_DISTANCE_M: (f64, f64) = (0.1, 50.0);
+/// The camera's elevation, degrees (`--elevation`).
+pub const CAMERA_ELEVATION_DEG: (f64, f64) = (-90.0, 90.0);
 /// Object sizes in a task file: half extents in metres.
 pub const HALF_EXTENT_M: (f64, f64) = (0.001, 0.5);
 /// Object masses in a task file, kg.

@@ -1,4 +1,10 @@
 fn main() {
+    // A closed pipe ends the program quietly, as it does `cat` and `ls` (`blockpuzzle info | head -1`),
+    // rather than as a panic in the next `println!`: Rust starts programs with SIGPIPE ignored.
+    // SAFETY: restoring a signal's default disposition at startup, before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     blockpuzzle::blas::ensure_fast_kernels();
     if let Err(e) = blockpuzzle::cli::main() {
         eprintln!("error: {}", blockpuzzle::cli::error_text(&e));

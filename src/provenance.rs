@@ -65,8 +65,14 @@ impl Build {
 
     /// "MuJoCo M by blockpuzzle V (commit `C`)".
     pub fn describe(&self) -> String {
+        format!("MuJoCo {} by {}", self.mujoco, self.maker())
+    }
+
+    /// The package and commit alone, e.g. "blockpuzzle 0.9.0 (commit `abc`)", for a page whose
+    /// heading already names the engine.
+    pub fn maker(&self) -> String {
         let commit = self.commit.as_deref().map_or_else(String::new, |c| format!(" (commit `{c}`)"));
-        format!("MuJoCo {} by blockpuzzle {}{commit}", self.mujoco, self.blockpuzzle)
+        format!("blockpuzzle {}{commit}", self.blockpuzzle)
     }
 }
 
@@ -155,11 +161,8 @@ impl Provenance {
             Some(h) => format!("`{}` ({h})", self.policy.name),
             None => format!("`{}`", self.policy.name),
         };
-        let suite = self.suite.as_ref().map_or_else(String::new, |s| format!("; suite `{}` sha256 {}", s.name, s.sha256));
-        format!(
-            "Made on {}, harness {}; policy {policy}{suite}.",
-            self.build.describe(),
-            self.harness.name()
-        )
+        let suite =
+            self.suite.as_ref().map_or_else(String::new, |s| format!("; suite `{}` sha256 {}", s.name, s.sha256));
+        format!("Made on {}, harness {}; policy {policy}{suite}.", self.build.describe(), self.harness.name())
     }
 }

@@ -31,18 +31,16 @@ pub struct ResultFile {
 /// A missing, oversized or malformed file, a file that is not a suite
 /// result, or one written before results carried their provenance.
 pub fn read(path: &Path) -> Result<ResultFile> {
-    let meta = std::fs::metadata(path).with_context(|| format!("cannot read result file {}", path.display()))?;
-    if !meta.is_file() {
-        bail!("{} is not a file; give the JSON files written by `blockpuzzle eval --suite`", path.display());
-    }
-    if meta.len() > MAX_RESULT_BYTES {
-        bail!("{} is {} bytes, more than a suite result holds ({MAX_RESULT_BYTES})", path.display(), meta.len());
-    }
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read result file {}", path.display()))?;
+    let text =
+        crate::io::read_text(path, "suite result (the JSON written by `blockpuzzle eval --suite`)", MAX_RESULT_BYTES)
+            .with_context(|| format!("cannot read result file {}", path.display()))?;
     let value: serde_json::Value = serde_json::from_str(&text)
         .with_context(|| format!("{} is not JSON; give the JSON files written by `eval --suite`", path.display()))?;
     if value.get("splits").is_none() || value.get("suite").is_none() {
-        bail!("{} is not a suite result (no `suite` and `splits`); give files written by `eval --suite`", path.display());
+        bail!(
+            "{} is not a suite result (no `suite` and `splits`); give files written by `eval --suite`",
+            path.display()
+        );
     }
     if value.get("provenance").is_none() {
         bail!(
@@ -51,8 +49,8 @@ pub fn read(path: &Path) -> Result<ResultFile> {
             path.display()
         );
     }
-    let result: SuiteResult =
-        serde_json::from_value(value).with_context(|| format!("{} is not a well-formed suite result", path.display()))?;
+    let result: SuiteResult = serde_json::from_value(value)
+        .with_context(|| format!("{} is not a well-formed suite result", path.display()))?;
     if result.provenance.suite.as_ref() != Some(&result.suite) {
         bail!(
             "{}: its provenance names another suite than its `suite` field (an edited or damaged file); evaluate again",
@@ -285,9 +283,11 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
             let r = &same[0].result;
             let ci = score_interval(r).map_or_else(String::new, |(lo, hi)| format!(" [{lo:.3}, {hi:.3}]"));
             let train = r.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success);
-            let (done, all) = r.splits.iter().flat_map(|s| &s.rows).fold((0, 0), |(d, a), row| {
-                (d + usize::from(row.evaluation.is_some()), a + 1)
-            });
+            let (done, all) = r
+                .splits
+                .iter()
+                .flat_map(|s| &s.rows)
+                .fold((0, 0), |(d, a), row| (d + usize::from(row.evaluation.is_some()), a + 1));
             let mut harnesses: Vec<String> =
                 same.iter().map(|f| f.result.provenance.harness.name().to_owned()).collect();
             harnesses.dedup();
@@ -305,13 +305,7 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
             let files: Vec<String> = same.iter().map(|f| format!("`{}`", f.path.display())).collect();
             let p = &r.provenance;
             let hash = p.policy.sha256.as_deref().map_or_else(|| "a baseline".to_owned(), |h| format!("policy {h}"));
-            let commit = p.build.commit.as_deref().map_or_else(String::new, |c| format!(" (commit `{c}`)"));
-            notes.push(format!(
-                "[^{label}-{}]: {hash}; made by blockpuzzle {}{commit}; {}.",
-                rank + 1,
-                p.build.blockpuzzle,
-                files.join(", ")
-            ));
+            notes.push(format!("[^{label}-{}]: {hash}; made by {}; {}.", rank + 1, p.build.maker(), files.join(", ")));
         }
         md += "\n";
         for n in notes {

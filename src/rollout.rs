@@ -258,29 +258,26 @@ pub fn episode_digest(
     Ok(h.finalize().iter().map(|b| format!("{b:02x}")).collect())
 }
 
-/// A JSON Lines file written atomically: episodes go to a temporary file
-/// next to `path`, renamed onto `path` by [`DumpWriter::finish`]. If the
+/// A JSON Lines file written as [`crate::io::Output`] writes: episodes go to
+/// a temporary file next to `path`, renamed onto `path` by
+/// [`DumpWriter::finish`] (a device or pipe is written in place). If the
 /// writer is dropped unfinished (an error), the temporary file is removed
 /// and nothing is left at `path`.
 pub struct DumpWriter {
     path: PathBuf,
-    tmp: PathBuf,
-    file: Option<std::io::BufWriter<std::fs::File>>,
+    out: crate::io::Output,
 }
 
 impl DumpWriter {
-    /// Opens the temporary file (so an unwritable destination fails before any work).
+    /// Opens the output (so an unwritable destination fails before any work).
     ///
     /// # Errors
-    /// [`RolloutError::Io`] if the folder does not exist or is not writable.
+    /// [`RolloutError::Io`] if the folder does not exist, is not writable or
+    /// `path` is not ours to write (a folder, a read-only file, ...).
     pub fn create(path: &Path) -> Result<Self, RolloutError> {
-        let tmp = crate::io::temp_path(path);
-        let io = |source| RolloutError::Io { path: path.to_owned(), source };
-        if path.is_dir() {
-            return Err(io(std::io::Error::other("it is a directory")));
-        }
-        let file = std::fs::File::create(&tmp).map_err(io)?;
-        Ok(Self { path: path.to_owned(), tmp, file: Some(std::io::BufWriter::new(file)) })
+        let out =
+            crate::io::Output::create(path).map_err(|source| RolloutError::Io { path: path.to_owned(), source })?;
+        Ok(Self { path: path.to_owned(), out })
     }
 
     /// Appends one episode as a line.
@@ -288,40 +285,19 @@ impl DumpWriter {
     /// # Errors
     /// [`RolloutError::Io`] / [`RolloutError::Json`].
     pub fn write(&mut self, ep: &EpisodeRecord) -> Result<(), RolloutError> {
-        let path = self.path.clone();
-        let f = self.file.as_mut().ok_or_else(|| RolloutError::Io {
-            path: path.clone(),
-            source: std::io::Error::other("writer already finished"),
-        })?;
         // Encoded first, so that a failed write is reported as one (naming the file).
         let mut line = serde_json::to_vec(ep)?;
         line.push(b'\n');
-        f.write_all(&line).map_err(|source| RolloutError::Io { path, source })
+        self.out.write_all(&line).map_err(|source| RolloutError::Io { path: self.path.clone(), source })
     }
 
     /// Flushes and moves the file into place.
     ///
     /// # Errors
     /// [`RolloutError::Io`].
-    pub fn finish(mut self) -> Result<(), RolloutError> {
-        let path = self.path.clone();
-        let io = |source| RolloutError::Io { path: path.clone(), source };
-        let Some(f) = self.file.as_mut() else {
-            return Err(io(std::io::Error::other("writer already finished")));
-        };
-        f.flush().map_err(io)?;
-        crate::io::commit(&self.tmp, &self.path).map_err(io)?;
-        self.file = None; // in place: nothing for Drop to clean up
-        Ok(())
-    }
-}
-
-impl Drop for DumpWriter {
-    fn drop(&mut self) {
-        if self.file.is_some() {
-            self.file = None;
-            let _ = std::fs::remove_file(&self.tmp);
-        }
+    pub fn finish(self) -> Result<(), RolloutError> {
+        let path = self.path;
+        self.out.finish().map_err(|source| RolloutError::Io { path, source })
     }
 }
 
@@ -330,7 +306,8 @@ impl Drop for DumpWriter {
 /// # Errors
 /// [`RolloutError::Read`], or [`RolloutError::Decode`] naming the file and the bad line.
 pub fn read_dump(path: &Path) -> Result<Vec<EpisodeRecord>, RolloutError> {
-    let text = std::fs::read_to_string(path).map_err(|source| RolloutError::Read { path: path.to_owned(), source })?;
+    let text = crate::io::read_text(path, "trajectory dump", crate::limits::DUMP_FILE_BYTES)
+        .map_err(|source| RolloutError::Read { path: path.to_owned(), source })?;
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())

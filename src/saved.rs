@@ -73,7 +73,7 @@ impl SavedPolicy {
 /// # Errors
 /// A missing, malformed or damaged file, named.
 pub fn read(file: &Path) -> Result<SavedPolicy> {
-    let text = std::fs::read_to_string(file)
+    let text = crate::io::read_text(file, "policy file", crate::limits::POLICY_FILE_BYTES)
         .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
     let saved: SavedPolicy =
         serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;

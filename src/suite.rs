@@ -138,8 +138,8 @@ pub fn load(name_or_path: &str) -> Result<Suite, SuiteError> {
     }
     let path = Path::new(name_or_path);
     if path.extension().is_some_and(|e| e == "toml") || path.exists() {
-        let text =
-            std::fs::read_to_string(path).map_err(|source| SuiteError::Read { path: path.to_owned(), source })?;
+        let text = crate::io::read_text(path, "suite file", crate::limits::TEXT_FILE_BYTES)
+            .map_err(|source| SuiteError::Read { path: path.to_owned(), source })?;
         return parse(&text, &path.display().to_string(), path.parent());
     }
     Err(SuiteError::Unknown {
@@ -160,8 +160,13 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
     if spec.version != SUITE_VERSION {
         return Err(invalid(format!("version {} is not one this build reads ({SUITE_VERSION})", spec.version)));
     }
-    if spec.name.trim().is_empty() {
-        return Err(invalid("the name is empty".into()));
+    let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
+    if spec.name.is_empty() || spec.name.len() > 64 || spec.name.starts_with('.') || !spec.name.chars().all(plain) {
+        return Err(invalid(format!(
+            "name {:?}: a suite's name goes into file names, so it is 1 to 64 letters, digits, '-', '_' or '.' \
+             (not first); for example \"my-suite\"",
+            crate::limits::cut_long_lines(&spec.name)
+        )));
     }
     for required in ["train", "test"] {
         if !spec.splits.contains_key(required) {
@@ -184,6 +189,7 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
         splits.push(Split { name: name.clone(), rows });
     }
     check_disjoint(&splits).map_err(invalid)?;
+    check_no_repeats(&splits).map_err(invalid)?;
     Ok(Suite { name: spec.name, summary: spec.summary, sha256: hex(&Sha256::digest(text.as_bytes())), splits })
 }
 
@@ -232,6 +238,35 @@ fn check_disjoint(splits: &[Split]) -> Result<(), String> {
                      train and test seeds must be disjoint",
                     a.seed, b.seed
                 ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// No two rows of a split may play the same episodes (the same task content,
+/// distribution and level with overlapping seeds): the mean would count
+/// them twice.
+fn check_no_repeats(splits: &[Split]) -> Result<(), String> {
+    for split in splits {
+        for (i, a) in split.rows.iter().enumerate() {
+            for (j, b) in split.rows.iter().enumerate().skip(i + 1) {
+                let same = a.task.source.hash == b.task.source.hash
+                    && a.distribution == b.distribution
+                    && a.level.unwrap_or(a.task.max_level()) == b.level.unwrap_or(b.task.max_level());
+                let (a_end, b_end) =
+                    (a.seed.saturating_add(a.episodes as u64), b.seed.saturating_add(b.episodes as u64));
+                if same && a.seed < b_end && b.seed < a_end {
+                    return Err(format!(
+                        "splits.{0}[{i}] and splits.{0}[{j}] play the same episodes ({1}, {2}, seeds {3}..{a_end} \
+                         and {4}..{b_end}), which the mean would count twice; remove one or give it other seeds",
+                        split.name,
+                        a.task.id(),
+                        a.distribution_label(),
+                        a.seed,
+                        b.seed
+                    ));
+                }
             }
         }
     }

@@ -32,6 +32,7 @@ use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use serde::{Deserialize, Serialize};
 
 use std::collections::HashMap;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -56,6 +57,9 @@ pub enum ZooError {
     /// Export would replace an entry.
     #[error("the zoo already has an entry {path}; pass --force to replace it, or choose another --name")]
     Exists { path: PathBuf },
+    /// A name that cannot be an entry's.
+    #[error("--name {name:?}: an entry's name is letters, digits, '-' and '_' (it becomes NAME.safetensors and NAME.json in the zoo folder)")]
+    BadName { name: String },
     /// The zoo path is a file.
     #[error("the zoo {zoo} is a file; give a folder (it is created if missing)")]
     NotAFolder { zoo: PathBuf },
@@ -335,7 +339,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
     // No dots: a bare name without an extension is what `load_policy` looks up in the zoo.
     if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)) {
-        return Err(corrupt(format!("name {:?}: use letters, digits, '-' and '_'", info.name)));
+        return Err(ZooError::BadName { name: crate::limits::cut_long_lines(&info.name) });
     }
     entry_free(zoo, &info.name, info.overwrite)?;
     saved.check().map_err(&corrupt)?;
@@ -396,10 +400,18 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     if zoo.exists() && !zoo.is_dir() {
         return Err(ZooError::NotAFolder { zoo: zoo.to_owned() });
     }
-    std::fs::create_dir_all(zoo).map_err(io(zoo))?;
-    crate::io::write_file(&tensors_path, &bytes).map_err(|e| corrupt(format!("{e:#}")))?;
     let json = serde_json::to_vec_pretty(&meta).map_err(|e| corrupt(e.to_string()))?;
-    crate::io::write_file(&tensors_path.with_extension("json"), &json).map_err(|e| corrupt(format!("{e:#}")))?;
+    let json_path = tensors_path.with_extension("json");
+    // A folder made here goes again if the export fails (a full disk leaves nothing behind), and
+    // both files are written in full before either is put in place.
+    let created = crate::io::CreatedDir::create(zoo).map_err(io(zoo))?;
+    let mut tensors_out = crate::io::Output::create(&tensors_path).map_err(io(&tensors_path))?;
+    tensors_out.write_all(&bytes).and_then(|()| tensors_out.flush()).map_err(io(&tensors_path))?;
+    let mut json_out = crate::io::Output::create(&json_path).map_err(io(&json_path))?;
+    json_out.write_all(&json).and_then(|()| json_out.flush()).map_err(io(&json_path))?;
+    tensors_out.finish().map_err(io(&tensors_path))?;
+    json_out.finish().map_err(io(&json_path))?;
+    created.keep();
     Ok(tensors_path)
 }
 
@@ -436,7 +448,8 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
         };
         // The same numbers: the same success rate, and the same outcome counts where the record has them
         // (format 1 entries do not).
-        let agrees = |r: &ZooEvaluation| r.success_rate == e.success_rate && (r.outcomes.is_none() || r.outcomes == e.outcomes);
+        let agrees =
+            |r: &ZooEvaluation| r.success_rate == e.success_rate && (r.outcomes.is_none() || r.outcomes == e.outcomes);
         let before = meta.evaluations.len();
         meta.evaluations.retain(|r| !(unlabelled(r) && agrees(r)));
         let confirmed = meta.evaluations.len() < before;
@@ -468,7 +481,8 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
 /// A missing or malformed file.
 pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
     let json_path = path.with_extension("json");
-    let text = std::fs::read_to_string(&json_path).map_err(io(&json_path))?;
+    let text =
+        crate::io::read_text(&json_path, "zoo entry", crate::limits::RESULT_FILE_BYTES).map_err(io(&json_path))?;
     let meta: ZooMeta = serde_json::from_str(&text)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("bad metadata: {e}") })?;
     if !READS.contains(&meta.format.as_str()) {
@@ -494,7 +508,8 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
     meta.task.compile().map_err(|e| ZooError::Corrupt { path: path.with_extension("json"), reason: e.to_string() })?;
     let tensors_path = path.with_extension("safetensors");
-    let bytes = std::fs::read(&tensors_path).map_err(io(&tensors_path))?;
+    let bytes = crate::io::read_bytes(&tensors_path, "zoo tensor file", crate::limits::POLICY_FILE_BYTES)
+        .map_err(io(&tensors_path))?;
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
     if crate::provenance::sha256(&bytes) != meta.tensors_sha256 {
         return Err(corrupt(format!(

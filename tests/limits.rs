@@ -309,6 +309,20 @@ fn a_weight_out_of_range_is_named_by_its_element() {
     refused(&o, &["holds inf (element 0)"]);
 }
 
+/// A dump of one random episode on BlocksTouch-v0, `d.jsonl` in `dir`.
+fn random_dump(dir: &Path) -> PathBuf {
+    let dump = dir.join("d.jsonl");
+    let o = bp_in(
+        dir,
+        &["rollout", "--env", "BlocksTouch-v0", "--policy", "random", "--episodes", "1", "--out"]
+            .into_iter()
+            .chain([dump.to_str().unwrap()])
+            .collect::<Vec<_>>(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    dump
+}
+
 /// Runs `script` (sh) in a private mount namespace with a small tmpfs at
 /// `$M` (`opts` its mount options), so that full and read-only disks can be
 /// made without touching the machine; None where this process may not mount
@@ -330,34 +344,21 @@ fn on_small_fs(opts: &str, script: &str) -> Option<Output> {
 #[test]
 fn a_full_or_read_only_disk_fails_cleanly_naming_the_path() {
     let dir = tempfile::tempdir().unwrap();
-    let dump = dir.path().join("d.jsonl");
-    let o = bp_in(
-        dir.path(),
-        &[
-            "rollout",
-            "--env",
-            "BlocksTouch-v0",
-            "--policy",
-            "random",
-            "--episodes",
-            "1",
-            "--out",
-            dump.to_str().unwrap(),
-        ],
-    );
-    assert!(o.status.success(), "{}", text(&o));
+    let dump = random_dump(dir.path());
     let run = tiny_run(dir.path(), "run");
     let script = format!(
         "$BP render --traj {} --width 200 --height 200 --out $M/frames/; echo rc=$?; \
          $BP rollout --env BlocksTouch-v0 --policy random --episodes 20 --out $M/x.jsonl; echo rc=$?; \
          dd if=/dev/zero of=$M/fill bs=4k 2>/dev/null; \
          $BP train --env BlocksTouch-v0 --epochs 1 --cycles 1 --batches 1 --test-episodes 1 --workers 1 --run-dir $M/run; \
-         echo rc=$?; rm $M/fill; echo left: $(ls -A $M)",
+         echo rc=$?; \
+         $BP zoo export --from BlocksTouch-v0-ddpg --name n --description d --trained-with t --zoo $M/z; echo rc=$?; \
+         rm $M/fill; echo left: $(ls -A $M)",
         dump.display()
     );
     let Some(o) = on_small_fs("size=200k", &script) else { return };
     let t = text(&o);
-    assert_eq!(t.matches("rc=1").count(), 3, "{t}");
+    assert_eq!(t.matches("rc=1").count(), 4, "{t}");
     assert!(t.contains("frames") && t.contains("No space left on device"), "{t}");
     assert!(t.contains("cannot write trajectory dump") && t.contains("x.jsonl: No space left on device"), "{t}");
     let last = String::from_utf8_lossy(&o.stdout).lines().last().map(str::to_owned);
@@ -385,4 +386,390 @@ fn long_commands_show_progress_on_a_terminal() {
     let o = on_tty(&format!("eval --checkpoint BlocksTouch-v0-ddpg --episodes 3 --threads 1 --out {}", out.display()))
         .unwrap();
     assert!(text(&o).contains("episode 1/3") || text(&o).contains("episode 0/3"), "{}", text(&o));
+}
+
+/// A one-episode-a-split suite file in `dir`.
+fn tiny_suite(dir: &Path) -> PathBuf {
+    let path = dir.join("tiny-suite.toml");
+    let text = "version = 1\nname = \"tiny\"\nsummary = \"one episode a split\"\n\
+                [[splits.train]]\ntask = \"BlocksTouch-v0\"\nseed = 0\nepisodes = 1\n\
+                [[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 100\nepisodes = 1\n";
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Every command that writes a file, with `T` where its output path goes
+/// (`T` has the extension the command needs), run in a folder holding the
+/// inputs it reads.
+fn writers(inputs: &Path) -> Vec<(&'static str, Vec<String>)> {
+    let i = |name: &str| inputs.join(name).display().to_string();
+    let words = |s: &str| s.split(' ').map(str::to_owned).collect::<Vec<_>>();
+    vec![
+        ("json", words("eval --checkpoint BlocksTouch-v0-ddpg --episodes 1 --threads 1 --out T")),
+        ("json", [words("eval --baseline scripted --threads 1 --out T --suite"), vec![i("tiny-suite.toml")]].concat()),
+        ("md", words("table --episodes 1 --threads 1 --out T")),
+        ("jsonl", words("rollout --env BlocksTouch-v0 --policy random --episodes 1 --out T")),
+        ("gif", [words("render --width 64 --height 64 --out T --traj"), vec![i("d.jsonl")]].concat()),
+        ("png", [words("render --width 64 --height 64 --filmstrip 2 --out T --traj"), vec![i("d.jsonl")]].concat()),
+        ("png", words("task check BlocksTouch-v0 --samples 1 --width 64 --height 64 --render T")),
+        ("png", [words("plot --out T --overlay"), vec![i("log.csv")]].concat()),
+        ("md", [words("results leaderboard --out T"), vec![i("result.json")]].concat()),
+    ]
+}
+
+/// The inputs [`writers`] read.
+fn writer_inputs(dir: &Path) {
+    tiny_suite(dir);
+    std::fs::write(dir.join("log.csv"), "epoch,time/env_steps,finals/success\n1,100,0.5\n2,200,0.75\n").unwrap();
+    random_dump(dir);
+    let suite = dir.join("tiny-suite.toml");
+    let result = dir.join("result.json");
+    let o = bp_in(
+        dir,
+        &[
+            "eval",
+            "--baseline",
+            "scripted",
+            "--threads",
+            "1",
+            "--suite",
+            suite.to_str().unwrap(),
+            "--out",
+            result.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+/// `args` with `T` replaced by `target`.
+fn with_target(args: &[String], target: &Path) -> Vec<String> {
+    args.iter().map(|a| if a == "T" { target.display().to_string() } else { a.clone() }).collect()
+}
+
+fn run_args(cwd: &Path, args: &[String]) -> Output {
+    Command::new(BP).current_dir(cwd).args(args).output().expect("run blockpuzzle")
+}
+
+#[test]
+fn no_writer_replaces_or_leaves_anything_beside_what_is_not_a_regular_file() {
+    use std::os::unix::fs::FileTypeExt;
+    let inputs = tempfile::tempdir().unwrap();
+    writer_inputs(inputs.path());
+    let mkfifo = |p: &Path| assert!(Command::new("mkfifo").arg(p).status().unwrap().success());
+    // Character devices of our own (null and full, with the extension each command wants) where this
+    // process may make them (root).
+    let mknod = |dir: &Path, name: &str, minor: &str| {
+        let p = dir.join(name);
+        let made = Command::new("mknod").args([p.to_str().unwrap(), "c", "1", minor]).output();
+        made.is_ok_and(|o| o.status.success()).then_some(p)
+    };
+    let probe = tempfile::tempdir().unwrap();
+    let devices = mknod(probe.path(), "probe", "3").is_some();
+    if !devices {
+        eprintln!("skipped: the character-device targets (this process may not make devices: not root)");
+    }
+    // One thread per command (each runs its cases in order; the commands are independent).
+    std::thread::scope(|scope| {
+        for (k, (ext, args)) in writers(inputs.path()).into_iter().enumerate() {
+            let (mknod, mkfifo) = (&mknod, &mkfifo);
+            scope.spawn(move || {
+                let what = args[..2].join(" ");
+                let dir = tempfile::tempdir().unwrap();
+                let dev = tempfile::tempdir().unwrap();
+                // A FIFO nobody reads: refused at once (a write would wait forever), still a FIFO.
+                let fifo = dir.path().join(format!("fifo.{ext}"));
+                mkfifo(&fifo);
+                let o = run_args(dir.path(), &with_target(&args, &fifo));
+                refused(&o, &[fifo.to_str().unwrap(), "FIFO that no process reads"]);
+                assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "{what}: the FIFO stays");
+                // A folder, and a read-only file: refused, both as they were.
+                let folder = dir.path().join(format!("folder.{ext}"));
+                std::fs::create_dir(&folder).unwrap();
+                let o = run_args(dir.path(), &with_target(&args, &folder));
+                refused(&o, &[folder.to_str().unwrap(), "is a folder"]);
+                assert!(folder.is_dir() && entries(&folder).is_empty(), "{what}");
+                let locked = dir.path().join(format!("locked.{ext}"));
+                std::fs::write(&locked, "mine").unwrap();
+                let mut perms = std::fs::metadata(&locked).unwrap().permissions();
+                perms.set_readonly(true);
+                std::fs::set_permissions(&locked, perms).unwrap();
+                let o = run_args(dir.path(), &with_target(&args, &locked));
+                refused(&o, &[locked.to_str().unwrap(), "read-only"]);
+                assert_eq!(std::fs::read_to_string(&locked).unwrap(), "mine", "{what}");
+                assert_eq!(
+                    entries(dir.path()),
+                    [format!("fifo.{ext}"), format!("folder.{ext}"), format!("locked.{ext}")],
+                    "{what}: nothing left beside the targets"
+                );
+                if devices {
+                    // A full device: the OS's words with the path, and the device stays.
+                    let full = mknod(dev.path(), &format!("full.{ext}"), "7").unwrap();
+                    let o = run_args(dir.path(), &with_target(&args, &full));
+                    refused(&o, &[full.to_str().unwrap(), "No space left on device"]);
+                    assert!(std::fs::symlink_metadata(&full).unwrap().file_type().is_char_device(), "{what}");
+                    // A device is written in place: it stays one, and nothing appears beside it (no companion file).
+                    let null = mknod(dev.path(), &format!("null.{ext}"), "3").unwrap();
+                    let o = run_args(dir.path(), &with_target(&args, &null));
+                    assert!(o.status.success(), "{what}: {}", text(&o));
+                    assert!(std::fs::symlink_metadata(&null).unwrap().file_type().is_char_device(), "{what}: a device");
+                    assert_eq!(entries(dev.path()), [format!("full.{ext}"), format!("null.{ext}")], "{what}");
+                    std::fs::remove_file(full).unwrap();
+                    std::fs::remove_file(null).unwrap();
+                }
+                // A FIFO a process reads gets the whole output: one writer of each kind (the JSON writer, the
+                // streamed dump, a file an encoder writes by path), to keep the test short.
+                if ![0, 3, 4].contains(&k) {
+                    return;
+                }
+                let read = dir.path().join(format!("read.{ext}"));
+                mkfifo(&read);
+                let captured = dev.path().join("captured");
+                let sink = std::fs::File::create(&captured).unwrap();
+                let mut reader = Command::new("cat").arg(&read).stdout(sink).spawn().unwrap();
+                std::thread::sleep(std::time::Duration::from_millis(200));
+                let o = run_args(dir.path(), &with_target(&args, &read));
+                if !o.status.success() {
+                    // Nothing opened the FIFO: open it once so that the reader ends.
+                    drop(std::fs::OpenOptions::new().write(true).open(&read));
+                }
+                reader.wait().unwrap();
+                assert!(o.status.success(), "{what}: {}", text(&o));
+                assert!(std::fs::metadata(&captured).unwrap().len() > 0, "{what}: the reader got the output");
+                assert!(std::fs::symlink_metadata(&read).unwrap().file_type().is_fifo(), "{what}: the FIFO stays");
+            });
+        }
+    });
+}
+
+#[test]
+fn options_a_run_would_ignore_are_refused_from_flags_recipes_and_bench() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--algo", "sac", "--noise-eps", "0.1"], &["--noise-eps is only used with --algo ddpg", "SAC"]),
+        (&["--target-noise", "0.3"], &["--target-noise is only used with --algo ddpg --td3"]),
+        (&["--algo", "pggd", "--beta0", "0.5"], &["--beta0 is only used with --expert"]),
+        (&["--set-pooling", "attention"], &["--set-pooling is only used with --net set"]),
+        (&["--hindsight-strategy", "pairs"], &["--hindsight-strategy is only used with --hindsight-colours"]),
+        (&["--pg-lr", "0.01"], &["--pg-lr is only used with --algo pggd"]),
+        (&["--algo", "pggd", "--lr-critic", "0.01"], &["--lr-critic is only used with --algo ddpg or --algo sac"]),
+    ];
+    for (extra, wanted) in cases {
+        let o = bp_in(dir.path(), &tiny_args(&run, "1", extra));
+        refused(&o, wanted);
+        assert!(!run.exists(), "{extra:?}: nothing created");
+    }
+    // The same rule for a recipe, and several settings named at once.
+    let recipe = dir.path().join("r.toml");
+    std::fs::write(&recipe, "env = \"BlocksTouch-v0\"\nalgo = \"sac\"\nrandom-eps = 0.5\npolicy-delay = 3\n").unwrap();
+    let o = bp_in(dir.path(), &["train", "--config", recipe.to_str().unwrap(), "--run-dir", run.to_str().unwrap()]);
+    refused(&o, &["would ignore", "--random-eps", "--policy-delay"]);
+    // A recipe's value of the wrong kind names the key and the file.
+    std::fs::write(&recipe, "env = \"BlocksTouch-v0\"\ntd3 = \"yes\"\n").unwrap();
+    let o = bp_in(dir.path(), &["train", "--config", recipe.to_str().unwrap()]);
+    refused(&o, &["r.toml", "`td3` is a switch", "td3 = true or false"]);
+    std::fs::write(&recipe, "env = \"BlocksTouch-v0\"\nepochs = true\n").unwrap();
+    let o = bp_in(dir.path(), &["train", "--config", recipe.to_str().unwrap()]);
+    refused(&o, &["r.toml", "`epochs` takes a value"]);
+    // bench --ddpg goes by the same table.
+    let o = bp_in(dir.path(), &["bench", "--ddpg", "--set-pooling", "attention", "--steps", "10", "--updates", "1"]);
+    refused(&o, &["--set-pooling is only used with --net set"]);
+    let o = bp_in(dir.path(), &["bench", "--ddpg", "--algo", "pggd", "--precision", "bf16", "--steps", "10"]);
+    refused(&o, &["--precision is only used with --algo ddpg or --algo sac"]);
+}
+
+#[test]
+fn cameras_that_show_nothing_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.gif");
+    let dump = dir.path().join("d.jsonl");
+    for (flag, value, wanted) in [
+        ("--distance", "NaN", "--distance NaN"),
+        ("--distance", "0", "--distance 0"),
+        ("--distance", "-1", "--distance -1"),
+        ("--distance", "inf", "--distance inf"),
+        ("--elevation", "100", "--elevation 100"),
+        ("--azimuth", "NaN", "--azimuth NaN"),
+    ] {
+        let render = ["render", "--policy", "BlocksTouch-v0-ddpg", "--out", out.to_str().unwrap(), flag, value];
+        refused(&bp_in(dir.path(), &render), &[wanted]);
+        let rollout = [
+            "rollout",
+            "--env",
+            "BlocksTouch-v0",
+            "--policy",
+            "random",
+            "--episodes",
+            "1",
+            "--out",
+            dump.to_str().unwrap(),
+            "--render",
+            out.to_str().unwrap(),
+            flag,
+            value,
+        ];
+        refused(&bp_in(dir.path(), &rollout), &[wanted]);
+        let check = ["task", "check", "BlocksTouch-v0", "--samples", "1", "--render", "x.png", flag, value];
+        refused(&bp_in(dir.path(), &check), &[wanted]);
+        assert!(entries(dir.path()).is_empty(), "{flag} {value}: nothing written, no episode played");
+    }
+}
+
+#[test]
+fn an_edited_trajectory_dump_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = random_dump(dir.path());
+    let line = std::fs::read_to_string(&dump).unwrap();
+    let render = |d: &Path| {
+        bp_in(
+            dir.path(),
+            &["render", "--traj", d.to_str().unwrap(), "--out", "x.gif", "--width", "64", "--height", "64"],
+        )
+    };
+    let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
+        f(&mut v);
+        let d = dir.path().join("edited.jsonl");
+        std::fs::write(&d, serde_json::to_string(&v).unwrap()).unwrap();
+        d
+    };
+    // The task's text edited, its hash left as it was.
+    let d = edit(&|v| {
+        let toml = v["task"]["toml"].as_str().unwrap().replace("max_episode_steps = 50", "max_episode_steps = 40");
+        v["task"]["toml"] = toml.into();
+    });
+    refused(&render(&d), &["its text is not the task its hash"]);
+    // The rule objects edited.
+    let d = edit(&|v| v["objects"][2]["name"] = "purple".into());
+    refused(&render(&d), &["not its task's rule objects", "edited"]);
+    // A position edited to a non-number (JSON has no NaN: null reads as an error too).
+    let d = edit(&|v| v["initial"]["qpos"][0] = 1e300.into());
+    let o = render(&d);
+    assert!(o.status.success() || !text(&o).contains("panicked"), "{}", text(&o));
+    assert!(!dir.path().join("x.gif").exists() || o.status.success());
+}
+
+#[test]
+fn odd_logs_suites_and_entries_are_named_not_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A progress log that is a folder, has only its header, or holds a success that is not a rate.
+    let run = tiny_run(d, "run");
+    let progress = run.join("progress.csv");
+    let good = std::fs::read_to_string(&progress).unwrap();
+    let header = good.lines().next().unwrap().to_owned();
+    std::fs::write(&progress, format!("{header}\n")).unwrap();
+    refused(&bp_in(d, &["report", run.to_str().unwrap()]), &["progress.csv has no rows"]);
+    let nan = good.lines().enumerate().map(|(i, l)| {
+        if i == 1 {
+            let cols: Vec<&str> = header.split(',').collect();
+            let k = cols.iter().position(|c| *c == "finals/success").unwrap();
+            l.split(',').enumerate().map(|(j, v)| if j == k { "NaN" } else { v }).collect::<Vec<_>>().join(",")
+        } else {
+            l.to_owned()
+        }
+    });
+    std::fs::write(&progress, nan.collect::<Vec<_>>().join("\n")).unwrap();
+    refused(&bp_in(d, &["report", run.to_str().unwrap()]), &["finals/success is NaN, not a rate"]);
+    std::fs::remove_file(&progress).unwrap();
+    std::fs::create_dir(&progress).unwrap();
+    refused(&bp_in(d, &["plot", "--run-dir", run.to_str().unwrap()]), &["progress.csv", "is a folder"]);
+    // plot --overlay given a JSON file, or an output that is not a PNG.
+    let json = d.join("r.json");
+    std::fs::write(&json, "{\"a\": 1}\n").unwrap();
+    refused(&bp_in(d, &["plot", "--overlay", json.to_str().unwrap(), "--out", "o.png"]), &["r.json has no rows"]);
+    refused(&bp_in(d, &["plot", "--overlay", json.to_str().unwrap(), "--out", "o.jpg"]), &["o.jpg: plots are PNG"]);
+    // Suites: a name that cannot be a file name, and rows that play the same episodes twice.
+    let suite = tiny_suite(d);
+    let text_of = std::fs::read_to_string(&suite).unwrap();
+    std::fs::write(&suite, text_of.replace("name = \"tiny\"", "name = \"a/b\"")).unwrap();
+    let eval = ["eval", "--baseline", "scripted", "--suite", suite.to_str().unwrap()];
+    refused(&bp_in(d, &eval), &["name \"a/b\"", "goes into file names"]);
+    let twice = format!("{text_of}[[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 100\nepisodes = 1\n");
+    std::fs::write(&suite, twice).unwrap();
+    refused(&bp_in(d, &eval), &["splits.test[0] and splits.test[1] play the same episodes"]);
+    // A task file's fixed-length list with an element too many.
+    let task = d.join("t.toml");
+    let builtin = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tasks/BlocksAvoid-v0.toml")).unwrap();
+    std::fs::write(&task, builtin.replace("count = [1, 3]", "count = [1, 3, 9]")).unwrap();
+    refused(&bp_in(d, &["task", "check", task.to_str().unwrap()]), &["t.toml", "expected a list of exactly 2"]);
+    // A zoo entry whose set layout holds a field no network has.
+    let zoo = d.join("zoo");
+    std::fs::create_dir(&zoo).unwrap();
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/zoo/BlocksChoose-v0-ddpg-set");
+    std::fs::copy(format!("{src}.safetensors"), zoo.join("s.safetensors")).unwrap();
+    let meta = std::fs::read_to_string(format!("{src}.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    v["actor"]["set"]["pooling"] = "max".into();
+    std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    refused(&bp_in(d, &["zoo", "check", "--zoo", zoo.to_str().unwrap()]), &["s.json", "unknown field `pooling`"]);
+}
+
+#[test]
+fn huge_or_binary_inputs_are_refused_by_size_and_kind_with_short_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Sparse files: large to the reader, no disk used.
+    let big = d.join("big.toml");
+    std::fs::File::create(&big).unwrap().set_len(1 << 30).unwrap();
+    for args in [
+        vec!["eval", "--baseline", "scripted", "--suite", big.to_str().unwrap()],
+        vec!["task", "check", big.to_str().unwrap()],
+        vec!["train", "--config", big.to_str().unwrap()],
+        vec!["results", "compare", big.to_str().unwrap(), big.to_str().unwrap()],
+    ] {
+        let o = bp_in(d, &args);
+        refused(&o, &["big.toml", "1.0 GiB"]);
+        assert!(text(&o).len() < 2_000, "{args:?}: a short message: {}", text(&o).len());
+    }
+    // NUL bytes within the bound: not text.
+    let nul = d.join("nul.toml");
+    std::fs::write(&nul, vec![0u8; 1000]).unwrap();
+    refused(&bp_in(d, &["task", "check", nul.to_str().unwrap()]), &["not a text file (a NUL byte at offset 0)"]);
+    // One long line within the bound: the parser's excerpt is cut short.
+    let long = d.join("long.toml");
+    std::fs::write(&long, "a".repeat(3_000_000)).unwrap();
+    let o = bp_in(d, &["eval", "--baseline", "scripted", "--suite", long.to_str().unwrap()]);
+    refused(&o, &["more characters)"]);
+    assert!(text(&o).len() < 5_000, "{}", text(&o).len());
+}
+
+#[test]
+fn messages_name_the_setting_and_exports_leave_nothing_half_made() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A resume that changes --counts names --counts (not its entries).
+    let run = d.join("run");
+    let touch = |extra: &[&str]| {
+        let mut a = vec![
+            "train",
+            "--env",
+            "BlocksChooseN-v0",
+            "--cycles",
+            "1",
+            "--batches",
+            "1",
+            "--test-episodes",
+            "1",
+            "--hidden",
+            "8",
+            "--workers",
+            "1",
+            "--run-dir",
+            run.to_str().unwrap(),
+        ];
+        a.extend_from_slice(extra);
+        bp_in(d, &a)
+    };
+    let o = touch(&["--epochs", "1", "--counts", "grey=0-2"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = touch(&["--epochs", "2", "--counts", "grey=1-2", "--resume"]);
+    refused(&o, &["--counts"]);
+    assert!(!text(&o).contains("--grey"), "{}", text(&o));
+    // An entry name that cannot be one is worded as such, not as a broken entry.
+    let export = ["zoo", "export", "--from", "BlocksTouch-v0-ddpg", "--description", "d", "--trained-with", "t"];
+    let o = bp_in(d, &[&export[..], &["--name", "a/b", "--zoo", "z"]].concat());
+    refused(&o, &["--name \"a/b\"", "letters, digits"]);
+    assert!(!text(&o).contains("not usable"), "{}", text(&o));
+    assert!(!d.join("z").exists(), "no zoo folder made");
 }

@@ -42,7 +42,8 @@ fn obs_hash_on(suite: &Path) -> SuiteResult {
 #[test]
 fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
     let dir = tempfile::tempdir().unwrap();
-    let task = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml")).unwrap();
+    let task =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml")).unwrap();
     std::fs::write(dir.path().join("task.toml"), &task).unwrap();
     let suite = dir.path().join("edited.toml");
     std::fs::write(&suite, SUITE).unwrap();
@@ -50,7 +51,10 @@ fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
     let p = &a.provenance;
     assert_eq!(p.build.mujoco, blockpuzzle::mj::version());
     assert_eq!(p.build.blockpuzzle, env!("CARGO_PKG_VERSION"));
-    assert_eq!((p.harness, p.policy.name.as_str(), p.policy.sha256.as_deref()), (Harness::Cli, "baseline:obs-hash", None));
+    assert_eq!(
+        (p.harness, p.policy.name.as_str(), p.policy.sha256.as_deref()),
+        (Harness::Cli, "baseline:obs-hash", None)
+    );
     assert_eq!(p.suite.as_ref(), Some(&a.suite));
     let built_in = blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().source.hash;
     for row in a.splits.iter().flat_map(|s| &s.rows) {
@@ -61,7 +65,8 @@ fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
 
     // The task file edited (one more step per episode), the suite's text untouched: the suite hash
     // stays, the rows' task hash changes, and the two results are refused in one column.
-    std::fs::write(dir.path().join("task.toml"), task.replace("max_episode_steps = 50", "max_episode_steps = 51")).unwrap();
+    std::fs::write(dir.path().join("task.toml"), task.replace("max_episode_steps = 50", "max_episode_steps = 51"))
+        .unwrap();
     let b = obs_hash_on(&suite);
     assert_eq!(a.suite, b.suite);
     assert_ne!(a.splits[0].rows[0].task_sha256, b.splits[0].rows[0].task_sha256);
@@ -74,8 +79,11 @@ fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
 fn compare_refuses_other_engines_and_suites_naming_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let suite = dir.path().join("edited.toml");
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"), dir.path().join("task.toml"))
-        .unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"),
+        dir.path().join("task.toml"),
+    )
+    .unwrap();
     std::fs::write(&suite, SUITE).unwrap();
     let a = dir.path().join("a.json");
     let o = bp(&["eval", "--suite", suite.to_str().unwrap(), "--baseline", "scripted", "--out", a.to_str().unwrap()]);
@@ -139,8 +147,9 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "2", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let (meta, saved) = blockpuzzle::zoo::load(&blockpuzzle::zoo::find(&blockpuzzle::zoo::dir(), "ReachAvoid-v0-ddpg").unwrap())
-        .unwrap();
+    let (meta, saved) =
+        blockpuzzle::zoo::load(&blockpuzzle::zoo::find(&blockpuzzle::zoo::dir(), "ReachAvoid-v0-ddpg").unwrap())
+            .unwrap();
     assert_eq!(v["task_sha256"], meta.task.hash.as_str());
     assert_eq!(v["provenance"]["policy"]["sha256"], saved.policy_id("x").sha256.unwrap().as_str());
     assert_eq!(v["provenance"]["mujoco"], blockpuzzle::mj::version().as_str());

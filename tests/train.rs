@@ -463,7 +463,7 @@ fn bad_expert_settings_are_clear_errors() {
         ..tiny_sac("BlocksChoose-v0", 1)
     };
     let err = train(&td3, dir.path(), false, &mut quiet).unwrap_err();
-    assert!(err.to_string().contains("--td3 is a DDPG option"), "{err}");
+    assert!(err.to_string().contains("--td3 is only used with --algo ddpg"), "{err}");
 }
 
 fn tiny_sac(env: &str, epochs: usize) -> TrainConfig {

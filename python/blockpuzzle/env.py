@@ -72,7 +72,12 @@ class BlockPuzzleEnv(gymnasium.Env):
         return observation.split(obs, self.obs_layout), info
 
     def step(self, action):
-        action = np.ascontiguousarray(action, dtype=np.float32).reshape(-1)
+        action = np.ascontiguousarray(action, dtype=np.float32)
+        if action.shape != self.action_space.shape:
+            raise ValueError(
+                f"action of shape {action.shape}: this environment takes one action of shape "
+                f"{self.action_space.shape} (for a batch of environments use blockpuzzle.make_vec)"
+            )
         obs, reward, terminated, truncated, info = self._env.step(action)
         return observation.split(obs, self.obs_layout), reward, terminated, truncated, info
 

@@ -61,19 +61,27 @@ def _native_actor(path: pathlib.Path, required: bool):
 
 
 def read_safetensors(path: str | pathlib.Path) -> dict[str, np.ndarray]:
-    """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data."""
+    """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data.
+    A damaged file raises ValueError naming it."""
     raw = pathlib.Path(path).read_bytes()
-    n = int.from_bytes(raw[:8], "little")
-    header = json.loads(raw[8:8 + n])
-    data = memoryview(raw)[8 + n:]
-    out = {}
-    for key, t in header.items():
-        if key == "__metadata__":
-            continue
-        if t["dtype"] != "F32":
-            raise ValueError(f"{path}: tensor {key} is {t['dtype']}, the zoo stores F32")
-        start, end = t["data_offsets"]
-        out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(t["shape"]).astype(np.float32)
+    try:
+        n = int.from_bytes(raw[:8], "little")
+        if len(raw) < 8 or 8 + n > len(raw):
+            raise ValueError(f"its header claims {n} bytes, the file has {len(raw)}")
+        header = json.loads(raw[8:8 + n])
+        data = memoryview(raw)[8 + n:]
+        out = {}
+        for key, t in header.items():
+            if key == "__metadata__":
+                continue
+            if t["dtype"] != "F32":
+                raise ValueError(f"tensor {key} is {t['dtype']}, the zoo stores F32")
+            start, end = t["data_offsets"]
+            if not 0 <= start <= end <= len(data):
+                raise ValueError(f"tensor {key} lies beyond the end of the file (cut short?)")
+            out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(t["shape"]).astype(np.float32)
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise ValueError(f"{path} is not a usable safetensors file: {e}; restore the zoo entry") from e
     return out
 
 
@@ -89,14 +97,18 @@ class ZooPolicy:
     def __init__(self, path, native: bool | None = None):
         json_path = pathlib.Path(path).with_suffix(".json")
         self.path = json_path
-        self.meta = json.loads(json_path.read_text())
-        if self.meta["format"] not in FORMATS:
-            raise ValueError(f"{json_path}: unknown format {self.meta['format']!r}")
-        self.tensors = read_safetensors(json_path.with_suffix(".safetensors"))
-        self.layers = len(self.meta["actor"]["sizes"]) - 1
-        self.set = self.meta["actor"].get("set")
-        #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts.
+        #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts. Loaded first:
+        #: it checks the whole entry (checksums, layout, values) and names what is wrong.
         self.native = None if native is False else _native_actor(json_path, required=bool(native))
+        try:
+            self.meta = json.loads(json_path.read_text())
+            if self.meta["format"] not in FORMATS:
+                raise ValueError(f"unknown format {self.meta['format']!r}")
+            self.layers = len(self.meta["actor"]["sizes"]) - 1
+            self.set = self.meta["actor"].get("set")
+        except (ValueError, KeyError, TypeError, AttributeError) as e:
+            raise ValueError(f"zoo entry {json_path} is not usable: {e}; restore it") from e
+        self.tensors = read_safetensors(json_path.with_suffix(".safetensors"))
 
     @property
     def name(self) -> str:

@@ -11,6 +11,7 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
+use std::sync::{Mutex, PoisonError};
 
 mod policy;
 mod vector;
@@ -33,17 +34,64 @@ pub(crate) fn to_py(e: EnvError) -> PyErr {
     }
 }
 
-/// One BlockPuzzle environment: a registered id or a task file.
-#[pyclass(unsendable, module = "blockpuzzle._native")]
+/// One BlockPuzzle environment: a registered id or a task file. Any Python
+/// thread may use it (one at a time, as Python objects are); its renderer, an
+/// OpenGL context, stays on the thread that first rendered.
+#[pyclass(module = "blockpuzzle._native")]
 struct Env {
-    env: Option<BlockEnv>,
+    /// The simulation (the mutex makes the class `Sync`, as PyO3 asks; access
+    /// goes through `&mut self`, which needs no lock).
+    env: Mutex<Option<BlockEnv>>,
     view: View,
-    renderer: Option<Renderer>,
+    renderer: Mutex<Option<OnThread<Renderer>>>,
 }
 
 impl Env {
     fn env(&mut self) -> PyResult<&mut BlockEnv> {
-        self.env.as_mut().ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))
+        self.env
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner)
+            .as_mut()
+            .ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))
+    }
+}
+
+/// A value that may be used and dropped only on the thread that made it (an
+/// OpenGL context is current there). Elsewhere [`OnThread::get`] is an error
+/// and dropping it leaks it rather than run its destructor on a foreign thread.
+struct OnThread<T> {
+    owner: std::thread::ThreadId,
+    value: std::mem::ManuallyDrop<T>,
+}
+
+// SAFETY: the value is reached only through `get`, which checks that the
+// calling thread is the one that made it, and dropped only on that thread
+// (`Drop` leaks it elsewhere), so no other thread ever touches it.
+unsafe impl<T> Send for OnThread<T> {}
+
+impl<T> OnThread<T> {
+    fn new(value: T) -> Self {
+        Self { owner: std::thread::current().id(), value: std::mem::ManuallyDrop::new(value) }
+    }
+
+    fn get(&mut self, what: &str) -> PyResult<&mut T> {
+        if std::thread::current().id() == self.owner {
+            Ok(&mut self.value)
+        } else {
+            Err(PyRuntimeError::new_err(format!(
+                "{what} works on the thread that first called it (its OpenGL context lives there); call it from \
+                 that thread, or make one environment per thread"
+            )))
+        }
+    }
+}
+
+impl<T> Drop for OnThread<T> {
+    fn drop(&mut self) {
+        if std::thread::current().id() == self.owner {
+            // SAFETY: dropped once, here, on the thread that made it.
+            unsafe { std::mem::ManuallyDrop::drop(&mut self.value) }
+        }
     }
 }
 
@@ -91,9 +139,13 @@ impl Env {
             )));
         }
         let obs_mode: ObsMode = obs_mode.parse().map_err(PyValueError::new_err)?;
-        let task = registry::task(task).map_err(to_py)?;
+        let task = crate::task(task)?;
         let env = BlockEnv::new(EnvConfig { obs_mode, ..EnvConfig::new(task) }).map_err(to_py)?;
-        Ok(Self { env: Some(env), view: View { width, height, ..View::default() }, renderer: None })
+        Ok(Self {
+            env: Mutex::new(Some(env)),
+            view: View { width, height, ..View::default() },
+            renderer: Mutex::new(None),
+        })
     }
 
     /// The task's id.
@@ -204,13 +256,22 @@ impl Env {
     /// Fetch viewer's camera (headless: EGL with Mesa's software rasteriser).
     fn render<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let view = self.view.clone();
-        let env = self.env.as_mut().ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))?;
-        if self.renderer.is_none() {
+        let env = self
+            .env
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner)
+            .as_mut()
+            .ok_or_else(|| PyRuntimeError::new_err("the environment is closed"))?;
+        let slot = self.renderer.get_mut().unwrap_or_else(PoisonError::into_inner);
+        if slot.is_none() {
             let model = env.data().model().clone();
             let r = Renderer::new(&model, &view).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-            self.renderer = Some(r);
+            *slot = Some(OnThread::new(r));
         }
-        let Some(renderer) = self.renderer.as_mut() else { unreachable!("made above") };
+        let Some(renderer) = slot.as_mut() else {
+            return Err(PyRuntimeError::new_err("the renderer could not be made"));
+        };
+        let renderer = renderer.get("render()")?;
         // Colours move between episodes when the task shuffles roles.
         let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
         renderer
@@ -249,8 +310,8 @@ impl Env {
 
     /// Frees the simulation and the renderer; later calls raise RuntimeError.
     fn close(&mut self) {
-        self.renderer = None;
-        self.env = None;
+        *self.renderer.get_mut().unwrap_or_else(PoisonError::into_inner) = None;
+        *self.env.get_mut().unwrap_or_else(PoisonError::into_inner) = None;
     }
 }
 
@@ -313,12 +374,38 @@ fn assets_dir() -> PyResult<std::path::PathBuf> {
     blockpuzzle::scene::assets().map(|a| a.base).map_err(|e| to_py(EnvError::Scene(e)))
 }
 
-/// A suite that cannot be read (FileNotFoundError) or checked (ValueError).
+/// An input file that cannot be read, as Python names it: a path that does
+/// not exist is FileNotFoundError, one that may not be read PermissionError,
+/// anything else about the file (a folder, too large, not text) ValueError.
+/// Task files, suites and zoo entries all follow this one convention.
+pub(crate) fn read_err(source: &std::io::Error, msg: String) -> PyErr {
+    match source.kind() {
+        std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(msg),
+        std::io::ErrorKind::PermissionDenied => pyo3::exceptions::PyPermissionError::new_err(msg),
+        _ => PyValueError::new_err(msg),
+    }
+}
+
+/// A suite that cannot be read ([`read_err`]) or checked (ValueError).
 pub(crate) fn suite_err(e: blockpuzzle::suite::SuiteError) -> PyErr {
-    match e {
-        blockpuzzle::suite::SuiteError::Read { .. } => PyFileNotFoundError::new_err(e.to_string()),
+    match &e {
+        blockpuzzle::suite::SuiteError::Read { source, .. } => {
+            let msg = format!("{e}: {source}");
+            read_err(source, msg)
+        }
         _ => PyValueError::new_err(e.to_string()),
     }
+}
+
+/// The task of a registered id or a task file; a file that does not exist is
+/// FileNotFoundError ([`read_err`]), a bad one ValueError.
+pub(crate) fn task(id: &str) -> PyResult<blockpuzzle::task::Task> {
+    if registry::is_path(id) {
+        if let Err(source) = std::fs::metadata(id) {
+            return Err(read_err(&source, format!("cannot read the task file {id}: {source}")));
+        }
+    }
+    registry::task(id).map_err(to_py)
 }
 
 /// An evaluation suite (a built-in name or a suite file), checked: a dict of

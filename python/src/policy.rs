@@ -6,14 +6,14 @@
 use blockpuzzle::actor::AnyPolicy;
 use blockpuzzle::provenance::{Build, Harness};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::Path;
 
 fn zoo_err(e: blockpuzzle::zoo::ZooError) -> PyErr {
-    match e {
-        blockpuzzle::zoo::ZooError::Io { .. } => PyFileNotFoundError::new_err(e.to_string()),
+    match &e {
+        blockpuzzle::zoo::ZooError::Io { source, .. } => crate::read_err(source, e.to_string()),
         _ => PyValueError::new_err(e.to_string()),
     }
 }

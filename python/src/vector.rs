@@ -102,7 +102,7 @@ impl VecEnv {
             bound.check_usize(v).map_err(PyValueError::new_err)?;
         }
         let obs_mode: ObsMode = obs_mode.parse().map_err(PyValueError::new_err)?;
-        let task = registry::task(task).map_err(to_py)?;
+        let task = crate::task(task)?;
         let engine =
             VectorEnv::new(&EnvConfig { obs_mode, ..EnvConfig::new(task) }, num_envs, threads).map_err(to_py)?;
         let (obs_dim, objects) = (engine.obs_spec().dim(), engine.envs()[0].objects().len());

@@ -50,6 +50,7 @@ fn dot(a: &[f32], b: &[f32]) -> f32 {
 /// How a set network reads its input: `robot | slots × object | mask`
 /// (an `objects` observation, [`crate::env::ObsSpec`]), then any extra inputs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SetLayout {
     /// Robot features.
     pub robot: usize,

@@ -88,23 +88,7 @@ impl NetConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        if self.set_norm && self.net != NetKind::Set {
-            return Err(
-                "--set-norm normalises a set network's pooled features: add --net set, or drop --set-norm".into()
-            );
-        }
         crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)
-    }
-
-    /// Whether `--flat-critic` (a set actor's MLP critics) suits these networks.
-    ///
-    /// # Errors
-    /// `--flat-critic` without a set network, naming the fix.
-    pub fn check_flat_critic(&self, flat_critic: bool) -> Result<(), String> {
-        if flat_critic && self.net != NetKind::Set {
-            return Err("--flat-critic makes a set actor's critics MLPs: add --net set, or drop --flat-critic".into());
-        }
-        Ok(())
     }
 
     /// How the run's title names the network (empty: the paper's MLP).

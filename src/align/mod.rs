@@ -85,7 +85,8 @@ impl Reference {
     /// [`AlignError::Read`] / [`AlignError::Format`].
     pub fn load(path: &Path) -> Result<Self, AlignError> {
         let p = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| AlignError::Read { path: p.clone(), source })?;
+        let text = crate::io::read_text(path, "alignment reference", crate::limits::RESULT_FILE_BYTES)
+            .map_err(|source| AlignError::Read { path: p.clone(), source })?;
         let r: Reference =
             serde_json::from_str(&text).map_err(|e| AlignError::Format { path: p.clone(), reason: e.to_string() })?;
         if r.episodes.is_empty() {

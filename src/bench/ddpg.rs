@@ -114,7 +114,18 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     if c.torch_threads == 0 {
         bail!("--torch-threads must be at least 1");
     }
-    c.net.check_flat_critic(c.flat_critic).map_err(anyhow::Error::msg)?;
+    let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
+    // The options table `train` goes by: a bench setting the timed run would not use is refused.
+    crate::train::options::check(&crate::train::options::Options {
+        algo: c.algo,
+        net: &c.net,
+        ddpg: &ddpg,
+        pggd: &Default::default(),
+        aggrevated: &Default::default(),
+        hindsight_colours: 0,
+        hindsight_strategy_given: false,
+    })
+    .map_err(anyhow::Error::msg)?;
     tch::set_num_threads(crate::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let task = registry::task(&c.env)?;
     let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
@@ -122,7 +133,6 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
     let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
     c.precision.check().map_err(anyhow::Error::msg)?;
-    let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
     let gamma = ddpg.gamma;
     let spec = Spec { arch, act_dim, ddpg: &ddpg, pggd: &Default::default() };
     let mut agent = c.algo.build(&spec, &mut ChaCha8Rng::seed_from_u64(c.seed)).map_err(anyhow::Error::msg)?;

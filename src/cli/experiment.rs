@@ -44,14 +44,27 @@ pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<Vec<OsString
 
 /// The flags of one recipe file (keys in sorted order; each flag once).
 fn flags(path: &Path, train: &clap::Command) -> Result<Vec<OsString>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read the recipe {}", path.display()))?;
+    let text = crate::io::read_text(path, "recipe", crate::limits::TEXT_FILE_BYTES)
+        .with_context(|| format!("cannot read the recipe {}", path.display()))?;
     let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
     let known: Vec<&str> = train.get_arguments().filter_map(|a| a.get_long()).filter(|l| *l != "config").collect();
     let mut out = Vec::new();
     for (key, value) in table {
         let flag = key.replace('_', "-");
-        if !known.contains(&flag.as_str()) {
+        let Some(arg) = train.get_arguments().find(|a| a.get_long() == Some(flag.as_str()) && flag != "config") else {
             bail!("{}: `{key}` is not a flag of `blockpuzzle train` (they are: {})", path.display(), known.join(", "));
+        };
+        // A switch takes true or false; every other flag a value.
+        match (arg.get_action().takes_values(), &value) {
+            (false, toml::Value::Boolean(_))
+            | (true, toml::Value::String(_) | toml::Value::Integer(_) | toml::Value::Float(_)) => {}
+            (false, other) => {
+                bail!("{}: `{key} = {other}`: `{key}` is a switch; write {key} = true or false", path.display())
+            }
+            (true, other) => bail!(
+                "{}: `{key} = {other}`: `{key}` takes a value (as --{flag} VALUE): give a number or a string",
+                path.display()
+            ),
         }
         match value {
             toml::Value::Boolean(true) => out.push(format!("--{flag}").into()),

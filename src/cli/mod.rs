@@ -293,15 +293,18 @@ struct MovieArgs {
 }
 
 impl ViewArgs {
-    fn view(&self) -> crate::render::View {
-        crate::render::View {
+    /// The camera, checked (a command checks it before any work).
+    fn view(&self) -> Result<crate::render::View> {
+        let view = crate::render::View {
             width: self.width,
             height: self.height,
             distance: self.distance,
             azimuth: self.azimuth,
             elevation: self.elevation,
             ..Default::default()
-        }
+        };
+        view.check().map_err(anyhow::Error::msg)?;
+        Ok(view)
     }
 }
 
@@ -419,7 +422,7 @@ pub fn error_text(e: &anyhow::Error) -> String {
         }
         text.push_str(&part);
     }
-    text
+    crate::limits::cut_long_lines(&text)
 }
 
 /// The command line `args` (from the program name on), `train --config`
@@ -505,7 +508,8 @@ fn results(c: ResultsCommand) -> Result<()> {
             let md = crate::results::leaderboard(&crate::results::read_all(&paths)?)?;
             match (out, check) {
                 (Some(out), true) => {
-                    let now = std::fs::read_to_string(&out).with_context(|| format!("cannot read {}", out.display()))?;
+                    let now = crate::io::read_text(&out, "leaderboard", crate::limits::RESULT_FILE_BYTES)
+                        .with_context(|| format!("cannot read {}", out.display()))?;
                     if now != md {
                         bail!("{} is stale: regenerate it with the same command without --check", out.display());
                     }
@@ -633,6 +637,9 @@ fn rollout(a: RolloutArgs) -> Result<()> {
         .as_deref()
         .map(|out| crate::render::replay::Output::for_path(out, a.movie.filmstrip, a.movie.fps))
         .transpose()?;
+    if a.render.is_some() {
+        a.view.view()?;
+    }
     let mut env: BlockEnv = registry::make(&a.env)?;
     if a.challenge {
         env.set_challenge(true)?;
@@ -663,7 +670,7 @@ fn rollout(a: RolloutArgs) -> Result<()> {
     if let (Some(out), Some(kind)) = (&a.render, &render_kind) {
         // The dump is whole by now: a failed rendering keeps it and says so.
         let (frames, fps) =
-            crate::render::replay::render_dump(&a.out, 0, &a.view.view(), out, kind).with_context(|| {
+            crate::render::replay::render_dump(&a.out, 0, &a.view.view()?, out, kind).with_context(|| {
                 format!(
                     "the episodes are saved in {}, but --render failed; render them with \
                      `blockpuzzle render --traj {}` once rendering works",
@@ -695,6 +702,8 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
         if out.extension().map_or(true, |e| !e.eq_ignore_ascii_case("png")) {
             bail!("--render writes a filmstrip PNG: give a FILE.png");
         }
+        crate::io::check_output(out)?;
+        a.view.view()?;
     }
     let task = registry::task(&a.file)?;
     let bar = crate::progress::bar(crate::check::settings(&task).len() as u64 * a.samples, "reset");
@@ -715,7 +724,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
     if let Some(out) = &a.render {
         let mut frames = Vec::new();
         let mut env = BlockEnv::new(crate::env::EnvConfig::new(task.clone()))?;
-        let mut renderer = crate::render::Renderer::new(env.scene().model.as_ref(), &a.view.view())?;
+        let mut renderer = crate::render::Renderer::new(env.scene().model.as_ref(), &a.view.view()?)?;
         for (label, level, distribution) in crate::check::settings(task) {
             env.set_level(level)?;
             env.set_distribution(distribution.as_deref())?;
@@ -738,7 +747,7 @@ fn task_check(a: TaskCheckArgs) -> Result<()> {
 
 fn render(a: RenderArgs) -> Result<()> {
     let kind = crate::render::replay::Output::for_path(&a.out, a.movie.filmstrip, a.movie.fps)?;
-    let view = a.view.view();
+    let view = a.view.view()?;
     let (frames, fps, what) = match (&a.traj, &a.policy) {
         (Some(traj), _) => {
             let (frames, fps) = crate::render::replay::render_dump(traj, a.episode, &view, &a.out, &kind)?;
@@ -788,6 +797,9 @@ fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) -> Result<c
 
 fn table(a: TableArgs) -> Result<()> {
     crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
+    if let Some(out) = &a.out {
+        crate::io::check_output(out)?;
+    }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let task = registry::task(&a.env)?;
     if task.distribution("challenge").is_none() {
@@ -861,22 +873,34 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     use crate::provenance::Harness;
     let suite = crate::suite::load(name)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let (r, out) = match (&a.checkpoint, a.baseline) {
-        (_, Some(b)) => {
-            let r = crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli)?;
-            (r, PathBuf::from(format!("eval-{}-suite-{}.json", b.name(), suite.name)))
-        }
-        (Some(checkpoint), None) => {
-            let saved = crate::load::load_policy(checkpoint)?;
-            let r = crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads, Harness::Cli)?;
-            (r, eval_out(checkpoint, &format!("suite-{}", suite.name)))
-        }
-        (None, None) => bail!("give --checkpoint POLICY or --baseline scripted|obs-hash"),
+    // Where the results go, checked before any episode is played.
+    let out = match (&a.out, &a.checkpoint, a.baseline) {
+        (Some(out), _, _) => out.clone(),
+        (None, _, Some(b)) => PathBuf::from(format!("eval-{}-suite-{}.json", b.name(), suite.name)),
+        (None, Some(checkpoint), None) => eval_out(checkpoint, &format!("suite-{}", suite.name)),
+        (None, None, None) => bail!("give --checkpoint POLICY or --baseline scripted|obs-hash"),
     };
-    let out = a.out.clone().unwrap_or(out);
-    let md = out.with_extension("md");
+    crate::io::check_output(&out)?;
+    // The Markdown goes beside a file; a device or pipe gets the JSON alone.
+    let md = match crate::io::target(&out) {
+        Ok(crate::io::Target::File { .. }) => Some(out.with_extension("md")),
+        _ => None,
+    };
+    if let Some(md) = &md {
+        crate::io::check_output(md)?;
+    }
+    let r = match (&a.checkpoint, a.baseline) {
+        (_, Some(b)) => crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli)?,
+        (checkpoint, None) => {
+            let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
+            let saved = crate::load::load_policy(checkpoint)?;
+            crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads, Harness::Cli)?
+        }
+    };
     crate::io::write_json(&out, &r)?;
-    crate::io::write_file(&md, r.to_markdown().as_bytes())?;
+    if let Some(md) = &md {
+        crate::io::write_file(md, r.to_markdown().as_bytes())?;
+    }
     for split in &r.splits {
         for row in &split.rows {
             match (&row.evaluation, &row.skipped) {
@@ -895,13 +919,13 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
         }
     }
     let show = |v: Option<f64>| v.map_or_else(|| "none".to_owned(), |v| format!("{v:.3}"));
+    let md = md.map_or_else(|| " (no Markdown beside a device or pipe)".to_owned(), |md| format!(", {}", md.display()));
     println!(
-        "suite {}: score {} (test mean success), gap {} -> {}, {}",
+        "suite {}: score {} (test mean success), gap {} -> {}{md}",
         suite.name,
         show(r.score),
         show(r.gap),
         out.display(),
-        md.display()
     );
     Ok(())
 }
@@ -931,6 +955,13 @@ fn eval(a: EvalArgs) -> Result<()> {
         seed: a.seed,
         threads: a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
     };
+    let distribution = match (a.challenge, a.level) {
+        (true, _) => "challenge".to_owned(),
+        (false, Some(l)) if l < task.max_level() => format!("level{l}"),
+        _ => "normal".to_owned(),
+    };
+    let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
+    crate::io::check_output(&out)?;
     let r = crate::evaluate::evaluate(checkpoint, saved, &spec)?;
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
@@ -938,12 +969,6 @@ fn eval(a: EvalArgs) -> Result<()> {
         "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": checkpoint, "policy_epoch": policy_epoch,
         "task_sha256": task.source.hash, "provenance": provenance,
     });
-    let distribution = match (a.challenge, a.level) {
-        (true, _) => "challenge".to_owned(),
-        (false, Some(l)) if l < task.max_level() => format!("level{l}"),
-        _ => "normal".to_owned(),
-    };
-    let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
     crate::io::write_json(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",

@@ -174,6 +174,9 @@ fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::
 
 /// `blockpuzzle plot`: a run's success.png, or an overlay of several runs.
 pub(super) fn plot(a: PlotArgs) -> Result<()> {
+    if let Some(out) = &a.out {
+        crate::train::plot::png_only(out)?;
+    }
     if let Some(dir) = a.run_dir {
         let (config, rows) = read_run(&dir)?;
         let max_level = run_max_level(&config)?;

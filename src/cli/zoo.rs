@@ -96,7 +96,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                     .evaluations
                     .iter()
                     .filter(|e| e.mujoco() != Some(engine.as_str()))
-                    .map(|e| e.mujoco().map_or_else(|| "ones that name no engine".to_owned(), |m| format!("MuJoCo {m}")))
+                    .map(|e| {
+                        e.mujoco().map_or_else(|| "ones that name no engine".to_owned(), |m| format!("MuJoCo {m}"))
+                    })
                     .collect();
                 if !others.is_empty() {
                     println!(
@@ -215,7 +217,8 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         #[serde(default)]
         provenance: Option<crate::provenance::Provenance>,
     }
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read evaluation {}", path.display()))?;
+    let text = crate::io::read_text(path, "evaluation file", crate::limits::RESULT_FILE_BYTES)
+        .with_context(|| format!("cannot read evaluation {}", path.display()))?;
     let w: Written = serde_json::from_str(&text)
         .with_context(|| format!("{} is not an evaluation written by `blockpuzzle eval`", path.display()))?;
     Ok(crate::zoo::ZooEvaluation {
@@ -245,8 +248,8 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
         let (meta, saved) = crate::zoo::load(&path)?;
         // Each measurement once (an entry may hold it for several engines).
         let mut wanted: Vec<&crate::zoo::ZooEvaluation> = Vec::new();
+        let key = |r: &crate::zoo::ZooEvaluation| (r.env.clone(), r.distribution.clone(), r.episodes, r.seed);
         for e in &meta.evaluations {
-            let key = |r: &crate::zoo::ZooEvaluation| (r.env.clone(), r.distribution.clone(), r.episodes, r.seed);
             if !wanted.iter().any(|w| key(w) == key(e)) {
                 wanted.push(e);
             }
@@ -256,7 +259,10 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
             let env = (w.env != saved.env_id).then_some(w.env.as_str());
             let task = super::policy_task(env, &saved)?;
             if !matches!(w.distribution.as_str(), "normal" | "challenge") {
-                bail!("{name}: evaluation on distribution {:?}: zoo evaluations are normal or challenge", w.distribution);
+                bail!(
+                    "{name}: evaluation on distribution {:?}: zoo evaluations are normal or challenge",
+                    w.distribution
+                );
             }
             let spec = crate::evaluate::EvalSpec {
                 task: &task,

@@ -72,15 +72,18 @@ pub fn task(id: &str) -> Result<Task, EnvError> {
 /// policies and dumps outlive a moved or edited task file).
 ///
 /// # Errors
-/// A recorded copy that no longer compiles.
+/// A recorded copy that no longer compiles, or whose text is not the task
+/// its hash names (an edited record is refused, whatever is on disk now).
 pub fn recorded(source: &TaskSource) -> Result<Task, EnvError> {
+    // The record itself must be whole: its text the task its hash names.
+    let copy = source.compile()?;
     let current = match &source.path {
         Some(p) => Task::from_file(p).ok(),
         None => task(&source.id).ok(),
     };
     match current {
         Some(t) if t.source.hash == source.hash => Ok(t),
-        _ => Ok(source.compile()?),
+        _ => Ok(copy),
     }
 }
 

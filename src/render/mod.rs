@@ -33,6 +33,9 @@ pub enum RenderError {
         /// EGL's error.
         reason: String,
     },
+    /// A camera that would show nothing or the inside of the scene.
+    #[error("{0}")]
+    Camera(String),
     /// Requested frame larger than the model's offscreen buffer.
     #[error("a {width} x {height} frame does not fit MuJoCo's {max_width} x {max_height} offscreen buffer")]
     TooLarge {
@@ -72,6 +75,42 @@ pub struct View {
     pub elevation: f64,
 }
 
+impl View {
+    /// Whether the camera shows the scene: a finite distance from 0.1 to 50 m
+    /// (closer puts it inside the objects, farther makes the scene a few
+    /// pixels), an elevation from −90° to 90° (beyond, it turns upside down),
+    /// a finite azimuth and point to look at.
+    ///
+    /// # Errors
+    /// The first value out of range, naming the flag and the range.
+    pub fn check(&self) -> Result<(), String> {
+        let (d, e) = (crate::limits::CAMERA_DISTANCE_M, crate::limits::CAMERA_ELEVATION_DEG);
+        if !crate::limits::within(self.distance, d) {
+            return Err(format!(
+                "--distance {}: the camera's distance is {} to {} m (closer puts it inside the objects, farther \
+                 shrinks the scene to a few pixels)",
+                self.distance, d.0, d.1
+            ));
+        }
+        if !crate::limits::within(self.elevation, e) {
+            return Err(format!(
+                "--elevation {}: the camera's elevation is {}° to {}° (negative looks down)",
+                self.elevation, e.0, e.1
+            ));
+        }
+        if !self.azimuth.is_finite() {
+            return Err(format!(
+                "--azimuth {}: give the camera's azimuth in degrees (any finite number)",
+                self.azimuth
+            ));
+        }
+        if self.lookat.iter().any(|v| !v.is_finite()) {
+            return Err(format!("the camera's point to look at {:?} is not finite", self.lookat));
+        }
+        Ok(())
+    }
+}
+
 impl Default for View {
     /// 480 × 480, the Fetch tasks' viewer camera: the table from the front-side.
     fn default() -> Self {
@@ -99,6 +138,7 @@ impl Renderer {
         if view.width == 0 || view.height == 0 {
             return Err(RenderError::Empty { width: view.width, height: view.height });
         }
+        view.check().map_err(RenderError::Camera)?;
         let gl = egl::GlContext::new()?;
         let (max_width, max_height) = model.offscreen_size();
         if view.width > max_width || view.height > max_height {

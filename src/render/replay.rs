@@ -22,6 +22,21 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
         None => registry::task(&ep.env_id)?,
     };
     let mut env = BlockEnv::new(EnvConfig::new(task))?;
+    // The record must be of this task: its id and its rule objects (in the
+    // episode's order, which a task that shuffles roles deals anew).
+    if ep.env_id != env.id() {
+        bail!("the episode names task {:?} but records the task {:?}; the dump was edited", ep.env_id, env.id());
+    }
+    let mut names: Vec<&str> = env.objects().iter().map(|o| o.name.as_str()).collect();
+    let recorded: Vec<&str> = ep.objects.iter().map(|o| o.name.as_str()).collect();
+    let mut sorted = recorded.clone();
+    (names.sort_unstable(), sorted.sort_unstable());
+    if names != sorted {
+        bail!(
+            "the episode's objects {recorded:?} are not its task's rule objects {names:?}; the dump was edited \
+             (record it again with `blockpuzzle rollout`)"
+        );
+    }
     let nq = env.data().qpos().len();
     let model = env.data().model().clone();
     let mut renderer = Renderer::new(&model, view)?;
@@ -43,6 +58,9 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
         let state = if k == 0 { &ep.initial } else { &ep.steps[k - 1].state };
         if state.qpos.len() != nq {
             bail!("step {k} of the episode stores {} positions, {} has {nq}", state.qpos.len(), ep.env_id);
+        }
+        if let Some(i) = state.qpos.iter().position(|v| !v.is_finite()) {
+            bail!("step {k} of the episode stores position {i} as {}; the dump was edited or damaged", state.qpos[i]);
         }
         let data = env.data_mut();
         data.qpos_mut().copy_from_slice(&state.qpos);
@@ -75,16 +93,21 @@ impl Output {
     pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self> {
         let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
         match (ext.as_deref(), filmstrip) {
-            (Some("png"), Some(n)) if n > 0 => Ok(Self::Filmstrip(n)),
+            (Some("png"), Some(n)) if n > 0 => crate::io::check_output(out).map(|()| Self::Filmstrip(n)),
             (_, Some(_)) => bail!("--filmstrip N writes a PNG: give --out FILE.png with N ≥ 1"),
             (Some("gif"), None) if fps == 0 => bail!("--fps must be at least 1 (frames per second of the GIF)"),
-            (Some("gif"), None) => Ok(Self::Gif { fps }),
+            (Some("gif"), None) => crate::io::check_output(out).map(|()| Self::Gif { fps }),
             (Some("png"), None) => {
                 bail!("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", out.display())
             }
             (Some(other), None) if !out.is_dir() => bail!(
                 "--out {}: .{other} is not written here; give FILE.gif (animation), FILE.png with --filmstrip N, \
                  or a folder without an extension (one PNG per frame)",
+                out.display()
+            ),
+            _ if out.symlink_metadata().is_ok_and(|m| !m.is_dir()) && !out.is_dir() => bail!(
+                "--out {}: it exists and is not a folder; one PNG per frame goes into a folder: give a folder path, \
+                 FILE.gif (animation) or FILE.png with --filmstrip N",
                 out.display()
             ),
             _ => Ok(Self::Folder),

@@ -7,6 +7,7 @@
 //! and go through the same code.
 
 pub mod counts;
+mod exact;
 pub mod expr;
 pub mod sampler;
 pub mod spec;
@@ -266,7 +267,8 @@ impl Task {
     pub fn from_file(path: &Path) -> Result<Task, TaskError> {
         let origin = path.display().to_string();
         let err = |line, message| TaskError { origin: origin.clone(), line, message };
-        let text = std::fs::read_to_string(path).map_err(|e| err(None, format!("cannot read the task file: {e}")))?;
+        let text = crate::io::read_text(path, "task file", crate::limits::TEXT_FILE_BYTES)
+            .map_err(|e| err(None, format!("cannot read the task file: {e}")))?;
         if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
             return Task::from_toml(&text, Some(path));
         }

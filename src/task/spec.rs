@@ -215,13 +215,13 @@ pub struct ObjectSpec {
     #[serde(default = "default_kind")]
     pub kind: Kind,
     /// Half extents (x, y, z) in metres.
-    #[serde(default = "default_half_extents")]
+    #[serde(default = "default_half_extents", deserialize_with = "super::exact::array")]
     pub half_extents: [f64; 3],
     /// Mass in kg.
     #[serde(default = "default_mass")]
     pub mass: f64,
     /// MuJoCo friction (sliding, torsional, rolling); absent: MuJoCo's default.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub friction: Option<[f64; 3]>,
     /// Where it starts.
     #[serde(default)]
@@ -231,7 +231,7 @@ pub struct ObjectSpec {
     /// `NAME.(max-1)`, of which the first `n` drawn take part in the episode;
     /// the others are absent (no physics with the scene, no rules, not drawn,
     /// zero rows in the observation).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub count: Option<[usize; 2]>,
 }
 
@@ -260,7 +260,7 @@ fn default_mass() -> f64 {
 pub struct StartSpec {
     /// Absolute (x, y) in the world, used as written: the table and
     /// separation constraints do not apply.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub at: Option<[Value; 2]>,
     /// The anchor: "gripper" (default), "table", an object, or a list of them (their centroid).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -273,19 +273,19 @@ pub struct StartSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub towards: Option<String>,
     /// Distance range [lo, hi] from the anchor.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub distance: Option<[Value; 2]>,
     /// How the distance is drawn.
     #[serde(default)]
     pub density: Density,
     /// Direction range [lo, hi] in radians, in the frame (default: all around).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub angle: Option<[Value; 2]>,
     /// Half sides [a, b] of a uniform rectangle in the frame.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub rectangle: Option<[Value; 2]>,
     /// A fixed offset [dx, dy] in the frame.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", deserialize_with = "super::exact::option")]
     pub offset: Option<[Value; 2]>,
     /// Height of the centre above the table top (default: resting on the table, or on `on`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -323,7 +323,7 @@ pub enum Yaw {
     /// Fixed.
     Fixed(Value),
     /// Uniform in [lo, hi].
-    Range([Value; 2]),
+    Range(#[serde(deserialize_with = "super::exact::array")] [Value; 2]),
 }
 
 /// A named distribution: the curriculum at one level with some parameters
@@ -343,7 +343,7 @@ pub struct DistributionSpec {
     pub starts: BTreeMap<String, StartSpec>,
     /// Count ranges replaced, by the name of an entry with a count (within
     /// that entry's `[0, max]`).
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty", deserialize_with = "super::exact::map")]
     pub counts: BTreeMap<String, [usize; 2]>,
 }
 

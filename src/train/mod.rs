@@ -26,6 +26,7 @@ mod branch;
 pub mod checkpoint;
 pub mod comm;
 mod learner;
+pub mod options;
 pub mod plot;
 pub mod report;
 mod rollouts;
@@ -240,6 +241,19 @@ pub struct EpochRow {
 }
 
 impl TrainConfig {
+    /// The choices and settings [`options::check`] reads.
+    pub fn settings(&self) -> options::Options<'_> {
+        options::Options {
+            algo: self.algo,
+            net: &self.net,
+            ddpg: &self.ddpg,
+            pggd: &self.pggd,
+            aggrevated: &self.aggrevated,
+            hindsight_colours: self.hindsight_colours,
+            hindsight_strategy_given: self.hindsight_strategy != crate::hindsight::Strategy::default(),
+        }
+    }
+
     /// The replay layout of a run's recorded configuration (one recorded
     /// before the setting existed shared its replay).
     pub fn replay_layout(&self) -> ReplayLayout {
@@ -373,20 +387,28 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
 /// the record of a branch (kept from the run's `config.json`).
 const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env", "branched_from"];
 
-/// The fields of two configurations that differ, as `--PREFIXfield-name`;
-/// nested configurations are compared field by field (PGGD's flags carry `pg-`).
+/// The fields of two configurations that differ, as the flags that set them
+/// (`--PREFIXfield-name`); the groups of flags (`net`, `ddpg`, `pggd`,
+/// `aggrevated`) are compared field by field (PGGD's flags carry `pg-`),
+/// any other value whole (`--counts`, not its entries).
 fn differing_fields<T: Serialize>(prefix: &str, a: &T, b: &T, out: &mut Vec<String>) {
+    const GROUPS: [&str; 4] = ["net", "ddpg", "pggd", "aggrevated"];
     let (a, b) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
     let (serde_json::Value::Object(a), serde_json::Value::Object(b)) = (a, b) else { return };
-    for (k, v) in &a {
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    for k in keys {
         if RESUMABLE_CHANGES.contains(&k.as_str()) {
             continue;
         }
-        match (v, b.get(k)) {
-            (serde_json::Value::Object(_), Some(w @ serde_json::Value::Object(_))) => {
-                differing_fields(if k == "pggd" { "pg-" } else { prefix }, v, w, out)
+        match (a.get(k), b.get(k)) {
+            (Some(v @ serde_json::Value::Object(_)), Some(w @ serde_json::Value::Object(_)))
+                if prefix.is_empty() && GROUPS.contains(&k.as_str()) =>
+            {
+                differing_fields(if k == "pggd" { "pg-" } else { "" }, v, w, out)
             }
-            (v, w) if w == Some(v) => {}
+            (v, w) if v == w => {}
             _ => out.push(format!("--{prefix}{}", k.replace('_', "-"))),
         }
     }

@@ -1,7 +1,7 @@
 //! Success curves of a run as a PNG (plotters, headless bitmap backend).
 
 use super::EpochRow;
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
@@ -74,9 +74,23 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
         .draw()
 }
 
+/// Plots are PNG files: another extension is refused before drawing (the
+/// encoder would refuse it in its own, unreadable words), and the path is
+/// checked as every output is.
+///
+/// # Errors
+/// Another extension, or a path not ours to write.
+pub fn png_only(path: &Path) -> Result<()> {
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        bail!("{}: plots are PNG images; give a path ending in .png", path.display());
+    }
+    crate::io::check_output(path)
+}
+
 /// Two panels of the same curves: against the epoch (left) and against
 /// millions of environment steps (right).
 fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
+    png_only(path)?;
     register_font()?;
     crate::io::write_atomic_via(path, |tmp| two_panels_to(tmp, path, title, curves))
 }
@@ -158,10 +172,12 @@ impl From<&EpochRow> for FinalsPoint {
 /// # Errors
 /// A message naming the file for a missing or malformed file.
 pub fn read_finals(path: &Path) -> Result<Vec<FinalsPoint>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize().collect::<Result<Vec<FinalsPoint>, _>>().with_context(|| {
-        format!("{} is not a progress log (columns epoch, time/env_steps, finals/success)", path.display())
-    })
+    let rows: Vec<FinalsPoint> =
+        super::rundir::read_log(path, "progress log", "CSV with columns epoch, time/env_steps, finals/success")?;
+    if let Some(r) = rows.iter().find(|r| !(0.0..=1.0).contains(&r.finals_success)) {
+        bail!("{}: epoch {}: finals/success is {}, not a rate from 0 to 1", path.display(), r.epoch, r.finals_success);
+    }
+    Ok(rows)
 }
 
 /// Finals success of several runs, one curve each, against the epoch and
@@ -201,6 +217,7 @@ const DEVIATION_FLOOR: f64 = 1e-12;
 /// # Errors
 /// A missing font or an unwritable file.
 pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)], tolerance: f64) -> Result<()> {
+    png_only(path)?;
     register_font()?;
     crate::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();

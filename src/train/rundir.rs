@@ -1,7 +1,7 @@
 //! The run directory: its files and `progress.csv`.
 
 use super::{EpochRow, TrainConfig};
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
 /// Files of a run directory.
@@ -49,7 +49,8 @@ impl RunDir {
     /// A missing or malformed file, named.
     pub fn read_config(&self) -> Result<TrainConfig> {
         let path = self.config();
-        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let text = crate::io::read_text(&path, "run config", crate::limits::RESULT_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("{} is not a training config", path.display()))
     }
     /// `provenance.json`: the builds and engines that ran the run's epochs ([`Span`]).
@@ -65,7 +66,8 @@ impl RunDir {
         if !path.exists() {
             return Ok(Vec::new());
         }
-        let text = std::fs::read_to_string(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let text = crate::io::read_text(&path, "run provenance", crate::limits::RESULT_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("{} is not a run's provenance", path.display()))
     }
     /// Records that the epochs from `from_epoch` on run on this build (rank 0; nothing is written when the
@@ -110,11 +112,46 @@ pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
     })
 }
 
-/// Reads `progress.csv`.
+/// The largest log read whole: a million epochs of about 400 bytes.
+const MAX_LOG_BYTES: u64 = 400 << 20;
+
+/// Reads the rows of a CSV log (`what` names it in messages, `columns` says
+/// what it must hold), refusing a log without rows.
 ///
 /// # Errors
-/// A message naming the file for a missing or malformed file.
+/// A missing, oversized, malformed or empty file, named.
+pub fn read_log<T: serde::de::DeserializeOwned>(path: &Path, what: &str, columns: &str) -> Result<Vec<T>> {
+    let text =
+        crate::io::read_text(path, what, MAX_LOG_BYTES).with_context(|| format!("cannot read {}", path.display()))?;
+    let rows = csv::Reader::from_reader(text.as_bytes())
+        .deserialize()
+        .collect::<Result<Vec<T>, _>>()
+        .with_context(|| format!("{} is not a {what} ({columns})", path.display()))?;
+    if rows.is_empty() {
+        bail!("{} has no rows: a {what} gains one per epoch (train the run for at least one epoch)", path.display());
+    }
+    Ok(rows)
+}
+
+/// Reads `progress.csv`, whose success rates must be rates.
+///
+/// # Errors
+/// A message naming the file for a missing, malformed or empty file, or a
+/// success rate that is not a number from 0 to 1.
 pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
-    let mut r = csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
-    r.deserialize().collect::<Result<Vec<EpochRow>, _>>().with_context(|| format!("{} is malformed", path.display()))
+    let rows: Vec<EpochRow> = read_log(path, "progress log", "a run's progress.csv, written by `blockpuzzle train`")?;
+    for r in &rows {
+        for (column, v) in
+            [("train/success", r.train_success), ("test/success", r.test_success), ("finals/success", r.finals_success)]
+        {
+            if !(0.0..=1.0).contains(&v) {
+                bail!(
+                    "{}: epoch {}: {column} is {v}, not a rate from 0 to 1; the log was edited or damaged",
+                    path.display(),
+                    r.epoch
+                );
+            }
+        }
+    }
+    Ok(rows)
 }

@@ -9,7 +9,7 @@ use super::comm::Comm;
 use super::learner::{Algorithm, Expert, Learner};
 use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
 use super::rundir::{read_progress, write_progress, RunDir};
-use super::{computation_differences, plot, run_task, EpochRow, PgWeight, ReplayLayout, TrainConfig};
+use super::{computation_differences, plot, run_task, EpochRow, ReplayLayout, TrainConfig};
 use crate::agents::algorithm::Spec;
 use crate::agents::arch::Arch;
 use crate::agents::ddpg::UpdateStats;
@@ -81,15 +81,12 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     }
     config.ddpg.precision.check().map_err(anyhow::Error::msg)?;
     config.net.validate().map_err(anyhow::Error::msg)?;
-    config.net.check_flat_critic(config.ddpg.flat_critic).map_err(anyhow::Error::msg)?;
+    super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
         bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
     }
     config.algo.check(&config.ddpg, &config.pggd, expert).map_err(anyhow::Error::msg)?;
-    if !config.algo.registration().takes_expert && config.aggrevated.pg_weight != PgWeight::Return {
-        bail!("--pg-weight is for AggreVaTeD's learners (--algo pggd)");
-    }
     let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
     if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
         bail!("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0");

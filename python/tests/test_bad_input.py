@@ -1,0 +1,80 @@
+"""Bad input from Python (issue 43): one exception convention for files, environments that work
+from any thread, actions of the wrong shape refused, damaged zoo files named."""
+
+import shutil
+import threading
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import blockpuzzle
+from blockpuzzle import zoo
+
+
+def zeros(obs):
+    return np.zeros((len(obs), 4), np.float32)
+
+
+def test_a_missing_file_is_filenotfounderror_and_a_bad_one_valueerror(tmp_path):
+    missing = tmp_path / "nothere.toml"
+    with pytest.raises(FileNotFoundError, match="nothere.toml"):
+        blockpuzzle.make_task(missing)
+    with pytest.raises(FileNotFoundError, match="nothere.toml"):
+        blockpuzzle.evaluate(zeros, suite=str(missing))
+    with pytest.raises(FileNotFoundError, match="nothere"):
+        zoo.load(tmp_path / "nothere.json")
+    folder = tmp_path / "folder.toml"
+    folder.mkdir()
+    with pytest.raises(ValueError, match="folder"):
+        blockpuzzle.evaluate(zeros, suite=str(folder))
+    nul = tmp_path / "nul.toml"
+    nul.write_bytes(b"\0" * 100)
+    with pytest.raises(ValueError, match="NUL byte"):
+        blockpuzzle.make_task(nul)
+
+
+def test_an_environment_works_from_another_thread_and_rendering_stays_on_its_thread():
+    env = gym.make("BlockPuzzle/BlocksTouch-v0", render_mode="rgb_array", width=32, height=32).unwrapped
+    env.reset(seed=0)
+    assert env.render().shape == (32, 32, 3)
+    errors, steps = [], []
+
+    def use():
+        try:
+            obs, *_ = env.step(np.zeros(4, np.float32))
+            steps.append(obs)
+            env.render()
+        except BaseException as e:  # a PanicException would be a BaseException
+            errors.append(e)
+
+    t = threading.Thread(target=use)
+    t.start()
+    t.join()
+    assert len(steps) == 1, "stepping from another thread works"
+    assert len(errors) == 1 and type(errors[0]) is RuntimeError, errors
+    assert "thread" in str(errors[0])
+    env.close()
+
+
+def test_an_action_of_another_shape_is_refused_not_flattened():
+    env = gym.make("BlockPuzzle/BlocksTouch-v0")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"shape \(2, 2\).*\(4,\)"):
+        env.step(np.zeros((2, 2), np.float32))
+    with pytest.raises(ValueError, match=r"shape \(1, 4\)"):
+        env.step(np.zeros((1, 4), np.float32))
+    env.step(np.zeros(4, np.float32))
+
+
+@pytest.mark.parametrize("native", [True, False])
+def test_a_cut_short_zoo_entry_names_its_file(tmp_path, native):
+    for suffix in (".json", ".safetensors"):
+        src = zoo.FOLDER / "BlocksTouch-v0-ddpg"
+        for s in (".json", ".safetensors"):
+            shutil.copy(src.with_suffix(s), tmp_path / f"e{s}")
+        cut = tmp_path / f"e{suffix}"
+        data = cut.read_bytes()
+        cut.write_bytes(data[: len(data) // 2])
+        with pytest.raises(ValueError, match=f"e{suffix}"):
+            zoo.load(tmp_path / "e.json", native=native)
