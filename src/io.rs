@@ -77,7 +77,13 @@ pub fn target(path: &Path) -> std::io::Result<Target> {
     }
     let t = meta.file_type();
     if t.is_file() {
-        if meta.permissions().readonly() {
+        // Read-only by its mode, or not writable by this user (opening it for writing, without
+        // truncating, changes nothing): renaming over it would defeat its protection.
+        let denied = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
+        if meta.permissions().readonly() || denied {
             return Err(refuse(path, "is read-only; make it writable (chmod u+w) or give another path"));
         }
         Ok(Target::File { path: path.to_owned(), permissions: Some(meta.permissions()) })
@@ -298,6 +304,26 @@ fn unique() -> u64 {
 /// # Errors
 /// The OS's error, or the bound or kind refused, each naming the path.
 pub fn read_bytes(path: &Path, what: &str, max: u64) -> std::io::Result<Vec<u8>> {
+    read(path, what, max, false)
+}
+
+/// As [`read_bytes`], as UTF-8 text without NUL bytes. The text is checked as
+/// it is read, so a binary file is refused after its first megabyte, not after
+/// all of it.
+///
+/// # Errors
+/// As [`read_bytes`], or text that is not UTF-8 or holds a NUL byte.
+pub fn read_text(path: &Path, what: &str, max: u64) -> std::io::Result<String> {
+    let bytes = read(path, what, max, true)?;
+    String::from_utf8(bytes).map_err(|e| {
+        refuse(
+            path,
+            &format!("is not UTF-8 text (byte offset {}); give the {what} itself", e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
+fn read(path: &Path, what: &str, max: u64, text: bool) -> std::io::Result<Vec<u8>> {
     let meta = std::fs::metadata(path)?;
     let t = meta.file_type();
     if t.is_dir() {
@@ -312,11 +338,27 @@ pub fn read_bytes(path: &Path, what: &str, max: u64) -> std::io::Result<Vec<u8>>
     // A pipe is opened without waiting for a writer, and read until every
     // writer has closed it (none at all: it reads as empty).
     let nonblock = if t.is_fifo() { libc::O_NONBLOCK } else { 0 };
-    let mut file = std::fs::OpenOptions::new().read(true).custom_flags(nonblock).open(path)?.take(max + 1);
+    let mut file = std::fs::OpenOptions::new().read(true).custom_flags(nonblock).open(path)?;
     let mut bytes = Vec::new();
+    let mut chunk = vec![0u8; 1 << 20];
     loop {
-        match file.read_to_end(&mut bytes) {
-            Ok(_) => break,
+        match file.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => {
+                if text {
+                    if let Some(at) = chunk[..n].iter().position(|&b| b == 0) {
+                        let at = bytes.len() + at;
+                        return Err(refuse(
+                            path,
+                            &format!("is not a text file (a NUL byte at offset {at}); give the {what} itself"),
+                        ));
+                    }
+                }
+                bytes.extend_from_slice(&chunk[..n]);
+                if bytes.len() as u64 > max {
+                    return Err(refuse(path, &format!("holds more than {}; a {what} is at most that", size(max))));
+                }
+            }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
                 std::thread::sleep(std::time::Duration::from_millis(5));
             }
@@ -324,27 +366,7 @@ pub fn read_bytes(path: &Path, what: &str, max: u64) -> std::io::Result<Vec<u8>>
             Err(e) => return Err(e),
         }
     }
-    if bytes.len() as u64 > max {
-        return Err(refuse(path, &format!("holds more than {}; a {what} is at most that", size(max))));
-    }
     Ok(bytes)
-}
-
-/// As [`read_bytes`], as UTF-8 text without NUL bytes.
-///
-/// # Errors
-/// As [`read_bytes`], or text that is not UTF-8 or holds a NUL byte.
-pub fn read_text(path: &Path, what: &str, max: u64) -> std::io::Result<String> {
-    let bytes = read_bytes(path, what, max)?;
-    if let Some(at) = bytes.iter().position(|&b| b == 0) {
-        return Err(refuse(path, &format!("is not a text file (a NUL byte at offset {at}); give the {what} itself")));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        refuse(
-            path,
-            &format!("is not UTF-8 text (byte offset {}); give the {what} itself", e.utf8_error().valid_up_to()),
-        )
-    })
 }
 
 /// `1.5 MB` for 1_500_000.
@@ -416,6 +438,40 @@ mod tests {
         assert!(format!("{:#}", err.unwrap_err()).contains("a.txt"));
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.txt")], "no temporary file is left");
+    }
+
+    #[test]
+    fn a_link_is_written_through_and_a_file_keeps_its_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.json");
+        std::fs::write(&real, b"old").unwrap();
+        std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.path().join("link.json");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_file(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays");
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        assert_eq!(std::fs::metadata(&real).unwrap().permissions().mode() & 0o777, 0o640);
+        let dangling = dir.path().join("dangling.json");
+        std::os::unix::fs::symlink(dir.path().join("nowhere/x"), &dangling).unwrap();
+        assert!(format!("{:#}", write_file(&dangling, b"x").unwrap_err()).contains("does not exist"));
+    }
+
+    #[test]
+    fn reads_are_bounded_and_text_is_text() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.toml");
+        std::fs::write(&path, b"x = 1\n").unwrap();
+        assert_eq!(read_text(&path, "task file", 100).unwrap(), "x = 1\n");
+        let e = read_text(&path, "task file", 3).unwrap_err().to_string();
+        assert!(e.contains("6 bytes; a task file is at most 3 bytes"), "{e}");
+        std::fs::write(&path, [b'a', 0, b'b']).unwrap();
+        assert!(read_text(&path, "task file", 100).unwrap_err().to_string().contains("NUL byte at offset 1"));
+        std::fs::write(&path, [0xff, 0xfe]).unwrap();
+        assert!(read_text(&path, "task file", 100).unwrap_err().to_string().contains("not UTF-8"));
+        assert_eq!(read_bytes(&path, "tensor file", 100).unwrap(), [0xff, 0xfe]);
+        assert!(read_text(dir.path(), "task file", 100).unwrap_err().to_string().contains("is a folder"));
     }
 
     #[test]

@@ -511,6 +511,28 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let bytes = crate::io::read_bytes(&tensors_path, "zoo tensor file", crate::limits::POLICY_FILE_BYTES)
         .map_err(io(&tensors_path))?;
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
+    // What the metadata says wrongly is reported against it, by field.
+    let json_path = tensors_path.with_extension("json");
+    let metadata = |field: &str, reason: String| ZooError::Corrupt {
+        path: json_path.clone(),
+        reason: format!("{field}: {reason} (the metadata was edited; restore both files of the entry together)"),
+    };
+    for (field, v, ok) in [
+        ("norm_clip", meta.norm_clip as f64, meta.norm_clip.is_finite() && meta.norm_clip > 0.0),
+        ("norm_eps", meta.norm_eps, meta.norm_eps.is_finite() && meta.norm_eps >= 0.0),
+        ("sigma_min", meta.sigma_min.unwrap_or(0.0), meta.sigma_min.map_or(true, |s| s.is_finite() && s >= 0.0)),
+    ] {
+        if !ok {
+            return Err(metadata(field, format!("{v} is not a usable value")));
+        }
+    }
+    let outputs = if meta.sigma_min.is_some() { 2 * crate::env::ACTION_DIM } else { crate::env::ACTION_DIM };
+    if meta.actor.sizes.last() != Some(&outputs) {
+        return Err(metadata(
+            "actor.sizes",
+            format!("{:?} does not end in the actor's {outputs} outputs", meta.actor.sizes),
+        ));
+    }
     if crate::provenance::sha256(&bytes) != meta.tensors_sha256 {
         return Err(corrupt(format!(
             "its checksum does not match {} (damaged, or the tensors of another entry); restore both files of the entry together",
@@ -518,14 +540,18 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         )));
     }
     let st = SafeTensors::deserialize(&bytes).map_err(|e| corrupt(format!("not a safetensors file: {e}")))?;
-    let read = |name: &str, shape: &[usize]| -> Result<Vec<f32>, ZooError> {
+    // `field`: the metadata that gives the shape.
+    let read = |name: &str, shape: &[usize], field: &str| -> Result<Vec<f32>, ZooError> {
         let t = st.tensor(name).map_err(|e| corrupt(format!("tensor {name}: {e}")))?;
         if t.dtype() != Dtype::F32 || t.shape() != shape {
-            return Err(corrupt(format!(
-                "tensor {name} is {:?} {:?}, the metadata says F32 {shape:?}",
-                t.dtype(),
-                t.shape()
-            )));
+            return Err(metadata(
+                field,
+                format!(
+                    "it gives tensor {name} the shape F32 {shape:?}, the tensor is {:?} {:?}",
+                    t.dtype(),
+                    t.shape()
+                ),
+            ));
         }
         Ok(t.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
     };
@@ -543,9 +569,10 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             .iter()
             .enumerate()
             .map(|(i, &[out, n_in])| {
+                let field = if l.set.is_some() { format!("{prefix}.layers[{i}]") } else { format!("{prefix}.sizes") };
                 Ok(Dense {
-                    w: read(&format!("{prefix}.{i}.weight"), &[out, n_in])?,
-                    b: read(&format!("{prefix}.{i}.bias"), &[out])?,
+                    w: read(&format!("{prefix}.{i}.weight"), &[out, n_in], &field)?,
+                    b: read(&format!("{prefix}.{i}.bias"), &[out], &field)?,
                     n_in,
                 })
             })
@@ -556,8 +583,8 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;
     let dim = meta.actor.sizes[0];
     let norm = Normalizer::from_stats(
-        read("obs_norm.mean", &[dim])?,
-        read("obs_norm.std", &[dim])?,
+        read("obs_norm.mean", &[dim], "actor.sizes[0]")?,
+        read("obs_norm.std", &[dim], "actor.sizes[0]")?,
         meta.norm_count,
         meta.norm_eps,
         meta.norm_clip,
@@ -582,7 +609,10 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     saved.check().map_err(&corrupt)?;
     for (k, p) in meta.probes.iter().enumerate() {
         if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {
-            return Err(corrupt(format!("it does not act as the exported policy did on probe {k}")));
+            return Err(corrupt(format!(
+                "it does not act as the exported policy did on probe {k}: the tensors or the metadata's network \
+                 (actor.tanh_out, actor.set, norm_*) were edited; restore both files of the entry together"
+            )));
         }
     }
     Ok((meta, saved))

@@ -414,6 +414,16 @@ fn writers(inputs: &Path) -> Vec<(&'static str, Vec<String>)> {
         ("png", words("task check BlocksTouch-v0 --samples 1 --width 64 --height 64 --render T")),
         ("png", [words("plot --out T --overlay"), vec![i("log.csv")]].concat()),
         ("md", [words("results leaderboard --out T"), vec![i("result.json")]].concat()),
+        (
+            "gif",
+            [
+                words(
+                    "rollout --env BlocksTouch-v0 --policy random --episodes 1 --width 64 --height 64 --render T --out",
+                ),
+                vec![i("r.jsonl")],
+            ]
+            .concat(),
+        ),
     ]
 }
 
@@ -642,11 +652,10 @@ fn an_edited_trajectory_dump_is_refused() {
     // The rule objects edited.
     let d = edit(&|v| v["objects"][2]["name"] = "purple".into());
     refused(&render(&d), &["not its task's rule objects", "edited"]);
-    // A position edited to a non-number (JSON has no NaN: null reads as an error too).
+    // A position edited to one no scene has.
     let d = edit(&|v| v["initial"]["qpos"][0] = 1e300.into());
-    let o = render(&d);
-    assert!(o.status.success() || !text(&o).contains("panicked"), "{}", text(&o));
-    assert!(!dir.path().join("x.gif").exists() || o.status.success());
+    refused(&render(&d), &["joint position 0 as 1e300", "edited or damaged"]);
+    assert!(!dir.path().join("x.gif").exists(), "nothing rendered");
 }
 
 #[test]
@@ -703,6 +712,15 @@ fn odd_logs_suites_and_entries_are_named_not_used() {
     v["actor"]["set"]["pooling"] = "max".into();
     std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
     refused(&bp_in(d, &["zoo", "check", "--zoo", zoo.to_str().unwrap()]), &["s.json", "unknown field `pooling`"]);
+    // A layout edit is reported against the metadata's field.
+    v["actor"]["set"].as_object_mut().unwrap().remove("pooling");
+    v["actor"]["layers"][1][0] = 255.into();
+    std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    refused(&bp_in(d, &["zoo", "check", "--zoo", zoo.to_str().unwrap()]), &["s.json", "actor.layers[1]", "[255, 256]"]);
+    v["actor"]["layers"][1][0] = 256.into();
+    v["norm_clip"] = (-1.0).into();
+    std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    refused(&bp_in(d, &["zoo", "check", "--zoo", zoo.to_str().unwrap()]), &["s.json", "norm_clip: -1"]);
 }
 
 #[test]

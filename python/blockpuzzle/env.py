@@ -75,7 +75,7 @@ class BlockPuzzleEnv(gymnasium.Env):
         action = np.ascontiguousarray(action, dtype=np.float32)
         if action.shape != self.action_space.shape:
             raise ValueError(
-                f"action of shape {action.shape}: this environment takes one action of shape "
+                f"invalid action of shape {action.shape}: this environment takes one action of shape "
                 f"{self.action_space.shape} (for a batch of environments use blockpuzzle.make_vec)"
             )
         obs, reward, terminated, truncated, info = self._env.step(action)

@@ -4,7 +4,7 @@
 //! steps, writing into numpy arrays the caller allocated once.
 
 use crate::to_py;
-use blockpuzzle::env::{registry, EnvConfig, Info, ObsMode, ResetOptions, VecError, VectorEnv};
+use blockpuzzle::env::{EnvConfig, Info, ObsMode, ResetOptions, VecError, VectorEnv};
 use blockpuzzle::rules::ContactState;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray1, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};

@@ -59,8 +59,13 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
         if state.qpos.len() != nq {
             bail!("step {k} of the episode stores {} positions, {} has {nq}", state.qpos.len(), ep.env_id);
         }
-        if let Some(i) = state.qpos.iter().position(|v| !v.is_finite()) {
-            bail!("step {k} of the episode stores position {i} as {}; the dump was edited or damaged", state.qpos[i]);
+        // A joint position beyond 10 km or 10⁴ rad is no state of the scene.
+        if let Some(i) = state.qpos.iter().position(|v| !(v.abs() <= 1e4)) {
+            bail!(
+                "step {k} of the episode stores joint position {i} as {:e}, no state of the scene; the dump was \
+                 edited or damaged",
+                state.qpos[i]
+            );
         }
         let data = env.data_mut();
         data.qpos_mut().copy_from_slice(&state.qpos);
