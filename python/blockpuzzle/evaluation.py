@@ -137,7 +137,10 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
     successes = failures = success_steps = finished = 0
     outcomes = dict.fromkeys(OUTCOMES, 0)
     while finished < episodes:
-        actions = np.asarray(policy(obs), dtype=np.float32).reshape(n, 4)
+        actions = np.asarray(policy(obs), dtype=np.float32)
+        if actions.shape != (n, 4):
+            raise ValueError(f"the policy returned actions of shape {actions.shape} for {n} observations; "
+                             f"return one action per observation, shape ({n}, 4)")
         obs, _, terminated, truncated, info = envs.step(actions)
         steps += 1
         success |= info["is_success"]

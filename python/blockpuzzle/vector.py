@@ -94,7 +94,12 @@ class BlockPuzzleVectorEnv(VectorEnv):
         return self._out_obs(), info
 
     def step(self, actions):
-        actions = np.ascontiguousarray(actions, dtype=np.float32).reshape(self.num_envs, -1)
+        actions = np.ascontiguousarray(actions, dtype=np.float32)
+        if actions.shape != self.action_space.shape:
+            raise ValueError(
+                f"invalid actions of shape {actions.shape}: {self.num_envs} environments take a batch of shape "
+                f"{self.action_space.shape}, one row each (nothing is reshaped)"
+            )
         info = self._native.step(actions, self._obs, self._rewards, self._terminated, self._truncated)
         return (self._out_obs(), self._out(self._rewards), self._out(self._terminated),
                 self._out(self._truncated), info)

@@ -65,6 +65,15 @@ def test_an_action_of_another_shape_is_refused_not_flattened():
     with pytest.raises(ValueError, match=r"shape \(1, 4\)"):
         env.step(np.zeros((1, 4), np.float32))
     env.step(np.zeros(4, np.float32))
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=1)
+    envs.reset(seed=0)
+    for shape in [(8,), (4, 2), (1, 4)]:
+        with pytest.raises(ValueError, match=r"invalid actions of shape"):
+            envs.step(np.zeros(shape, np.float32))
+    envs.step(np.zeros((2, 4), np.float32))
+    envs.close()
+    with pytest.raises(ValueError, match=r"actions of shape \(4, 8\) for 8 observations"):
+        blockpuzzle.evaluate(lambda obs: np.zeros((4, len(obs))), suite="layout", num_envs=8, threads=1)
 
 
 @pytest.mark.parametrize("native", [True, False])
