@@ -100,8 +100,11 @@ def make_task(path: str, **kwargs) -> gymnasium.Env:
 
 
 def _register() -> None:
-    # Each task file sets its own step limit and the environment truncates there itself, so no
-    # TimeLimit wrapper is added. `Task-v0` takes any task file: gymnasium.make(..., task=path).
+    # Each task file sets its own step limit and the environment truncates there itself; the
+    # registry records it too (spec.max_episode_steps, which TimeLimit, RecordEpisodeStatistics
+    # and SB3's Monitor read; the TimeLimit gymnasium.make adds truncates at the same step).
+    # `Task-v0` takes any task file, gymnasium.make(..., task=path), so its spec has no limit: pass
+    # max_episode_steps= to gymnasium.make where a wrapper needs one.
     for env_id in [*env_ids(), "Task-v0"]:
         full = f"{NAMESPACE}/{env_id}"
         if full in gymnasium.registry:
@@ -111,6 +114,7 @@ def _register() -> None:
             id=full,
             entry_point="blockpuzzle.env:BlockPuzzleEnv",
             vector_entry_point="blockpuzzle.vector:BlockPuzzleVectorEnv",
+            max_episode_steps=None if env_id == "Task-v0" else _native.max_episode_steps(env_id),
             kwargs=kwargs,
         )
 

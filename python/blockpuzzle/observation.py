@@ -24,11 +24,14 @@ def space(layout: dict, low: np.ndarray, high: np.ndarray) -> spaces.Space:
     if layout["mode"] == "flat":
         return spaces.Box(low=low, high=high, dtype=np.float32)
     r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+    # sort_keys=False keeps this order (by default a Dict sorts its keys: mask | objects | robot), and
+    # batch_space keeps the setting, so gymnasium's FlattenObservation gives the documented
+    # robot | objects | mask vector for one environment and for a batch.
     return spaces.Dict({
         "robot": spaces.Box(-np.inf, np.inf, (r,), np.float32),
         "objects": spaces.Box(-np.inf, np.inf, (m, f), np.float32),
         "mask": spaces.Box(0.0, 1.0, (m,), np.float32),
-    })
+    }, sort_keys=False)
 
 
 def split(obs: np.ndarray, layout: dict):

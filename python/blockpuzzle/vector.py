@@ -13,6 +13,7 @@ from gymnasium.vector.utils import batch_space
 
 from . import observation
 from ._native import Env as _NativeEnv
+from ._native import max_episode_steps as _native_max_steps
 from ._native import VecEnv as _NativeVecEnv
 
 
@@ -34,7 +35,13 @@ class BlockPuzzleVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
     def __init__(self, task: str, num_envs: int, threads: int | None = None, copy: bool = True,
-                 obs_mode: str = "flat"):
+                 obs_mode: str = "flat", max_episode_steps: int | None = None):
+        # gymnasium.make_vec passes the spec's step limit: the task's own, where each environment
+        # truncates. Another limit is a different task (write it in a task file).
+        if max_episode_steps is not None and max_episode_steps != _native_max_steps(str(task)):
+            raise ValueError(f"max_episode_steps={max_episode_steps}: {task} truncates its episodes at "
+                             f"{_native_max_steps(str(task))} steps; for another limit write a task file with "
+                             "max_episode_steps set")
         if threads is None:
             threads = min(num_envs, os.cpu_count() or 1, 256)  # 256: the engine's thread bound
         observation.check_mode(obs_mode)

@@ -344,6 +344,13 @@ fn _golden_digest(env: &str, scripted: bool, level: usize, challenge: bool, seed
     })
 }
 
+/// The step limit of a registered id or task file (its `max_episode_steps`), read
+/// without building the scene: what Gymnasium's registry records as the spec's.
+#[pyfunction]
+fn max_episode_steps(task: &str) -> PyResult<usize> {
+    Ok(crate::task(task)?.spec.max_episode_steps)
+}
+
 /// The registered environment ids.
 #[pyfunction]
 fn env_ids() -> Vec<&'static str> {
@@ -454,6 +461,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(policy::evaluate_saved, m)?)?;
     m.add_function(wrap_pyfunction!(policy::build_info, m)?)?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
+    m.add_function(wrap_pyfunction!(max_episode_steps, m)?)?;
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;

@@ -9,7 +9,7 @@ use blockpuzzle::rules::ContactState;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray1, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use std::sync::{Mutex, PoisonError};
 
 /// N environments of one task, stepped in Rust threads. It may be made on
@@ -80,8 +80,43 @@ impl VecEnv {
             }
         }
         d.set_item("contact_matrix", PyArray1::from_vec(py, cells).reshape([reports.len(), n, n])?)?;
+        // The single environment's other keys, as Gymnasium's vector info holds values that are not
+        // numbers: one-dimensional object arrays (None for the environments the call did not reach).
+        let objects = |values: Vec<PyObject>| -> PyResult<Bound<'py, PyAny>> {
+            let a = py.import("numpy")?.call_method1("empty", (values.len(), "object"))?;
+            for (k, v) in values.into_iter().enumerate() {
+                a.set_item(k, v)?;
+            }
+            Ok(a)
+        };
+        let distribution: Vec<PyObject> = infos
+            .iter()
+            .map(|i| match i.and_then(|i| i.distribution.as_deref()) {
+                Some(name) => pyo3::types::PyString::new(py, name).into_any().unbind(),
+                None => py.None(),
+            })
+            .collect();
+        d.set_item("distribution", objects(distribution)?)?;
+        let touching = infos
+            .iter()
+            .map(|i| match i {
+                Some(i) => Ok(PyList::new(py, i.touching.iter().map(|&(a, b)| (a, b)))?.into_any().unbind()),
+                None => Ok(py.None()),
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        d.set_item("touching", objects(touching)?)?;
         let present: Vec<bool> = infos.iter().map(Option::is_some).collect();
-        for key in ["is_success", "is_failure", "challenge", "unstable", "level", "elapsed_steps", "contact_matrix"] {
+        for key in [
+            "is_success",
+            "is_failure",
+            "challenge",
+            "unstable",
+            "level",
+            "elapsed_steps",
+            "contact_matrix",
+            "distribution",
+            "touching",
+        ] {
             d.set_item(format!("_{key}"), PyArray1::from_vec(py, present.clone()))?;
         }
         d.set_item("autoreset", PyArray1::from_vec(py, reports.iter().map(|r| r.autoreset).collect::<Vec<_>>()))?;

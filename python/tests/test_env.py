@@ -236,3 +236,17 @@ def test_a_missing_or_other_dependency_is_an_importerror_naming_the_pip_command(
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and pip in out.stdout, out.stdout + out.stderr
+
+
+def test_the_registry_records_each_tasks_step_limit():
+    for env_id in blockpuzzle.env_ids():
+        spec = gym.spec(f"BlockPuzzle/{env_id}")
+        assert spec.max_episode_steps == blockpuzzle._native.max_episode_steps(env_id) > 0, env_id
+    env = gym.wrappers.RecordEpisodeStatistics(gym.make("BlockPuzzle/BlocksTouch-v0"))
+    assert env.spec.max_episode_steps == 50
+    env.reset(seed=0)
+    for t in range(50):
+        _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        if terminated or truncated:
+            break
+    assert truncated and t == 49 and info["episode"]["l"] == 50

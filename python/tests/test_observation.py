@@ -96,3 +96,21 @@ def test_variable_counts_in_the_vector_env_do_not_depend_on_num_envs_or_threads(
 
     a = run(2, 1)
     assert np.array_equal(a, run(2, 2)) and np.array_equal(a, run(5, 3))
+
+
+def test_flatten_observation_gives_the_documented_order():
+    """gymnasium's FlattenObservation flattens a Dict in its space's key order: robot | objects | mask,
+    the native vector a set policy reads, for one environment and for a batch."""
+    from gymnasium.spaces import flatten
+    from gymnasium.wrappers import FlattenObservation
+    from gymnasium.vector.utils import batch_space
+
+    env = gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="objects")
+    assert list(env.observation_space.spaces) == ["robot", "objects", "mask"]
+    assert list(batch_space(env.observation_space, 3).spaces) == ["robot", "objects", "mask"]
+    obs, _ = env.reset(seed=0)
+    flat = FlattenObservation(gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="objects"))
+    vec, _ = flat.reset(seed=0)
+    want = np.concatenate([obs["robot"], obs["objects"].reshape(-1), obs["mask"]])
+    np.testing.assert_array_equal(vec, want)
+    np.testing.assert_array_equal(flatten(env.observation_space, obs), want)

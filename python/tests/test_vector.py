@@ -139,3 +139,24 @@ def test_absurd_sizes_are_refused_naming_the_range():
         blockpuzzle.make_vec("BlocksTouch-v0", num_envs=100_000)
     with pytest.raises(ValueError, match="threads = 0: allowed are 1 to 256"):
         blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=0)
+
+
+def test_the_vector_info_has_the_single_environments_keys():
+    single = gym.make("BlockPuzzle/BlocksTouch-v0")
+    _, single_info = single.reset(seed=0)
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=1)
+    _, info = envs.reset(seed=0)
+    for key in single_info:
+        assert key in info and f"_{key}" in info, key
+    assert info["distribution"].shape == (2,) and info["distribution"][0] == single_info["distribution"]
+    assert info["touching"].shape == (2,) and info["touching"][0] == single_info["touching"]
+    _, _, _, _, info = envs.step(np.zeros((2, 4), np.float32))
+    assert isinstance(info["touching"][1], list)
+
+
+def test_make_vec_takes_the_spec_step_limit_and_refuses_another():
+    envs = gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    assert envs.spec.max_episode_steps == 50
+    with pytest.raises(ValueError, match="truncates its episodes at 50 steps"):
+        gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                     max_episode_steps=10)
