@@ -87,5 +87,11 @@ class BlockPuzzleEnv(gymnasium.Env):
             return None
         return self._env.render()
 
+    def __getstate__(self):
+        raise observation.not_copyable(self)
+
+    def __deepcopy__(self, memo):
+        raise observation.not_copyable(self)
+
     def close(self):
         self._env.close()

@@ -46,3 +46,13 @@ def split(obs: np.ndarray, layout: dict):
         "objects": obs[..., r:r + m * f].reshape(*lead, m, f),
         "mask": obs[..., r + m * f:],
     }
+
+
+def not_copyable(env) -> TypeError:
+    """The error pickling or deep-copying an environment raises: it holds a MuJoCo simulation (and
+    threads, for the vector one), which is remade rather than copied."""
+    spec = getattr(env, "spec", None)
+    how = (f"gymnasium.make({spec.id!r}, **{spec.kwargs!r})" if spec is not None
+           else "blockpuzzle.make_task(path) or gymnasium.make(id)")
+    return TypeError(f"a {type(env).__name__} cannot be pickled or copied: it holds a MuJoCo simulation. Make "
+                     f"another with {how} and reset it with the same seed, which reproduces the episode exactly")

@@ -111,6 +111,12 @@ class BlockPuzzleVectorEnv(VectorEnv):
         return (self._out_obs(), self._out(self._rewards), self._out(self._terminated),
                 self._out(self._truncated), info)
 
+    def __getstate__(self):
+        raise observation.not_copyable(self)
+
+    def __deepcopy__(self, memo):
+        raise observation.not_copyable(self)
+
     def close_extras(self, **kwargs):
         self._native.close()
 

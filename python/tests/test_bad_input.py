@@ -87,3 +87,14 @@ def test_a_cut_short_zoo_entry_names_its_file(tmp_path, native):
         cut.write_bytes(data[: len(data) // 2])
         with pytest.raises(ValueError, match=f"e{suffix}"):
             zoo.load(tmp_path / "e.json", native=native)
+
+
+def test_pickling_or_copying_an_environment_says_how_to_remake_it():
+    import copy
+    import pickle
+
+    for env in (gym.make("BlockPuzzle/BlocksTouch-v0").unwrapped, blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2)):
+        for attempt in (pickle.dumps, copy.deepcopy):
+            with pytest.raises(TypeError, match="cannot be pickled or copied.*same seed"):
+                attempt(env)
+        env.close()
