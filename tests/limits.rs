@@ -697,6 +697,10 @@ fn odd_logs_suites_and_entries_are_named_not_used() {
     let twice = format!("{text_of}[[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 100\nepisodes = 1\n");
     std::fs::write(&suite, twice).unwrap();
     refused(&bp_in(d, &eval), &["splits.test[0] and splits.test[1] play the same episodes"]);
+    std::fs::write(&suite, &text_of).unwrap();
+    let onto_md = [&eval[..], &["--out", "r.md"]].concat();
+    refused(&bp_in(d, &onto_md), &["--out r.md", "give NAME.json"]);
+    assert!(!d.join("r.md").exists());
     // A task file's fixed-length list with an element too many.
     let task = d.join("t.toml");
     let builtin = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tasks/BlocksAvoid-v0.toml")).unwrap();

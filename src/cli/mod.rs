@@ -880,6 +880,12 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
         (None, Some(checkpoint), None) => eval_out(checkpoint, &format!("suite-{}", suite.name)),
         (None, None, None) => bail!("give --checkpoint POLICY or --baseline scripted|obs-hash"),
     };
+    if out.extension().is_some_and(|e| e.eq_ignore_ascii_case("md")) {
+        bail!(
+            "--out {}: names the JSON result, whose Markdown goes beside it as NAME.md; give NAME.json",
+            out.display()
+        );
+    }
     crate::io::check_output(&out)?;
     // The Markdown goes beside a file; a device or pipe gets the JSON alone.
     let md = match crate::io::target(&out) {
