@@ -39,8 +39,8 @@ pub enum Target {
     Stream,
 }
 
-/// An error saying why `_path` is refused ("it is a folder; ..."); the caller names the path.
-fn refuse(_path: &Path, why: &str) -> std::io::Error {
+/// An error saying why a path is refused ("it is a folder; ..."); the caller names the path.
+fn refuse(why: &str) -> std::io::Error {
     std::io::Error::other(format!("it {why}"))
 }
 
@@ -54,10 +54,10 @@ pub fn target(path: &Path) -> std::io::Result<Target> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
             if !parent.is_dir() {
-                return Err(refuse(
-                    path,
-                    &format!("cannot be created: the folder {} does not exist (create it first)", parent.display()),
-                ));
+                return Err(refuse(&format!(
+                    "cannot be created: the folder {} does not exist (create it first)",
+                    parent.display()
+                )));
             }
             return Ok(Target::File { path: path.to_owned(), permissions: None });
         }
@@ -69,10 +69,9 @@ pub fn target(path: &Path) -> std::io::Result<Target> {
                 Target::File { permissions, .. } => Ok(Target::File { path: real, permissions }),
                 Target::Stream => Ok(Target::Stream),
             },
-            Err(_) => Err(refuse(
-                path,
-                "is a symbolic link to a path that does not exist; remove the link or give another path",
-            )),
+            Err(_) => {
+                Err(refuse("is a symbolic link to a path that does not exist; remove the link or give another path"))
+            }
         };
     }
     let t = meta.file_type();
@@ -84,26 +83,27 @@ pub fn target(path: &Path) -> std::io::Result<Target> {
             .open(path)
             .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
         if meta.permissions().readonly() || denied {
-            return Err(refuse(path, "is read-only; make it writable (chmod u+w) or give another path"));
+            return Err(refuse("is read-only; make it writable (chmod u+w) or give another path"));
         }
         Ok(Target::File { path: path.to_owned(), permissions: Some(meta.permissions()) })
     } else if t.is_dir() {
-        Err(refuse(path, "is a folder; give a file path (for example a name inside it)"))
+        Err(refuse("is a folder; give a file path (for example a name inside it)"))
     } else if t.is_char_device() || t.is_fifo() {
         Ok(Target::Stream)
     } else if t.is_block_device() {
-        Err(refuse(path, "is a block device; blockpuzzle writes only files, character devices and pipes"))
+        Err(refuse("is a block device; blockpuzzle writes only files, character devices and pipes"))
     } else {
-        Err(refuse(path, "is a socket; blockpuzzle writes only files, character devices and pipes"))
+        Err(refuse("is a socket; blockpuzzle writes only files, character devices and pipes"))
     }
 }
 
-/// Checks before any work is done that `path` can be written as [`Output`] would.
+/// Checks before any work is done that `path` can be written as [`Output`]
+/// would, and says how ([`target`]).
 ///
 /// # Errors
 /// As [`target`], naming the path.
-pub fn check_output(path: &Path) -> anyhow::Result<()> {
-    target(path).map(drop).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
+pub fn check_output(path: &Path) -> anyhow::Result<Target> {
+    target(path).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
 }
 
 /// Opens a character device or a pipe for writing in place. A FIFO that no
@@ -113,7 +113,7 @@ fn open_stream(path: &Path) -> std::io::Result<File> {
     let probe = std::fs::OpenOptions::new().write(true).custom_flags(libc::O_NONBLOCK).open(path);
     match probe {
         Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
-            Err(refuse(path, "is a FIFO that no process reads; start its reader first (a write would wait forever)"))
+            Err(refuse("is a FIFO that no process reads; start its reader first (a write would wait forever)"))
         }
         Err(e) => Err(e),
         // A reader holds it: the ordinary (blocking) open returns at once.
@@ -316,10 +316,7 @@ pub fn read_bytes(path: &Path, what: &str, max: u64) -> std::io::Result<Vec<u8>>
 pub fn read_text(path: &Path, what: &str, max: u64) -> std::io::Result<String> {
     let bytes = read(path, what, max, true)?;
     String::from_utf8(bytes).map_err(|e| {
-        refuse(
-            path,
-            &format!("is not UTF-8 text (byte offset {}); give the {what} itself", e.utf8_error().valid_up_to()),
-        )
+        refuse(&format!("is not UTF-8 text (byte offset {}); give the {what} itself", e.utf8_error().valid_up_to()))
     })
 }
 
@@ -327,13 +324,13 @@ fn read(path: &Path, what: &str, max: u64, text: bool) -> std::io::Result<Vec<u8
     let meta = std::fs::metadata(path)?;
     let t = meta.file_type();
     if t.is_dir() {
-        return Err(refuse(path, &format!("is a folder; give the {what} itself")));
+        return Err(refuse(&format!("is a folder; give the {what} itself")));
     }
     if !(t.is_file() || t.is_fifo() || t.is_char_device()) {
-        return Err(refuse(path, &format!("is not a regular file; give the {what} itself")));
+        return Err(refuse(&format!("is not a regular file; give the {what} itself")));
     }
     if t.is_file() && meta.len() > max {
-        return Err(refuse(path, &format!("is {}; a {what} is at most {}", size(meta.len()), size(max))));
+        return Err(refuse(&format!("is {}; a {what} is at most {}", size(meta.len()), size(max))));
     }
     // A pipe is opened without waiting for a writer, and read until every
     // writer has closed it (none at all: it reads as empty).
@@ -348,15 +345,14 @@ fn read(path: &Path, what: &str, max: u64, text: bool) -> std::io::Result<Vec<u8
                 if text {
                     if let Some(at) = chunk[..n].iter().position(|&b| b == 0) {
                         let at = bytes.len() + at;
-                        return Err(refuse(
-                            path,
-                            &format!("is not a text file (a NUL byte at offset {at}); give the {what} itself"),
-                        ));
+                        return Err(refuse(&format!(
+                            "is not a text file (a NUL byte at offset {at}); give the {what} itself"
+                        )));
                     }
                 }
                 bytes.extend_from_slice(&chunk[..n]);
                 if bytes.len() as u64 > max {
-                    return Err(refuse(path, &format!("holds more than {}; a {what} is at most that", size(max))));
+                    return Err(refuse(&format!("holds more than {}; a {what} is at most that", size(max))));
                 }
             }
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {

@@ -231,8 +231,7 @@ fn check_disjoint(splits: &[Split]) -> Result<(), String> {
         |name: &'static str| splits.iter().filter(move |s| s.name == name).flat_map(|s| s.rows.iter().enumerate());
     for (i, a) in rows("train") {
         for (j, b) in rows("test") {
-            let (a_end, b_end) = (a.seed.saturating_add(a.episodes as u64), b.seed.saturating_add(b.episodes as u64));
-            if a.seed < b_end && b.seed < a_end {
+            if let Some((a_end, b_end)) = seeds_overlap(a, b) {
                 return Err(format!(
                     "the seeds of splits.train[{i}] ({}..{a_end}) and splits.test[{j}] ({}..{b_end}) overlap; \
                      train and test seeds must be disjoint",
@@ -242,6 +241,12 @@ fn check_disjoint(splits: &[Split]) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The ends of two rows' seed ranges (`seed..seed + episodes`) where the ranges overlap.
+fn seeds_overlap(a: &Row, b: &Row) -> Option<(u64, u64)> {
+    let (a_end, b_end) = (a.seed.saturating_add(a.episodes as u64), b.seed.saturating_add(b.episodes as u64));
+    (a.seed < b_end && b.seed < a_end).then_some((a_end, b_end))
 }
 
 /// No two rows of a split may play the same episodes (the same task content,
@@ -254,9 +259,7 @@ fn check_no_repeats(splits: &[Split]) -> Result<(), String> {
                 let same = a.task.source.hash == b.task.source.hash
                     && a.distribution == b.distribution
                     && a.level.unwrap_or(a.task.max_level()) == b.level.unwrap_or(b.task.max_level());
-                let (a_end, b_end) =
-                    (a.seed.saturating_add(a.episodes as u64), b.seed.saturating_add(b.episodes as u64));
-                if same && a.seed < b_end && b.seed < a_end {
+                if let Some((a_end, b_end)) = seeds_overlap(a, b).filter(|_| same) {
                     return Err(format!(
                         "splits.{0}[{i}] and splits.{0}[{j}] play the same episodes ({1}, {2}, seeds {3}..{a_end} \
                          and {4}..{b_end}), which the mean would count twice; remove one or give it other seeds",

@@ -886,11 +886,10 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
             out.display()
         );
     }
-    crate::io::check_output(&out)?;
-    // The Markdown goes beside a file; a device or pipe gets the JSON alone.
-    let md = match crate::io::target(&out) {
-        Ok(crate::io::Target::File { .. }) => Some(out.with_extension("md")),
-        _ => None,
+    // Checked before any episode is played; the Markdown goes beside a file, a device or pipe gets the JSON alone.
+    let md = match crate::io::check_output(&out)? {
+        crate::io::Target::File { .. } => Some(out.with_extension("md")),
+        crate::io::Target::Stream => None,
     };
     if let Some(md) = &md {
         crate::io::check_output(md)?;

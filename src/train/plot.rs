@@ -84,7 +84,7 @@ pub fn png_only(path: &Path) -> Result<()> {
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         bail!("{}: plots are PNG images; give a path ending in .png", path.display());
     }
-    crate::io::check_output(path)
+    crate::io::check_output(path).map(drop)
 }
 
 /// Two panels of the same curves: against the epoch (left) and against
@@ -174,8 +174,8 @@ impl From<&EpochRow> for FinalsPoint {
 pub fn read_finals(path: &Path) -> Result<Vec<FinalsPoint>> {
     let rows: Vec<FinalsPoint> =
         super::rundir::read_log(path, "progress log", "CSV with columns epoch, time/env_steps, finals/success")?;
-    if let Some(r) = rows.iter().find(|r| !(0.0..=1.0).contains(&r.finals_success)) {
-        bail!("{}: epoch {}: finals/success is {}, not a rate from 0 to 1", path.display(), r.epoch, r.finals_success);
+    for r in &rows {
+        super::rundir::check_rate(path, r.epoch, "finals/success", r.finals_success)?;
     }
     Ok(rows)
 }

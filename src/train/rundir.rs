@@ -144,14 +144,22 @@ pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
         for (column, v) in
             [("train/success", r.train_success), ("test/success", r.test_success), ("finals/success", r.finals_success)]
         {
-            if !(0.0..=1.0).contains(&v) {
-                bail!(
-                    "{}: epoch {}: {column} is {v}, not a rate from 0 to 1; the log was edited or damaged",
-                    path.display(),
-                    r.epoch
-                );
-            }
+            check_rate(path, r.epoch, column, v)?;
         }
     }
     Ok(rows)
+}
+
+/// A log's success column must hold a rate from 0 to 1.
+///
+/// # Errors
+/// Anything else (NaN included), naming the file, epoch and column.
+pub fn check_rate(path: &Path, epoch: usize, column: &str, v: f64) -> Result<()> {
+    if !(0.0..=1.0).contains(&v) {
+        bail!(
+            "{}: epoch {epoch}: {column} is {v}, not a rate from 0 to 1; the log was edited or damaged",
+            path.display()
+        );
+    }
+    Ok(())
 }
