@@ -46,13 +46,12 @@ test-mujoco3: setup-mujoco3
 	bash bench/align_fetchpush.sh --record
 	BLOCKPUZZLE_ALIGN_REFERENCE=$(CURDIR)/target/align/fetchpush-v4.json $(CARGO) test $(M3) --lib --tests
 
-# The Python wheel (MuJoCo 3.11.0 from the mujoco wheel, the Fetch files from gymnasium-robotics'),
-# installed into a fresh venv and tested away from the checkout; its CLI comparisons run the
-# command line built on the same engine.
-M3CLI = --release --no-default-features --features train,mujoco3 --target-dir target/mujoco3 --bin blockpuzzle
+# The Python sdist and, built from it, the manylinux_2_28 wheel (MuJoCo 3.11.0 from the mujoco wheel,
+# the Fetch files from gymnasium-robotics'), installed into a fresh venv and tested away from the
+# checkout; its CLI comparisons run the package's own `blockpuzzle` command (the Rust command line's
+# code, on the same engine).
 test-wheel: setup-mujoco3
-	$(CARGO) build $(M3CLI)
-	BLOCKPUZZLE_BIN=$(CURDIR)/target/mujoco3/release/blockpuzzle bash scripts/python_check.sh
+	bash scripts/python_check.sh
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

@@ -16,7 +16,10 @@ fn main() {
     let default = if wheel { String::new() } else { models.display().to_string() };
     println!("cargo:rustc-env=BLOCKPUZZLE_DEFAULT_MODELS_DIR={default}");
     println!("cargo:rerun-if-changed=build.rs");
-    println!("cargo:rustc-env=BLOCKPUZZLE_COMMIT={}", commit(Path::new(&manifest)).unwrap_or_default());
+    // Built from a source package (the Python sdist has no .git): the commit its maker recorded.
+    println!("cargo:rerun-if-env-changed=BLOCKPUZZLE_SOURCE_COMMIT");
+    let commit = commit(Path::new(&manifest)).or_else(|| std::env::var("BLOCKPUZZLE_SOURCE_COMMIT").ok());
+    println!("cargo:rustc-env=BLOCKPUZZLE_COMMIT={}", commit.unwrap_or_default());
     // With the `mujoco3` feature, libmujoco.so.3.x lives in a folder of this checkout
     // (engines/, or MUJOCO_DIR): binaries and tests find it through an rpath.
     if let Some(lib) = std::env::var_os("DEP_MUJOCO_LIB_DIR") {

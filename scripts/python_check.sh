@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# The Python package as a user gets it: builds the wheel (scripts/build_wheel.sh: against the
-# mujoco==3.11.0 wheel, repaired by auditwheel without libmujoco), installs it into a fresh venv
-# (with its dependencies from PyPI: mujoco, gymnasium-robotics, gymnasium, numpy) and runs the
-# pytest suite from another folder, with HOME temporary and BLOCKPUZZLE_MODELS_DIR unset, so
-# nothing can come from this checkout: the engine is the mujoco package's, the Fetch files are
-# gymnasium-robotics', the zoo is the package's. The suite's CLI comparisons run the command line
-# built on MuJoCo 3.11 ($BLOCKPUZZLE_BIN; `make test` builds target/mujoco3/release/blockpuzzle).
+# The Python package as a user gets it: builds the sdist and from it the manylinux_2_28 wheel
+# (scripts/build_wheel.sh: against the mujoco==3.11.0 wheel, repaired by auditwheel without
+# libmujoco), installs it into a fresh venv (with its dependencies from PyPI: mujoco,
+# gymnasium-robotics, gymnasium, numpy) and runs the pytest suite from another folder, with HOME
+# temporary and BLOCKPUZZLE_MODELS_DIR unset, so nothing can come from this checkout: the engine is
+# the mujoco package's, the Fetch files are gymnasium-robotics', the zoo is the package's. The
+# suite's CLI comparisons run the package's own `blockpuzzle` command (or $BLOCKPUZZLE_BIN, a
+# command line built on MuJoCo 3.11.0).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 WHEEL="$(bash "$ROOT/scripts/build_wheel.sh")"

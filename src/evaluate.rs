@@ -46,7 +46,7 @@ impl Policy for Trained {
 
 /// A policy that needs no training, evaluated as a reference point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "train", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Baseline {
     /// The scripted controller of each task (`src/policy.rs`).
     Scripted,
@@ -359,7 +359,9 @@ pub struct SuiteResult {
 
 /// Evaluates the policy in `saved` (loaded from `path`) on every row of
 /// `suite`; a row whose observation the policy cannot take (directly or
-/// with grey blocks removed) is skipped with the reason.
+/// with grey blocks removed) is skipped with the reason. `on_row` hears of
+/// each row as it is done (split name, the row, rows done, rows in all): a
+/// progress display.
 ///
 /// # Errors
 /// Environment failures (a row whose environment cannot be made is one).
@@ -368,7 +370,10 @@ pub fn evaluate_suite(
     suite: &crate::suite::Suite,
     threads: usize,
     harness: Harness,
+    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize),
 ) -> Result<SuiteResult> {
+    let total: usize = suite.splits.iter().map(|s| s.rows.len()).sum();
+    let mut done = 0;
     let mut splits = Vec::new();
     for split in &suite.splits {
         let mut rows = Vec::new();
@@ -398,6 +403,8 @@ pub fn evaluate_suite(
                 evaluation,
                 skipped,
             });
+            done += 1;
+            on_row(&split.name, rows.last().expect("a row was just pushed"), done, total);
         }
         let rates: Vec<f64> = rows.iter().filter_map(|r| r.evaluation.as_ref().map(|e| e.success_rate)).collect();
         let mean_success = (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64);

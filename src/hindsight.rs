@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 /// Which other tasks an episode is relabelled as (`--hindsight-strategy`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[cfg_attr(feature = "train", derive(clap::ValueEnum))]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Strategy {
     /// A block that blue touched becomes green (the green blocks take its colour).

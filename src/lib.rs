@@ -37,6 +37,8 @@ pub mod zoo;
 pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use rules::Colour;
 
+#[cfg(feature = "cli")]
+pub mod cli;
 #[cfg(feature = "render")]
 pub mod render;
 
@@ -48,8 +50,11 @@ pub mod bench;
 #[cfg(feature = "train")]
 pub mod blas;
 #[cfg(feature = "train")]
-pub mod cli;
-#[cfg(feature = "train")]
 pub mod table;
 #[cfg(feature = "train")]
 pub mod train;
+
+/// The README's Rust example, compiled and run by `cargo test` (a doctest).
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctest;

@@ -6,8 +6,5 @@ fn main() {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     blockpuzzle::blas::ensure_fast_kernels();
-    if let Err(e) = blockpuzzle::cli::main() {
-        eprintln!("error: {}", blockpuzzle::cli::error_text(&e));
-        std::process::exit(1);
-    }
+    std::process::exit(blockpuzzle::cli::run(std::env::args_os().collect()));
 }

@@ -51,6 +51,13 @@ pub fn read(path: &Path) -> Result<ResultFile> {
     }
     let result: SuiteResult = serde_json::from_value(value)
         .with_context(|| format!("{} is not a well-formed suite result", path.display()))?;
+    if let Some(n) = result.suite.episodes_per_row {
+        bail!(
+            "{}: a shortened run (at most {n} episodes per row), not the suite's score; evaluate the full \
+             suite (without --episodes-per-row / episodes=) to compare or rank it",
+            path.display()
+        );
+    }
     if result.provenance.suite.as_ref() != Some(&result.suite) {
         bail!(
             "{}: its provenance names another suite than its `suite` field (an edited or damaged file); evaluate again",

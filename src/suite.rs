@@ -76,6 +76,9 @@ pub struct Suite {
     pub sha256: String,
     /// The splits, `train` and `test` first, then any others by name.
     pub splits: Vec<Split>,
+    /// Set by [`Suite::first_episodes`]: at most this many episodes per row, a quick look whose
+    /// numbers are not the suite's score (results record it in their [`SuiteId`]).
+    pub episodes_per_row: Option<usize>,
 }
 
 /// A named list of rows.
@@ -190,7 +193,13 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
     }
     check_disjoint(&splits).map_err(invalid)?;
     check_no_repeats(&splits).map_err(invalid)?;
-    Ok(Suite { name: spec.name, summary: spec.summary, sha256: hex(&Sha256::digest(text.as_bytes())), splits })
+    Ok(Suite {
+        name: spec.name,
+        summary: spec.summary,
+        sha256: hex(&Sha256::digest(text.as_bytes())),
+        splits,
+        episodes_per_row: None,
+    })
 }
 
 /// One row compiled and checked.
@@ -287,11 +296,34 @@ pub struct SuiteId {
     pub name: String,
     /// SHA-256 of its text.
     pub sha256: String,
+    /// Present when the run was shortened ([`Suite::first_episodes`]): at most this many episodes
+    /// per row. Such a result is not the suite's score: `results` refuses it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub episodes_per_row: Option<usize>,
 }
 
 impl Suite {
     /// Its name and hash, as results record them.
     pub fn id(&self) -> SuiteId {
-        SuiteId { name: self.name.clone(), sha256: self.sha256.clone() }
+        SuiteId { name: self.name.clone(), sha256: self.sha256.clone(), episodes_per_row: self.episodes_per_row }
+    }
+
+    /// The suite shortened to the first `episodes` episodes of every row (rows with fewer keep
+    /// theirs): a quick look at a policy, recorded as such in every result it makes.
+    ///
+    /// # Errors
+    /// `episodes` is 0.
+    pub fn first_episodes(mut self, episodes: usize) -> Result<Suite, SuiteError> {
+        if episodes == 0 {
+            return Err(SuiteError::Invalid {
+                origin: self.name.clone(),
+                message: "a shortened run needs at least 1 episode per row".into(),
+            });
+        }
+        for row in self.splits.iter_mut().flat_map(|s| s.rows.iter_mut()) {
+            row.episodes = row.episodes.min(episodes);
+        }
+        self.episodes_per_row = Some(episodes);
+        Ok(self)
     }
 }

@@ -36,7 +36,7 @@ episodes = 3
 
 fn obs_hash_on(suite: &Path) -> SuiteResult {
     let suite = blockpuzzle::suite::load(suite.to_str().unwrap()).unwrap();
-    evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli).unwrap()
+    evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli, &mut |_, _, _, _| {}).unwrap()
 }
 
 #[test]
@@ -73,6 +73,55 @@ fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
     let m = results::comparable(&a, &b).unwrap_err();
     assert!(m.field.contains("task_sha256") && m.field.contains("train"), "{m}");
     assert!(results::comparable(&a, &a.clone()).is_ok());
+}
+
+#[test]
+fn a_shortened_run_says_so_and_is_never_ranked() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"),
+        dir.path().join("task.toml"),
+    )
+    .unwrap();
+    let path = dir.path().join("edited.toml");
+    std::fs::write(&path, SUITE).unwrap();
+    // The library: rows cut to 2 episodes, the result's suite id says so, each row is reported once.
+    let suite = blockpuzzle::suite::load(path.to_str().unwrap()).unwrap();
+    assert!(suite.clone().first_episodes(0).is_err());
+    let short = suite.first_episodes(2).unwrap();
+    let mut heard = Vec::new();
+    let r = evaluate_suite(
+        Subject::Baseline(Baseline::ObsHash),
+        &short,
+        2,
+        Harness::Cli,
+        &mut |split, row, done, total| heard.push((split.to_owned(), row.episodes, done, total)),
+    )
+    .unwrap();
+    assert_eq!(heard, [("train".to_owned(), 2, 1, 2), ("test".to_owned(), 2, 2, 2)]);
+    assert_eq!((r.suite.episodes_per_row, r.provenance.suite.as_ref().unwrap().episodes_per_row), (Some(2), Some(2)));
+    assert!(r.splits.iter().flat_map(|s| &s.rows).all(|row| row.evaluation.as_ref().unwrap().episodes == 2));
+    // The command line: --episodes-per-row writes it, and `results` refuses to rank or compare it.
+    let a = dir.path().join("short.json");
+    let o = bp(&[
+        "eval",
+        "--suite",
+        path.to_str().unwrap(),
+        "--baseline",
+        "obs-hash",
+        "--episodes-per-row",
+        "1",
+        "--out",
+        a.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
+    assert_eq!(v["suite"]["episodes_per_row"], 1);
+    assert_eq!(v["splits"][0]["rows"][0]["episodes"], 1);
+    let t = text(&bp(&["results", "leaderboard", a.to_str().unwrap()]));
+    assert!(t.contains("shortened run") && t.contains("at most 1 episodes per row"), "{t}");
+    let o = bp(&["eval", "--suite", path.to_str().unwrap(), "--baseline", "obs-hash", "--episodes-per-row", "0"]);
+    assert!(!o.status.success() && text(&o).contains("episodes-per-row"), "{}", text(&o));
 }
 
 #[test]

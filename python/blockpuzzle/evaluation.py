@@ -13,6 +13,8 @@ for outcome count; any other callable plays through this module's loop. Every re
 from __future__ import annotations
 
 import json
+import sys
+import time
 
 import numpy as np
 
@@ -22,7 +24,7 @@ from .vector import make_vec
 
 
 def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, obs_mode: str | None = None,
-             name: str | None = None) -> dict:
+             name: str | None = None, episodes: int | None = None, progress: bool = True) -> dict:
     """Evaluates ``policy`` on ``suite`` (a built-in name such as "layout", or a suite file).
 
     ``policy`` is a zoo policy (``blockpuzzle.zoo.load(...)``), evaluated exactly as
@@ -30,31 +32,48 @@ def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, 
     grey blocks sees them removed; rows whose observation it cannot read are skipped, with the
     reason), or any callable ``policy(obs) -> actions``: it receives a batch of observations
     (``num_envs`` rows, or a dict of batches with ``obs_mode="objects"``) and returns a
-    ``(num_envs, 4)`` array; rows of environments with no episode left to play are ignored.
+    ``(num_envs, 4)`` array; rows of environments with no episode left to play are ignored. A
+    callable with an ``obs_mode`` attribute gets that mode unless ``obs_mode`` is given; one that
+    fails on a row's observation raises a ValueError naming the row's task and observation shape.
     Episode k of a row plays seed ``seed + k``, so the numbers do not depend on ``num_envs`` or
     ``threads``. ``name`` names the policy in the result (default: the zoo entry's name, else the
     callable's ``__name__``).
+
+    ``episodes=N`` plays only the first N episodes of each row: a quick look, recorded in the
+    result (``suite["episodes_per_row"]``), which is then not the suite's score (``blockpuzzle
+    results`` refuses to rank it). ``progress`` prints a line per row to stderr as it is done.
 
     Returns the dict ``blockpuzzle eval --suite`` writes as JSON: ``provenance`` (``blockpuzzle``,
     ``commit``, ``mujoco``, ``harness`` "python", ``policy`` name and sha256, ``suite``),
     ``suite`` with its sha256, ``splits`` of ``rows`` (each with its ``task_sha256`` and its
     ``evaluation``), ``score`` and ``gap``.
     """
+    on_row = _Progress(str(suite), episodes) if progress else None
     actor = getattr(policy, "native", None)
     if actor is not None:
         if obs_mode is not None and obs_mode != policy.obs_mode:
             raise ValueError(f"{policy.name} reads {policy.obs_mode!r} observations, not obs_mode={obs_mode!r}: "
                              "leave obs_mode out for a zoo policy")
-        return json.loads(_native.evaluate_saved(str(policy.path), name or policy.name, str(suite), threads))
-    s = _native.suite(str(suite))
+        return json.loads(_native.evaluate_saved(str(policy.path), name or policy.name, str(suite), threads,
+                                                 episodes, on_row))
+    s = _native.suite(str(suite), episodes)
     name = name or getattr(policy, "__name__", type(policy).__name__)
+    obs_mode = obs_mode or getattr(policy, "obs_mode", None) or "flat"
+    total, done = sum(len(rows) for _, rows in s["splits"]), 0
     splits = []
     for split, rows in s["splits"]:
-        results = [_row(policy, row, num_envs, threads, obs_mode or "flat") for row in rows]
+        results = []
+        for row in rows:
+            results.append(_row(policy, row, num_envs, threads, obs_mode))
+            done += 1
+            if on_row is not None:
+                on_row(split, results[-1], done, total)
         rates = [r["evaluation"]["success_rate"] for r in results]
         splits.append({"name": split, "rows": results, "mean_success": sum(rates) / len(rates)})
     mean = {sp["name"]: sp["mean_success"] for sp in splits}
     suite_id = {"name": s["name"], "sha256": s["sha256"]}
+    if s["episodes_per_row"] is not None:
+        suite_id["episodes_per_row"] = s["episodes_per_row"]
     return {
         "provenance": {**_native.build_info(), "harness": "python", "policy": {"name": name, "sha256": None},
                        "suite": suite_id},
@@ -65,6 +84,20 @@ def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, 
         "score": mean["test"],
         "gap": mean["train"] - mean["test"],
     }
+
+
+class _Progress:
+    """One line per row on stderr: how far, the row, its success and the time so far."""
+
+    def __init__(self, suite: str, episodes: int | None):
+        self.suite = suite if episodes is None else f"{suite} (first {episodes} episodes per row)"
+        self.start = time.monotonic()
+
+    def __call__(self, split: str, row: dict, done: int, total: int) -> None:
+        e = row.get("evaluation")
+        what = f"success {e['success_rate']:.3f}" if e else f"skipped ({row.get('skipped')})"
+        print(f"[{self.suite}] {done}/{total} {split} {row['task']} {row['distribution']}: {what} "
+              f"({time.monotonic() - self.start:.0f} s)", file=sys.stderr, flush=True)
 
 
 #: Height of the table top (m): a blue or green block that starts above it and ends below it was
@@ -137,7 +170,13 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
     successes = failures = success_steps = finished = 0
     outcomes = dict.fromkeys(OUTCOMES, 0)
     while finished < episodes:
-        actions = np.asarray(policy(obs), dtype=np.float32)
+        try:
+            actions = np.asarray(policy(obs), dtype=np.float32)
+        except (ValueError, TypeError, IndexError) as e:
+            shape = {k: v.shape for k, v in obs.items()} if isinstance(obs, dict) else obs.shape
+            raise ValueError(f"the policy failed on {row['task_id']}'s observations (obs_mode={obs_mode!r}, "
+                             f"batch shape {shape}): {e}. Give obs_mode= the mode the policy reads; a policy "
+                             "trained on one task reads only tasks with the same observation") from e
         if actions.shape != (n, 4):
             raise ValueError(f"the policy returned actions of shape {actions.shape} for {n} observations; "
                              f"return one action per observation, shape ({n}, 4)")

@@ -155,11 +155,32 @@ class ZooPolicy:
             flat = np.asarray(obs, np.float32)
             batch = flat.ndim == 2
             flat = flat.reshape(-1, flat.shape[-1])
+        self._check_width(flat.shape[-1])
         if self.native is not None:
             actions = self.native.act(np.ascontiguousarray(flat, np.float32))
         else:
             actions = np.stack([self.act_numpy(row) for row in flat])
         return actions if batch else actions[0]
+
+    @property
+    def obs_dim(self) -> int | None:
+        """The length of the flat observation it reads (None for a set network: any number of slots)."""
+        return None if self.set is not None else int(self.tensors["obs_norm.mean"].shape[0])
+
+    def _check_width(self, width: int) -> None:
+        """An observation of another length is an error naming both shapes and the fix (not a numpy
+        broadcast error, nor a set network silently reading a misaligned vector)."""
+        fix = (f"make the environment with the policy's task and observation mode "
+               f"(gym.make('BlockPuzzle/{self.task_id}', obs_mode={self.obs_mode!r})), or evaluate it with "
+               "blockpuzzle.evaluate(policy, suite=...), which plays each row the way the command line does")
+        if self.set is None and width != self.obs_dim:
+            raise ValueError(f"{self.name} reads flat observations of shape ({self.obs_dim},); these have shape "
+                             f"({width},): {fix}")
+        if self.set is not None:
+            r, f = self.set["robot"], self.set["object"]
+            if width < r or (width - r) % (f + 1):
+                raise ValueError(f"{self.name} reads object-set observations of shape ({r} + k * {f + 1},) "
+                                 f"(robot | {f}-feature rows | mask); these have shape ({width},): {fix}")
 
     def _dense(self, i, x, relu):
         y = x @ self.tensors[f"actor.{i}.weight"].T + self.tensors[f"actor.{i}.bias"]
@@ -213,7 +234,9 @@ class ZooPolicy:
 
     def act_numpy(self, obs) -> np.ndarray:
         """The action for one flat observation vector by the numpy reference pass."""
-        x = self._normalise(np.asarray(obs, np.float32))
+        obs = np.asarray(obs, np.float32)
+        self._check_width(obs.shape[-1])
+        x = self._normalise(obs)
         first = 0
         if self.set is not None:
             x, first = self._pool(x)

@@ -421,12 +421,17 @@ pub(crate) fn task(id: &str) -> PyResult<blockpuzzle::task::Task> {
 /// content hash), `distribution` (None: the
 /// curriculum's), `level` (None: the last), `seed` and `episodes`.
 #[pyfunction]
-fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
-    let s = blockpuzzle::suite::load(name).map_err(suite_err)?;
+#[pyo3(signature = (name, episodes=None))]
+fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<Bound<'py, PyDict>> {
+    let mut s = blockpuzzle::suite::load(name).map_err(suite_err)?;
+    if let Some(n) = episodes {
+        s = s.first_episodes(n).map_err(suite_err)?;
+    }
     let d = PyDict::new(py);
     d.set_item("name", &s.name)?;
     d.set_item("summary", &s.summary)?;
     d.set_item("sha256", &s.sha256)?;
+    d.set_item("episodes_per_row", s.episodes_per_row)?;
     let splits = PyList::empty(py);
     for split in &s.splits {
         let rows = PyList::empty(py);
@@ -447,6 +452,13 @@ fn suite<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
     Ok(d)
 }
 
+/// The command line's commands that need no libtorch, run in this process: `args` from the
+/// program name on; returns the exit status (the `blockpuzzle` command of the package).
+#[pyfunction]
+fn cli(py: Python<'_>, args: Vec<String>) -> i32 {
+    py.allow_threads(|| blockpuzzle::cli::run(args.into_iter().map(Into::into).collect()))
+}
+
 /// The Wilson score interval at 95% of `successes` out of `n` (the CLI's, for `evaluate`).
 #[pyfunction]
 fn wilson95(successes: usize, n: usize) -> (f64, f64) {
@@ -465,6 +477,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
+    m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;
     m.add_function(wrap_pyfunction!(assets_dir, m)?)?;

@@ -66,29 +66,55 @@ impl ZooActor {
         };
         let x = obs.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec();
         let actions: Vec<Vec<f32>> = py.allow_threads(|| x.chunks_exact(dim.max(1)).map(|o| policy.act(o)).collect());
-        let flat: Vec<f32> = actions.into_iter().flat_map(|a| (0..4).map(move |k| a.get(k).copied().unwrap_or(0.0))).collect();
+        let flat: Vec<f32> =
+            actions.into_iter().flat_map(|a| (0..4).map(move |k| a.get(k).copied().unwrap_or(0.0))).collect();
         PyArray1::from_vec(py, flat).reshape([n, 4])
     }
 }
 
 /// A saved policy (a zoo entry's file) on a suite by the CLI's evaluator, named `name` in the
-/// result: the result as JSON text, `harness` "python".
+/// result: the result as JSON text, `harness` "python". `episodes` shortens every row to its first
+/// episodes (recorded in the result); `on_row(split, row, done, total)` is called after each row,
+/// with the row as the result holds it (a dict).
 #[pyfunction]
-#[pyo3(signature = (path, name, suite, threads=None))]
+#[pyo3(signature = (path, name, suite, threads=None, episodes=None, on_row=None))]
 pub(crate) fn evaluate_saved(
     py: Python<'_>,
     path: std::path::PathBuf,
     name: &str,
     suite: &str,
     threads: Option<usize>,
+    episodes: Option<usize>,
+    on_row: Option<PyObject>,
 ) -> PyResult<String> {
     let (_, saved) = blockpuzzle::zoo::load(&path).map_err(zoo_err)?;
-    let suite = blockpuzzle::suite::load(suite).map_err(crate::suite_err)?;
+    let mut suite = blockpuzzle::suite::load(suite).map_err(crate::suite_err)?;
+    if let Some(n) = episodes {
+        suite = suite.first_episodes(n).map_err(crate::suite_err)?;
+    }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let subject = blockpuzzle::evaluate::Subject::Saved(Path::new(name), &saved);
-    let result = py
-        .allow_threads(|| blockpuzzle::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python))
-        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    // The callback's own error (a KeyboardInterrupt included) stops the evaluation at the next row.
+    let mut failed: Option<PyErr> = None;
+    let mut report = |split: &str, row: &blockpuzzle::evaluate::RowResult, done: usize, total: usize| {
+        let Some(f) = on_row.as_ref().filter(|_| failed.is_none()) else { return };
+        Python::with_gil(|py| {
+            let called = serde_json::to_string(row)
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+                .and_then(|text| py.import("json")?.call_method1("loads", (text,)))
+                .and_then(|row| f.call1(py, (split, row, done, total)));
+            if let Err(e) = called {
+                failed = Some(e);
+            }
+        });
+    };
+    let result = py.allow_threads(|| {
+        blockpuzzle::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python, &mut report)
+    });
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let result = result.map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
     serde_json::to_string(&result).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 

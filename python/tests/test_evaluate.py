@@ -3,6 +3,7 @@
 import json
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import gymnasium as gym
@@ -97,14 +98,14 @@ def test_obs_hash_is_pinned_to_the_rust_bits():
 
 
 def cli_binary() -> Path:
-    """The command line on the package's engine (MuJoCo 3.11.0): ``$BLOCKPUZZLE_BIN``, else the
-    checkout's ``target/mujoco3/release/blockpuzzle`` (``make test-wheel`` builds it)."""
-    root = Path(__file__).resolve().parents[2]
+    """The command line on the package's engine (MuJoCo 3.11.0): ``$BLOCKPUZZLE_BIN`` (e.g. the Rust
+    binary built with ``--features train,mujoco3``), else the package's own ``blockpuzzle`` command
+    (the same Rust command line, its commands that need no libtorch)."""
     given = os.environ.get("BLOCKPUZZLE_BIN")
-    binary = Path(given) if given else root / "target" / "mujoco3" / "release" / "blockpuzzle"
+    binary = Path(given) if given else Path(sys.executable).parent / "blockpuzzle"
     if not binary.is_file():
-        pytest.fail(f"no blockpuzzle binary at {binary}: build it with `cargo build --release --no-default-features "
-                    "--features train,mujoco3 --target-dir target/mujoco3 --bin blockpuzzle` (`make test-wheel` does)")
+        pytest.fail(f"no blockpuzzle command at {binary}: install the package (its `blockpuzzle` script), or point "
+                    "$BLOCKPUZZLE_BIN at a command line built on MuJoCo 3.11.0")
     return binary
 
 
@@ -173,3 +174,50 @@ def test_outcomes_follow_the_cli_order():
     assert _outcome(False, False, True, m, **args) == "unstable"
     assert _outcome(False, True, True, m, **args) == "failure"
     assert _outcome(True, True, True, m, **args) == "success"
+
+
+def test_a_shortened_evaluation_says_so_and_reports_each_row(tmp_path, capsys):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    r = blockpuzzle.evaluate(policy, suite=str(path), num_envs=2, episodes=3)
+    assert r["suite"]["episodes_per_row"] == 3 and r["provenance"]["suite"] == r["suite"]
+    assert [row["evaluation"]["episodes"] for s in r["splits"] for row in s["rows"]] == [3, 3]
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and lines[0].startswith(f"[{path} (first 3 episodes per row)] 1/2 train BlocksTouch-v0")
+    # The first episodes of the full evaluation, seed for seed.
+    full = blockpuzzle.evaluate(policy, suite=str(path), num_envs=2, progress=False)
+    assert "episodes_per_row" not in full["suite"] and capsys.readouterr().err == ""
+    short = TINY.replace("episodes = 7", "episodes = 3").replace("episodes = 5", "episodes = 3")
+    (tmp_path / "short.toml").write_text(short)
+    same = blockpuzzle.evaluate(policy, suite=str(tmp_path / "short.toml"), num_envs=2, progress=False)
+    assert [s["rows"][0]["evaluation"]["outcomes"] for s in same["splits"]] == [
+        s["rows"][0]["evaluation"]["outcomes"] for s in r["splits"]]
+    with pytest.raises(ValueError, match="at least 1 episode"):
+        blockpuzzle.evaluate(policy, suite=str(path), episodes=0)
+    # A zoo policy, by the CLI's evaluator: the same marks and one line per row.
+    z = blockpuzzle.evaluate(blockpuzzle.zoo.load("BlocksTouch-v0-ddpg"), suite=str(path), episodes=2)
+    assert z["suite"]["episodes_per_row"] == 2 and len(capsys.readouterr().err.splitlines()) == 2
+
+
+def test_a_policy_that_does_not_fit_the_observation_gets_a_clear_error(tmp_path):
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    touch = blockpuzzle.zoo.load("BlocksTouch-v0-ddpg")  # 48 flat values; the test row has 67
+    with pytest.raises(ValueError, match=r"BlocksChoose-v0's observations .*shape \(5, 67\).*reads flat observations "
+                                         r"of shape \(48,\); these have shape \(67,\)"):
+        blockpuzzle.evaluate(lambda obs: touch(obs), suite=str(path), num_envs=5, progress=False)
+    env = gym.make("BlockPuzzle/BlocksChoose-v0")
+    obs, _ = env.reset(seed=0)
+    for act in (touch, lambda o: touch.act_numpy(o)):
+        with pytest.raises(ValueError, match=r"\(48,\).*\(67,\).*gym.make\('BlockPuzzle/BlocksTouch-v0'"):
+            act(obs)
+    # A callable carrying its observation mode gets it.
+    seen = []
+
+    def objects_policy(obs):
+        seen.append(type(obs))
+        return np.zeros((len(obs["robot"]), 4), np.float32)
+
+    objects_policy.obs_mode = "objects"
+    blockpuzzle.evaluate(objects_policy, suite=str(path), episodes=1, progress=False)
+    assert seen and all(t is dict for t in seen)

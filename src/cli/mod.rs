@@ -1,4 +1,5 @@
-//! The `blockpuzzle` command line.
+//! The `blockpuzzle` command line. With the `cli` feature alone, the commands that need no
+//! libtorch (the Python package's `blockpuzzle`); with `train`, every command.
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -9,10 +10,14 @@ use crate::outcome::{Outcome, Outcomes};
 use crate::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use crate::rollout::{run_episode, DumpWriter};
 
+#[cfg(feature = "train")]
 mod experiment;
+#[cfg(feature = "train")]
 mod runs;
 mod zoo;
+#[cfg(feature = "train")]
 pub use runs::train_config;
+#[cfg(feature = "train")]
 use runs::{PlotArgs, TrainArgs};
 use zoo::ZooCommand;
 
@@ -34,19 +39,24 @@ enum Command {
     Info,
     /// Roll out a policy and write a trajectory dump (JSON Lines, one episode per line).
     Rollout(RolloutArgs),
+    #[cfg(feature = "train")]
     /// Measure environment steps/s and raw mj_step/s.
     Bench(BenchArgs),
     /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
     Render(RenderArgs),
+    #[cfg(feature = "train")]
     /// Train an agent with the task's curriculum: DDPG, PGGD, or PGGD with AggreVaTeD (--expert).
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
+    #[cfg(feature = "train")]
     /// The paper's results table on BlocksChoose-v0 (Normal and Challenge), beside the paper's numbers.
     Table(TableArgs),
+    #[cfg(feature = "train")]
     /// Redraw a run's success curves (success.png) from its progress.csv, or
     /// overlay the finals success of several runs (--overlay) in one PNG.
     Plot(PlotArgs),
+    #[cfg(feature = "train")]
     /// The time to a result of a run: when test and finals success first
     /// reached --target (epoch, env steps, hours) and the epoch's time split.
     Report {
@@ -74,6 +84,7 @@ enum Command {
         #[arg(long)]
         env: String,
     },
+    #[cfg(feature = "train")]
     /// Replay gymnasium-robotics FetchPush-v4 episodes (recorded by
     /// bench/align_fetchpush.py) in the FetchPush-like environment on this
     /// build's MuJoCo and print, per episode, the largest distance between
@@ -146,6 +157,7 @@ struct TaskCheckArgs {
     view: ViewArgs,
 }
 
+#[cfg(feature = "train")]
 #[derive(Debug, clap::Args)]
 struct TableArgs {
     /// The task: the paper's BlocksChoose-v0, or another id or task file with a challenge
@@ -202,6 +214,10 @@ struct EvalArgs {
     /// obstacles) or a suite file; writes eval-POLICY-suite-NAME.json and .md (docs/suites.md).
     #[arg(long, conflicts_with_all = ["env", "challenge", "level", "episodes", "seed"])]
     suite: Option<String>,
+    /// With --suite: play at most N episodes of each row, a quick look. The result records it and
+    /// is not the suite's score (`results` refuses it).
+    #[arg(long, requires = "suite", value_name = "N", value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    episodes_per_row: Option<usize>,
     /// Environment id or task file (default: the one the policy was trained on).
     #[arg(long)]
     env: Option<String>,
@@ -338,6 +354,7 @@ struct RenderArgs {
     movie: MovieArgs,
 }
 
+#[cfg(feature = "train")]
 #[derive(Debug, clap::Args)]
 struct BenchArgs {
     /// Environment id or task file (.toml).
@@ -405,7 +422,9 @@ fn command() -> clap::Command {
     let cmd = negatives(<Cli as clap::CommandFactory>::command());
     // A flag given twice takes its last value: `train --config FILE` puts the
     // file's flags first, so the command line's own win.
-    cmd.mut_subcommand("train", |t| t.args_override_self(true))
+    #[cfg(feature = "train")]
+    let cmd = cmd.mut_subcommand("train", |t| t.args_override_self(true));
+    cmd
 }
 
 /// An error and its causes on one line, each cause once: a cause whose text
@@ -432,43 +451,76 @@ pub fn error_text(e: &anyhow::Error) -> String {
 /// An unreadable recipe, or clap's error (help and version included).
 fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
     let cmd = command();
-    let train = cmd.find_subcommand("train").cloned().unwrap_or_default();
-    let matches = cmd.try_get_matches_from(experiment::expand(args, &train)?)?;
+    #[cfg(feature = "train")]
+    let args = {
+        let train = cmd.find_subcommand("train").cloned().unwrap_or_default();
+        experiment::expand(args, &train)?
+    };
+    let matches = cmd.try_get_matches_from(args)?;
     Ok(<Cli as clap::FromArgMatches>::from_arg_matches(&matches)?)
 }
 
-/// Runs the command line.
+/// Whether the command line `args` (from the program name on) parses, without running it: the
+/// docs' command lines are checked so (tests/docs.rs).
 ///
 /// # Errors
-/// Any failure, with a message that names the problem.
-pub fn main() -> Result<()> {
-    let cli = match parse(std::env::args_os().collect()) {
+/// clap's message, or an unreadable recipe.
+pub fn check_args(args: Vec<std::ffi::OsString>) -> Result<()> {
+    parse(args).map(|_| ())
+}
+
+/// Runs the command line `args` (from the program name on) and returns the process's exit
+/// status: 0; 1 with the error on stderr; clap's status for help, version and usage errors,
+/// printed as clap prints them. The `blockpuzzle` binary and the Python package's command call it.
+pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
+    let failed = |e: anyhow::Error| {
+        eprintln!("error: {}", error_text(&e));
+        1
+    };
+    let cli = match parse(args) {
         Ok(cli) => cli,
-        // Help, version and usage errors as clap prints them (and its exit codes).
         Err(e) => match e.downcast::<clap::Error>() {
-            Ok(usage) => usage.exit(),
-            Err(e) => return Err(e),
+            Ok(usage) => {
+                let _ = usage.print();
+                return usage.exit_code();
+            }
+            Err(e) => return failed(e),
         },
     };
-    match cli.command {
+    match dispatch(cli.command) {
+        Ok(()) => 0,
+        Err(e) => failed(e),
+    }
+}
+
+/// Runs one parsed command.
+fn dispatch(command: Command) -> Result<()> {
+    match command {
         Command::Envs => envs(),
         Command::Info => info(),
         Command::Rollout(a) => rollout(a),
+        #[cfg(feature = "train")]
         Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval(a),
         Command::Render(a) => render(a),
         Command::Zoo(c) => zoo::run(c),
         Command::Results(c) => results(c),
+        #[cfg(feature = "train")]
         Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
+        #[cfg(feature = "train")]
         Command::Table(a) => table(a),
         Command::Task(TaskCommand::Check(a)) => task_check(a),
+        #[cfg(feature = "train")]
         Command::Plot(a) => runs::plot(a),
+        #[cfg(feature = "train")]
         Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
             align_bench(&reference, steps, threads)
         }
+        #[cfg(feature = "train")]
         Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
             bail!("--plot draws the replay; leave it out with --bench-steps")
         }
+        #[cfg(feature = "train")]
         Command::Align { reference, plot, .. } => align(&reference, plot.as_deref()),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
@@ -476,7 +528,9 @@ pub fn main() -> Result<()> {
             print!("{}", crate::scene::mjcf(&c.scene_spec())?.0);
             Ok(())
         }
+        #[cfg(feature = "train")]
         Command::Bench(a) if a.ddpg => bench_ddpg(a),
+        #[cfg(feature = "train")]
         Command::Bench(a) => bench(&a),
     }
 }
@@ -533,14 +587,17 @@ fn info() -> Result<()> {
         println!("commit {commit}");
     }
     println!("MuJoCo {} (the engine every number this build writes is made on)", crate::mj::version());
+    #[cfg(feature = "train")]
     println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
     println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
     println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
     println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
+    #[cfg(feature = "train")]
     println!("bf16 updates {}", if crate::agents::ddpg::Precision::bf16_supported() { "yes" } else { "no" });
     Ok(())
 }
 
+#[cfg(feature = "train")]
 /// `align --bench-steps`: env steps/s of the FetchPush-like scene from the reference's first state.
 fn align_bench(reference: &Path, steps: usize, threads: usize) -> Result<()> {
     let r = crate::align::Reference::load(reference)?;
@@ -555,6 +612,7 @@ fn align_bench(reference: &Path, steps: usize, threads: usize) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "train")]
 /// `blockpuzzle align`: the replay's per-episode deviations, and their plot.
 fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
     let r = crate::align::Reference::load(reference)?;
@@ -582,6 +640,7 @@ fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "train")]
 /// `bench --ddpg`: collection env steps/s and update rate.
 fn bench_ddpg(a: BenchArgs) -> Result<()> {
     let r = crate::bench::ddpg::run(&crate::bench::ddpg::DdpgBenchConfig {
@@ -613,6 +672,7 @@ fn bench_ddpg(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "train")]
 /// `blockpuzzle bench`: env steps/s and mj_step/s.
 fn bench(a: &BenchArgs) -> Result<()> {
     let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
@@ -795,6 +855,7 @@ fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) -> Result<c
     })
 }
 
+#[cfg(feature = "train")]
 fn table(a: TableArgs) -> Result<()> {
     crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     if let Some(out) = &a.out {
@@ -871,7 +932,10 @@ fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
 fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     use crate::evaluate::Subject;
     use crate::provenance::Harness;
-    let suite = crate::suite::load(name)?;
+    let mut suite = crate::suite::load(name)?;
+    if let Some(n) = a.episodes_per_row {
+        suite = suite.first_episodes(n)?;
+    }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     // Where the results go, checked before any episode is played.
     let out = match (&a.out, &a.checkpoint, a.baseline) {
@@ -895,11 +959,19 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
         crate::io::check_output(md)?;
     }
     let r = match (&a.checkpoint, a.baseline) {
-        (_, Some(b)) => crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli)?,
+        (_, Some(b)) => {
+            crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli, &mut |_, _, _, _| {})?
+        }
         (checkpoint, None) => {
             let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
             let saved = crate::load::load_policy(checkpoint)?;
-            crate::evaluate::evaluate_suite(Subject::Saved(checkpoint, &saved), &suite, threads, Harness::Cli)?
+            crate::evaluate::evaluate_suite(
+                Subject::Saved(checkpoint, &saved),
+                &suite,
+                threads,
+                Harness::Cli,
+                &mut |_, _, _, _| {},
+            )?
         }
     };
     crate::io::write_json(&out, &r)?;

@@ -1,6 +1,8 @@
 //! `blockpuzzle zoo`: list, check and export the shipped policies (src/zoo.rs has the format).
 
-use anyhow::{bail, Context, Result};
+#[cfg(feature = "train")]
+use anyhow::Context;
+use anyhow::{bail, Result};
 use clap::Subcommand;
 use std::path::{Path, PathBuf};
 
@@ -21,6 +23,7 @@ pub(super) enum ZooCommand {
         zoo: Option<PathBuf>,
     },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
+    #[cfg(feature = "train")]
     Export(ZooExportArgs),
     /// Evaluate entries on this build's engine and record the results in their metadata: each
     /// evaluation the entry records (task, distribution, episodes, seeds) is played again here
@@ -37,6 +40,7 @@ pub(super) enum ZooCommand {
     },
 }
 
+#[cfg(feature = "train")]
 #[derive(Debug, clap::Args)]
 pub(super) struct ZooExportArgs {
     /// The policy: a policy file, a snapshot, or a run directory.
@@ -139,6 +143,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             Ok(())
         }
         ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
+        #[cfg(feature = "train")]
         ZooCommand::Export(a) => {
             if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
                 bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
@@ -199,6 +204,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
     }
 }
 
+#[cfg(feature = "train")]
 /// An evaluation written by `blockpuzzle eval`, as a zoo record.
 fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
     #[derive(serde::Deserialize)]
@@ -296,6 +302,7 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
     Ok(())
 }
 
+#[cfg(feature = "train")]
 /// Environment steps behind a policy of `epoch` epochs: from the
 /// `progress.csv` of its run (the policy's folder, or the run of a snapshot).
 fn env_steps_of(policy: &Path, epoch: usize) -> Option<u64> {
