@@ -23,9 +23,16 @@ fn docs() -> Vec<PathBuf> {
     files
 }
 
-/// The command lines (continuations joined, comments cut) of each shell block not marked as a
-/// fragment: (file:line, command).
-fn shell_commands(path: &Path) -> Vec<(String, String)> {
+/// A fenced block: its language, the line of its first line, its text, and whether the line above
+/// its fence marks it as a fragment.
+struct Block {
+    lang: String,
+    at: String,
+    text: String,
+    fragment: bool,
+}
+
+fn blocks(path: &Path) -> Vec<Block> {
     let text = std::fs::read_to_string(path).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     let mut out = Vec::new();
@@ -36,36 +43,46 @@ fn shell_commands(path: &Path) -> Vec<(String, String)> {
             i += 1;
             continue;
         }
-        let lang = fence.trim_start_matches('`').trim();
-        let mark = lines[..i].iter().rev().find(|l| !l.trim().is_empty()).is_some_and(|l| {
+        let indent = lines[i].len() - fence.len();
+        let fragment = lines[..i].iter().rev().find(|l| !l.trim().is_empty()).is_some_and(|l| {
             let l = l.trim();
             l.starts_with("<!--") && l.trim_start_matches("<!--").trim_start().starts_with("fragment")
         });
         let mut j = i + 1;
-        let mut command = String::new();
         while j < lines.len() && !lines[j].trim_start().starts_with("```") {
-            if matches!(lang, "sh" | "bash") && !mark {
-                let line = lines[j].trim();
-                let code = match line.find(" #") {
-                    Some(k) => &line[..k],
-                    None if line.starts_with('#') => "",
-                    None => line,
-                };
-                command.push_str(code.trim_end_matches('\\').trim());
-                command.push(' ');
-                if !code.ends_with('\\') {
-                    if !command.trim().is_empty() {
-                        out.push((
-                            format!("{}:{}", path.strip_prefix(root()).unwrap().display(), j + 1),
-                            command.trim().to_owned(),
-                        ));
-                    }
-                    command.clear();
-                }
-            }
             j += 1;
         }
+        let body: Vec<&str> = lines[i + 1..j.min(lines.len())].iter().map(|l| l.get(indent..).unwrap_or("")).collect();
+        out.push(Block {
+            lang: fence.trim_start_matches('`').trim().to_owned(),
+            at: format!("{}:{}", path.strip_prefix(root()).unwrap().display(), i + 2),
+            text: body.join("\n"),
+            fragment,
+        });
         i = j + 1;
+    }
+    out
+}
+
+/// The command lines (continuations joined, comments cut) of a shell block: (file:line, command).
+fn shell_commands(block: &Block) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut command = String::new();
+    for line in block.text.lines() {
+        let line = line.trim();
+        let code = match line.find(" #") {
+            Some(k) => &line[..k],
+            None if line.starts_with('#') => "",
+            None => line,
+        };
+        command.push_str(code.trim_end_matches('\\').trim());
+        command.push(' ');
+        if !code.ends_with('\\') {
+            if !command.trim().is_empty() {
+                out.push((block.at.clone(), command.trim().to_owned()));
+            }
+            command.clear();
+        }
     }
     out
 }
@@ -126,7 +143,9 @@ fn check(command: &str, makefile: &str) -> Option<String> {
 fn every_command_line_in_the_docs_parses() {
     std::env::set_current_dir(root()).unwrap();
     let makefile = std::fs::read_to_string(root().join("Makefile")).unwrap();
-    let commands: Vec<(String, String)> = docs().iter().flat_map(|p| shell_commands(p)).collect();
+    let all: Vec<Block> = docs().iter().flat_map(|p| blocks(p)).filter(|b| !b.fragment).collect();
+    let commands: Vec<(String, String)> =
+        all.iter().filter(|b| matches!(b.lang.as_str(), "sh" | "bash")).flat_map(shell_commands).collect();
     assert!(commands.len() > 20, "{commands:?}");
     let wrong: Vec<String> =
         commands.iter().filter_map(|(at, c)| check(c, &makefile).map(|why| format!("{at}: `{c}`: {why}"))).collect();
@@ -135,4 +154,23 @@ fn every_command_line_in_the_docs_parses() {
     assert!(check("blockpuzzle eval --suite layout --no-such-flag", &makefile).is_some());
     assert!(check("blockpuzzle rollout --env BlocksTouch-v0 --episodes 0 --out x.jsonl", &makefile).is_some());
     assert!(check("make no-such-target", &makefile).is_some());
+}
+
+#[test]
+fn every_toml_block_in_the_docs_is_a_valid_task_or_suite_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let tomls: Vec<Block> = docs().iter().flat_map(|p| blocks(p)).filter(|b| b.lang == "toml" && !b.fragment).collect();
+    assert!(tomls.len() >= 2);
+    for b in &tomls {
+        let file = dir.path().join("block.toml");
+        std::fs::write(&file, &b.text).unwrap();
+        // A task file has an id; a suite file has splits.
+        if b.text.lines().any(|l| l.starts_with("id =")) {
+            let task = blockpuzzle::task::Task::from_file(&file);
+            assert!(task.is_ok(), "{}: {}", b.at, task.err().unwrap());
+        } else {
+            let suite = blockpuzzle::suite::parse(&b.text, &b.at, Some(dir.path()));
+            assert!(suite.is_ok(), "{}: {}", b.at, suite.err().unwrap());
+        }
+    }
 }

@@ -58,6 +58,8 @@ def test_a_shortened_suite_evaluation_of_a_zoo_policy_equals_evaluate(tmp_path):
     assert cli["provenance"]["mujoco"] == blockpuzzle.MUJOCO_PIN
     py = blockpuzzle.evaluate(zoo.load("BlocksTouch-v0-ddpg"), suite="layout", episodes=2, threads=2, progress=False)
     assert py["splits"] == cli["splits"] and py["suite"] == cli["suite"]
+    # The 2-block policy plays the 3-block rows as the CLI does: grey blocks removed from its view.
+    assert any(r["evaluation"]["grey_blind"] for s in py["splits"] for r in s["rows"] if r["evaluation"])
     assert (tmp_path / "short.md").is_file()
 
 

@@ -3,8 +3,9 @@
 A block is run in a fresh namespace in an empty folder (``my-task.toml`` there: a copy of
 ``tasks/BlocksTouch-v0.toml``, the task file the docs ask the reader to bring). A block that is not
 meant to run alone says so on the line above its fence: ``<!-- fragment: why -->``; the test checks
-that every such mark gives a reason. The command lines of the shell blocks are checked by the Rust
-test ``tests/docs.rs`` (each parses), the README's Rust block by ``cargo test`` (a doctest).
+that every such mark gives a reason. The Rust test ``tests/docs.rs`` checks the shell blocks (each
+command line parses; make targets and scripts exist) and the TOML blocks (valid task and suite
+files); ``cargo test`` runs the README's Rust block (a doctest).
 """
 
 from __future__ import annotations

@@ -581,16 +581,19 @@ fn results(c: ResultsCommand) -> Result<()> {
 }
 
 fn info() -> Result<()> {
-    let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
     println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
     if let Some(commit) = crate::provenance::commit() {
         println!("commit {commit}");
     }
     println!("MuJoCo {} (the engine every number this build writes is made on)", crate::mj::version());
+    // What libtorch's updates run with (the training build's concern).
     #[cfg(feature = "train")]
-    println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
-    println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
-    println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
+    {
+        let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
+        println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
+        println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
+        println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
+    }
     println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
     #[cfg(feature = "train")]
     println!("bf16 updates {}", if crate::agents::ddpg::Precision::bf16_supported() { "yes" } else { "no" });
