@@ -361,16 +361,17 @@ pub struct SuiteResult {
 /// `suite`; a row whose observation the policy cannot take (directly or
 /// with grey blocks removed) is skipped with the reason. `on_row` hears of
 /// each row as it is done (split name, the row, rows done, rows in all): a
-/// progress display.
+/// progress display; its error stops the evaluation there.
 ///
 /// # Errors
-/// Environment failures (a row whose environment cannot be made is one).
+/// Environment failures (a row whose environment cannot be made is one), or
+/// `on_row`'s error.
 pub fn evaluate_suite(
     subject: Subject,
     suite: &crate::suite::Suite,
     threads: usize,
     harness: Harness,
-    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize),
+    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize) -> Result<()>,
 ) -> Result<SuiteResult> {
     let total: usize = suite.splits.iter().map(|s| s.rows.len()).sum();
     let mut done = 0;
@@ -404,7 +405,7 @@ pub fn evaluate_suite(
                 skipped,
             });
             done += 1;
-            on_row(&split.name, rows.last().expect("a row was just pushed"), done, total);
+            on_row(&split.name, rows.last().expect("a row was just pushed"), done, total)?;
         }
         let rates: Vec<f64> = rows.iter().filter_map(|r| r.evaluation.as_ref().map(|e| e.success_rate)).collect();
         let mean_success = (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64);

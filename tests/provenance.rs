@@ -36,7 +36,7 @@ episodes = 3
 
 fn obs_hash_on(suite: &Path) -> SuiteResult {
     let suite = blockpuzzle::suite::load(suite.to_str().unwrap()).unwrap();
-    evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli, &mut |_, _, _, _| {}).unwrap()
+    evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli, &mut |_, _, _, _| Ok(())).unwrap()
 }
 
 #[test]
@@ -95,10 +95,20 @@ fn a_shortened_run_says_so_and_is_never_ranked() {
         &short,
         2,
         Harness::Cli,
-        &mut |split, row, done, total| heard.push((split.to_owned(), row.episodes, done, total)),
+        &mut |split, row, done, total| {
+            heard.push((split.to_owned(), row.episodes, done, total));
+            Ok(())
+        },
     )
     .unwrap();
     assert_eq!(heard, [("train".to_owned(), 2, 1, 2), ("test".to_owned(), 2, 2, 2)]);
+    // The callback's error stops the evaluation after its row (Python's KeyboardInterrupt does so).
+    let mut rows = 0;
+    let stopped = evaluate_suite(Subject::Baseline(Baseline::ObsHash), &short, 2, Harness::Cli, &mut |_, _, _, _| {
+        rows += 1;
+        anyhow::bail!("stop")
+    });
+    assert_eq!((stopped.unwrap_err().to_string(), rows), ("stop".to_owned(), 1));
     assert_eq!((r.suite.episodes_per_row, r.provenance.suite.as_ref().unwrap().episodes_per_row), (Some(2), Some(2)));
     assert!(r.splits.iter().flat_map(|s| &s.rows).all(|row| row.evaluation.as_ref().unwrap().episodes == 2));
     // The command line: --episodes-per-row writes it, and `results` refuses to rank or compare it.

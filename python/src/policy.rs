@@ -94,19 +94,22 @@ pub(crate) fn evaluate_saved(
     }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let subject = blockpuzzle::evaluate::Subject::Saved(Path::new(name), &saved);
-    // The callback's own error (a KeyboardInterrupt included) stops the evaluation at the next row.
+    // Ctrl-C (a KeyboardInterrupt) or the callback's own error stops the evaluation after the row
+    // and is raised as it is.
     let mut failed: Option<PyErr> = None;
     let mut report = |split: &str, row: &blockpuzzle::evaluate::RowResult, done: usize, total: usize| {
-        let Some(f) = on_row.as_ref().filter(|_| failed.is_none()) else { return };
         Python::with_gil(|py| {
-            let called = serde_json::to_string(row)
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))
-                .and_then(|text| py.import("json")?.call_method1("loads", (text,)))
-                .and_then(|row| f.call1(py, (split, row, done, total)));
-            if let Err(e) = called {
+            let called = py.check_signals().and_then(|()| {
+                let Some(f) = on_row.as_ref() else { return Ok(()) };
+                let row =
+                    py.import("json")?.call_method1("loads", (serde_json::to_string(row).unwrap_or_default(),))?;
+                f.call1(py, (split, row, done, total)).map(|_| ())
+            });
+            called.map_err(|e| {
                 failed = Some(e);
-            }
-        });
+                anyhow::anyhow!("stopped by the on_row callback")
+            })
+        })
     };
     let result = py.allow_threads(|| {
         blockpuzzle::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python, &mut report)

@@ -221,3 +221,16 @@ def test_a_policy_that_does_not_fit_the_observation_gets_a_clear_error(tmp_path)
     objects_policy.obs_mode = "objects"
     blockpuzzle.evaluate(objects_policy, suite=str(path), episodes=1, progress=False)
     assert seen and all(t is dict for t in seen)
+
+
+def test_an_error_in_the_row_callback_stops_the_clis_evaluator_and_is_raised():
+    calls = []
+
+    def stop(split, row, done, total):
+        calls.append((split, row["task"], done, total))
+        raise KeyboardInterrupt
+
+    path = str(blockpuzzle.zoo.load("BlocksTouch-v0-ddpg").path)
+    with pytest.raises(KeyboardInterrupt):
+        blockpuzzle._native.evaluate_saved(path, "BlocksTouch-v0-ddpg", "layout", 2, 1, stop)
+    assert len(calls) == 1 and calls[0][0] == "train" and calls[0][2] == 1

@@ -963,7 +963,9 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     }
     let r = match (&a.checkpoint, a.baseline) {
         (_, Some(b)) => {
-            crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli, &mut |_, _, _, _| {})?
+            crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli, &mut |_, _, _, _| {
+                Ok(())
+            })?
         }
         (checkpoint, None) => {
             let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
@@ -973,7 +975,7 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
                 &suite,
                 threads,
                 Harness::Cli,
-                &mut |_, _, _, _| {},
+                &mut |_, _, _, _| Ok(()),
             )?
         }
     };
