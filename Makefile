@@ -40,7 +40,7 @@ setup-mujoco3: setup
 	bash scripts/setup_mujoco3.sh
 M3 = --release --no-default-features --features mujoco3,render --target-dir target/mujoco3
 # The environment core, its tests and the renderer's on MuJoCo 3.11 (the training stack is engine-agnostic).
-# With them the alignment with gymnasium-robotics FetchPush-v4 on the same engine (tests/align_mujoco3.rs),
+# With them the alignment with gymnasium-robotics FetchPush-v4 on the same engine (tests/it/align_mujoco3.rs),
 # whose reference bench/align_fetchpush.sh records first (a venv with gymnasium-robotics and mujoco 3.11).
 test-mujoco3: setup-mujoco3
 	bash bench/align_fetchpush.sh --record
@@ -63,7 +63,7 @@ bench: build
 	bash bench/fetchpush.sh
 
 # results/leaderboard.md from the suite results of both engines (scripts/generalization.sh writes them;
-# tests/provenance.rs fails when the page is stale).
+# tests/it/provenance.rs fails when the page is stale).
 LEADERBOARD_RESULTS = results/generalization/mujoco-2.2.2 results/generalization/mujoco-3.11.0
 leaderboard: build
 	$(BP) results leaderboard $(LEADERBOARD_RESULTS) --out results/leaderboard.md

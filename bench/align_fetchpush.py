@@ -8,7 +8,7 @@ scripted push (behind the block, down, through it). Written per episode: the sta
 (qpos and qvel of every joint, by joint name), the actions, and after reset and after every step
 the gripper position (observation[0:3], site robot0:grip) and the block position
 (observation[3:6], site object0), as FetchPush-v4 reports them. `blockpuzzle align` and
-tests/align_mujoco3.rs replay the episodes in a FetchPush-like BlockPuzzle environment from
+tests/it/align_mujoco3.rs replay the episodes in a FetchPush-like BlockPuzzle environment from
 the same states with the same actions and report how far the two drift apart.
 """
 import argparse

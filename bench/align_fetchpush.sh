@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Alignment with gymnasium-robotics FetchPush-v4 (bench/align_fetchpush.py records its episodes on
 # MuJoCo 3.11.0 in the venv of bench/fetchpush_venv.sh):
-#   --record  only records the reference, target/align/fetchpush-v4.json, for tests/align_mujoco3.rs
+#   --record  only records the reference, target/align/fetchpush-v4.json, for tests/it/align_mujoco3.rs
 #             (every step of every episode within 1e-4 m; `make test-mujoco3` runs both)
 #   default   records it, runs that test, replays the reference on both engines (`blockpuzzle
 #             align`) and writes the tables to results/align.md and the per-step figures to
@@ -19,7 +19,7 @@ mkdir -p "$ROOT/target/align"
 "$PY" "$ROOT/bench/align_fetchpush.py" --random 4 --scripted 4 --out "$REF" 2>/dev/null
 [ "${1:-}" = "--record" ] && exit 0
 M3=(--release --features mujoco3 --target-dir "$ROOT/target/mujoco3")
-( cd "$ROOT" && BLOCKPUZZLE_ALIGN_REFERENCE="$REF" cargo test "${M3[@]}" --test align_mujoco3 -- --nocapture )
+( cd "$ROOT" && BLOCKPUZZLE_ALIGN_REFERENCE="$REF" cargo test "${M3[@]}" --test it align_mujoco3:: -- --nocapture )
 
 "$PY" "$ROOT/bench/align_fetchpush.py" --random 4 --scripted 4 --f64-actions --out "$REF64" 2>/dev/null
 OUT="$ROOT/results/align.md"

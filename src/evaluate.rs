@@ -141,7 +141,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     let spec = env.obs_spec();
     if let Some(layout) = saved.policy.net().set {
         // A set network plays any number of objects with the same row features.
-        if spec.mode != ObsMode::Objects || (spec.robot_dim(), spec.object_dim()) != (layout.robot, layout.object) {
+        if !spec.mode.is_set() || (spec.robot_dim(), spec.object_dim()) != (layout.robot, layout.object) {
             bail!(
                 "policy {} is a set network over `objects` observations ({} robot and {} object features); {} \
                  gives {:?} observations with {} and {} (give the environment obs_mode objects)",

@@ -1,3 +1,4 @@
+//! (A test binary of its own: it registers another assets folder for the whole process.)
 //! The Fetch files can come from a folder registered at run time (the Python
 //! package registers the installed gymnasium-robotics' `envs/assets`): the
 //! scenes built from it are the checkout's, a changed or missing file is

@@ -10,7 +10,10 @@ from __future__ import annotations
 import numpy as np
 from gymnasium import spaces
 
-OBS_MODES = ("flat", "objects")
+from . import _native
+
+#: The observation modes the core has (``ObsMode::ALL``).
+OBS_MODES = tuple(_native.obs_modes())
 
 
 def check_mode(obs_mode: str) -> str:
@@ -19,9 +22,22 @@ def check_mode(obs_mode: str) -> str:
     return obs_mode
 
 
+#: The modes this module lays out: each is handled by ``space`` and ``split`` (a mode the extension
+#: knows and this module does not is an error there, and in ``tests/test_observation.py``).
+LAID_OUT = ("flat", "objects")
+
+
+def _known(layout: dict) -> str:
+    if layout["mode"] not in LAID_OUT:
+        raise NotImplementedError(f"observation mode {layout['mode']!r} has no Python layout yet "
+                                  f"(blockpuzzle.observation lays out {', '.join(LAID_OUT)})")
+    return layout["mode"]
+
+
 def space(layout: dict, low: np.ndarray, high: np.ndarray) -> spaces.Space:
     """The single environment's observation space for ``layout``."""
-    if layout["mode"] == "flat":
+    mode = _known(layout)
+    if mode == "flat":
         return spaces.Box(low=low, high=high, dtype=np.float32)
     r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
     # sort_keys=False keeps this order (by default a Dict sorts its keys: mask | objects | robot), and
@@ -37,7 +53,7 @@ def space(layout: dict, low: np.ndarray, high: np.ndarray) -> spaces.Space:
 def split(obs: np.ndarray, layout: dict):
     """``obs`` (one observation or a batch: the last axis is the native vector) in ``layout``'s
     form: itself for ``flat``, else a dict of views of it."""
-    if layout["mode"] == "flat":
+    if _known(layout) == "flat":
         return obs
     r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
     lead = obs.shape[:-1]

@@ -165,7 +165,8 @@ impl Env {
     fn obs_layout<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let spec = self.env()?.obs_spec();
         let d = PyDict::new(py);
-        d.set_item("mode", if spec.mode == ObsMode::Objects { "objects" } else { "flat" })?;
+        d.set_item("mode", spec.mode.name())?;
+        d.set_item("mask", spec.mode.has_mask())?;
         d.set_item("robot_dim", spec.robot_dim())?;
         d.set_item("object_dim", spec.object_dim())?;
         d.set_item("max_objects", spec.max_objects)?;
@@ -452,6 +453,12 @@ fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<
     Ok(d)
 }
 
+/// The observation modes, by name (`obs_mode`): the core's closed set, in its order.
+#[pyfunction]
+fn obs_modes() -> Vec<&'static str> {
+    blockpuzzle::env::ObsMode::ALL.iter().map(|m| m.name()).collect()
+}
+
 /// The command line's commands that need no libtorch, run in this process: `args` from the
 /// program name on; returns the exit status (the `blockpuzzle` command of the package).
 #[pyfunction]
@@ -478,6 +485,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;
+    m.add_function(wrap_pyfunction!(obs_modes, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;
     m.add_function(wrap_pyfunction!(assets_dir, m)?)?;

@@ -3,7 +3,7 @@
 A block is run in a fresh namespace in an empty folder (``my-task.toml`` there: a copy of
 ``tasks/BlocksTouch-v0.toml``, the task file the docs ask the reader to bring). A block that is not
 meant to run alone says so on the line above its fence: ``<!-- fragment: why -->``; the test checks
-that every such mark gives a reason. The Rust test ``tests/docs.rs`` checks the shell blocks (each
+that every such mark gives a reason. The Rust test ``tests/it/docs.rs`` checks the shell blocks (each
 command line parses; make targets and scripts exist) and the TOML blocks (valid task and suite
 files); ``cargo test`` runs the README's Rust block (a doctest).
 """

@@ -181,7 +181,7 @@ GOLDEN = json.loads((ROOT / "tests" / "golden.json").read_text())["cases"]
 
 @pytest.mark.parametrize("case", GOLDEN, ids=lambda c: f"{c['env']}-{c['policy']}-{c['level']}-{c['seed']}")
 def test_episodes_are_bit_identical_to_the_rust_golden_digests(case):
-    # The digests the Rust tests check on the same engine (tests/golden.rs built with mujoco3).
+    # The digests the Rust tests check on the same engine (tests/it/golden.rs built with mujoco3).
     engine = blockpuzzle.mujoco_version()
     got = blockpuzzle._native._golden_digest(case["env"], case["policy"] == "scripted", case["level"],
                                              case["challenge"], case["seed"])

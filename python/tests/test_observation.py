@@ -114,3 +114,16 @@ def test_flatten_observation_gives_the_documented_order():
     want = np.concatenate([obs["robot"], obs["objects"].reshape(-1), obs["mask"]])
     np.testing.assert_array_equal(vec, want)
     np.testing.assert_array_equal(flatten(env.observation_space, obs), want)
+
+
+def test_every_mode_of_the_core_has_a_python_layout():
+    # A mode added to the Rust core (ObsMode::ALL) fails here until blockpuzzle.observation lays it out.
+    assert blockpuzzle.observation.OBS_MODES == tuple(blockpuzzle._native.obs_modes())
+    assert set(blockpuzzle.observation.OBS_MODES) == set(blockpuzzle.observation.LAID_OUT)
+    for mode in blockpuzzle.observation.OBS_MODES:
+        env = gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode=mode)
+        obs, _ = env.reset(seed=0)
+        assert env.observation_space.contains(obs), mode
+        assert env.unwrapped.obs_layout["mask"] == (mode != "flat")
+    with pytest.raises(ValueError, match="unknown obs_mode 'entities'"):
+        gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="entities")

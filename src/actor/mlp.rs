@@ -104,8 +104,11 @@ impl SetLayout {
     /// # Errors
     /// A flat observation: a set network reads object rows and a mask.
     pub fn of(spec: &crate::env::ObsSpec, encoder_layers: usize) -> Result<Self, String> {
-        if spec.mode != crate::env::ObsMode::Objects {
-            return Err("a set network reads the `objects` observation (obs_mode objects), not the flat one".into());
+        if !spec.mode.is_set() {
+            return Err(format!(
+                "a set network reads the `objects` observation (obs_mode objects), not the {} one",
+                spec.mode
+            ));
         }
         Ok(Self {
             robot: spec.robot_dim(),

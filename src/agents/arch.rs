@@ -130,8 +130,10 @@ impl Arch {
     pub fn of(obs: &ObsSpec, net: &NetConfig) -> Result<Self, String> {
         net.validate()?;
         match net.net {
-            NetKind::Mlp if obs.mode == ObsMode::Flat => Ok(Self::mlp(obs.dim())),
-            NetKind::Mlp => Err("--net mlp reads the flat observation, not the `objects` one".into()),
+            NetKind::Mlp => match obs.mode {
+                ObsMode::Flat => Ok(Self::mlp(obs.dim())),
+                ObsMode::Objects => Err("--net mlp reads the flat observation, not the `objects` one".into()),
+            },
             NetKind::Set => {
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;

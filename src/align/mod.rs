@@ -5,7 +5,7 @@
 //! environment ([`fetchpush_like`]) from the same states with the same
 //! actions, and the per-step distance between the two trajectories is
 //! reported. On the same engine (the `mujoco3` feature and the reference's
-//! MuJoCo 3.11.0) they agree to 1e-4 m (`tests/align_mujoco3.rs`); on Debian's
+//! MuJoCo 3.11.0) they agree to 1e-4 m (`tests/it/align_mujoco3.rs`); on Debian's
 //! 2.2.2 the figure is the engines' own difference (`blockpuzzle align`).
 
 use crate::env::{BlockEnv, EnvConfig, EnvError};
@@ -17,7 +17,7 @@ use std::path::Path;
 use thiserror::Error;
 
 /// How far (m) the FetchPush-like trajectories may drift from FetchPush-v4's
-/// on the same engine: the bound of `tests/align_mujoco3.rs`, marked in the figure.
+/// on the same engine: the bound of `tests/it/align_mujoco3.rs`, marked in the figure.
 pub const TOLERANCE: f64 = 1e-4;
 
 /// The task file of the FetchPush-like environment.

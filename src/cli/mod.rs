@@ -461,7 +461,7 @@ fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
 }
 
 /// Whether the command line `args` (from the program name on) parses, without running it: the
-/// docs' command lines are checked so (tests/docs.rs).
+/// docs' command lines are checked so (tests/it/docs.rs).
 ///
 /// # Errors
 /// clap's message, or an unreadable recipe.

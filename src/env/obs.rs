@@ -83,15 +83,60 @@ pub enum ObsMode {
     Objects,
 }
 
+/// What depends on the mode lives here, each in a `match` the compiler checks for every mode: a
+/// new mode is a compile error wherever it must be handled (Python reads the same through
+/// `obs_layout`'s `mode`, `object_features` and `mask`).
+impl ObsMode {
+    /// Every mode, in the order the docs list them.
+    pub const ALL: [ObsMode; 2] = [ObsMode::Flat, ObsMode::Objects];
+
+    /// Its name, as `obs_mode` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ObsMode::Flat => "flat",
+            ObsMode::Objects => "objects",
+        }
+    }
+
+    /// The features of an object row after [`OBJECT_FEATURES`].
+    pub fn extra_object_features(self) -> &'static [&'static str] {
+        match self {
+            ObsMode::Flat => &[],
+            ObsMode::Objects => &SIZE_FEATURES,
+        }
+    }
+
+    /// Whether the observation ends with a mask of the slots holding an object.
+    pub fn has_mask(self) -> bool {
+        match self {
+            ObsMode::Flat => false,
+            ObsMode::Objects => true,
+        }
+    }
+
+    /// Whether a set network reads it: rows of one layout, any number of them, and a mask.
+    pub fn is_set(self) -> bool {
+        match self {
+            ObsMode::Flat => false,
+            ObsMode::Objects => true,
+        }
+    }
+}
+
+impl std::fmt::Display for ObsMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for ObsMode {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "flat" => Ok(Self::Flat),
-            "objects" => Ok(Self::Objects),
-            _ => Err(format!("unknown observation mode {s:?}; use \"flat\" or \"objects\"")),
-        }
+        Self::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            let known: Vec<String> = Self::ALL.iter().map(|m| format!("{:?}", m.name())).collect();
+            format!("unknown observation mode {s:?}; use {}", known.join(" or "))
+        })
     }
 }
 
@@ -124,12 +169,12 @@ impl ObsSpec {
 
     /// Features per object: [`OBJECT_FEATURES`], and in the `objects` mode [`SIZE_FEATURES`].
     pub fn object_dim(&self) -> usize {
-        BLOCK_OBS + if self.mode == ObsMode::Objects { SIZE_FEATURES.len() } else { 0 }
+        BLOCK_OBS + self.mode.extra_object_features().len()
     }
 
     /// The observation vector's length.
     pub fn dim(&self) -> usize {
-        let mask = if self.mode == ObsMode::Objects { self.max_objects } else { 0 };
+        let mask = if self.mode.has_mask() { self.max_objects } else { 0 };
         ROBOT_OBS + self.object_dim() * self.max_objects + mask
     }
 
@@ -146,8 +191,7 @@ impl ObsSpec {
 
     /// The mask of `obs` (1 for a slot holding an object), in the `objects` mode.
     pub fn mask<'a>(&self, obs: &'a [f32]) -> Option<&'a [f32]> {
-        (self.mode == ObsMode::Objects)
-            .then(|| &obs[(ROBOT_OBS + self.object_dim() * self.max_objects).min(obs.len())..])
+        self.mode.has_mask().then(|| &obs[(ROBOT_OBS + self.object_dim() * self.max_objects).min(obs.len())..])
     }
 
     /// The colour one-hot (red, blue, green, grey) of an object row.
@@ -169,11 +213,11 @@ impl ObsSpec {
     /// `object0/pos.x`, …, and in the `objects` mode `mask/0`, ….
     pub fn names(&self) -> Vec<String> {
         let mut names: Vec<String> = ROBOT_FEATURES.iter().map(|f| format!("robot/{f}")).collect();
-        let size: &[&str] = if self.mode == ObsMode::Objects { &SIZE_FEATURES } else { &[] };
+        let extra = self.mode.extra_object_features();
         for k in 0..self.max_objects {
-            names.extend(OBJECT_FEATURES.iter().chain(size).map(|f| format!("object{k}/{f}")));
+            names.extend(OBJECT_FEATURES.iter().chain(extra).map(|f| format!("object{k}/{f}")));
         }
-        if self.mode == ObsMode::Objects {
+        if self.mode.has_mask() {
             names.extend((0..self.max_objects).map(|k| format!("mask/{k}")));
         }
         names
@@ -225,11 +269,12 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
         out.extend((0..3).map(|k| (bv[3 + k] * dt - grip_velp[k]) as f32));
         out.extend((0..3).map(|k| (bv[k] * dt) as f32));
         out.extend(colour.one_hot());
-        if spec.mode == ObsMode::Objects {
-            out.extend(ctx.sizes.get(k).map_or([0.0; 3], |s| s.map(|v| v as f32)));
+        match spec.mode {
+            ObsMode::Flat => {}
+            ObsMode::Objects => out.extend(ctx.sizes.get(k).map_or([0.0; 3], |s| s.map(|v| v as f32))),
         }
     }
-    if spec.mode == ObsMode::Objects {
+    if spec.mode.has_mask() {
         out.extend((0..spec.max_objects).map(|k| if ctx.present.get(k).copied().unwrap_or(true) { 1.0 } else { 0.0 }));
     }
 }

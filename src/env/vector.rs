@@ -11,7 +11,7 @@
 //!   evaluation, training's collection and `bench` are this.
 //!
 //! Environment i depends only on its own seeds and actions, so its
-//! trajectory is the same whatever N and K are (tests/vector.rs).
+//! trajectory is the same whatever N and K are (tests/it/vector.rs).
 
 use super::{BlockEnv, EnvConfig, EnvError, Info, ObsSpec, ACTION_DIM};
 use rayon::prelude::*;

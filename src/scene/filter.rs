@@ -12,7 +12,7 @@
 //! the table, and the arm links listed are separated by a roll joint that
 //! cannot bring them together. Pairs of arm links that *do* touch the head
 //! or torso in normal use (upper-arm roll vs. head, shoulder lift vs. torso)
-//! are not excluded. `tests/collision_filter.rs` proves that trajectories
+//! are not excluded. `tests/it/collision_filter.rs` proves that trajectories
 //! with and without this list are bit-identical over many seeded random and
 //! scripted rollouts.
 

@@ -6,7 +6,7 @@
 //! the distance (one uniform), then the direction (one uniform), then the
 //! rectangle (two), then the yaw (one, when a range). The built-in tasks
 //! reproduce the episodes of the original hand-written samplers bit for bit
-//! (`tests/golden.rs`).
+//! (`tests/it/golden.rs`).
 
 use super::expr::Expr;
 use super::spec::{Anchor, Density, ObjectSpec, StartSpec, TaskSpec, Value, Yaw};

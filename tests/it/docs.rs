@@ -141,7 +141,6 @@ fn check(command: &str, makefile: &str) -> Option<String> {
 
 #[test]
 fn every_command_line_in_the_docs_parses() {
-    std::env::set_current_dir(root()).unwrap();
     let makefile = std::fs::read_to_string(root().join("Makefile")).unwrap();
     let all: Vec<Block> = docs().iter().flat_map(|p| blocks(p)).filter(|b| !b.fragment).collect();
     let commands: Vec<(String, String)> =

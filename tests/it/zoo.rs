@@ -48,8 +48,8 @@ fn info(name: &str) -> ExportInfo {
     ExportInfo {
         name: name.into(),
         description: "a test entry".into(),
-        trained_with: "none (made by tests/zoo.rs)".into(),
-        exported_from: "tests/zoo.rs".into(),
+        trained_with: "none (made by tests/it/zoo.rs)".into(),
+        exported_from: "tests/it/zoo.rs".into(),
         keep_critic: true,
         overwrite: false,
         ..ExportInfo::default()

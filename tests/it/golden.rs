@@ -6,7 +6,7 @@
 //! were recorded before they became task files; the Python wheel checks the
 //! 3.11.0 ones (python/tests/test_env.py).
 //!
-//! `BLOCKPUZZLE_PRINT_GOLDEN=1 cargo test --test golden -- --nocapture`
+//! `BLOCKPUZZLE_PRINT_GOLDEN=1 cargo test --test it golden:: -- --nocapture`
 //! prints the digests instead of checking them (only for a deliberate,
 //! documented break).
 
@@ -16,7 +16,7 @@ use blockpuzzle::rollout::episode_digest;
 fn environments_are_bit_identical_to_the_recorded_digests() {
     let engine = blockpuzzle::mj::version();
     let golden: serde_json::Value =
-        serde_json::from_str(include_str!("golden.json")).expect("tests/golden.json is JSON");
+        serde_json::from_str(include_str!("../golden.json")).expect("tests/golden.json is JSON");
     let cases = golden["cases"].as_array().expect("a list of cases");
     assert!(cases.len() >= 21, "the recorded cases are all there");
     let print = std::env::var_os("BLOCKPUZZLE_PRINT_GOLDEN").is_some();

@@ -1,11 +1,9 @@
 //! Environment API against real MuJoCo: dimensions, Gymnasium semantics,
 //! determinism, bad input, instability handling.
 
-mod common;
-
+use crate::common::trajectory;
 use blockpuzzle::env::{ids, make, registry, BlockEnv, EnvConfig, EnvError, ACTION_DIM};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
-use common::trajectory;
 
 #[test]
 fn registry_lists_and_builds_every_id() {

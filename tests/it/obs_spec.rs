@@ -26,12 +26,23 @@ fn the_spec_describes_each_layout() {
     assert_eq!("objects".parse::<ObsMode>(), Ok(ObsMode::Objects));
     let err = "set".parse::<ObsMode>().unwrap_err();
     assert!(err.contains("\"flat\" or \"objects\""), "{err}");
+    // Every mode: its name parses back, and its spec's names, dimension and mask agree.
+    for mode in ObsMode::ALL {
+        assert_eq!(mode.name().parse::<ObsMode>(), Ok(mode));
+        assert_eq!(mode.to_string(), mode.name());
+        let spec = ObsSpec::new(mode, 2);
+        assert_eq!(spec.names().len(), spec.dim(), "{mode}");
+        assert_eq!(spec.object_dim(), BLOCK_OBS + mode.extra_object_features().len(), "{mode}");
+        let obs = vec![1.0; spec.dim()];
+        assert_eq!(spec.mask(&obs).map(<[f32]>::len), mode.has_mask().then_some(2), "{mode}");
+        assert_eq!(spec.objects(&obs).count(), 2, "{mode}");
+    }
 }
 
 /// The objects mode holds the flat observation's robot features and
 /// object rows, each row extended by the object's half extents, and the
 /// mask (every slot present while counts are fixed), step for step; the
-/// flat mode is what every id had (its golden digests are tests/golden.rs).
+/// flat mode is what every id had (its golden digests are tests/it/golden.rs).
 #[test]
 fn objects_mode_is_the_flat_observation_with_sizes_and_a_mask() {
     let (mut flat, mut objects) = (env("BlocksChoose-v0", ObsMode::Flat), env("BlocksChoose-v0", ObsMode::Objects));

@@ -1,12 +1,10 @@
 //! The collision filter changes nothing: trajectories with and without the
 //! excluded robot pairs are bit-identical.
 
-mod common;
-
+use crate::common::trajectory;
 use blockpuzzle::env::{registry, BlockEnv};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
 use blockpuzzle::scene::EXCLUDED_BODY_PAIRS;
-use common::trajectory;
 
 fn pair(id: &str) -> (BlockEnv, BlockEnv) {
     let mut off = registry::config(id).unwrap();

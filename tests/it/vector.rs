@@ -2,10 +2,8 @@
 //! number of environments and threads, next-step autoreset, per-environment
 //! seeds and masks, and bad input refused before anything moves.
 
+use crate::common::vector_actions as actions;
 use blockpuzzle::env::{registry, EnvConfig, ResetOptions, VectorEnv, ACTION_DIM};
-
-mod common;
-use common::vector_actions as actions;
 
 fn config(id: &str) -> EnvConfig {
     EnvConfig::new(registry::task(id).unwrap())
@@ -13,7 +11,7 @@ fn config(id: &str) -> EnvConfig {
 
 /// Environment `index`'s observations, rewards and flags over `steps` steps.
 fn trajectory(n: usize, threads: usize, index: usize, steps: usize) -> Vec<f32> {
-    common::vector_trajectory(&config("GripperTouch-v0"), (n, threads), index, steps, 10)
+    crate::common::vector_trajectory(&config("GripperTouch-v0"), (n, threads), index, steps, 10)
 }
 
 #[test]

@@ -315,7 +315,7 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
         "--description",
         "tiny",
         "--trained-with",
-        "tests/cli.rs",
+        "tests/it/cli.rs",
         "--zoo",
         zoo.to_str().unwrap(),
     ]);

@@ -102,14 +102,12 @@ fn the_same_seed_gives_the_same_episode() {
     assert_eq!(a[0], a[2], "seed 5 again after seed 6");
 }
 
-mod common;
-
 /// Environment `index`'s observations, rewards and flags over `steps` steps of a vector engine of
 /// `n` BlocksChooseN-v0 environments (the `objects` observation) on `threads` threads.
 fn vector_trajectory(n: usize, threads: usize, index: usize, steps: usize) -> Vec<f32> {
     let mut config = EnvConfig::new(registry::task("BlocksChooseN-v0").unwrap());
     config.obs_mode = ObsMode::Objects;
-    common::vector_trajectory(&config, (n, threads), index, steps, 40)
+    crate::common::vector_trajectory(&config, (n, threads), index, steps, 40)
 }
 
 #[test]
@@ -193,7 +191,7 @@ fn malformed_counts_are_clear_errors() {
 
 #[test]
 fn tasks_without_counts_draw_nothing_for_them() {
-    // The built-in tasks keep their episodes (tests/golden.rs pins them); here: no slot is ever absent.
+    // The built-in tasks keep their episodes (tests/it/golden.rs pins them); here: no slot is ever absent.
     for id in registry::ids().into_iter().filter(|id| *id != "BlocksChooseN-v0") {
         let task = registry::task(id).unwrap();
         if !task.count_groups().is_empty() {
