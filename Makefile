@@ -12,7 +12,7 @@ resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
 # Set-up, build, test, the main job, a demo and the benchmark. Every other experiment is a recipe
 # file in experiments/ run with `blockpuzzle train --config FILE` (docs/training.md lists them).
-.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel demo test bench train build leaderboard
+.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel test-fast demo test bench train build leaderboard
 
 setup:
 	bash scripts/setup.sh
@@ -32,6 +32,14 @@ test: setup
 	bash scripts/zoo_python_check.sh
 	$(MAKE) test-mujoco3
 	$(MAKE) test-wheel
+
+# The fast tier for the inner loop: the library's unit tests and the integration tests of the core
+# (environments, tasks, rules, suites, the CLI, provenance), without the training runs, MPI and the
+# bad-input rounds. `make test` (what CI runs) is the full suite.
+FAST_SKIP = --skip learning:: --skip train:: --skip mpi:: --skip limits:: --skip aggrevated:: --skip set_network::
+test-fast: setup
+	$(CARGO) test --lib
+	$(CARGO) test --test it -- $(FAST_SKIP)
 
 # The opt-in second engine, MuJoCo 3.11.0 from its PyPI wheel (engines/mujoco-3.11.0, sha256-pinned):
 # `cargo build --release --features mujoco3 --target-dir target/mujoco3` (its own target folder

@@ -58,3 +58,12 @@ pub fn vector_trajectory(
     }
     out
 }
+
+/// Says that the running test skips `what` and why, where a run shows it: straight to the process's
+/// standard error, past the test harness's capture (which keeps `eprintln!` of a passing test out of
+/// sight), so a green run lists what it did not check.
+pub fn skipped(what: &str) {
+    use std::io::Write;
+    let test = std::thread::current().name().unwrap_or("a test").to_owned();
+    let _ = writeln!(std::io::stderr().lock(), "SKIPPED in {test}: {what}");
+}

@@ -328,10 +328,13 @@ fn random_dump(dir: &Path) -> PathBuf {
 /// made without touching the machine; None where this process may not mount
 /// (not root, or no unshare), and the caller then skips.
 fn on_small_fs(opts: &str, script: &str) -> Option<Output> {
-    let probe =
-        Command::new("unshare").args(["-m", "sh", "-c", "mount -t tmpfs -o size=16k tmpfs /mnt"]).output().ok()?;
+    let Ok(probe) = Command::new("unshare").args(["-m", "sh", "-c", "mount -t tmpfs -o size=16k tmpfs /mnt"]).output()
+    else {
+        crate::common::skipped("no `unshare` to make a small file system");
+        return None;
+    };
     if !probe.status.success() {
-        eprintln!("skipped: cannot mount a tmpfs here ({})", text(&probe).trim());
+        crate::common::skipped(&format!("cannot mount a tmpfs here ({})", text(&probe).trim()));
         return None;
     }
     let m = tempfile::tempdir().unwrap().keep();
@@ -377,7 +380,7 @@ fn long_commands_show_progress_on_a_terminal() {
     // `script` gives the command a terminal (indicatif draws nothing elsewhere).
     let on_tty = |args: &str| Command::new("script").args(["-qec", &format!("{BP} {args}"), "/dev/null"]).output();
     let Ok(o) = on_tty("task check BlocksTouch-v0 --samples 5") else {
-        eprintln!("skipped: no `script` to give the command a terminal");
+        crate::common::skipped("no `script` to give the command a terminal");
         return;
     };
     assert!(o.status.success() && text(&o).contains("reset 1/30"), "{}", text(&o));
@@ -476,7 +479,7 @@ fn no_writer_replaces_or_leaves_anything_beside_what_is_not_a_regular_file() {
     let probe = tempfile::tempdir().unwrap();
     let devices = mknod(probe.path(), "probe", "3").is_some();
     if !devices {
-        eprintln!("skipped: the character-device targets (this process may not make devices: not root)");
+        crate::common::skipped("the character-device targets (this process may not make devices: not root)");
     }
     // One thread per command (each runs its cases in order; the commands are independent).
     std::thread::scope(|scope| {
