@@ -71,9 +71,7 @@ def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, 
         rates = [r["evaluation"]["success_rate"] for r in results]
         splits.append({"name": split, "rows": results, "mean_success": sum(rates) / len(rates)})
     mean = {sp["name"]: sp["mean_success"] for sp in splits}
-    suite_id = {"name": s["name"], "sha256": s["sha256"]}
-    if s["episodes_per_row"] is not None:
-        suite_id["episodes_per_row"] = s["episodes_per_row"]
+    suite_id = s["id"]
     return {
         "provenance": {**_native.build_info(), "harness": "python", "policy": {"name": name, "sha256": None},
                        "suite": suite_id},

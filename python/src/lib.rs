@@ -416,8 +416,9 @@ pub(crate) fn task(id: &str) -> PyResult<blockpuzzle::task::Task> {
     registry::task(id).map_err(to_py)
 }
 
-/// An evaluation suite (a built-in name or a suite file), checked: a dict of
-/// `name`, `summary`, `sha256` and `splits`, a list of (split name, rows),
+/// An evaluation suite (a built-in name or a suite file), checked, shortened to its first
+/// `episodes` per row where given: a dict of `name`, `summary`, `sha256`, `id` (what results
+/// record of it) and `splits`, a list of (split name, rows),
 /// each row a dict of `task` (id or file path), `task_id`, `task_sha256` (the compiled task's
 /// content hash), `distribution` (None: the
 /// curriculum's), `level` (None: the last), `seed` and `episodes`.
@@ -432,7 +433,9 @@ fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<
     d.set_item("name", &s.name)?;
     d.set_item("summary", &s.summary)?;
     d.set_item("sha256", &s.sha256)?;
-    d.set_item("episodes_per_row", s.episodes_per_row)?;
+    // What results record of it (the CLI's `SuiteId`, a shortened run's mark included).
+    let id = serde_json::to_string(&s.id()).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    d.set_item("id", py.import("json")?.call_method1("loads", (id,))?)?;
     let splits = PyList::empty(py);
     for split in &s.splits {
         let rows = PyList::empty(py);

@@ -101,8 +101,8 @@ pub(crate) fn evaluate_saved(
         Python::with_gil(|py| {
             let called = py.check_signals().and_then(|()| {
                 let Some(f) = on_row.as_ref() else { return Ok(()) };
-                let row =
-                    py.import("json")?.call_method1("loads", (serde_json::to_string(row).unwrap_or_default(),))?;
+                let text = serde_json::to_string(row).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+                let row = py.import("json")?.call_method1("loads", (text,))?;
                 f.call1(py, (split, row, done, total)).map(|_| ())
             });
             called.map_err(|e| {

@@ -961,24 +961,16 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     if let Some(md) = &md {
         crate::io::check_output(md)?;
     }
-    let r = match (&a.checkpoint, a.baseline) {
-        (_, Some(b)) => {
-            crate::evaluate::evaluate_suite(Subject::Baseline(b), &suite, threads, Harness::Cli, &mut |_, _, _, _| {
-                Ok(())
-            })?
-        }
+    let saved;
+    let subject = match (&a.checkpoint, a.baseline) {
+        (_, Some(b)) => Subject::Baseline(b),
         (checkpoint, None) => {
             let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
-            let saved = crate::load::load_policy(checkpoint)?;
-            crate::evaluate::evaluate_suite(
-                Subject::Saved(checkpoint, &saved),
-                &suite,
-                threads,
-                Harness::Cli,
-                &mut |_, _, _, _| Ok(()),
-            )?
+            saved = crate::load::load_policy(checkpoint)?;
+            Subject::Saved(checkpoint, &saved)
         }
     };
+    let r = crate::evaluate::evaluate_suite(subject, &suite, threads, Harness::Cli, &mut |_, _, _, _| Ok(()))?;
     crate::io::write_json(&out, &r)?;
     if let Some(md) = &md {
         crate::io::write_file(md, r.to_markdown().as_bytes())?;

@@ -84,8 +84,9 @@ pub enum ObsMode {
 }
 
 /// What depends on the mode lives here, each in a `match` the compiler checks for every mode: a
-/// new mode is a compile error wherever it must be handled (Python reads the same through
-/// `obs_layout`'s `mode`, `object_features` and `mask`).
+/// new mode is a compile error wherever it must be handled (Python reads the results through
+/// `obs_layout`'s `mode`, `object_dim`, `dim`, `names` and `mask`, and checks its own layouts
+/// against [`ObsMode::ALL`]).
 impl ObsMode {
     /// Every mode, in the order the docs list them.
     pub const ALL: [ObsMode; 2] = [ObsMode::Flat, ObsMode::Objects];
