@@ -412,6 +412,8 @@ impl<'a> Trainer<'a> {
         let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
         // One environment and one thread per worker.
         let env_config = EnvConfig { obs_mode: config.net.obs_mode(), ..EnvConfig::new(task.clone()) };
+        // Sized from the configuration before any environment is built (256 of them take a minute).
+        check_memory(&config, env_config.obs_spec().dim(), crate::env::ACTION_DIM, task.spec.max_episode_steps)?;
         let mut envs = VectorEnv::new(&env_config, config.workers, config.workers)?;
         // Hindsight colours replay the rules over every substep's contacts: the environments record them.
         envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
@@ -419,7 +421,6 @@ impl<'a> Trainer<'a> {
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
         let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
         let max_level = first.max_level();
-        check_memory(&config, obs_dim, act_dim, task.spec.max_episode_steps)?;
         if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
             bail!("--challenge-share: the task {} has no challenge distribution", task.id());
         }

@@ -1,8 +1,10 @@
 //! A small but real learning check: DDPG learns GripperTouch-v0 (move the
 //! blue gripper onto the green block; random actions succeed in about 10% of
 //! episodes) within a fixed budget of 10 epochs of 10 cycles (at most 20,000
-//! environment steps and 4,000 updates). Runs the `blockpuzzle` binary so that
-//! OpenBLAS gets its fast kernels (see src/blas.rs).
+//! environment steps and 4,000 updates), with hidden layers of 64 units instead
+//! of the paper's 256 (they learn it too, in about 4× the time: 173 s against 39 s
+//! on the 2-core AMD EPYC VM). Runs the `blockpuzzle` binary so that OpenBLAS
+//! gets its fast kernels (see src/blas.rs).
 #![cfg(feature = "train")]
 
 use std::process::Command;
@@ -21,7 +23,7 @@ fn ddpg_learns_to_touch_the_block_within_a_step_budget() {
     let run = run.to_str().unwrap();
     bp(&["train", "--env", "GripperTouch-v0", "--epochs", "10", "--cycles", "10", "--test-episodes", "10"]
         .into_iter()
-        .chain(["--torch-threads", "1", "--seed", "0", "--run-dir", run])
+        .chain(["--hidden", "64", "--torch-threads", "1", "--seed", "0", "--run-dir", run])
         .collect::<Vec<_>>());
     let rows = blockpuzzle::train::read_progress(&dir.path().join("run/progress.csv")).unwrap();
     let steps = rows.last().unwrap().env_steps;
