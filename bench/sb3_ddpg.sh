@@ -5,7 +5,7 @@
 #
 # For each torch thread count, blockpuzzle runs first, SB3 right after, so that both see the
 # same machine load:
-#   blockpuzzle bench --ddpg --workers 1 --torch-threads T --steps STEPS --updates UPDATES
+#   blockpuzzle bench --train --workers 1 --torch-threads T --steps STEPS --updates UPDATES
 #     (src/bench/ddpg.rs: the training loop's collection path -- plain-Rust actor + noise,
 #     env step, replay insert, normaliser update -- then DDPG updates at batch 256);
 # on CPUs with AMX or AVX512-BF16 also with --precision bf16 (hidden-layer products in
@@ -94,13 +94,13 @@ BP="$ROOT/target/release/blockpuzzle"
 LINES=()
 for t in $THREADS; do
     log "blockpuzzle DDPG, BlocksTouch-v0, threads=$t: $STEPS env steps, $UPDATES updates"
-    line="$("$BP" bench --ddpg --workers 1 --torch-threads "$t" --steps "$STEPS" \
+    line="$("$BP" bench --train --workers 1 --torch-threads "$t" --steps "$STEPS" \
         --updates "$UPDATES" --seed "$SEED" --json)"
     echo "$line"
     LINES+=("$line")
     if grep -qwE 'amx_bf16|avx512_bf16' /proc/cpuinfo; then
         log "blockpuzzle DDPG, --precision bf16, threads=$t: $UPDATES updates"
-        line="$("$BP" bench --ddpg --workers 1 --torch-threads "$t" --steps 500 \
+        line="$("$BP" bench --train --workers 1 --torch-threads "$t" --steps 500 \
             --updates "$UPDATES" --seed "$SEED" --precision bf16 --json)"
         echo "$line"
         LINES+=("$line")
@@ -113,7 +113,7 @@ for t in $THREADS; do
     LINES+=("$line")
 done
 log "blockpuzzle DDPG collection with 2 workers: $STEPS env steps"
-line="$("$BP" bench --ddpg --workers 2 --torch-threads 1 --steps "$STEPS" --updates 1 --seed "$SEED" --json)"
+line="$("$BP" bench --train --workers 2 --torch-threads 1 --steps "$STEPS" --updates 1 --seed "$SEED" --json)"
 echo "$line"
 LINES+=("$line")
 

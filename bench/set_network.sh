@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Update rates of the set networks against the flat MLP (issue 31), f32 and bf16, side by side:
-# `blockpuzzle bench --ddpg` on BlocksChoose-v0 for each network, the whole list ROUNDS times,
+# `blockpuzzle bench --train` on BlocksChoose-v0 for each network, the whole list ROUNDS times,
 # alternated so that a change in the machine's load touches every network alike. Prints one JSON
 # line per measurement (bench --json) and a table of the medians and their ratios to the MLP's.
 #   bash bench/set_network.sh [ROUNDS] [UPDATES]
@@ -17,7 +17,7 @@ for _ in $(seq "$ROUNDS"); do
     for precision in "${PRECISIONS[@]}"; do
         for net in "mlp mean-max" "set mean-max" "set mean-max --set-norm" "set mean-max --flat-critic" "set attention" "set colour"; do
             set -- $net
-            "$BP" bench --ddpg --json --env BlocksChoose-v0 --net "$1" --set-pooling "$2" ${3:-} --precision "$precision" \
+            "$BP" bench --train --json --env BlocksChoose-v0 --net "$1" --set-pooling "$2" ${3:-} --precision "$precision" \
                 --updates "$UPDATES" --steps 500 --torch-threads 1 | tee -a "$OUT"
         done
     done

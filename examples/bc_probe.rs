@@ -21,8 +21,9 @@
 
 use anyhow::{bail, ensure, Context, Result};
 use blockpuzzle::agents::arch::{Arch, NetConfig, NetKind};
-use blockpuzzle::agents::ddpg::{DdpgConfig, DdpgPolicy};
+use blockpuzzle::agents::ddpg::DeterministicPolicy;
 use blockpuzzle::agents::nets::{append_grads, Adam, Net};
+use blockpuzzle::agents::shared::SharedConfig;
 use blockpuzzle::env::{ObsMode, ObsSpec, ACTION_DIM, BLOCK_OBS};
 use blockpuzzle::evaluate::Trained;
 use blockpuzzle::outcome::{wilson95, Outcome, Outcomes};
@@ -208,7 +209,7 @@ impl<P: Policy> Policy for Viewed<P> {
 
 /// A trained student as a policy: the plain-Rust copy of its network and its normaliser
 /// (what a training run saves and rolls out).
-struct Frozen(DdpgPolicy);
+struct Frozen(DeterministicPolicy);
 
 impl Policy for Frozen {
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
@@ -360,7 +361,7 @@ impl Student {
     /// A fresh network of `arch` (DDPG's default hidden layers, initialised from `seed`), its
     /// normaliser fitted once on the training rows, and Adam as DDPG's actor has it.
     fn new(name: &'static str, arch: Arch, flat: bool, seed: u64, train: &Dataset, val: &Dataset) -> Self {
-        let config = DdpgConfig::default();
+        let config = SharedConfig::default();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let net = arch.net((config.hidden, config.layers), 0, ACTION_DIM, true, &mut rng);
         let mut norm = arch.normalizer(config.norm_eps, config.norm_clip);
@@ -393,7 +394,7 @@ impl Student {
 
     /// The student as a policy in the `objects` environment of layout `spec`.
     fn policy(&self, spec: ObsSpec) -> Box<dyn Policy> {
-        let frozen = Frozen(DdpgPolicy { net: self.net.to_plain(), norm: self.norm.clone() });
+        let frozen = Frozen(DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() });
         Box::new(Viewed { policy: frozen, flat_of: self.flat.then_some(spec) })
     }
 }

@@ -1,7 +1,8 @@
 //! DDPG updates per second on random data (3×256 nets, BlocksTouch sizes).
 //! Usage: cargo run --release --example update_rate [BATCH] [THREADS] [f32|bf16]
-use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig, Precision};
+use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::replay::ReplayBuffer;
+use blockpuzzle::agents::shared::{Precision, SharedConfig};
 use rand::{Rng, SeedableRng};
 fn main() {
     blockpuzzle::blas::ensure_fast_kernels();
@@ -11,7 +12,8 @@ fn main() {
     tch::set_num_threads(threads);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
     let precision = if bf16 { Precision::Bf16 } else { Precision::F32 };
-    let mut agent = Ddpg::new(48, 4, DdpgConfig { precision, ..DdpgConfig::default() }, &mut rng);
+    let mut agent =
+        Ddpg::new(48, 4, SharedConfig { precision, ..SharedConfig::default() }, DdpgConfig::default(), &mut rng);
     let mut buf = ReplayBuffer::new(48, 4, 100_000);
     for _ in 0..20_000 {
         let o: Vec<f32> = (0..48).map(|_| rng.gen_range(-1.0..1.0)).collect();

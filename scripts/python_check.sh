@@ -23,8 +23,11 @@ WORK="$(mktemp -d)"
 trap 'rm -rf "$NATIVE" "$WORK"' EXIT
 echo "[python] installing it into a fresh venv ($WORK/venv)"
 python3 -m venv "$WORK/venv"
-"$WORK/venv/bin/pip" install -q --disable-pip-version-check "$WHEEL" pytest==9.2.0 gymnasium==1.4.0 numpy==2.2.6
+"$WORK/venv/bin/pip" install -q --disable-pip-version-check "$WHEEL" pytest==9.2.0 pytest-xdist==3.8.0 \
+    gymnasium==1.4.0 numpy==2.2.6
 mkdir -p "$WORK/home"
 cd "$WORK"
+# Two pytest workers (pytest-xdist; PYTEST_WORKERS=N for another count), each test module in one of them.
 env -u BLOCKPUZZLE_MODELS_DIR HOME="$WORK/home" BLOCKPUZZLE_WHEEL_TEST="$ROOT" \
-    "$WORK/venv/bin/python" -m pytest -q -p no:cacheprovider "$ROOT/python/tests"
+    "$WORK/venv/bin/python" -m pytest -q -p no:cacheprovider -n "${PYTEST_WORKERS:-2}" --dist loadscope \
+    "$ROOT/python/tests"

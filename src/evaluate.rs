@@ -55,6 +55,22 @@ pub enum Baseline {
 }
 
 impl Baseline {
+    /// Every baseline.
+    pub const ALL: [Baseline; 2] = [Baseline::Scripted, Baseline::ObsHash];
+
+    /// The baseline called `name` (`scripted`, `obs-hash`), if any.
+    pub fn named(name: &str) -> Option<Baseline> {
+        Self::ALL.into_iter().find(|b| b.name() == name)
+    }
+
+    /// Its policy in `env`.
+    pub fn policy(self, env: &BlockEnv) -> Box<dyn Policy> {
+        match self {
+            Baseline::Scripted => Box::new(ScriptedPolicy::for_env(env.config())),
+            Baseline::ObsHash => Box::new(ObsHashPolicy),
+        }
+    }
+
     /// Its name in outputs: `scripted`, `obs-hash`.
     pub fn name(self) -> &'static str {
         match self {

@@ -1,4 +1,4 @@
-//! Hindsight colour relabelling (issue 31, the core part): an episode in
+//! Hindsight colour relabelling (the core part; training stores the copies): an episode in
 //! which blue touched a grey block is a success of the task in which that
 //! block had been green. Given the contacts an episode recorded at every
 //! physics substep, this module proposes other colourings of its blocks and

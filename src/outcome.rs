@@ -66,43 +66,89 @@ impl Outcome {
 
     /// Classifies a recorded episode.
     pub fn of(ep: &EpisodeRecord) -> Outcome {
-        if ep.success {
+        // Blocks are the task's objects: everything but the robot and the surfaces.
+        let blocks: Vec<bool> = ep.objects.iter().map(|o| !RESERVED_NAMES.contains(&o.name.as_str())).collect();
+        let colours: Vec<Option<Colour>> = ep.objects.iter().map(|o| Some(o.colour)).collect();
+        let n = ep.objects.len();
+        let mut touched = vec![false; n * n];
+        for (a, b) in ep.steps.iter().flat_map(|s| s.touching.iter().copied()) {
+            if a < n && b < n {
+                touched[a * n + b] = true;
+                touched[b * n + a] = true;
+            }
+        }
+        // The record's blocks are the objects that are not reserved, in order; their heights likewise.
+        let last = ep.steps.last().map_or(&ep.initial, |s| &s.state);
+        let z = |state: &crate::rollout::StateRecord, k: usize| state.blocks.get(k).map(|b| b.pos[2]);
+        let heights: Vec<(Option<f64>, Option<f64>)> =
+            (0..blocks.iter().filter(|b| **b).count()).map(|k| (z(&ep.initial, k), z(last, k))).collect();
+        Outcome::classify(&Summary {
+            success: ep.success,
+            failure: ep.failure,
+            unstable: ep.steps.iter().any(|s| s.unstable),
+            colours: &colours,
+            blocks: &blocks,
+            gripper: ep.objects.iter().position(|o| o.name == "gripper"),
+            touched: &|a, b| touched[a * n + b],
+            heights: &heights,
+        })
+    }
+
+    /// Classifies an episode from what it did ([`Summary`]): the one
+    /// classifier behind `eval`, `rollout` and Python's `evaluate`.
+    pub fn classify(s: &Summary) -> Outcome {
+        if s.success {
             return Outcome::Success;
         }
-        if ep.failure {
+        if s.failure {
             return Outcome::Failure;
         }
-        if ep.steps.iter().any(|s| s.unstable) {
+        if s.unstable {
             return Outcome::Unstable;
         }
-        // Blocks are the task's objects: everything but the robot and the surfaces.
-        let block = |i: usize| ep.objects.get(i).is_some_and(|o| !RESERVED_NAMES.contains(&o.name.as_str()));
-        let gripper = ep.objects.iter().position(|o| o.name == "gripper");
-        let colour = |i: usize| ep.objects.get(i).map(|o| o.colour);
-        let pairs = || ep.steps.iter().flat_map(|s| s.touching.iter().copied());
-        let gripper_reached =
-            pairs().any(|(a, b)| (Some(a) == gripper && block(b)) || (Some(b) == gripper && block(a)));
+        let n = s.colours.len();
+        let block = |i: usize| s.blocks.get(i).copied().unwrap_or(false);
+        let colour = |i: usize| s.colours.get(i).copied().flatten();
+        let gripper_reached = s.gripper.is_some_and(|g| (0..n).any(|b| block(b) && (s.touched)(g, b)));
         if !gripper_reached {
             return Outcome::NoContact;
         }
-        // The record's blocks are the objects that are not reserved, in order.
-        let blocks: Vec<usize> = (0..ep.objects.len()).filter(|&i| block(i)).collect();
-        let last = ep.steps.last().map_or(&ep.initial, |s| &s.state);
-        let knocked_off = blocks.iter().enumerate().any(|(k, &i)| {
-            let z = |state: &crate::rollout::StateRecord| state.blocks.get(k).map(|b| b.pos[2]);
+        let knocked_off = (0..n).filter(|&i| block(i)).enumerate().any(|(k, i)| {
             matches!(colour(i), Some(Colour::Blue | Colour::Green))
-                && matches!((z(&ep.initial), z(last)), (Some(a), Some(b)) if a > TABLE_TOP_Z && b < TABLE_TOP_Z)
+                && matches!(s.heights.get(k), Some((Some(a), Some(b))) if *a > TABLE_TOP_Z && *b < TABLE_TOP_Z)
         });
         if knocked_off {
             return Outcome::OffTable;
         }
-        let blue_grey =
-            |a: usize, b: usize| colour(a) == Some(Colour::Blue) && colour(b) == Some(Colour::Grey) && block(b);
-        if pairs().any(|(a, b)| blue_grey(a, b) || blue_grey(b, a)) {
+        let blue_grey = (0..n).any(|a| {
+            colour(a) == Some(Colour::Blue)
+                && (0..n).any(|b| block(b) && colour(b) == Some(Colour::Grey) && (s.touched)(a, b))
+        });
+        if blue_grey {
             return Outcome::BlueMetGrey;
         }
         Outcome::Timeout
     }
+}
+
+/// What [`Outcome::classify`] reads of an episode.
+pub struct Summary<'a> {
+    /// The task's success.
+    pub success: bool,
+    /// The task's failure.
+    pub failure: bool,
+    /// Whether the simulation went unstable.
+    pub unstable: bool,
+    /// Each rule object's colour (None: an absent object), in rule-object order.
+    pub colours: &'a [Option<Colour>],
+    /// Whether each rule object is a block (not the gripper, table or floor).
+    pub blocks: &'a [bool],
+    /// The gripper's index among the rule objects.
+    pub gripper: Option<usize>,
+    /// Whether rule objects `a` and `b` touched during the episode (either order).
+    pub touched: &'a dyn Fn(usize, usize) -> bool,
+    /// The k-th block's height (m) at the start and at the end (None: unknown).
+    pub heights: &'a [(Option<f64>, Option<f64>)],
 }
 
 /// Episode counts per outcome.

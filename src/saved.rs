@@ -4,12 +4,14 @@
 //! safetensors form is `crate::zoo`; a policy named on the command line
 //! (file, run directory or zoo name) is resolved by `crate::load`.
 
-use crate::actor::mlp::TanhMlp;
+use crate::actor::mlp::PlainNet;
 use crate::actor::AnyPolicy;
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// A run directory's configuration file: its presence makes a folder a run directory.
+pub const CONFIG_FILE: &str = "config.json";
 /// A run's latest policy, in its run directory.
 pub const POLICY_FILE: &str = "policy.json";
 /// A run's policy of the best finals success, in its run directory.
@@ -37,7 +39,7 @@ pub struct SavedPolicy {
     /// expert with `--pg-weight expert-advantage`. Absent for PGGD and in
     /// policies saved before the critic was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub critic: Option<TanhMlp>,
+    pub critic: Option<PlainNet>,
 }
 
 impl SavedPolicy {

@@ -23,9 +23,9 @@
 //! --policy`, `table`, AggreVaTeD's `--expert`) takes a zoo name as well as
 //! a file or run directory: [`crate::load::load_policy`].
 
-use crate::actor::mlp::{Dense, TanhMlp};
+use crate::actor::mlp::{Dense, PlainNet};
 use crate::actor::normalizer::Normalizer;
-use crate::actor::{AnyPolicy, DdpgPolicy, PggdPolicy};
+use crate::actor::{AnyPolicy, DeterministicPolicy, PggdPolicy};
 use crate::saved::SavedPolicy;
 use crate::task::TaskSource;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
@@ -282,7 +282,7 @@ pub fn is_zoo_file(path: &Path) -> bool {
 }
 
 /// A network's layout, `n_in` its whole input (observation, and a critic's action).
-fn layout(net: &TanhMlp, n_in: usize) -> NetLayout {
+fn layout(net: &PlainNet, n_in: usize) -> NetLayout {
     let mut sizes = vec![n_in];
     sizes.extend(net.layers.iter().map(|l| l.b.len()));
     let layers = match net.set {
@@ -348,12 +348,12 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         .clone()
         .ok_or_else(|| corrupt("the policy does not record its task (saved before tasks were files)".into()))?;
     let (net, norm, sigma_min) = match &saved.policy {
-        AnyPolicy::Ddpg(p) => (&p.net, &p.norm, None),
+        AnyPolicy::Deterministic(p) => (&p.net, &p.norm, None),
         AnyPolicy::Pggd(p) => (&p.net, &p.norm, Some(p.sigma_min)),
     };
     let critic = if info.keep_critic { saved.critic.as_ref() } else { None };
     let mut arrays: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
-    let mut add_net = |prefix: &str, net: &TanhMlp| {
+    let mut add_net = |prefix: &str, net: &PlainNet| {
         for (i, l) in net.layers.iter().enumerate() {
             arrays.push((format!("{prefix}.{i}.weight"), vec![l.b.len(), l.n_in], le_bytes(&l.w)));
             arrays.push((format!("{prefix}.{i}.bias"), vec![l.b.len()], le_bytes(&l.b)));
@@ -555,7 +555,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         }
         Ok(t.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
     };
-    let read_net = |prefix: &str, l: &NetLayout| -> Result<TanhMlp, ZooError> {
+    let read_net = |prefix: &str, l: &NetLayout| -> Result<PlainNet, ZooError> {
         if l.sizes.len() < 2 {
             return Err(corrupt(format!("{prefix} has {} layer sizes, at least 2 needed", l.sizes.len())));
         }
@@ -577,7 +577,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                 })
             })
             .collect::<Result<_, ZooError>>()?;
-        Ok(TanhMlp { layers, tanh_out: l.tanh_out, set: l.set })
+        Ok(PlainNet { layers, tanh_out: l.tanh_out, set: l.set })
     };
     let net = read_net("actor", &meta.actor)?;
     let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;
@@ -591,7 +591,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     );
     let out = *meta.actor.sizes.last().unwrap_or(&0);
     let policy = match (meta.algo.as_str(), meta.sigma_min) {
-        ("ddpg", None) => AnyPolicy::Ddpg(DdpgPolicy { net, norm }),
+        ("ddpg", None) => AnyPolicy::Deterministic(DeterministicPolicy { net, norm }),
         ("pggd", Some(sigma_min)) => AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min }),
         (algo, s) => {
             return Err(corrupt(format!("algorithm {algo:?} with sigma_min {s:?} is not a known policy kind")))

@@ -98,9 +98,6 @@ class _Progress:
               f"({time.monotonic() - self.start:.0f} s)", file=sys.stderr, flush=True)
 
 
-#: Height of the table top (m): a blue or green block that starts above it and ends below it was
-#: knocked off (the CLI's ``off_table``; src/scene/xml.rs ``TABLE_TOP_Z``).
-TABLE_TOP_Z = 0.4
 #: The outcomes in the order they are tested (src/outcome.rs; docs/suites.md).
 OUTCOMES = ("success", "failure", "unstable", "no_contact", "off_table", "blue_met_grey", "timeout")
 _RED, _BLUE, _GREEN, _GREY = range(4)
@@ -121,28 +118,15 @@ def _blocks(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return colour, rows[..., 2].copy()
 
 
-def _outcome(success, failure, unstable, matrix, surfaces, colour0, z0, colour_end, z_end) -> str:
-    """The CLI's outcome of one episode (src/outcome.rs), from the episode's contact matrix (rule
-    objects gripper, table, blocks, then the floor if it is one), the colours of the gripper, table
-    and floor (``surfaces``), and each block's colour and height at the start and the end."""
-    if success:
-        return "success"
-    if failure:
-        return "failure"
-    if unstable:
-        return "unstable"
-    m = len(colour0)
-    touched = np.asarray(matrix) > 0
-    blocks = range(2, 2 + m)
-    if not any(touched[0, b] for b in blocks):
-        return "no_contact"
-    if any(colour0[k] in (_BLUE, _GREEN) and z0[k] > TABLE_TOP_Z and z_end[k] < TABLE_TOP_Z for k in range(m)):
-        return "off_table"
-    colour = list(surfaces[:2]) + [int(c) for c in colour_end] + list(surfaces[2:])
-    n = len(colour)
-    if any(colour[a] == _BLUE and colour[b] == _GREY and touched[a, b] for a in range(n) for b in blocks):
-        return "blue_met_grey"
-    return "timeout"
+def _outcome(success, failure, unstable, matrix, surfaces, z0, colour_end, z_end) -> str:
+    """The CLI's outcome of one episode, classified by the CLI's own code (``_native.outcome``),
+    from the episode's contact matrix (rule objects gripper, table, blocks, then the floor if it is
+    one), the colours of the gripper, table and floor (``surfaces``), and each block's colour and
+    its height at the start and the end."""
+    colours = list(surfaces[:2]) + [int(c) for c in colour_end] + list(surfaces[2:])
+    touched = (np.asarray(matrix) > 0).tolist()
+    return _native.outcome(bool(success), bool(failure), bool(unstable), touched, colours,
+                           [float(z) for z in z0], [float(z) for z in z_end])
 
 
 def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -> dict:
@@ -158,7 +142,7 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
     if row["distribution"] is not None:
         options["distribution"] = row["distribution"]
     obs, _ = envs.reset(seed=[first + i for i in range(n)], options=options)
-    colour0, z0 = _blocks(_rows(obs, envs.obs_layout))
+    _, z0 = _blocks(_rows(obs, envs.obs_layout))
     playing = list(range(n))  # the episode each environment plays (None: none left)
     next_episode = n
     steps = np.zeros(n, np.int64)
@@ -193,8 +177,8 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
             successes += int(success[i])
             failures += int(failure[i])
             success_steps += int(steps[i]) if success[i] else 0
-            outcomes[_outcome(success[i], failure[i], unstable[i], info["contact_matrix"][i], surfaces, colour0[i],
-                              z0[i], colour_end[i], z_end[i])] += 1
+            outcomes[_outcome(success[i], failure[i], unstable[i], info["contact_matrix"][i], surfaces, z0[i],
+                              colour_end[i], z_end[i])] += 1
             if next_episode < episodes:
                 playing[i], seeds[i], mask[i] = next_episode, first + next_episode, True
                 next_episode += 1
@@ -203,10 +187,10 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
             steps[i], success[i], failure[i], unstable[i] = 0, False, False, False
         if any(mask):
             obs, _ = envs.reset(seed=seeds, options={**options, "reset_mask": mask})
-            colour, z = _blocks(_rows(obs, envs.obs_layout))
+            _, z = _blocks(_rows(obs, envs.obs_layout))
             for i in range(n):
                 if mask[i]:
-                    colour0[i], z0[i] = colour[i], z[i]
+                    z0[i] = z[i]
     envs.close()
     # The CLI's row (src/evaluate.rs RowResult), field for field.
     return {

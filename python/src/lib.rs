@@ -475,8 +475,50 @@ fn wilson95(successes: usize, n: usize) -> (f64, f64) {
     blockpuzzle::outcome::wilson95(successes, n)
 }
 
+/// The CLI's outcome of one episode (src/outcome.rs `Outcome::classify`): the rules' flags, the
+/// episode's contact matrix over the rule objects (gripper, table, the block slots, then the floor if
+/// it is one), each rule object's colour index (0-3 red, blue, green, grey; -1 for an absent slot),
+/// and each block slot's height at the start and the end.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn outcome(
+    success: bool,
+    failure: bool,
+    unstable: bool,
+    touched: Vec<Vec<bool>>,
+    colours: Vec<i64>,
+    z_start: Vec<f64>,
+    z_end: Vec<f64>,
+) -> PyResult<&'static str> {
+    use blockpuzzle::outcome::{Outcome, Summary};
+    use blockpuzzle::rules::Colour;
+    let n = colours.len();
+    if touched.len() != n || touched.iter().any(|r| r.len() != n) || z_start.len() != z_end.len() {
+        return Err(PyValueError::new_err(format!(
+            "outcome: a {n} x {n} contact matrix for {n} rule objects and as many start as end heights"
+        )));
+    }
+    let colours: Vec<Option<Colour>> =
+        colours.iter().map(|&c| usize::try_from(c).ok().and_then(|c| Colour::ALL.get(c).copied())).collect();
+    // Gripper and table first, then the block slots.
+    let blocks: Vec<bool> = (0..n).map(|i| (2..2 + z_start.len()).contains(&i)).collect();
+    let heights: Vec<(Option<f64>, Option<f64>)> = z_start.iter().zip(&z_end).map(|(a, b)| (Some(*a), Some(*b))).collect();
+    Ok(Outcome::classify(&Summary {
+        success,
+        failure,
+        unstable,
+        colours: &colours,
+        blocks: &blocks,
+        gripper: Some(0),
+        touched: &|a, b| touched[a][b] || touched[b][a],
+        heights: &heights,
+    })
+    .name())
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(outcome, m)?)?;
     m.add_class::<Env>()?;
     m.add_class::<vector::VecEnv>()?;
     m.add_class::<policy::ZooActor>()?;

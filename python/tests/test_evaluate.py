@@ -163,8 +163,8 @@ def test_outcomes_follow_the_cli_order():
     # rule objects: gripper, table, two blocks (blue, grey); grey gripper and table, no floor
     surfaces = [3, 3]
     m = np.zeros((4, 4), np.int64)
-    args = dict(surfaces=surfaces, colour0=np.array([1, 3]), z0=np.array([0.425, 0.425]),
-                colour_end=np.array([1, 3]), z_end=np.array([0.425, 0.425]))
+    args = dict(surfaces=surfaces, z0=np.array([0.425, 0.425]), colour_end=np.array([1, 3]),
+                z_end=np.array([0.425, 0.425]))
     assert _outcome(False, False, False, m, **args) == "no_contact"
     m[0, 2] = m[2, 0] = 1  # the gripper touched blue
     assert _outcome(False, False, False, m, **args) == "timeout"
@@ -174,6 +174,10 @@ def test_outcomes_follow_the_cli_order():
     assert _outcome(False, False, True, m, **args) == "unstable"
     assert _outcome(False, True, True, m, **args) == "failure"
     assert _outcome(True, True, True, m, **args) == "success"
+    # The classifier is the CLI's own: an absent slot (-1) is no block colour, a bad matrix is refused.
+    assert _outcome(False, False, False, m, **{**args, "colour_end": np.array([1, -1])}) == "timeout"
+    with pytest.raises(ValueError, match="contact matrix"):
+        _outcome(False, False, False, np.zeros((3, 3)), **args)
 
 
 def test_a_shortened_evaluation_says_so_and_reports_each_row(tmp_path, capsys):

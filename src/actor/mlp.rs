@@ -166,7 +166,7 @@ impl SetLayout {
 
 /// ReLU hidden layers and a tanh (or linear) output; with `set`, a set network.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TanhMlp {
+pub struct PlainNet {
     /// The layers, input first.
     pub layers: Vec<Dense>,
     /// Whether the output goes through tanh.
@@ -176,7 +176,7 @@ pub struct TanhMlp {
     pub set: Option<SetLayout>,
 }
 
-impl TanhMlp {
+impl PlainNet {
     /// Whether the network is whole and sane: layers chain from `n_in`
     /// inputs to `n_out` outputs, every weight and bias is finite and at
     /// most `max_abs` in size.
@@ -339,7 +339,7 @@ mod tests {
 
     #[test]
     fn relu_then_tanh() {
-        let net = TanhMlp {
+        let net = PlainNet {
             layers: vec![
                 Dense { w: vec![1.0, 0.0, 0.0, -1.0], b: vec![0.0, 0.0], n_in: 2 },
                 Dense { w: vec![1.0, 1.0], b: vec![0.5], n_in: 2 },

@@ -11,7 +11,7 @@ pub mod normalizer;
 
 use crate::env::{obs_dim, ObsSpec, BLOCK_OBS, ROBOT_OBS};
 use crate::rules::Colour;
-use mlp::TanhMlp;
+use mlp::PlainNet;
 use normalizer::Normalizer;
 use serde::{Deserialize, Serialize};
 
@@ -28,7 +28,7 @@ pub enum AnyPolicy {
     /// PGGD (tried first: a DDPG policy lacks its `act_dim` and `sigma_min`).
     Pggd(PggdPolicy),
     /// A deterministic tanh actor (DDPG, TD3, SAC).
-    Ddpg(DdpgPolicy),
+    Deterministic(DeterministicPolicy),
 }
 
 impl AnyPolicy {
@@ -36,15 +36,15 @@ impl AnyPolicy {
     pub fn act(&self, obs: &[f32]) -> Vec<f32> {
         match self {
             Self::Pggd(p) => p.act(obs),
-            Self::Ddpg(p) => p.act(obs),
+            Self::Deterministic(p) => p.act(obs),
         }
     }
 
     /// The policy's network.
-    pub fn net(&self) -> &mlp::TanhMlp {
+    pub fn net(&self) -> &mlp::PlainNet {
         match self {
             Self::Pggd(p) => &p.net,
-            Self::Ddpg(p) => &p.net,
+            Self::Deterministic(p) => &p.net,
         }
     }
 
@@ -66,7 +66,7 @@ impl AnyPolicy {
         let mut out = self.clone();
         let (net, norm) = match &mut out {
             Self::Pggd(p) => (&mut p.net, &mut p.norm),
-            Self::Ddpg(p) => (&mut p.net, &mut p.norm),
+            Self::Deterministic(p) => (&mut p.net, &mut p.norm),
         };
         net.set = Some(layout);
         *norm = norm.with_slots(layout);
@@ -77,7 +77,7 @@ impl AnyPolicy {
     pub fn obs_dim(&self) -> usize {
         match self {
             Self::Pggd(p) => p.norm.dim(),
-            Self::Ddpg(p) => p.norm.dim(),
+            Self::Deterministic(p) => p.norm.dim(),
         }
     }
 
@@ -89,7 +89,7 @@ impl AnyPolicy {
     /// The first problem, named.
     pub fn check(&self) -> Result<(), String> {
         let (net, norm, outputs) = match self {
-            Self::Ddpg(p) => (&p.net, &p.norm, crate::env::ACTION_DIM),
+            Self::Deterministic(p) => (&p.net, &p.norm, crate::env::ACTION_DIM),
             Self::Pggd(p) => {
                 if p.act_dim != crate::env::ACTION_DIM {
                     return Err(format!(
@@ -116,7 +116,7 @@ impl AnyPolicy {
         let (net, norm) = (self.net(), self.norm());
         let (act_dim, sigma_min) = match self {
             Self::Pggd(p) => (Some(p.act_dim), Some(p.sigma_min)),
-            Self::Ddpg(_) => (None, None),
+            Self::Deterministic(_) => (None, None),
         };
         serde_json::json!({
             "algo": self.algo(), "net": net, "mean": norm.mean(), "std": norm.std(), "clip": norm.clip(),
@@ -129,7 +129,7 @@ impl AnyPolicy {
     pub fn norm(&self) -> &Normalizer {
         match self {
             Self::Pggd(p) => &p.norm,
-            Self::Ddpg(p) => &p.norm,
+            Self::Deterministic(p) => &p.norm,
         }
     }
 
@@ -138,7 +138,7 @@ impl AnyPolicy {
     pub fn algo(&self) -> &'static str {
         match self {
             Self::Pggd(_) => "pggd",
-            Self::Ddpg(_) => "ddpg",
+            Self::Deterministic(_) => "ddpg",
         }
     }
 }
@@ -146,14 +146,14 @@ impl AnyPolicy {
 /// A frozen deterministic tanh actor (DDPG, TD3, SAC's mean action) for
 /// rollouts: plain Rust, `Send + Sync`, cheap to clone.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DdpgPolicy {
+pub struct DeterministicPolicy {
     /// The actor.
-    pub net: TanhMlp,
+    pub net: PlainNet,
     /// The observation normaliser it was trained with.
     pub norm: Normalizer,
 }
 
-impl DdpgPolicy {
+impl DeterministicPolicy {
     /// The deterministic action π(s).
     pub fn act(&self, obs: &[f32]) -> Vec<f32> {
         let mut x = obs.to_vec();
@@ -166,7 +166,7 @@ impl DdpgPolicy {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PggdPolicy {
     /// The network, outputs `[μ | σ pre-activation]`.
-    pub net: TanhMlp,
+    pub net: PlainNet,
     /// The observation normaliser it was trained with.
     pub norm: Normalizer,
     /// Action size.

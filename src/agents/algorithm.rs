@@ -1,31 +1,64 @@
-//! What a learning algorithm is to the training loop, and the list of them.
+//! What a learning algorithm is to the training loop: the [`Algorithm`]
+//! trait a learner implements, and the [`Registration`] its file declares.
 //!
 //! An algorithm is one file (`ddpg.rs`, `pggd.rs`, `sac.rs`) that implements
-//! [`Algorithm`]: its update as a gradient plus an optimiser step (so the
-//! loop can average shards' gradients, across MPI ranks too), how it
-//! explores, the deterministic policy it exports, and its state as named
-//! tensors and counters ([`StateDict`]), which checkpoints store by name.
-//! Adding one is that file and a line in [`ALGORITHMS`]; the trainer,
-//! checkpoints, `--algo` and the run's files take it from there.
+//! [`Algorithm`] (its update as a gradient plus an optimiser step, so that the
+//! loop can average shards' gradients, across MPI ranks too; how it explores;
+//! the deterministic policy it exports; the parts of its state, which
+//! checkpoints save and load by name) and declares a [`Registration`]: its
+//! names, its own settings (a `clap` + `serde` type), the shared settings it
+//! reads, its checks and its memory footprint. Adding one is that file and
+//! its line in `registry.rs`; the trainer, checkpoints, `--algo`, the
+//! settings checks and `bench --train` take it from there. This module knows
+//! no algorithm.
 
-use super::ddpg::{DdpgConfig, UpdateStats};
-use super::mlp::TanhMlp;
+use super::arch::Arch;
+use super::mlp::PlainNet;
 use super::nets::{Adam, Net};
 use super::normalizer::Normalizer;
-use super::pggd::PggdConfig;
 use super::replay::Batch;
+use super::shared::SharedConfig;
 use super::AnyPolicy;
 use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Every algorithm `--algo` accepts: its registration (name, summary,
-/// constructor, settings check). The first is the default.
-pub const ALGORITHMS: &[Registration] =
-    &[super::ddpg::REGISTRATION, super::pggd::REGISTRATION, super::sac::REGISTRATION];
+/// What an algorithm's own settings are: flags (`clap`), a group of a run's
+/// `config.json` (`serde`, missing keys taking their defaults) and defaults.
+pub trait AlgorithmConfig:
+    clap::Args
+    + clap::FromArgMatches
+    + Serialize
+    + serde::de::DeserializeOwned
+    + Default
+    + Clone
+    + PartialEq
+    + std::fmt::Debug
+    + Send
+    + Sync
+    + 'static
+{
+}
 
-/// How an algorithm is named and built.
-pub struct Registration {
-    /// `--algo` value and checkpoint name (lowercase).
+impl<T> AlgorithmConfig for T where
+    T: clap::Args
+        + clap::FromArgMatches
+        + Serialize
+        + serde::de::DeserializeOwned
+        + Default
+        + Clone
+        + PartialEq
+        + std::fmt::Debug
+        + Send
+        + Sync
+        + 'static
+{
+}
+
+/// An algorithm's names and the facts about its settings that callers ask for.
+#[derive(Debug, Clone, Copy)]
+pub struct Info {
+    /// `--algo` value, checkpoint name and its settings' group in `config.json` (lowercase).
     pub name: &'static str,
     /// How it is shown in titles and reports, e.g. "DDPG".
     pub title: &'static str,
@@ -33,143 +66,86 @@ pub struct Registration {
     pub about: &'static str,
     /// Whether it learns from an AggreVaTeD expert (`--expert`).
     pub takes_expert: bool,
-    /// A fresh learner; `rng` fixes the initial weights.
-    pub new: fn(&Spec, &mut ChaCha8Rng) -> Box<dyn Algorithm>,
-    /// Whether the run's settings suit it; the error names the flag.
-    pub check: fn(&DdpgConfig, &PggdConfig) -> Result<(), String>,
+    /// The flags of the shared settings ([`SharedConfig`]) it reads; a run that
+    /// gives any other is refused, naming the algorithms that read it.
+    pub reads: &'static [&'static str],
+    /// What its own settings' flags start with: the flag of field `f` is
+    /// `--{flag_prefix}{f}` (underscores as dashes).
+    pub flag_prefix: &'static str,
+    /// Its own settings a branch (`train --branch-from`) may change, by field name.
+    pub branchable: &'static [&'static str],
 }
 
-/// What an algorithm is built from: the networks' inputs and the run's settings (the
-/// off-policy settings in [`DdpgConfig`] are shared by DDPG and SAC, and
-/// give PGGD its network shape and normaliser).
+/// How an algorithm is named, configured and built: declared once in its
+/// file, listed in `registry.rs`.
+pub struct Registration<C: AlgorithmConfig> {
+    /// Its names and settings facts.
+    pub info: Info,
+    /// A fresh learner; `rng` fixes the initial weights.
+    pub new: fn(&Spec, &C, &mut ChaCha8Rng) -> Box<dyn Algorithm>,
+    /// Whether its own settings are in range; the error names the flag.
+    pub validate: fn(&C) -> Result<(), String>,
+    /// Its own settings that these settings would ignore (e.g. TD3's without
+    /// `--td3`), as (flag, the flags that use it).
+    pub unused: fn(&C) -> Vec<(&'static str, &'static str)>,
+    /// The bytes its networks and optimiser state take (the trainer's memory check).
+    pub memory: fn(&Spec, &C) -> u64,
+    /// Its own settings away from the paper's, in words for titles, e.g. "TD3", "no action penalty".
+    pub describe: fn(&C) -> Vec<String>,
+}
+
+/// What an algorithm is built from besides its own settings: the networks'
+/// inputs and the shared settings.
 #[derive(Debug, Clone, Copy)]
 pub struct Spec<'a> {
     /// What the networks read: the observation's length and, for a set network, its layout.
-    pub arch: super::arch::Arch,
+    pub arch: Arch,
     /// Action size.
     pub act_dim: usize,
-    /// Network shape, optimiser, discount, normaliser, exploration, n-step, TD3.
-    pub ddpg: &'a DdpgConfig,
-    /// PGGD's settings.
-    pub pggd: &'a PggdConfig,
+    /// Network shape, discount, normaliser, the actor-critics' optimiser and targets, n-step, precision.
+    pub shared: &'a SharedConfig,
 }
 
-/// An algorithm by name (`--algo`, a run's `config.json`, a checkpoint):
-/// one of [`ALGORITHMS`].
-#[derive(Clone, Copy)]
-pub struct Algo(&'static Registration);
-
-impl Algo {
-    /// DDPG (the default; the paper's).
-    pub const DDPG: Self = Self(&ALGORITHMS[0]);
-    /// PGGD (the paper's; with `--expert`, AggreVaTeD).
-    pub const PGGD: Self = Self(&ALGORITHMS[1]);
-
-    /// The algorithm of a registration (an algorithm's file names itself this way).
-    pub const fn of(registration: &'static Registration) -> Self {
-        Self(registration)
-    }
-
-    /// The registered algorithm called `name`.
-    ///
-    /// # Errors
-    /// An unknown name, with the known ones.
-    pub fn named(name: &str) -> Result<Self, String> {
-        ALGORITHMS.iter().find(|r| r.name == name).map(Self).ok_or_else(|| {
-            let known: Vec<&str> = ALGORITHMS.iter().map(|r| r.name).collect();
-            format!("unknown algorithm {name:?}; known: {}", known.join(", "))
-        })
-    }
-
-    /// Its registration.
-    pub fn registration(self) -> &'static Registration {
-        self.0
-    }
-
-    /// Whether the run's settings suit it: [`Registration::check`], and
-    /// `--expert` only for algorithms that take one.
-    ///
-    /// # Errors
-    /// The first setting that does not suit it, naming the flag.
-    pub fn check(self, ddpg: &DdpgConfig, pggd: &PggdConfig, expert: bool) -> Result<(), String> {
-        if expert && !self.0.takes_expert {
-            let takers: Vec<&str> = ALGORITHMS.iter().filter(|r| r.takes_expert).map(|r| r.name).collect();
-            return Err(format!(
-                "--expert is for AggreVaTeD (--algo {}); {} trains without an expert",
-                takers.join(" or --algo "),
-                self.0.title
-            ));
-        }
-        (self.0.check)(ddpg, pggd)
-    }
-
-    /// Its name, e.g. "ddpg".
-    pub fn name(self) -> &'static str {
-        self.0.name
-    }
-
-    /// A fresh learner of this algorithm, after its settings check.
-    ///
-    /// # Errors
-    /// [`Registration::check`]'s message.
-    pub fn build(self, spec: &Spec, rng: &mut ChaCha8Rng) -> Result<Box<dyn Algorithm>, String> {
-        (self.0.check)(spec.ddpg, spec.pggd)?;
-        Ok((self.0.new)(spec, rng))
-    }
-
-    /// clap's parser for `--algo`: the registered names, each with its summary.
-    pub fn parser() -> impl clap::builder::TypedValueParser<Value = Self> {
-        use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-        PossibleValuesParser::new(ALGORITHMS.iter().map(|r| PossibleValue::new(r.name).help(r.about)))
-            .map(|name| Self::named(&name).unwrap_or_default())
+impl Spec<'_> {
+    /// The bytes of `copies` copies (a network, its target, Adam's two
+    /// moments, …) of an MLP from the observation (and `extra` more inputs)
+    /// to `out` outputs, with the shared shape: an estimate for set networks too.
+    pub fn mlp_bytes(&self, extra: usize, out: usize, copies: u64) -> u64 {
+        let (hidden, layers) = (self.shared.hidden as u64, self.shared.layers as u64);
+        let inputs = (self.arch.obs_dim + extra) as u64;
+        let params =
+            (inputs + 1) * hidden + (hidden + 1) * hidden * layers.saturating_sub(1) + (hidden + 1) * out as u64;
+        4 * copies * params
     }
 }
 
-impl Default for Algo {
-    fn default() -> Self {
-        Self::DDPG
-    }
+/// Losses and statistics of one update (`progress.csv`'s `train/` columns).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct UpdateStats {
+    /// Critic loss (mean squared TD error; NaN without a critic).
+    pub critic_loss: f64,
+    /// Actor (policy) loss.
+    pub actor_loss: f64,
+    /// Mean Q(s, a) over the batch (NaN without a critic).
+    pub mean_q: f64,
 }
 
-/// Two algorithms are the same when their names are (a registration's
-/// address is not unique: `const` items may be copied).
-impl PartialEq for Algo {
-    fn eq(&self, other: &Self) -> bool {
-        self.0.name == other.0.name
-    }
-}
-
-impl Eq for Algo {}
-
-impl std::fmt::Debug for Algo {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.0.title)
-    }
-}
-
-impl std::fmt::Display for Algo {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.0.name)
-    }
-}
-
-impl serde::Serialize for Algo {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.0.name)
-    }
-}
-
-impl<'de> serde::Deserialize<'de> for Algo {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let name = String::deserialize(d)?;
-        Self::named(&name).map_err(serde::de::Error::custom)
-    }
+/// One named part of a learner's state: what a checkpoint saves and loads.
+pub enum Part<'a> {
+    /// A network's parameters, saved as `name.0`, `name.1`, ….
+    Net(&'a mut Net),
+    /// An optimiser's moments (`name.0`, …) and step count (`name.t`).
+    Adam(&'a mut Adam),
+    /// A tensor's values, saved as `name.0`.
+    Tensor(&'a mut tch::Tensor),
+    /// A counter (e.g. a noise seed), saved as `name`.
+    Counter(&'a mut u64),
 }
 
 /// A learner as the training loop sees it.
 pub trait Algorithm: Send {
-    /// Which algorithm.
-    fn algo(&self) -> Algo;
+    /// Its registration's name, e.g. "ddpg".
+    fn name(&self) -> &'static str;
 
     /// The observation normaliser.
     fn norm(&self) -> &Normalizer;
@@ -202,22 +178,69 @@ pub trait Algorithm: Send {
 
     /// A critic Q(s̄, a) of the policy as a plain network, saved beside it
     /// (for AggreVaTeD's `expert-advantage`); None where there is none.
-    fn critic(&self) -> Option<TanhMlp> {
+    fn critic(&self) -> Option<PlainNet> {
         None
     }
 
-    /// Takes the settings a branch may change (`train --branch-from`).
-    fn take_branch_settings(&mut self, _ddpg: &DdpgConfig) {}
+    /// Takes over the settings a branch may change ([`Registration::branchable`])
+    /// from `own`, its own settings (its registration's config type).
+    fn take_branch_settings(&mut self, _own: &dyn std::any::Any) {}
 
-    /// Everything a checkpoint must hold to continue bit for bit, by name
-    /// (the normaliser apart).
-    fn state(&self) -> StateDict;
+    /// The parts of its state, by name: everything a checkpoint must hold to
+    /// continue bit for bit (the normaliser apart). [`Algorithm::state`] and
+    /// [`Algorithm::load_state`] follow from this one list.
+    fn parts(&mut self) -> Vec<(&'static str, Part<'_>)>;
 
-    /// Restores [`Algorithm::state`]'s output into a learner built with the same settings.
+    /// Its state by name, from [`Algorithm::parts`].
+    fn state(&mut self) -> StateDict {
+        let mut s = StateDict::default();
+        for (name, part) in self.parts() {
+            match part {
+                Part::Net(net) => s.put_net(name, net),
+                Part::Adam(adam) => s.put_adam(name, adam),
+                Part::Tensor(t) => s.put_arrays(name, vec![super::nets::tensor_to_vec(t)]),
+                Part::Counter(c) => {
+                    s.counters.insert(name.to_owned(), *c);
+                }
+            }
+        }
+        s
+    }
+
+    /// Restores [`Algorithm::state`]'s output into a learner built with the
+    /// same settings.
     ///
     /// # Errors
-    /// A missing or mis-sized entry, named.
-    fn load_state(&mut self, state: &StateDict) -> Result<(), String>;
+    /// A missing or mis-sized part, or one these settings do not have (e.g.
+    /// TD3's second critic without `--td3`), named.
+    fn load_state(&mut self, state: &StateDict) -> Result<(), String> {
+        let mut known = Vec::new();
+        for (name, part) in self.parts() {
+            known.push(name);
+            match part {
+                Part::Net(net) => state.load_net(name, net)?,
+                Part::Adam(adam) => state.load_adam(name, adam)?,
+                Part::Tensor(t) => match state.arrays(name).as_slice() {
+                    [v] if v.len() as i64 == t.numel() as i64 => {
+                        let values = tch::Tensor::of_slice(v).view_as(t);
+                        tch::no_grad(|| t.copy_(&values));
+                    }
+                    _ => return Err(format!("{name}: expected one array of {} values", t.numel())),
+                },
+                Part::Counter(c) => *c = state.counter(name)?,
+            }
+        }
+        // Arrays of a part these settings lack (counters of older checkpoints may be spare).
+        let foreign = state
+            .tensors
+            .keys()
+            .map(|k| k.rsplit_once('.').map_or(k.as_str(), |(part, _)| part))
+            .find(|p| !known.contains(p));
+        match foreign {
+            Some(p) => Err(format!("the checkpoint holds {p}, which a learner with these settings does not have")),
+            None => Ok(()),
+        }
+    }
 
     /// This learner as `Any`, for callers that need one algorithm's internals (tests, experts).
     fn as_any(&self) -> &dyn std::any::Any;
@@ -319,17 +342,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn names_are_unique_lowercase_and_round_trip() {
-        for (i, r) in ALGORITHMS.iter().enumerate() {
-            assert_eq!(r.name, r.name.to_lowercase());
-            assert!(ALGORITHMS[..i].iter().all(|o| o.name != r.name), "{} twice", r.name);
-            let a = Algo::named(r.name).unwrap();
-            assert_eq!(serde_json::to_string(&a).unwrap(), format!("\"{}\"", r.name));
-            assert_eq!(serde_json::from_str::<Algo>(&format!("\"{}\"", r.name)).unwrap(), a);
-        }
-        let e = Algo::named("ppo").unwrap_err();
-        assert!(e.contains("unknown algorithm \"ppo\"") && e.contains("ddpg, pggd"), "{e}");
-        assert_eq!((Algo::DDPG.name(), Algo::PGGD.name()), ("ddpg", "pggd"));
-        assert_eq!(Algo::of(&super::super::sac::REGISTRATION), Algo::named("sac").unwrap());
+    fn mlp_bytes_count_weights_and_biases() {
+        let shared = SharedConfig { hidden: 4, layers: 2, ..SharedConfig::default() };
+        let spec = Spec { arch: Arch::mlp(3), act_dim: 2, shared: &shared };
+        // 3 -> 4 -> 4 -> 2: 16 + 20 + 10 parameters.
+        assert_eq!(spec.mlp_bytes(0, 2, 1), 4 * 46);
+        assert_eq!(spec.mlp_bytes(2, 1, 2), 4 * 2 * (24 + 20 + 5));
     }
 }

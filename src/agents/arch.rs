@@ -1,6 +1,6 @@
 //! Which network an algorithm learns with, and what it reads: a flat MLP
 //! over the flat observation (the paper's), or a set network over the
-//! `objects` observation (issue 31): a per-object encoder shared by every
+//! `objects` observation: a per-object encoder shared by every
 //! object row, optionally one masked self-attention block between the rows,
 //! masked mean and max pooling, then a head over the robot features, the
 //! pooled features and (a critic) the action. Every algorithm builds its

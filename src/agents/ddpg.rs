@@ -23,12 +23,13 @@
 //!   the target networks' schedule stay as above except that the actor is
 //!   updated on every `policy_delay`-th critic update only.
 
-use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, StateDict};
+use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, UpdateStats};
 use super::arch::Arch;
-use super::mlp::TanhMlp;
+use super::mlp::PlainNet;
 use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
+use super::shared::SharedConfig;
 use super::AnyPolicy;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -37,201 +38,122 @@ use serde::{Deserialize, Serialize};
 use tch::Tensor;
 
 /// DDPG in the list of algorithms (`--algo ddpg`).
-pub const REGISTRATION: Registration = Registration {
-    name: "ddpg",
-    title: "DDPG",
-    about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
-    takes_expert: false,
-    new: |spec, rng| Box::new(Ddpg::build(spec.arch, spec.act_dim, spec.ddpg.clone(), rng)),
-    check: |_, _| Ok(()),
+pub const REGISTRATION: Registration<DdpgConfig> = Registration {
+    info: Info {
+        name: "ddpg",
+        title: "DDPG",
+        about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
+        takes_expert: false,
+        // Every shared setting.
+        reads: SharedConfig::FLAGS,
+        flag_prefix: "",
+        branchable: &["random_eps", "noise_eps", "noise_correlation", "action_l2", "preact_l2", "preact_margin"],
+    },
+    new: |spec, own, rng| Box::new(Ddpg::build(spec.arch, spec.act_dim, spec.shared.clone(), own.clone(), rng)),
+    validate: DdpgConfig::validate,
+    unused: |c| {
+        let d = DdpgConfig::DEFAULT;
+        let td3_only = [
+            ("--target-noise", c.target_noise != d.target_noise),
+            ("--target-noise-clip", c.target_noise_clip != d.target_noise_clip),
+            ("--policy-delay", c.policy_delay != d.policy_delay),
+        ];
+        td3_only.into_iter().filter(|(_, given)| *given && !c.td3).map(|(f, _)| (f, "--algo ddpg --td3")).collect()
+    },
+    // Actor and critic(s), each with its target and Adam's two moments.
+    memory: |spec, c| spec.mlp_bytes(0, spec.act_dim, 4) + spec.mlp_bytes(spec.act_dim, 1, if c.td3 { 8 } else { 4 }),
+    describe: |c| {
+        let paper = DdpgConfig::DEFAULT;
+        let mut v = Vec::new();
+        if c.td3 {
+            v.push("TD3".to_owned());
+        }
+        if c.action_l2 == 0.0 {
+            v.push("no action penalty".to_owned());
+        } else if c.action_l2 != paper.action_l2 {
+            v.push(format!("action penalty {}", c.action_l2));
+        }
+        if c.noise_correlation > 0.0 {
+            v.push(format!("noise correlation {}", c.noise_correlation));
+        }
+        if c.preact_l2 > 0.0 && c.preact_margin > 0.0 {
+            v.push(format!("pre-tanh penalty {} beyond {}", c.preact_l2, c.preact_margin));
+        } else if c.preact_l2 > 0.0 {
+            v.push(format!("pre-tanh penalty {}", c.preact_l2));
+        }
+        v
+    },
 };
 
-/// DDPG hyperparameters (defaults: the paper's, i.e. Plappert et al. 2018);
-/// SAC shares the network, optimiser, discount, normaliser and n-step ones,
-/// PGGD the network shape and normaliser.
+/// DDPG's own settings (defaults: the paper's, i.e. Plappert et al. 2018),
+/// besides the shared ones ([`SharedConfig`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(default)]
+#[command(next_help_heading = "DDPG's settings (--algo ddpg)")]
 pub struct DdpgConfig {
-    /// Hidden layers of actor and critic.
-    #[arg(long, default_value_t = 3, value_parser = crate::limits::LAYERS.parser::<usize>())]
-    pub layers: usize,
-    /// Units per hidden layer.
-    #[arg(long, default_value_t = 256, value_parser = crate::limits::HIDDEN.parser::<usize>())]
-    pub hidden: usize,
-    /// Actor learning rate (Adam).
-    #[arg(long, default_value_t = 1e-3)]
-    pub lr_actor: f64,
-    /// Critic learning rate (Adam).
-    #[arg(long, default_value_t = 1e-3)]
-    pub lr_critic: f64,
-    /// Discount; the default 0.98 is 1 − 1/T for T = 50 steps.
-    #[arg(long, default_value_t = 0.98)]
-    pub gamma: f64,
-    /// Target networks keep this share of themselves at each update.
-    #[arg(long, default_value_t = 0.95)]
-    pub polyak: f64,
     /// Weight of the L2 penalty on the actor's (pre-scaling) actions.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = Self::DEFAULT.action_l2)]
     pub action_l2: f64,
     /// Weight of an L2 penalty on the actor's output before its tanh (0: off,
     /// the paper's). Unlike `--action-l2`, its gradient does not vanish where
     /// the tanh saturates, so it keeps actions in the range where the critic
     /// can still steer them.
-    #[arg(long, default_value_t = 0.0)]
-    #[serde(default)]
+    #[arg(long, default_value_t = Self::DEFAULT.preact_l2)]
     pub preact_l2: f64,
     /// With `--preact-l2`: penalise only the part of each pre-tanh output
     /// beyond this size, `(|u| − margin)²` where `|u| > margin` (0: all of
     /// it, `u²`). Inside the margin the actor is free (tanh(2) = 0.96), so
     /// the penalty keeps actions off the tanh's flat ends without pulling
     /// them towards 0.
-    #[arg(long, default_value_t = 0.0)]
-    #[serde(default)]
+    #[arg(long, default_value_t = Self::DEFAULT.preact_margin)]
     pub preact_margin: f64,
     /// Probability of a uniform random action while exploring.
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = Self::DEFAULT.random_eps)]
     pub random_eps: f64,
     /// Standard deviation of the Gaussian exploration noise.
-    #[arg(long, default_value_t = 0.2)]
+    #[arg(long, default_value_t = Self::DEFAULT.noise_eps)]
     pub noise_eps: f64,
     /// Correlation of the exploration noise between consecutive steps of an
     /// episode, in [0, 1): AR(1) noise with the same standard deviation, whose
     /// deviations persist for about 1 / (1 − ρ) steps (0: independent, the paper's).
-    #[arg(long, default_value_t = 0.0)]
-    #[serde(default)]
+    #[arg(long, default_value_t = Self::DEFAULT.noise_correlation)]
     pub noise_correlation: f64,
-    /// Floor of the normaliser's standard deviation.
-    #[arg(long, default_value_t = 0.01)]
-    pub norm_eps: f64,
-    /// Normalised observations are clipped to ±this.
-    #[arg(long, default_value_t = 5.0)]
-    pub norm_clip: f32,
-    /// Arithmetic of the update's hidden-layer products: `f32` (the paper's)
-    /// or `bf16` (mixed precision; about 1.5× the update rate on CPUs with AMX,
-    /// results/ddpg.md).
-    #[arg(long, value_enum, default_value = "f32")]
-    #[serde(default)]
-    pub precision: Precision,
-    /// Steps of reward summed before bootstrapping (1: the paper's one-step target).
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::N_STEP.parser::<usize>())]
-    #[serde(default = "one")]
-    pub n_step: usize,
-    /// With `--net set`: the critics are MLPs over the same `objects` observation (its rows in
-    /// the environment's order), only the actor a set network (an asymmetric actor-critic: the
-    /// critics serve training alone; the policy saved is the set actor).
-    #[arg(long)]
-    #[serde(default)]
-    pub flat_critic: bool,
     /// TD3's changes: twin critics (clipped double Q), target policy smoothing, delayed actor updates.
     #[arg(long)]
-    #[serde(default)]
     pub td3: bool,
     /// TD3: standard deviation of the target action's smoothing noise.
-    #[arg(long, default_value_t = 0.2)]
-    #[serde(default = "target_noise")]
+    #[arg(long, default_value_t = Self::DEFAULT.target_noise)]
     pub target_noise: f64,
     /// TD3: the smoothing noise is clipped to ±this.
-    #[arg(long, default_value_t = 0.5)]
-    #[serde(default = "target_noise_clip")]
+    #[arg(long, default_value_t = Self::DEFAULT.target_noise_clip)]
     pub target_noise_clip: f64,
     /// TD3: the actor is updated on every this-many critic updates.
-    #[arg(long, default_value_t = 2, value_parser = crate::limits::POLICY_DELAY.parser::<usize>())]
-    #[serde(default = "policy_delay")]
+    #[arg(long, default_value_t = Self::DEFAULT.policy_delay, value_parser = crate::limits::POLICY_DELAY.parser::<usize>())]
     pub policy_delay: usize,
 }
 
-fn one() -> usize {
-    1
-}
-fn target_noise() -> f64 {
-    0.2
-}
-fn target_noise_clip() -> f64 {
-    0.5
-}
-fn policy_delay() -> usize {
-    2
-}
-
-/// Arithmetic of the networks' hidden-layer products during updates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Float32 throughout.
-    #[default]
-    F32,
-    /// Bfloat16 products with float accumulation and float parameters.
-    Bf16,
-}
-
-impl Precision {
-    /// Whether this CPU computes bfloat16 products natively (AMX or AVX512-BF16).
-    pub fn bf16_supported() -> bool {
-        std::fs::read_to_string("/proc/cpuinfo")
-            .map(|c| c.split_whitespace().any(|f| f == "amx_bf16" || f == "avx512_bf16"))
-            .unwrap_or(false)
-    }
-
-    /// Whether this CPU can run this precision.
-    ///
-    /// # Errors
-    /// bf16 on a CPU without AMX or AVX512-BF16, naming the fix.
-    pub fn check(self) -> Result<(), String> {
-        if self == Self::Bf16 && !Self::bf16_supported() {
-            return Err(
-                "--precision bf16 needs a CPU with AMX or AVX512-BF16 (this one has neither); use --precision f32"
-                    .into(),
-            );
-        }
-        Ok(())
-    }
-}
-
-impl Default for DdpgConfig {
-    fn default() -> Self {
-        Self {
-            layers: 3,
-            hidden: 256,
-            lr_actor: 1e-3,
-            lr_critic: 1e-3,
-            gamma: 0.98,
-            polyak: 0.95,
-            action_l2: 1.0,
-            preact_l2: 0.0,
-            preact_margin: 0.0,
-            random_eps: 0.3,
-            noise_eps: 0.2,
-            noise_correlation: 0.0,
-            norm_eps: 0.01,
-            norm_clip: 5.0,
-            precision: Precision::F32,
-            n_step: one(),
-            td3: false,
-            target_noise: target_noise(),
-            target_noise_clip: target_noise_clip(),
-            policy_delay: policy_delay(),
-            flat_critic: false,
-        }
-    }
-}
-
 impl DdpgConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self {
+        action_l2: 1.0,
+        preact_l2: 0.0,
+        preact_margin: 0.0,
+        random_eps: 0.3,
+        noise_eps: 0.2,
+        noise_correlation: 0.0,
+        td3: false,
+        target_noise: 0.2,
+        target_noise_clip: 0.5,
+        policy_delay: 2,
+    };
+
     /// Whether every setting is in range; the error names the flag.
     ///
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        use crate::limits::{HIDDEN, LAYERS, N_STEP, POLICY_DELAY};
-        for (bound, v) in
-            [(LAYERS, self.layers), (HIDDEN, self.hidden), (N_STEP, self.n_step), (POLICY_DELAY, self.policy_delay)]
-        {
-            bound.check_usize(v)?;
-        }
-        let finite_pos = |v: f64| v.is_finite() && v > 0.0;
-        let checks: [(bool, &str); 13] = [
-            (finite_pos(self.lr_actor), "--lr-actor must be a positive number"),
-            (finite_pos(self.lr_critic), "--lr-critic must be a positive number"),
-            ((0.0..1.0).contains(&self.gamma), "--gamma must be in [0, 1)"),
-            ((0.0..=1.0).contains(&self.polyak), "--polyak must be in [0, 1]"),
+        crate::limits::POLICY_DELAY.check_usize(self.policy_delay)?;
+        let checks: [(bool, &str); 8] = [
             (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
             (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),
             (self.preact_margin.is_finite() && self.preact_margin >= 0.0, "--preact-margin must be a number ≥ 0"),
@@ -242,10 +164,6 @@ impl DdpgConfig {
             ((0.0..=1.0).contains(&self.random_eps), "--random-eps must be in [0, 1]"),
             (self.noise_eps.is_finite() && self.noise_eps >= 0.0, "--noise-eps must be a number ≥ 0"),
             ((0.0..1.0).contains(&self.noise_correlation), "--noise-correlation must be in [0, 1)"),
-            (
-                finite_pos(self.norm_eps) && self.norm_clip.is_finite() && self.norm_clip > 0.0,
-                "--norm-eps and --norm-clip must be positive numbers",
-            ),
             (
                 self.target_noise.is_finite()
                     && self.target_noise >= 0.0
@@ -261,20 +179,17 @@ impl DdpgConfig {
     }
 }
 
-/// Losses and statistics of one update.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct UpdateStats {
-    /// Critic mean squared TD error.
-    pub critic_loss: f64,
-    /// Actor loss (−Q + L2 penalties).
-    pub actor_loss: f64,
-    /// Mean Q(s, a) over the batch.
-    pub mean_q: f64,
+impl Default for DdpgConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
 }
 
 /// The DDPG learner.
 pub struct Ddpg {
-    /// Hyperparameters.
+    /// The shared settings it reads (shape, learning rates, discount, targets, normaliser, precision).
+    pub shared: SharedConfig,
+    /// Its own settings.
     pub config: DdpgConfig,
     /// Observation normaliser.
     pub norm: Normalizer,
@@ -313,30 +228,30 @@ pub struct Twin {
 
 impl Ddpg {
     /// A fresh learner with MLPs over `obs_dim`-long observations; `rng` fixes the initial weights.
-    pub fn new(obs_dim: usize, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
-        Self::build(Arch::mlp(obs_dim), act_dim, config, rng)
+    pub fn new(obs_dim: usize, act_dim: usize, shared: SharedConfig, config: DdpgConfig, rng: &mut impl Rng) -> Self {
+        Self::build(Arch::mlp(obs_dim), act_dim, shared, config, rng)
     }
 
     /// A fresh learner with the networks of `arch`; `rng` fixes the initial weights.
-    pub fn build(arch: Arch, act_dim: usize, config: DdpgConfig, rng: &mut impl Rng) -> Self {
-        let bf16 = config.precision == Precision::Bf16;
-        let shape = (config.hidden, config.layers);
+    pub fn build(arch: Arch, act_dim: usize, shared: SharedConfig, config: DdpgConfig, rng: &mut impl Rng) -> Self {
+        let (bf16, shape) = (shared.bf16(), (shared.hidden, shared.layers));
         let obs_dim = arch.obs_dim;
         let actor = arch.net(shape, 0, act_dim, true, rng).with_bf16(bf16);
-        let critics = arch.critics(config.flat_critic);
+        let critics = arch.critics(shared.flat_critic);
         let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
         let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
-        let actor_opt = Adam::new(&actor.params, config.lr_actor);
-        let critic_opt = Adam::new(&critic.params, config.lr_critic);
-        let norm = arch.normalizer(config.norm_eps, config.norm_clip);
+        let actor_opt = Adam::new(&actor.params, shared.lr_actor);
+        let critic_opt = Adam::new(&critic.params, shared.lr_critic);
+        let norm = arch.normalizer(shared.norm_eps, shared.norm_clip);
         // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
         let twin = config.td3.then(|| {
             let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
-            let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, config.lr_critic));
+            let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, shared.lr_critic));
             Twin { critic, target, opt, noise_seed: rng.gen() }
         });
         Self {
             twin,
+            shared,
             config,
             norm,
             actor,
@@ -401,9 +316,9 @@ impl Ddpg {
         let next_obs = self.norm.tensor(&batch.next_obs);
         let act = Tensor::of_slice(&batch.act).view([n, self.act_dim as i64]);
         let rew = Tensor::of_slice(&batch.rew).view([n, 1]);
-        let not_done = 1.0 - Tensor::of_slice(&batch.done).view([n, 1]);
+        let not_done = 1.0 - Tensor::of_slice(&batch.terminated).view([n, 1]);
         let discount = Tensor::of_slice(&batch.discount).view([n, 1]);
-        let clip_return = 1.0 / (1.0 - self.config.gamma);
+        let clip_return = 1.0 / (1.0 - self.shared.gamma);
         let k = self.critic_opt.t;
 
         let target = tch::no_grad(|| {
@@ -500,7 +415,7 @@ impl Ddpg {
 
     /// Polyak-averages the target networks towards the learned ones.
     pub fn update_targets(&mut self) {
-        let p = self.config.polyak;
+        let p = self.shared.polyak;
         self.actor_target.polyak_from(&self.actor, p);
         self.critic_target.polyak_from(&self.critic, p);
         if let Some(t) = &mut self.twin {
@@ -509,14 +424,14 @@ impl Ddpg {
     }
 
     /// A self-contained policy for rollouts (weights and normaliser frozen).
-    pub fn policy(&self) -> DdpgPolicy {
-        DdpgPolicy { net: self.actor.to_plain(), norm: self.norm.clone() }
+    pub fn policy(&self) -> DeterministicPolicy {
+        DeterministicPolicy { net: self.actor.to_plain(), norm: self.norm.clone() }
     }
 }
 
 impl Algorithm for Ddpg {
-    fn algo(&self) -> Algo {
-        Algo::DDPG
+    fn name(&self) -> &'static str {
+        REGISTRATION.info.name
     }
 
     fn norm(&self) -> &Normalizer {
@@ -545,7 +460,7 @@ impl Algorithm for Ddpg {
     }
 
     fn policy(&self) -> AnyPolicy {
-        AnyPolicy::Ddpg(Ddpg::policy(self))
+        AnyPolicy::Deterministic(Ddpg::policy(self))
     }
 
     fn explorer(&self) -> Box<dyn Explorer> {
@@ -558,53 +473,39 @@ impl Algorithm for Ddpg {
         })
     }
 
-    fn critic(&self) -> Option<TanhMlp> {
+    fn critic(&self) -> Option<PlainNet> {
         Some(self.critic.to_plain())
     }
 
-    fn take_branch_settings(&mut self, ddpg: &DdpgConfig) {
-        self.config.action_l2 = ddpg.action_l2;
-        self.config.preact_l2 = ddpg.preact_l2;
-        self.config.preact_margin = ddpg.preact_margin;
+    fn take_branch_settings(&mut self, own: &dyn std::any::Any) {
+        if let Some(c) = own.downcast_ref::<DdpgConfig>() {
+            self.config.random_eps = c.random_eps;
+            self.config.noise_eps = c.noise_eps;
+            self.config.noise_correlation = c.noise_correlation;
+            self.config.action_l2 = c.action_l2;
+            self.config.preact_l2 = c.preact_l2;
+            self.config.preact_margin = c.preact_margin;
+        }
     }
 
-    fn state(&self) -> StateDict {
-        let mut s = StateDict::default();
-        s.put_net("actor", &self.actor);
-        s.put_net("critic", &self.critic);
-        s.put_net("actor_target", &self.actor_target);
-        s.put_net("critic_target", &self.critic_target);
-        s.put_adam("actor_adam", &self.actor_opt);
-        s.put_adam("critic_adam", &self.critic_opt);
-        if let Some(t) = &self.twin {
-            s.put_net("critic2", &t.critic);
-            s.put_net("critic2_target", &t.target);
-            s.put_adam("critic2_adam", &t.opt);
-            s.counters.insert("critic2.noise_seed".into(), t.noise_seed);
+    fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
+        let mut parts = vec![
+            ("actor", Part::Net(&mut self.actor)),
+            ("critic", Part::Net(&mut self.critic)),
+            ("actor_target", Part::Net(&mut self.actor_target)),
+            ("critic_target", Part::Net(&mut self.critic_target)),
+            ("actor_adam", Part::Adam(&mut self.actor_opt)),
+            ("critic_adam", Part::Adam(&mut self.critic_opt)),
+        ];
+        if let Some(t) = &mut self.twin {
+            parts.extend([
+                ("critic2", Part::Net(&mut t.critic)),
+                ("critic2_target", Part::Net(&mut t.target)),
+                ("critic2_adam", Part::Adam(&mut t.opt)),
+                ("critic2.noise_seed", Part::Counter(&mut t.noise_seed)),
+            ]);
         }
-        s
-    }
-
-    fn load_state(&mut self, s: &StateDict) -> Result<(), String> {
-        s.load_net("actor", &mut self.actor)?;
-        s.load_net("critic", &mut self.critic)?;
-        s.load_net("actor_target", &mut self.actor_target)?;
-        s.load_net("critic_target", &mut self.critic_target)?;
-        s.load_adam("actor_adam", &mut self.actor_opt)?;
-        s.load_adam("critic_adam", &mut self.critic_opt)?;
-        match &mut self.twin {
-            Some(t) => {
-                s.load_net("critic2", &mut t.critic)?;
-                s.load_net("critic2_target", &mut t.target)?;
-                s.load_adam("critic2_adam", &mut t.opt)?;
-                t.noise_seed = s.counter("critic2.noise_seed")?;
-            }
-            None if s.tensors.contains_key("critic2.0") => {
-                return Err("the checkpoint has TD3's second critic, the settings have no --td3".into())
-            }
-            None => {}
-        }
-        Ok(())
+        parts
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
@@ -612,10 +513,10 @@ impl Algorithm for Ddpg {
     }
 }
 
-/// DDPG's exploration with a frozen actor: see [`DdpgPolicy::explore_correlated`].
+/// DDPG's exploration with a frozen actor: see [`DeterministicPolicy::explore_correlated`].
 pub struct DdpgExplorer {
     /// The actor.
-    pub policy: DdpgPolicy,
+    pub policy: DeterministicPolicy,
     /// Probability of a uniform random action.
     pub random_eps: f64,
     /// Standard deviation of the Gaussian noise.
@@ -631,10 +532,10 @@ impl Explorer for DdpgExplorer {
     }
 }
 
-pub use crate::actor::DdpgPolicy;
+pub use crate::actor::DeterministicPolicy;
 
 /// DDPG's exploration (training only: the policy itself is the core's).
-impl DdpgPolicy {
+impl DeterministicPolicy {
     /// The exploration action with noise correlated across an episode's
     /// steps: uniform with probability `random_eps`, else π(s) + n, clipped to
     /// [−1, 1], where n follows n ← ρ n + √(1 − ρ²) noise_eps z, z ~ N(0, I),
@@ -683,6 +584,7 @@ fn shard_seed(seed: u64, shard: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::agents::shared::Precision;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -693,21 +595,21 @@ mod tests {
             b.act.extend((0..4).map(|_| rng.gen_range(-1.0..1.0)));
             b.rew.push(if i % 5 == 0 { 0.0 } else { -1.0 });
             b.next_obs.extend((0..obs_dim).map(|_| rng.gen_range(-1.0..1.0)));
-            b.done.push(if i % 5 == 0 { 1.0 } else { 0.0 });
-            b.extra.push(0.0);
+            b.terminated.push(if i % 5 == 0 { 1.0 } else { 0.0 });
+            b.return_to_go.push(0.0);
             b.discount.push(0.98);
         }
         b
     }
 
-    fn small() -> DdpgConfig {
-        DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() }
+    fn small() -> SharedConfig {
+        SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() }
     }
 
     #[test]
     fn updates_change_weights_and_lower_the_critic_loss() {
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let b = batch(256, 6, &mut rng);
         agent.norm.update(&b.obs);
         let before = agent.actor.to_vecs();
@@ -732,9 +634,10 @@ mod tests {
             return;
         }
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let f32_agent = Ddpg::new(6, 4, DdpgConfig::default(), &mut rng);
+        let f32_agent = Ddpg::new(6, 4, SharedConfig::default(), DdpgConfig::default(), &mut rng);
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let mut agent = Ddpg::new(6, 4, DdpgConfig { precision: Precision::Bf16, ..DdpgConfig::default() }, &mut rng);
+        let bf16 = SharedConfig { precision: Precision::Bf16, ..SharedConfig::default() };
+        let mut agent = Ddpg::new(6, 4, bf16, DdpgConfig::default(), &mut rng);
         let b = batch(256, 6, &mut rng);
         // Same weights, products rounded to bfloat16 (8-bit mantissa): close, not equal.
         let x = agent.norm.tensor(&b.obs);
@@ -765,8 +668,8 @@ mod tests {
         };
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
         let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let config = DdpgConfig { td3: true, flat_critic: true, ..small() };
-        let mut agent = Ddpg::build(arch, 4, config, &mut rng);
+        let shared = SharedConfig { flat_critic: true, ..small() };
+        let mut agent = Ddpg::build(arch, 4, shared, td3(), &mut rng);
         assert!(agent.actor.set_layout().is_some());
         let twin = agent.twin.as_ref().unwrap();
         assert!(agent.critic.set_layout().is_none() && twin.critic.set_layout().is_none());
@@ -796,10 +699,10 @@ mod tests {
     #[test]
     fn terminal_transitions_do_not_bootstrap_and_targets_are_clipped() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let mut b = batch(10, 6, &mut rng);
         b.rew = vec![-60.0, 0.0, -1.0, -1.0, -1.0, 0.0, -1.0, -1.0, -1.0, -1.0];
-        b.done = vec![1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        b.terminated = vec![1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         agent.update(&b);
         let y = agent.last_targets();
         assert_eq!(y[0], -50.0, "clipped at -1/(1-gamma)");
@@ -810,13 +713,13 @@ mod tests {
     }
 
     fn td3() -> DdpgConfig {
-        DdpgConfig { td3: true, ..small() }
+        DdpgConfig { td3: true, ..DdpgConfig::default() }
     }
 
     #[test]
     fn td3_updates_both_critics_and_lowers_their_loss() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let mut agent = Ddpg::new(6, 4, td3(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), td3(), &mut rng);
         let b = batch(256, 6, &mut rng);
         agent.norm.update(&b.obs);
         let twin_before = agent.twin.as_ref().unwrap().critic.to_vecs();
@@ -829,8 +732,8 @@ mod tests {
         }
         assert!(last.critic_loss < first.critic_loss * 0.5, "{first:?} -> {last:?}");
         // A DDPG agent of the same seed has the same actor and first critic: TD3 draws after them.
-        let ddpg = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(5));
-        let twin = Ddpg::new(6, 4, td3(), &mut ChaCha8Rng::seed_from_u64(5));
+        let ddpg = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(5));
+        let twin = Ddpg::new(6, 4, small(), td3(), &mut ChaCha8Rng::seed_from_u64(5));
         assert_eq!((ddpg.actor.to_vecs(), ddpg.critic.to_vecs()), (twin.actor.to_vecs(), twin.critic.to_vecs()));
     }
 
@@ -838,10 +741,10 @@ mod tests {
     fn td3_targets_take_the_smaller_target_critic_and_mask_terminals() {
         let mut rng = ChaCha8Rng::seed_from_u64(6);
         // No smoothing noise: the target action is π'(s̄') itself.
-        let mut agent = Ddpg::new(6, 4, DdpgConfig { target_noise: 0.0, ..td3() }, &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), DdpgConfig { target_noise: 0.0, ..td3() }, &mut rng);
         let mut b = batch(8, 6, &mut rng);
         b.rew = vec![-1.0; 8];
-        b.done = vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        b.terminated = vec![1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         b.discount = vec![0.98, 0.98, 0.5, 0.5, 0.98, 0.98, 0.98, 0.98];
         let next = agent.norm.tensor(&b.next_obs);
         let want: Vec<f32> = tch::no_grad(|| {
@@ -858,7 +761,7 @@ mod tests {
             assert!((y[i] - expect).abs() < 1e-5, "{i}: {} vs {expect}", y[i]);
         }
         // With noise, the targets move (smoothed actions), deterministically for the update number.
-        let mut noisy = Ddpg::new(6, 4, td3(), &mut ChaCha8Rng::seed_from_u64(6));
+        let mut noisy = Ddpg::new(6, 4, small(), td3(), &mut ChaCha8Rng::seed_from_u64(6));
         noisy.update(&b);
         assert_ne!(noisy.last_targets(), &y[..]);
     }
@@ -866,12 +769,12 @@ mod tests {
     #[test]
     fn the_discount_column_scales_the_bootstrap() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
-        let agent = Ddpg::new(6, 4, small(), &mut rng);
+        let agent = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let mut b = batch(4, 6, &mut rng);
         b.rew = vec![-1.0; 4];
-        b.done = vec![0.0; 4];
-        let mut one = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(7));
-        let mut three = Ddpg::new(6, 4, small(), &mut ChaCha8Rng::seed_from_u64(7));
+        b.terminated = vec![0.0; 4];
+        let mut one = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(7));
+        let mut three = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(7));
         drop(agent);
         one.update(&b);
         b.discount = vec![0.98f32.powi(3); 4];
@@ -884,18 +787,31 @@ mod tests {
 
     #[test]
     fn settings_out_of_range_name_their_flag() {
-        assert!(DdpgConfig::default().validate().is_ok());
-        let bad = |c: DdpgConfig, flag: &str| assert!(c.validate().unwrap_err().contains(flag), "{flag}");
-        bad(DdpgConfig { lr_actor: f64::NAN, ..small() }, "--lr-actor");
-        bad(DdpgConfig { lr_critic: -1.0, ..small() }, "--lr-critic");
-        bad(DdpgConfig { gamma: 1.0, ..small() }, "--gamma");
-        bad(DdpgConfig { n_step: 0, ..small() }, "--n-step");
-        bad(DdpgConfig { target_noise: f64::INFINITY, ..small() }, "--target-noise");
-        bad(DdpgConfig { hidden: 0, ..small() }, "--hidden");
-        bad(DdpgConfig { preact_l2: -0.1, ..small() }, "--preact-l2");
-        bad(DdpgConfig { preact_margin: f64::NAN, ..small() }, "--preact-margin");
-        bad(DdpgConfig { preact_margin: 2.0, preact_l2: 0.0, ..small() }, "--preact-l2 W > 0");
-        bad(DdpgConfig { noise_correlation: 1.0, ..small() }, "--noise-correlation");
+        assert!(DdpgConfig::default().validate().is_ok() && SharedConfig::default().validate().is_ok());
+        let shared = |c: SharedConfig, flag: &str| assert!(c.validate().unwrap_err().contains(flag), "{flag}");
+        shared(SharedConfig { lr_actor: f64::NAN, ..small() }, "--lr-actor");
+        shared(SharedConfig { lr_critic: -1.0, ..small() }, "--lr-critic");
+        shared(SharedConfig { gamma: 1.0, ..small() }, "--gamma");
+        shared(SharedConfig { n_step: 0, ..small() }, "--n-step");
+        shared(SharedConfig { hidden: 0, ..small() }, "--hidden");
+        let own = |c: DdpgConfig, flag: &str| assert!(c.validate().unwrap_err().contains(flag), "{flag}");
+        let d = DdpgConfig::default();
+        own(DdpgConfig { target_noise: f64::INFINITY, ..d.clone() }, "--target-noise");
+        own(DdpgConfig { preact_l2: -0.1, ..d.clone() }, "--preact-l2");
+        own(DdpgConfig { preact_margin: f64::NAN, ..d.clone() }, "--preact-margin");
+        own(DdpgConfig { preact_margin: 2.0, preact_l2: 0.0, ..d.clone() }, "--preact-l2 W > 0");
+        own(DdpgConfig { noise_correlation: 1.0, ..d }, "--noise-correlation");
+    }
+
+    #[test]
+    fn state_round_trips_and_a_part_the_settings_lack_is_named() {
+        let mut td3_agent = Ddpg::new(6, 4, small(), td3(), &mut ChaCha8Rng::seed_from_u64(3));
+        let mut other = Ddpg::new(6, 4, small(), td3(), &mut ChaCha8Rng::seed_from_u64(4));
+        other.load_state(&td3_agent.state()).unwrap();
+        assert_eq!(other.state(), td3_agent.state());
+        let mut plain = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(4));
+        let e = plain.load_state(&td3_agent.state()).unwrap_err();
+        assert!(e.contains("critic2"), "{e}");
     }
 
     /// Correlated exploration noise: ρ = 0 is the paper's independent noise
@@ -904,7 +820,7 @@ mod tests {
     #[test]
     fn correlated_noise_persists_and_keeps_its_size() {
         let mut rng = ChaCha8Rng::seed_from_u64(9);
-        let agent = Ddpg::new(6, 4, small(), &mut rng);
+        let agent = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let policy = agent.policy();
         let obs = [0.1f32, -0.2, 0.3, 0.0, 0.5, -0.5];
         let mean = policy.act(&obs);
@@ -949,7 +865,8 @@ mod tests {
     fn preact_penalty_pulls_saturated_actions_back() {
         let run = |preact_l2: f64, preact_margin: f64| {
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            let mut agent = Ddpg::new(6, 4, DdpgConfig { preact_l2, preact_margin, ..small() }, &mut rng);
+            let own = DdpgConfig { preact_l2, preact_margin, ..DdpgConfig::default() };
+            let mut agent = Ddpg::new(6, 4, small(), own, &mut rng);
             let b = batch(256, 6, &mut rng);
             agent.norm.update(&b.obs);
             // Saturate: scale the output layer by 100.
@@ -978,10 +895,10 @@ mod tests {
         // (the fresh one: |u| is well below 100 there) is not penalised at all.
         assert!(beyond_margin < 0.8 * unpenalised, "{beyond_margin} vs {unpenalised}");
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let config = DdpgConfig { preact_l2: 0.01, preact_margin: 100.0, ..small() };
-        let mut inside = Ddpg::new(6, 4, config, &mut rng);
+        let config = DdpgConfig { preact_l2: 0.01, preact_margin: 100.0, ..DdpgConfig::default() };
+        let mut inside = Ddpg::new(6, 4, small(), config, &mut rng);
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let mut free = Ddpg::new(6, 4, small(), &mut rng);
+        let mut free = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let b = batch(256, 6, &mut rng);
         inside.norm.update(&b.obs);
         free.norm.update(&b.obs);
@@ -992,7 +909,7 @@ mod tests {
     #[test]
     fn polyak_moves_targets_towards_the_learned_nets() {
         let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let mut agent = Ddpg::new(6, 4, small(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut rng);
         let b = batch(64, 6, &mut rng);
         agent.update(&b);
         let (t0, a) = (agent.actor_target.to_vecs(), agent.actor.to_vecs());
@@ -1001,7 +918,7 @@ mod tests {
         let (x0, x, x1) = (t0[0][0], a[0][0], t1[0][0]);
         assert!((x1 - (0.95 * x0 + 0.05 * x)).abs() < 1e-6);
         // TD3's second target critic follows its critic the same way.
-        let mut agent = Ddpg::new(6, 4, td3(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, small(), td3(), &mut rng);
         agent.update(&b);
         let twin = agent.twin.as_ref().unwrap();
         let (t0, c) = (twin.target.to_vecs(), twin.critic.to_vecs());
@@ -1013,7 +930,7 @@ mod tests {
     #[test]
     fn plain_rust_policy_matches_the_tensor_actor() {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let mut agent = Ddpg::new(6, 4, DdpgConfig::default(), &mut rng);
+        let mut agent = Ddpg::new(6, 4, SharedConfig::default(), DdpgConfig::default(), &mut rng);
         let b = batch(32, 6, &mut rng);
         agent.norm.update(&b.obs);
         let policy = agent.policy();

@@ -2,8 +2,8 @@
 //! of the 3-block observation (the grey block removed), the annealed mixing
 //! probability β, and the mixed roll-in policy.
 
-use super::ddpg::DdpgPolicy;
-use super::mlp::TanhMlp;
+use super::ddpg::DeterministicPolicy;
+use super::mlp::PlainNet;
 use super::nets::{tensor_to_vec, Net};
 use super::normalizer::Normalizer;
 use rand::Rng;
@@ -34,7 +34,7 @@ pub enum Actor {
 #[derive(Clone, Copy)]
 pub struct Mixture<'a> {
     /// The expert.
-    pub expert: &'a DdpgPolicy,
+    pub expert: &'a DeterministicPolicy,
     /// The learner, exploring (PGGD: sampling its Gaussian).
     pub learner: &'a dyn super::algorithm::Explorer,
     /// Probability that the expert acts.
@@ -67,7 +67,7 @@ impl ExpertCritic {
     /// # Errors
     /// A message when the critic does not take the policy's observation and
     /// action, or does not output one value.
-    pub fn new(policy: &DdpgPolicy, critic: &TanhMlp) -> Result<Self, String> {
+    pub fn new(policy: &DeterministicPolicy, critic: &PlainNet) -> Result<Self, String> {
         let actor = Net::from_plain(&policy.net).map_err(|e| format!("actor: {e}"))?;
         let critic = Net::from_plain(critic).map_err(|e| format!("critic: {e}"))?;
         let (obs_dim, act_dim) = (actor.sizes()[0], *actor.sizes().last().unwrap_or(&0));
@@ -125,12 +125,19 @@ mod tests {
     fn beta_one_is_all_expert_and_beta_zero_all_learner() {
         use crate::agents::ddpg::{Ddpg, DdpgConfig};
         use crate::agents::pggd::{Pggd, PggdConfig};
+        use crate::agents::shared::SharedConfig;
         use rand::SeedableRng;
         use rand_chacha::ChaCha8Rng;
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let dim = ROBOT_OBS + 3 * BLOCK_OBS;
-        let expert =
-            Ddpg::new(dim - BLOCK_OBS, 4, DdpgConfig { hidden: 16, ..DdpgConfig::default() }, &mut rng).policy();
+        let expert = Ddpg::new(
+            dim - BLOCK_OBS,
+            4,
+            SharedConfig { hidden: 16, ..SharedConfig::default() },
+            DdpgConfig::default(),
+            &mut rng,
+        )
+        .policy();
         let learner = Pggd::new(Arch::mlp(dim), 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng).policy();
         let mut obs: Vec<f32> = (0..dim).map(|k| (k as f32 * 0.7).sin()).collect();
         obs[dim - 4..].copy_from_slice(&[0.0, 0.0, 0.0, 1.0]); // the third block is grey
@@ -160,9 +167,16 @@ mod tests {
     #[test]
     fn saved_critic_gives_the_learners_advantage() {
         use crate::agents::ddpg::{Ddpg, DdpgConfig};
+        use crate::agents::shared::SharedConfig;
         use rand::SeedableRng;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let mut ddpg = Ddpg::new(6, 4, DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &mut rng);
+        let mut ddpg = Ddpg::new(
+            6,
+            4,
+            SharedConfig { hidden: 16, layers: 2, ..SharedConfig::default() },
+            DdpgConfig::default(),
+            &mut rng,
+        );
         let obs: Vec<f32> = (0..18).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
         ddpg.norm.update(&obs);
         let act: Vec<f32> = (0..12).map(|k| (k as f32 * 0.91).cos() * 1.5).collect();
@@ -192,7 +206,13 @@ mod tests {
         let own: Vec<f32> = obs.chunks(6).flat_map(|o| ddpg.policy().act(o)).collect();
         assert!(expert.advantage(&obs, &own).iter().all(|a| a.abs() < 1e-5));
         // A critic of another shape is refused.
-        let other = Ddpg::new(5, 4, DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &mut rng);
+        let other = Ddpg::new(
+            5,
+            4,
+            SharedConfig { hidden: 16, layers: 2, ..SharedConfig::default() },
+            DdpgConfig::default(),
+            &mut rng,
+        );
         assert!(ExpertCritic::new(&ddpg.policy(), &other.critic.to_plain()).is_err());
     }
 }

@@ -1,8 +1,9 @@
 //! Learning algorithms (DDPG, PGGD, SAC: one file each, listed in
-//! `algorithm::ALGORITHMS`), their networks, optimiser, normaliser and
-//! replay buffer, and AggreVaTeD's expert view and mixture. The trained
-//! policies they produce, and their plain-Rust networks and normaliser, are
-//! the core's [`crate::actor`] (re-exported here).
+//! `registry.rs`) behind one interface (`algorithm.rs`), the settings they
+//! share (`shared.rs`), their networks, optimiser, normaliser and replay
+//! buffer, and AggreVaTeD's expert view and mixture. The trained policies
+//! they produce, and their plain-Rust networks and normaliser, are the
+//! core's [`crate::actor`] (re-exported here).
 
 pub mod algorithm;
 pub mod arch;
@@ -10,7 +11,9 @@ pub mod ddpg;
 pub mod expert;
 pub mod nets;
 pub mod pggd;
+pub mod registry;
 pub mod replay;
 pub mod sac;
+pub mod shared;
 
 pub use crate::actor::{mlp, normalizer, AnyPolicy, MAX_ABS_WEIGHT};

@@ -3,7 +3,7 @@
 //! all simple loops over a list of tensors), plus an Adam optimiser whose
 //! state can be saved and restored exactly.
 
-use super::mlp::{Dense, SetLayout, TanhMlp, COLOURS, NORM_EPS};
+use super::mlp::{Dense, PlainNet, SetLayout, COLOURS, NORM_EPS};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
@@ -82,7 +82,7 @@ impl Net {
     ///
     /// # Errors
     /// A message naming the first layer whose sizes do not chain.
-    pub fn from_plain(mlp: &TanhMlp) -> Result<Self, String> {
+    pub fn from_plain(mlp: &PlainNet) -> Result<Self, String> {
         let Some(first) = mlp.layers.first() else {
             return Err("the network has no layers".into());
         };
@@ -293,7 +293,7 @@ impl Net {
     }
 
     /// A plain-Rust copy for fast single-observation rollouts.
-    pub fn to_plain(&self) -> TanhMlp {
+    pub fn to_plain(&self) -> PlainNet {
         let layers = self
             .shapes
             .iter()
@@ -304,7 +304,7 @@ impl Net {
                 n_in,
             })
             .collect();
-        TanhMlp { layers, tanh_out: self.tanh_out, set: self.set }
+        PlainNet { layers, tanh_out: self.tanh_out, set: self.set }
     }
 
     /// Sets every parameter's gradient to zero.
@@ -623,7 +623,7 @@ mod tests {
             assert_eq!(tensor_to_vec(&Net::from_plain(&plain).unwrap().forward(&batch(&x))), y);
             // Rows too short to hold the colour one-hot are refused, not read out of range.
             let short = SetLayout { object: 10, ..layout };
-            let broken = TanhMlp { set: Some(short), ..plain.clone() };
+            let broken = PlainNet { set: Some(short), ..plain.clone() };
             assert!(broken.check(short.obs_dim() + extra, out, f32::INFINITY).unwrap_err().contains("colour one-hot"));
             // Recolouring the red row green changes the output: colours are pooled apart.
             let mut green = x.clone();

@@ -13,9 +13,8 @@
 //!   transition, or an expert's advantage), optionally standardised over the
 //!   batch (see [`WeightNorm`]); Adam, lr 1e-4.
 
-use super::algorithm::{param_count, Algo, Algorithm, Explorer, Registration, StateDict};
+use super::algorithm::{param_count, Algorithm, Explorer, Info, Part, Registration, UpdateStats};
 use super::arch::Arch;
-use super::ddpg::UpdateStats;
 use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
@@ -27,25 +26,28 @@ use serde::{Deserialize, Serialize};
 use tch::Tensor;
 
 /// PGGD in the list of algorithms (`--algo pggd`; with `--expert`, AggreVaTeD).
-pub const REGISTRATION: Registration = Registration {
-    name: "pggd",
-    title: "PGGD",
-    about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
-    takes_expert: true,
-    new: |spec, rng| {
-        let d = spec.ddpg;
-        let (shape, norm) = ((d.layers, d.hidden), (d.norm_eps, d.norm_clip));
-        Box::new(Pggd::new(spec.arch, spec.act_dim, shape, norm, spec.pggd.clone(), rng))
+pub const REGISTRATION: Registration<PggdConfig> = Registration {
+    info: Info {
+        name: "pggd",
+        title: "PGGD",
+        about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
+        takes_expert: true,
+        // The network's shape, the normaliser and the discount of the return-to-go; no critic.
+        reads: &["--layers", "--hidden", "--gamma", "--norm-eps", "--norm-clip"],
+        flag_prefix: "pg-",
+        branchable: &[],
     },
-    check: |ddpg, _| {
-        if ddpg.n_step != 1 || ddpg.td3 {
-            return Err("--n-step and --td3 are DDPG options; PGGD uses the return-to-go".into());
-        }
-        if ddpg.flat_critic {
-            return Err("--flat-critic is for the critics of DDPG, TD3 and SAC; PGGD has none".into());
-        }
-        Ok(())
+    new: |spec, own, rng| {
+        let s = spec.shared;
+        let (shape, norm) = ((s.layers, s.hidden), (s.norm_eps, s.norm_clip));
+        Box::new(Pggd::new(spec.arch, spec.act_dim, shape, norm, own.clone(), rng))
     },
+    validate: PggdConfig::validate,
+    unused: |_| Vec::new(),
+    // The network with Adam's two moments.
+    memory: |spec, _| spec.mlp_bytes(0, 2 * spec.act_dim, 3),
+    // The title names the method ("PGGD + AggreVaTeD"); its settings are the paper's or given in the config.
+    describe: |_| Vec::new(),
 };
 
 /// What happens to the per-transition weights before the gradient.
@@ -70,23 +72,42 @@ pub enum WeightNorm {
     None,
 }
 
-/// PGGD hyperparameters (defaults: the paper's).
+/// PGGD's own settings (defaults: the paper's), besides the shared ones it reads.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(default)]
+#[command(next_help_heading = "PGGD's settings (--algo pggd)")]
 pub struct PggdConfig {
     /// PGGD learning rate (Adam).
-    #[arg(long = "pg-lr", default_value_t = 1e-4)]
+    #[arg(long = "pg-lr", default_value_t = Self::DEFAULT.lr)]
     pub lr: f64,
     /// PGGD: floor added to the softplus standard deviation.
-    #[arg(long = "pg-sigma-min", default_value_t = 0.01)]
+    #[arg(long = "pg-sigma-min", default_value_t = Self::DEFAULT.sigma_min)]
     pub sigma_min: f64,
     /// PGGD: normalisation of the per-transition weights within a batch.
-    #[arg(long = "pg-normalize", value_enum, default_value = "min-max")]
+    #[arg(long = "pg-normalize", value_enum, default_value_t = Self::DEFAULT.normalize)]
     pub normalize: WeightNorm,
+}
+
+impl PggdConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { lr: 1e-4, sigma_min: 0.01, normalize: WeightNorm::MinMax };
+
+    /// Whether every setting is in range; the error names the flag.
+    ///
+    /// # Errors
+    /// The first setting out of range.
+    pub fn validate(&self) -> Result<(), String> {
+        let (lr, sigma_min) = (self.lr, self.sigma_min);
+        if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
+            return Err("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0".into());
+        }
+        Ok(())
+    }
 }
 
 impl Default for PggdConfig {
     fn default() -> Self {
-        Self { lr: 1e-4, sigma_min: 0.01, normalize: WeightNorm::MinMax }
+        Self::DEFAULT
     }
 }
 
@@ -204,8 +225,8 @@ impl Pggd {
 }
 
 impl Algorithm for Pggd {
-    fn algo(&self) -> Algo {
-        Algo::PGGD
+    fn name(&self) -> &'static str {
+        REGISTRATION.info.name
     }
 
     fn norm(&self) -> &Normalizer {
@@ -218,7 +239,7 @@ impl Algorithm for Pggd {
 
     /// Each transition's weight is `weights` (an expert's advantage) or else the stored return-to-go.
     fn gradient(&mut self, batch: &Batch, _shard: u64, weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
-        Pggd::gradient(self, batch, weights.unwrap_or(&batch.extra))
+        Pggd::gradient(self, batch, weights.unwrap_or(&batch.return_to_go))
     }
 
     fn apply_gradient(&mut self, gradient: &[f32]) {
@@ -237,16 +258,8 @@ impl Algorithm for Pggd {
         Box::new(Pggd::policy(self))
     }
 
-    fn state(&self) -> StateDict {
-        let mut s = StateDict::default();
-        s.put_net("actor", &self.net);
-        s.put_adam("actor_adam", &self.opt);
-        s
-    }
-
-    fn load_state(&mut self, s: &StateDict) -> Result<(), String> {
-        s.load_net("actor", &mut self.net)?;
-        s.load_adam("actor_adam", &mut self.opt)
+    fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
+        vec![("actor", Part::Net(&mut self.net)), ("actor_adam", Part::Adam(&mut self.opt))]
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
@@ -305,8 +318,8 @@ mod tests {
             obs,
             act,
             rew: vec![0.0; n],
-            done: vec![0.0; n],
-            extra: vec![0.0; n],
+            terminated: vec![0.0; n],
+            return_to_go: vec![0.0; n],
             discount: vec![0.98; n],
         }
     }

@@ -16,11 +16,12 @@ pub struct Batch {
     pub next_obs: Vec<f32>,
     /// 1.0 where the episode terminated (no bootstrap), else 0.0. Truncation
     /// at the time limit is not termination.
-    pub done: Vec<f32>,
-    /// Extra per-transition value (e.g. the discounted return-to-go), `n`.
-    pub extra: Vec<f32>,
+    pub terminated: Vec<f32>,
+    /// The discounted return-to-go from each transition to the episode's end
+    /// (PGGD's per-transition weight), `n`.
+    pub return_to_go: Vec<f32>,
     /// The bootstrap discount of each transition: γᵐ for an m-step return
-    /// (γ for one step), applied to Q' of `next_obs` unless `done`.
+    /// (γ for one step), applied to Q' of `next_obs` unless `terminated`.
     pub discount: Vec<f32>,
 }
 
@@ -80,8 +81,8 @@ impl ReplayBuffer {
         act: &[f32],
         rew: f32,
         next_obs: &[f32],
-        done: bool,
-        extra: f32,
+        terminated: bool,
+        return_to_go: f32,
         discount: f32,
     ) {
         debug_assert_eq!(obs.len(), self.obs_dim);
@@ -92,8 +93,8 @@ impl ReplayBuffer {
             self.data.act.extend_from_slice(act);
             self.data.rew.push(rew);
             self.data.next_obs.extend_from_slice(next_obs);
-            self.data.done.push(f32::from(u8::from(done)));
-            self.data.extra.push(extra);
+            self.data.terminated.push(f32::from(u8::from(terminated)));
+            self.data.return_to_go.push(return_to_go);
             self.data.discount.push(discount);
             self.len += 1;
         } else {
@@ -102,8 +103,8 @@ impl ReplayBuffer {
             self.data.act[i * a..(i + 1) * a].copy_from_slice(act);
             self.data.rew[i] = rew;
             self.data.next_obs[i * o..(i + 1) * o].copy_from_slice(next_obs);
-            self.data.done[i] = f32::from(u8::from(done));
-            self.data.extra[i] = extra;
+            self.data.terminated[i] = f32::from(u8::from(terminated));
+            self.data.return_to_go[i] = return_to_go;
             self.data.discount[i] = discount;
         }
         self.next = (self.next + 1) % self.capacity;
@@ -146,7 +147,7 @@ impl ReplayBuffer {
         let fits = data.obs.len() == n * obs_dim
             && data.next_obs.len() == n * obs_dim
             && data.act.len() == n * act_dim
-            && [data.done.len(), data.extra.len(), data.discount.len()] == [n; 3]
+            && [data.terminated.len(), data.return_to_go.len(), data.discount.len()] == [n; 3]
             && n as u64 <= pushed
             && (n == capacity || n as u64 == pushed);
         if !fits {
@@ -168,7 +169,7 @@ impl ReplayBuffer {
             buf.data.obs.rotate_right(shift * o);
             buf.data.next_obs.rotate_right(shift * o);
             buf.data.act.rotate_right(shift * a);
-            for v in [&mut buf.data.rew, &mut buf.data.done, &mut buf.data.extra, &mut buf.data.discount] {
+            for v in [&mut buf.data.rew, &mut buf.data.terminated, &mut buf.data.return_to_go, &mut buf.data.discount] {
                 v.rotate_right(shift);
             }
         } else {
@@ -201,8 +202,8 @@ impl ReplayBuffer {
         b.act.extend_from_slice(&self.data.act[j * a..(j + 1) * a]);
         b.rew.push(self.data.rew[j]);
         b.next_obs.extend_from_slice(&self.data.next_obs[j * o..(j + 1) * o]);
-        b.done.push(self.data.done[j]);
-        b.extra.push(self.data.extra[j]);
+        b.terminated.push(self.data.terminated[j]);
+        b.return_to_go.push(self.data.return_to_go[j]);
         b.discount.push(self.data.discount[j]);
     }
 
@@ -229,8 +230,8 @@ impl ReplayBuffer {
             && data.obs.len() == n * obs_dim
             && data.next_obs.len() == n * obs_dim
             && data.act.len() == n * act_dim
-            && data.done.len() == n
-            && data.extra.len() == n
+            && data.terminated.len() == n
+            && data.return_to_go.len() == n
             && data.discount.len() == n
             && (n == capacity.max(1) || next == n);
         if !ok {
@@ -312,8 +313,8 @@ mod tests {
         assert_eq!(b.len(), 2000);
         for i in 0..b.len() {
             let v = b.rew[i];
-            assert_eq!((b.obs[2 * i], b.act[i], b.next_obs[2 * i], b.extra[i]), (v, v, v + 1.0, -v));
-            assert_eq!(b.done[i], if (v as usize) % 2 == 0 { 1.0 } else { 0.0 });
+            assert_eq!((b.obs[2 * i], b.act[i], b.next_obs[2 * i], b.return_to_go[i]), (v, v, v + 1.0, -v));
+            assert_eq!(b.terminated[i], if (v as usize) % 2 == 0 { 1.0 } else { 0.0 });
         }
         assert!(b.rew.contains(&9.0), "the newest transition is sampled");
         assert!(ReplayBuffer::new(2, 1, 4).sample(8, &mut ChaCha8Rng::seed_from_u64(0)).is_empty());

@@ -22,39 +22,94 @@
 //!   μ rows of the last layer), so the zoo, evaluation and Python read it as
 //!   they read a DDPG actor.
 //!
-//! Shared settings from `DdpgConfig`: layers, hidden, `--lr-actor`,
+//! It reads every shared setting (`SharedConfig`: layers, hidden, `--lr-actor`,
 //! `--lr-critic`, `--gamma`, `--polyak`, the normaliser, `--precision`,
-//! `--n-step`. DDPG's exploration noise and action penalties do not apply.
+//! `--n-step`, `--flat-critic`); its own are the temperature's start and
+//! target ([`SacConfig`]). DDPG's exploration noise and action penalties do not apply.
 //! The ε of update k and shard s come from a ChaCha8 stream of (seed, s, k),
 //! so a run resumes bit for bit and the shards draw independent noise.
 
-use super::algorithm::{param_count, split_gradient, Algo, Algorithm, Explorer, Registration, Spec, StateDict};
+use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, Spec, UpdateStats};
 use super::arch::Arch;
-use super::ddpg::{DdpgConfig, DdpgPolicy, UpdateStats};
-use super::mlp::{Dense, TanhMlp};
+use super::mlp::{Dense, PlainNet};
 use super::nets::{append_grads, Adam, Net};
 use super::normalizer::Normalizer;
 use super::replay::Batch;
+use super::shared::SharedConfig;
 use super::AnyPolicy;
+use crate::actor::DeterministicPolicy;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
 use tch::{Kind, Tensor};
 
 /// SAC in the list of algorithms (`--algo sac`).
-pub const REGISTRATION: Registration = Registration {
-    name: "sac",
-    title: "SAC",
-    about: "soft actor-critic with automatic entropy tuning (twin critics)",
-    takes_expert: false,
-    new: |spec, rng| Box::new(Sac::new(spec, rng)),
-    check: |ddpg, _| {
-        if ddpg.td3 {
-            return Err("--td3 is a DDPG option; SAC has twin critics of its own".into());
+pub const REGISTRATION: Registration<SacConfig> = Registration {
+    info: Info {
+        name: "sac",
+        title: "SAC",
+        about: "soft actor-critic with automatic entropy tuning (twin critics)",
+        takes_expert: false,
+        // Every shared setting.
+        reads: SharedConfig::FLAGS,
+        flag_prefix: "sac-",
+        branchable: &[],
+    },
+    new: |spec, own, rng| Box::new(Sac::new(spec, own, rng)),
+    validate: SacConfig::validate,
+    unused: |_| Vec::new(),
+    // The actor with Adam's two moments; two critics, each with its target and moments.
+    memory: |spec, _| spec.mlp_bytes(0, 2 * spec.act_dim, 3) + spec.mlp_bytes(spec.act_dim, 1, 8),
+    describe: |c| {
+        let mut v = Vec::new();
+        if c.alpha_init != SacConfig::DEFAULT.alpha_init {
+            v.push(format!("initial temperature {}", c.alpha_init));
         }
-        Ok(())
+        if let Some(h) = c.target_entropy {
+            v.push(format!("target entropy {h}"));
+        }
+        v
     },
 };
+
+/// SAC's own settings, besides the shared ones ([`SharedConfig`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(default)]
+#[command(next_help_heading = "SAC's settings (--algo sac)")]
+pub struct SacConfig {
+    /// The entropy temperature α at the start (1: the SAC paper's and SB3's `ent_coef="auto"`).
+    #[arg(long = "sac-alpha-init", default_value_t = Self::DEFAULT.alpha_init)]
+    pub alpha_init: f64,
+    /// The entropy α is tuned towards (default: −dim(A), the SAC paper's rule).
+    #[arg(long = "sac-target-entropy")]
+    pub target_entropy: Option<f64>,
+}
+
+impl SacConfig {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { alpha_init: 1.0, target_entropy: None };
+
+    /// Whether every setting is in range; the error names the flag.
+    ///
+    /// # Errors
+    /// The first setting out of range.
+    pub fn validate(&self) -> Result<(), String> {
+        if !self.alpha_init.is_finite() || self.alpha_init <= 0.0 {
+            return Err("--sac-alpha-init must be a positive number".into());
+        }
+        if self.target_entropy.is_some_and(|h| !h.is_finite()) {
+            return Err("--sac-target-entropy must be a number".into());
+        }
+        Ok(())
+    }
+}
+
+impl Default for SacConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
 
 /// log σ is clamped to [`LOG_STD_MIN`, `LOG_STD_MAX`].
 const LOG_STD_MIN: f64 = -20.0;
@@ -66,7 +121,8 @@ const LN_SQRT_2PI: f64 = 0.918_938_533_204_672_8;
 
 /// The SAC learner.
 pub struct Sac {
-    config: DdpgConfig,
+    shared: SharedConfig,
+    target_entropy: f64,
     norm: Normalizer,
     actor: Net,
     q1: Net,
@@ -85,16 +141,17 @@ pub struct Sac {
 
 impl Sac {
     /// A fresh learner; `rng` fixes the initial weights and the noise seed.
-    pub fn new(spec: &Spec, rng: &mut ChaCha8Rng) -> Self {
-        let (c, arch, a) = (spec.ddpg.clone(), spec.arch, spec.act_dim);
-        let bf16 = c.precision == super::ddpg::Precision::Bf16;
+    pub fn new(spec: &Spec, own: &SacConfig, rng: &mut ChaCha8Rng) -> Self {
+        let (c, arch, a) = (spec.shared.clone(), spec.arch, spec.act_dim);
+        let bf16 = c.bf16();
         let net = |arch: Arch, rng: &mut ChaCha8Rng, extra, out| {
             arch.net((c.hidden, c.layers), extra, out, false, rng).with_bf16(bf16)
         };
         let actor = net(arch, rng, 0, 2 * a);
         let critics = arch.critics(c.flat_critic);
         let (q1, q2) = (net(critics, rng, a, 1), net(critics, rng, a, 1));
-        let log_alpha = Tensor::zeros(&[1], (Kind::Float, tch::Device::Cpu)).set_requires_grad(true);
+        let log_alpha =
+            Tensor::full(&[1], own.alpha_init.ln(), (Kind::Float, tch::Device::Cpu)).set_requires_grad(true);
         Self {
             norm: arch.normalizer(c.norm_eps, c.norm_clip),
             actor_opt: Adam::new(&actor.params, c.lr_actor),
@@ -108,7 +165,8 @@ impl Sac {
             q1,
             q2,
             log_alpha,
-            config: c,
+            target_entropy: own.target_entropy.unwrap_or(-(a as f64)),
+            shared: c,
             act_dim: a,
         }
     }
@@ -156,7 +214,7 @@ impl Sac {
             let q1 = self.q1_target.q(&next_obs, &next_act);
             let q2 = self.q2_target.q(&next_obs, &next_act);
             let soft = q1.minimum(&q2) - &alpha * next_log_prob;
-            col(&batch.rew) + (1.0 - col(&batch.done)) * col(&batch.discount) * soft
+            col(&batch.rew) + (1.0 - col(&batch.terminated)) * col(&batch.discount) * soft
         });
         let q1 = self.q1.q(&obs, &act);
         let critic_loss =
@@ -166,7 +224,7 @@ impl Sac {
         let (f1, f2) = (self.q1.detached_view(), self.q2.detached_view());
         let q_pi = f1.q(&obs, &pi).minimum(&f2.q(&obs, &pi));
         let actor_loss = (&alpha * &log_prob - q_pi).mean(Kind::Float);
-        let target_entropy = -(self.act_dim as f64);
+        let target_entropy = self.target_entropy;
         let alpha_loss = -(&self.log_alpha * (log_prob.detach() + target_entropy)).mean(Kind::Float);
 
         for net in [&mut self.q1, &mut self.q2, &mut self.actor] {
@@ -192,7 +250,7 @@ impl Sac {
 
     /// The mean action tanh(μ(s̄)) as a deterministic tanh actor: the actor
     /// with its last layer cut to the μ rows.
-    fn mean_actor(&self) -> TanhMlp {
+    fn mean_actor(&self) -> PlainNet {
         let mut net = self.actor.to_plain();
         if let Some(last) = net.layers.last_mut() {
             *last =
@@ -204,8 +262,8 @@ impl Sac {
 }
 
 impl Algorithm for Sac {
-    fn algo(&self) -> Algo {
-        Algo::of(&REGISTRATION)
+    fn name(&self) -> &'static str {
+        REGISTRATION.info.name
     }
 
     fn norm(&self) -> &Normalizer {
@@ -235,13 +293,13 @@ impl Algorithm for Sac {
     }
 
     fn end_cycle(&mut self) {
-        let p = self.config.polyak;
+        let p = self.shared.polyak;
         self.q1_target.polyak_from(&self.q1, p);
         self.q2_target.polyak_from(&self.q2, p);
     }
 
     fn policy(&self) -> AnyPolicy {
-        AnyPolicy::Ddpg(DdpgPolicy { net: self.mean_actor(), norm: self.norm.clone() })
+        AnyPolicy::Deterministic(DeterministicPolicy { net: self.mean_actor(), norm: self.norm.clone() })
     }
 
     fn explorer(&self) -> Box<dyn Explorer> {
@@ -249,42 +307,24 @@ impl Algorithm for Sac {
     }
 
     /// Q₁ (a soft critic: it values the policy's entropy too).
-    fn critic(&self) -> Option<TanhMlp> {
+    fn critic(&self) -> Option<PlainNet> {
         Some(self.q1.to_plain())
     }
 
-    fn state(&self) -> StateDict {
-        let mut s = StateDict::default();
-        s.put_net("actor", &self.actor);
-        s.put_net("critic", &self.q1);
-        s.put_net("critic2", &self.q2);
-        s.put_net("critic_target", &self.q1_target);
-        s.put_net("critic2_target", &self.q2_target);
-        s.put_arrays("log_alpha", vec![super::nets::tensor_to_vec(&self.log_alpha)]);
-        s.put_adam("actor_adam", &self.actor_opt);
-        s.put_adam("critic_adam", &self.q1_opt);
-        s.put_adam("critic2_adam", &self.q2_opt);
-        s.put_adam("alpha_adam", &self.alpha_opt);
-        s.counters.insert("noise_seed".into(), self.noise_seed);
-        s
-    }
-
-    fn load_state(&mut self, s: &StateDict) -> Result<(), String> {
-        s.load_net("actor", &mut self.actor)?;
-        s.load_net("critic", &mut self.q1)?;
-        s.load_net("critic2", &mut self.q2)?;
-        s.load_net("critic_target", &mut self.q1_target)?;
-        s.load_net("critic2_target", &mut self.q2_target)?;
-        match s.arrays("log_alpha").as_slice() {
-            [v] if v.len() == 1 => tch::no_grad(|| self.log_alpha.copy_(&Tensor::of_slice(v))),
-            _ => return Err("log_alpha: expected one value".into()),
-        }
-        s.load_adam("actor_adam", &mut self.actor_opt)?;
-        s.load_adam("critic_adam", &mut self.q1_opt)?;
-        s.load_adam("critic2_adam", &mut self.q2_opt)?;
-        s.load_adam("alpha_adam", &mut self.alpha_opt)?;
-        self.noise_seed = s.counter("noise_seed")?;
-        Ok(())
+    fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
+        vec![
+            ("actor", Part::Net(&mut self.actor)),
+            ("critic", Part::Net(&mut self.q1)),
+            ("critic2", Part::Net(&mut self.q2)),
+            ("critic_target", Part::Net(&mut self.q1_target)),
+            ("critic2_target", Part::Net(&mut self.q2_target)),
+            ("log_alpha", Part::Tensor(&mut self.log_alpha)),
+            ("actor_adam", Part::Adam(&mut self.actor_opt)),
+            ("critic_adam", Part::Adam(&mut self.q1_opt)),
+            ("critic2_adam", Part::Adam(&mut self.q2_opt)),
+            ("alpha_adam", Part::Adam(&mut self.alpha_opt)),
+            ("noise_seed", Part::Counter(&mut self.noise_seed)),
+        ]
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
@@ -294,7 +334,7 @@ impl Algorithm for Sac {
 
 /// SAC's exploration: a sample tanh(μ + σ z) of the frozen actor.
 pub struct SacExplorer {
-    net: TanhMlp,
+    net: PlainNet,
     norm: Normalizer,
     act_dim: usize,
 }
@@ -318,11 +358,9 @@ impl Explorer for SacExplorer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::agents::pggd::PggdConfig;
 
-    fn spec(ddpg: &DdpgConfig, pggd: &PggdConfig) -> Spec<'static> {
-        let (d, p) = (Box::leak(Box::new(ddpg.clone())), Box::leak(Box::new(pggd.clone())));
-        Spec { arch: super::super::arch::Arch::mlp(6), act_dim: 4, ddpg: d, pggd: p }
+    fn spec(shared: &SharedConfig) -> Spec<'static> {
+        Spec { arch: super::super::arch::Arch::mlp(6), act_dim: 4, shared: Box::leak(Box::new(shared.clone())) }
     }
 
     fn batch(n: usize, rng: &mut ChaCha8Rng) -> Batch {
@@ -332,16 +370,16 @@ mod tests {
             b.act.extend((0..4).map(|_| rng.gen_range(-0.9f32..0.9)));
             b.rew.push(if i % 5 == 0 { 0.0 } else { -1.0 });
             b.next_obs.extend((0..6).map(|_| rng.gen_range(-1.0f32..1.0)));
-            b.done.push(if i % 5 == 0 { 1.0 } else { 0.0 });
-            b.extra.push(0.0);
+            b.terminated.push(if i % 5 == 0 { 1.0 } else { 0.0 });
+            b.return_to_go.push(0.0);
             b.discount.push(0.98);
         }
         b
     }
 
     fn small() -> Sac {
-        let d = DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() };
-        Sac::new(&spec(&d, &PggdConfig::default()), &mut ChaCha8Rng::seed_from_u64(1))
+        let d = SharedConfig { hidden: 16, layers: 2, ..SharedConfig::default() };
+        Sac::new(&spec(&d), &SacConfig::default(), &mut ChaCha8Rng::seed_from_u64(1))
     }
 
     #[test]
@@ -403,14 +441,15 @@ mod tests {
         let (g, _) = sac.compute_gradient(&b, 0);
         sac.apply_gradient(&g);
         let mut other = Sac::new(
-            &spec(&DdpgConfig { hidden: 16, layers: 2, ..DdpgConfig::default() }, &PggdConfig::default()),
+            &spec(&SharedConfig { hidden: 16, layers: 2, ..SharedConfig::default() }),
+            &SacConfig::default(),
             &mut ChaCha8Rng::seed_from_u64(99),
         );
         other.load_state(&sac.state()).unwrap();
         assert_eq!(other.state(), sac.state());
         assert_eq!(other.compute_gradient(&b, 3).0, sac.compute_gradient(&b, 3).0);
         let obs = [0.3f32, -0.1, 0.2, 0.9, -0.5, 0.0];
-        let AnyPolicy::Ddpg(p) = sac.policy() else { panic!("a deterministic actor") };
+        let AnyPolicy::Deterministic(p) = sac.policy() else { panic!("a deterministic actor") };
         let full = sac.actor.to_plain().forward(&obs);
         let mean: Vec<f32> = full[..4].iter().map(|m| m.tanh()).collect();
         let got = p.act(&obs);

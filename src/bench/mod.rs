@@ -1,9 +1,9 @@
 //! Throughput measurement: environment steps per second, MuJoCo `mj_step`
 //! calls per second on the same trajectories, and the environment's overhead
-//! (the share of a step spent outside `mj_step`); DDPG collection and
-//! update rates in [`ddpg`].
+//! (the share of a step spent outside `mj_step`); training's collection and
+//! update rates, for any algorithm, in [`train`].
 
-pub mod ddpg;
+pub mod train;
 
 use crate::env::{registry, BlockEnv, EnvError, VectorEnv};
 use crate::policy::{Policy, RandomPolicy};

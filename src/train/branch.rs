@@ -7,31 +7,31 @@
 //! the file system allows: they are written once and never changed) plus a
 //! `config.json` that records the change; training then
 //! resumes it like any run. The parent is untouched and may keep training.
-//! Only settings the trainer reads each epoch, and DDPG's action penalties,
-//! may change; the agent's other hyperparameters (network shape, learning
-//! rates, TD3, n-step, precision) live in its checkpoint and stay the parent's.
+//! Only settings the trainer reads each epoch, and those an algorithm's
+//! registration lists as branchable (DDPG's exploration noise and action
+//! penalties), may change; the agent's other hyperparameters (network shape,
+//! learning rates, TD3, n-step, precision) live in its checkpoint and stay the parent's.
 
 use super::{checkpoint, differing_fields, RunDir, TrainConfig};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// Settings a branch may change besides those a resume may change: how
-/// episodes are drawn and explored, the curriculum's threshold, updates per
-/// cycle and DDPG's action penalties (the agent takes them over from its
-/// checkpoint's, [`crate::agents::algorithm::Algorithm::take_branch_settings`]).
-pub const BRANCHABLE_CHANGES: &[&str] = &[
-    "level_replay",
-    "challenge_share",
-    "success_threshold",
-    "batches",
-    "random_eps",
-    "noise_eps",
-    "noise_correlation",
-    "action_l2",
-    "preact_l2",
-    "preact_margin",
-];
+/// Settings of the trainer a branch may change besides those a resume may
+/// change: how episodes are drawn, the curriculum's threshold and updates
+/// per cycle. Each algorithm adds its own that the learner takes over from
+/// the branch's settings ([`crate::agents::algorithm::Registration::branchable`]:
+/// DDPG's exploration noise and action penalties).
+pub const BRANCHABLE_CHANGES: &[&str] = &["level_replay", "challenge_share", "success_threshold", "batches"];
+
+/// Every setting a branch may change, as flags.
+fn branchable() -> Vec<String> {
+    BRANCHABLE_CHANGES
+        .iter()
+        .map(|f| crate::agents::registry::flag("", f))
+        .chain(crate::agents::registry::branchable_flags())
+        .collect()
+}
 
 /// Where a branched run came from (recorded in its `config.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,15 +87,15 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     base.replay = Some(saved.replay_layout());
     base.branched_from = None;
     let mut changed = Vec::new();
-    differing_fields("", &base, &wanted, &mut changed);
-    let (allowed, refused): (Vec<String>, Vec<String>) =
-        changed.into_iter().partition(|flag| BRANCHABLE_CHANGES.iter().any(|f| *flag == flag_name(f)));
+    differing_fields(&base, &wanted, &mut changed);
+    let branchable = branchable();
+    let (allowed, refused): (Vec<String>, Vec<String>) = changed.into_iter().partition(|f| branchable.contains(f));
     if !refused.is_empty() {
         bail!(
             "--branch-from {}: a branch may change only {} (and what --resume may); {} differ from {}; \
              pass the parent's values for those, or start a new run",
             parent.display(),
-            BRANCHABLE_CHANGES.iter().map(|f| flag_name(f)).collect::<Vec<_>>().join(", "),
+            branchable.join(", "),
             refused.join(", "),
             from.config().display()
         );
@@ -151,11 +151,6 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
         let _ = std::fs::remove_dir_all(&tmp);
     }
     placed
-}
-
-/// `--level-replay` for `level_replay`.
-fn flag_name(field: &str) -> String {
-    format!("--{}", field.replace('_', "-"))
 }
 
 /// Copies `from`'s files into `to` (new), hard-linking replay segments

@@ -13,11 +13,11 @@
 //! exactly. Checkpoints written before the log hold the buffers inline;
 //! they load, and their next save starts the log.
 
-use crate::agents::algorithm::{Algo, Algorithm, Spec, StateDict};
-use crate::agents::ddpg::DdpgConfig;
+use crate::agents::algorithm::{Algorithm, Spec, StateDict};
 use crate::agents::normalizer::Normalizer;
-use crate::agents::pggd::PggdConfig;
+use crate::agents::registry::{Algo, AlgoConfigs};
 use crate::agents::replay::{Batch, ReplayBuffer};
+use crate::agents::shared::SharedConfig;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Write;
@@ -81,10 +81,13 @@ struct Header {
     /// Absent in checkpoints written before PGGD existed: DDPG.
     #[serde(default)]
     algo: Algo,
-    /// The settings the agent is built from ([`Spec`]).
-    ddpg: DdpgConfig,
+    /// The settings the agent is built from: the shared ones ([`Spec`]) and
+    /// every algorithm's own (one group each, by name; headers written before
+    /// that held the shared ones in `ddpg`: [`crate::agents::shared::upgrade_legacy`]).
     #[serde(default)]
-    pggd: PggdConfig,
+    shared: SharedConfig,
+    #[serde(flatten)]
+    algos: AlgoConfigs,
     normalizer: Normalizer,
     /// The agent's counters by name ([`StateDict::counters`]); the arrays are blobs.
     #[serde(default)]
@@ -170,7 +173,7 @@ fn append_log(dir: &Path, replays: &[ReplayBuffer], log: &mut ReplayLog) -> Resu
         if to > from {
             let b = replay.history(from, to).unwrap_or_default();
             let mut payload = Vec::with_capacity(4 * (b.obs.len() * 2 + b.act.len() + 4 * b.rew.len()));
-            for column in [&b.obs, &b.act, &b.rew, &b.next_obs, &b.done, &b.extra, &b.discount] {
+            for column in [&b.obs, &b.act, &b.rew, &b.next_obs, &b.terminated, &b.return_to_go, &b.discount] {
                 for x in column {
                     payload.extend_from_slice(&x.to_le_bytes());
                 }
@@ -265,8 +268,8 @@ fn read_log(
                 &mut data.act,
                 &mut data.rew,
                 &mut data.next_obs,
-                &mut data.done,
-                &mut data.extra,
+                &mut data.terminated,
+                &mut data.return_to_go,
                 &mut data.discount,
             ];
             let mut off = 0;
@@ -290,15 +293,15 @@ fn io(path: &Path) -> impl Fn(std::io::Error) -> CheckpointError + '_ {
 }
 
 /// Saves the agent, the replay buffer and the run state to `path`
-/// atomically; `ddpg` and `pggd` are the settings the agent was built from.
+/// atomically; `settings` are those the agent was built from.
 ///
 /// # Errors
 /// [`CheckpointError::Io`].
 pub fn save(
     path: &Path,
     state: &RunState,
-    agent: &dyn Algorithm,
-    (ddpg, pggd): (&DdpgConfig, &PggdConfig),
+    agent: &mut dyn Algorithm,
+    (shared, algos): (&SharedConfig, &AlgoConfigs),
     replays: &[ReplayBuffer],
     log: &mut ReplayLog,
 ) -> Result<(), CheckpointError> {
@@ -317,9 +320,10 @@ pub fn save(
     let replay_log = append_log(dir, replays, log)?;
     let header = Header {
         state: state.clone(),
-        algo: agent.algo(),
-        ddpg: ddpg.clone(),
-        pggd: pggd.clone(),
+        algo: Algo::named(agent.name())
+            .map_err(|e| CheckpointError::Io { path: path.to_owned(), source: std::io::Error::other(e) })?,
+        shared: shared.clone(),
+        algos: algos.clone(),
         normalizer: agent.norm().clone(),
         counters,
         actor_adam_t: 0,
@@ -409,7 +413,7 @@ fn read_header(path: &Path) -> Result<Header, CheckpointError> {
     let hlen = u64::from_le_bytes(head[8..16].try_into().map_err(|_| corrupt("truncated"))?);
     let mut json = Vec::new();
     f.take(hlen).read_to_end(&mut json).map_err(io(path))?;
-    serde_json::from_slice(&json).map_err(|e| corrupt(&format!("bad header: {e}")))
+    header_from(&json).map_err(|e| corrupt(&format!("bad header: {e}")))
 }
 
 /// What [`load`] returns.
@@ -452,6 +456,13 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
 }
 
 /// The header and payload of a checkpoint file's bytes, checked (magic, sizes, checksum).
+/// A header from its JSON, older layouts included.
+fn header_from(json: &[u8]) -> Result<Header, serde_json::Error> {
+    let mut value: serde_json::Value = serde_json::from_slice(json)?;
+    crate::agents::shared::upgrade_legacy(&mut value);
+    serde_json::from_value(value)
+}
+
 fn parse<'b>(path: &Path, bytes: &'b [u8]) -> Result<(Header, &'b [u8]), CheckpointError> {
     let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
     if bytes.len() < 16 || &bytes[..8] != MAGIC {
@@ -462,7 +473,7 @@ fn parse<'b>(path: &Path, bytes: &'b [u8]) -> Result<(Header, &'b [u8]), Checkpo
     if hlen > body.len() {
         return Err(corrupt("truncated header"));
     }
-    let header: Header = serde_json::from_slice(&body[..hlen]).map_err(|e| corrupt(&format!("bad header: {e}")))?;
+    let header = header_from(&body[..hlen]).map_err(|e| corrupt(&format!("bad header: {e}")))?;
     let payload = &body[hlen..];
     let expected: usize = header.blobs.iter().map(|b| 4 * b.1).sum();
     if payload.len() != expected {
@@ -510,8 +521,8 @@ fn load_agent(
     let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(0);
     // A set network's layout is its normaliser's (a set network's normaliser always has one).
     let arch = crate::agents::arch::Arch { obs_dim, set: header.normalizer.set_layout() };
-    let spec = Spec { arch, act_dim, ddpg: &header.ddpg, pggd: &header.pggd };
-    let mut agent = header.algo.build(&spec, &mut rng).map_err(&mismatch)?;
+    let spec = Spec { arch, act_dim, shared: &header.shared };
+    let mut agent = header.algo.build(&spec, &header.algos, &mut rng);
     let state = StateDict { tensors: tensors.into_iter().collect(), counters: counters(header) };
     agent.load_state(&state).map_err(&mismatch)?;
     *agent.norm_mut() = header.normalizer.clone();
@@ -544,7 +555,7 @@ fn load_replays(
 ) -> Result<(Vec<ReplayBuffer>, ReplayLog), CheckpointError> {
     let corrupt = |reason: &str| CheckpointError::Corrupt { path: path.to_owned(), reason: reason.to_owned() };
     let take = |prefix: &str| take(blobs, prefix);
-    let d = &header.ddpg;
+    let d = &header.shared;
     if !header.replay_log.is_empty() {
         let dir = path.parent().unwrap_or(Path::new("."));
         let replays = read_log(dir, &header.replay_log, obs_dim, act_dim, &corrupt)?;
@@ -567,8 +578,8 @@ fn load_replays(
             act: next_array(),
             rew: next_array(),
             next_obs: next_array(),
-            done: next_array(),
-            extra: next_array(),
+            terminated: next_array(),
+            return_to_go: next_array(),
             discount: next_array(),
         };
         // Checkpoints from before n-step returns: every transition is one step.

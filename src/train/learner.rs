@@ -2,11 +2,12 @@
 
 use super::comm::Comm;
 use super::TrainConfig;
-use crate::agents::algorithm::Explorer;
-pub use crate::agents::algorithm::{Algo, Algorithm};
-use crate::agents::ddpg::{Ddpg, DdpgPolicy, UpdateStats};
+pub use crate::agents::algorithm::Algorithm;
+use crate::agents::algorithm::{Explorer, UpdateStats};
+use crate::agents::ddpg::DeterministicPolicy;
 use crate::agents::expert::{beta, without_grey, ExpertCritic, Mixture};
-use crate::agents::mlp::TanhMlp;
+use crate::agents::mlp::PlainNet;
+pub use crate::agents::registry::Algo;
 use crate::agents::replay::Batch;
 use crate::agents::AnyPolicy;
 use crate::load::load_policy;
@@ -52,7 +53,7 @@ impl Default for AggrevatedConfig {
 
 /// The AggreVaTeD expert: its policy and, for `expert-advantage`, its critic.
 pub(crate) struct Expert {
-    policy: DdpgPolicy,
+    policy: DeterministicPolicy,
     critic: Option<ExpertCritic>,
 }
 
@@ -79,7 +80,7 @@ impl Expert {
         } else {
             load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?
         };
-        let AnyPolicy::Ddpg(policy) = saved.policy.clone() else {
+        let AnyPolicy::Deterministic(policy) = saved.policy.clone() else {
             bail!(
                 "expert {} is a {} policy; AggreVaTeD needs a deterministic (DDPG or SAC) expert",
                 path.display(),
@@ -127,7 +128,7 @@ impl Expert {
 
 /// The critic of an expert policy saved without one (older runs): from the
 /// checkpoint of its run directory, which must be of the policy's epoch.
-fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Result<TanhMlp> {
+fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Result<PlainNet> {
     let ckpt = if path.is_dir() { path.join("checkpoint.bin") } else { path.with_file_name("checkpoint.bin") };
     let no_critic = format!(
         "--pg-weight expert-advantage needs the expert's critic: {} (epoch {}) was saved without one",
@@ -147,9 +148,9 @@ fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Resu
             loaded.state.epoch
         );
     }
-    match loaded.agent.as_any().downcast_ref::<Ddpg>() {
-        Some(agent) => Ok(agent.critic.to_plain()),
-        None => bail!("{} is a {} checkpoint, not DDPG", ckpt.display(), loaded.agent.algo()),
+    match loaded.agent.critic() {
+        Some(critic) => Ok(critic),
+        None => bail!("{} is a {} checkpoint, which has no critic", ckpt.display(), loaded.agent.name()),
     }
 }
 

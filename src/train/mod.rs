@@ -40,8 +40,8 @@ pub use rundir::{read_progress, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch};
 
 use crate::agents::arch::{NetConfig, NetKind, Pooling};
-use crate::agents::ddpg::{DdpgConfig, Precision};
-use crate::agents::pggd::PggdConfig;
+use crate::agents::registry::AlgoConfigs;
+use crate::agents::shared::{Precision, SharedConfig};
 use crate::env::registry;
 use crate::task::Task;
 use anyhow::{bail, Result};
@@ -51,10 +51,16 @@ use std::path::Path;
 /// Gradient steps per cycle in the paper's set-up (baselines' HER default).
 pub const PAPER_BATCHES: usize = 40;
 
-/// Training hyperparameters (defaults: the paper's set-up).
+/// Training hyperparameters (defaults: the paper's set-up): the trainer's
+/// own (workers, epochs, cycles, replay, batches, curriculum), the networks,
+/// the settings the algorithms share, and each algorithm's own.
+///
+/// A run's `config.json` holds it; files written before the algorithms had
+/// settings of their own read as they did ([`crate::agents::shared::upgrade_legacy`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
+#[serde(remote = "Self")]
 pub struct TrainConfig {
-    /// Algorithm (one of `agents::algorithm::ALGORITHMS`).
+    /// Algorithm (one of `agents::registry::ALGORITHMS`).
     #[arg(long, default_value = "ddpg", value_parser = Algo::parser())]
     #[serde(default)]
     pub algo: Algo,
@@ -145,13 +151,14 @@ pub struct TrainConfig {
     #[command(flatten)]
     #[serde(default)]
     pub net: NetConfig,
-    /// DDPG hyperparameters (PGGD uses its network shape, gamma and normaliser settings).
-    #[command(flatten)]
-    pub ddpg: DdpgConfig,
-    /// PGGD hyperparameters.
+    /// The settings the algorithms share (each reads those its registration lists).
     #[command(flatten)]
     #[serde(default)]
-    pub pggd: PggdConfig,
+    pub shared: SharedConfig,
+    /// Each algorithm's own settings (`config.json`: one group per algorithm, by name).
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub algos: AlgoConfigs,
     /// AggreVaTeD settings (PGGD with an expert).
     #[command(flatten)]
     #[serde(default)]
@@ -166,6 +173,20 @@ pub struct TrainConfig {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branched_from: Option<BranchedFrom>,
+}
+
+impl Serialize for TrainConfig {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        TrainConfig::serialize(self, s)
+    }
+}
+
+impl<'de> Deserialize<'de> for TrainConfig {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let mut value = serde_json::Value::deserialize(d)?;
+        crate::agents::shared::upgrade_legacy(&mut value);
+        TrainConfig::deserialize(value).map_err(serde::de::Error::custom)
+    }
 }
 
 /// How the workers of a process share replay (see [`TrainConfig::replay`]).
@@ -246,8 +267,8 @@ impl TrainConfig {
         options::Options {
             algo: self.algo,
             net: &self.net,
-            ddpg: &self.ddpg,
-            pggd: &self.pggd,
+            shared: &self.shared,
+            algos: &self.algos,
             aggrevated: &self.aggrevated,
             hindsight_colours: self.hindsight_colours,
             hindsight_strategy_given: self.hindsight_strategy != crate::hindsight::Strategy::default(),
@@ -263,7 +284,7 @@ impl TrainConfig {
     /// The method as (display name, short name): e.g. DDPG, or PGGD +
     /// AggreVaTeD (`pggd-aggrevated`).
     fn method(&self) -> (String, String) {
-        let (title, name) = (self.algo.registration().title, self.algo.name());
+        let (title, name) = (self.algo.title(), self.algo.name());
         match (&self.aggrevated.expert, self.aggrevated.pg_weight) {
             (None, _) => (title.to_owned(), name.to_owned()),
             (Some(_), PgWeight::Return) => (format!("{title} + AggreVaTeD"), format!("{name}-aggrevated")),
@@ -284,15 +305,15 @@ impl TrainConfig {
         }
     }
 
-    /// This project's options in use beyond the paper's DDPG, e.g. "TD3, 3-step, bf16" (empty: none).
+    /// This project's options in use beyond the paper's set-up, e.g. "TD3, 3-step, bf16" (empty: none).
     pub fn options(&self) -> String {
-        let d = &self.ddpg;
+        let s = &self.shared;
         let mut v = Vec::new();
         let net = self.net.describe();
         if !net.is_empty() {
             v.push(net);
         }
-        if d.flat_critic {
+        if s.flat_critic {
             v.push("flat critics".into());
         }
         if let Some(c) = &self.counts {
@@ -304,11 +325,9 @@ impl TrainConfig {
                 v.push("hindsight pairs".into());
             }
         }
-        if d.td3 {
-            v.push("TD3".to_owned());
-        }
-        if d.n_step > 1 {
-            v.push(format!("{}-step", d.n_step));
+        v.extend(self.algo.describe(&self.algos));
+        if s.n_step > 1 {
+            v.push(format!("{}-step", s.n_step));
         }
         if self.level_replay > 0.0 {
             v.push(format!("level replay {}", self.level_replay));
@@ -316,22 +335,8 @@ impl TrainConfig {
         if self.challenge_share > 0.0 {
             v.push(format!("challenge share {}", self.challenge_share));
         }
-        if d.precision == Precision::Bf16 {
+        if s.precision == Precision::Bf16 {
             v.push("bf16".to_owned());
-        }
-        let paper = DdpgConfig::default();
-        if d.action_l2 == 0.0 {
-            v.push("no action penalty".to_owned());
-        } else if d.action_l2 != paper.action_l2 {
-            v.push(format!("action penalty {}", d.action_l2));
-        }
-        if d.noise_correlation > 0.0 {
-            v.push(format!("noise correlation {}", d.noise_correlation));
-        }
-        if d.preact_l2 > 0.0 && d.preact_margin > 0.0 {
-            v.push(format!("pre-tanh penalty {} beyond {}", d.preact_l2, d.preact_margin));
-        } else if d.preact_l2 > 0.0 {
-            v.push(format!("pre-tanh penalty {}", d.preact_l2));
         }
         if self.batches != PAPER_BATCHES {
             v.push(format!("{} batches per cycle", self.batches));
@@ -362,7 +367,7 @@ impl TrainConfig {
             (NetKind::Set, Pooling::Colour) => "-set-colour",
         };
         let norm = if self.net.set_norm { "-norm" } else { "" };
-        let critic = if self.ddpg.flat_critic { "-flatcritic" } else { "" };
+        let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self
             .counts
@@ -378,7 +383,7 @@ impl TrainConfig {
 /// those in [`RESUMABLE_CHANGES`].
 fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
     let mut out = Vec::new();
-    differing_fields("", &a, &b, &mut out);
+    differing_fields(&a, &b, &mut out);
     out
 }
 
@@ -388,28 +393,26 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
 const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env", "branched_from"];
 
 /// The fields of two configurations that differ, as the flags that set them
-/// (`--PREFIXfield-name`); the groups of flags (`net`, `ddpg`, `pggd`,
-/// `aggrevated`) are compared field by field (PGGD's flags carry `pg-`),
-/// any other value whole (`--counts`, not its entries).
-fn differing_fields<T: Serialize>(prefix: &str, a: &T, b: &T, out: &mut Vec<String>) {
-    const GROUPS: [&str; 4] = ["net", "ddpg", "pggd", "aggrevated"];
+/// (`--PREFIXfield-name`), each once: the groups of flags (`net`, `shared`,
+/// `aggrevated`, and each algorithm's, whose flags carry its registration's
+/// prefix) field by field, any other value whole (`--counts`, not its
+/// entries); [`RESUMABLE_CHANGES`] left out.
+fn differing_fields<T: Serialize>(a: &T, b: &T, out: &mut Vec<String>) {
+    use crate::agents::registry::{flag, groups};
+    const GROUPS: [&str; 3] = ["net", crate::agents::shared::SHARED_KEY, "aggrevated"];
     let (a, b) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
-    let (serde_json::Value::Object(a), serde_json::Value::Object(b)) = (a, b) else { return };
-    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
-    keys.sort();
-    keys.dedup();
-    for k in keys {
-        if RESUMABLE_CHANGES.contains(&k.as_str()) {
+    for path in crate::diff::differences(&a, &b) {
+        let Some(top) = path.key(0) else { continue };
+        if RESUMABLE_CHANGES.contains(&top) {
             continue;
         }
-        match (a.get(k), b.get(k)) {
-            (Some(v @ serde_json::Value::Object(_)), Some(w @ serde_json::Value::Object(_)))
-                if prefix.is_empty() && GROUPS.contains(&k.as_str()) =>
-            {
-                differing_fields(if k == "pggd" { "pg-" } else { "" }, v, w, out)
-            }
-            (v, w) if v == w => {}
-            _ => out.push(format!("--{prefix}{}", k.replace('_', "-"))),
+        let prefix = GROUPS.iter().map(|g| (*g, "")).chain(groups()).find(|(g, _)| *g == top).map(|(_, p)| p);
+        let name = match (prefix, path.key(1)) {
+            (Some(prefix), Some(field)) => flag(prefix, field),
+            _ => flag("", top),
+        };
+        if !out.contains(&name) {
+            out.push(name);
         }
     }
 }

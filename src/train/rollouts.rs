@@ -315,13 +315,16 @@ mod tests {
         let next: Vec<f32> = d.next_obs.chunks(2).map(|o| o[0]).collect();
         assert_eq!(next, vec![3.0, 4.0, 5.0, 5.0, 5.0]);
         assert_eq!(d.discount, vec![g * g * g, g * g * g, g * g * g, g * g, g]);
-        assert_eq!(d.done, vec![0.0, 0.0, 1.0, 1.0, 1.0], "the terminal state ends the last three returns");
-        assert_eq!(d.extra[3], -8.0, "return-to-go");
+        assert_eq!(d.terminated, vec![0.0, 0.0, 1.0, 1.0, 1.0], "the terminal state ends the last three returns");
+        assert_eq!(d.return_to_go[3], -8.0, "return-to-go");
         // One step: the paper's transitions.
         let mut replay = ReplayBuffer::new(2, 1, 100);
         episode(vec![-1.0, -2.0], false).store(&mut replay, &mut Normalizer::new(2, 0.01, 5.0), 0.5, 1);
         let (d, _) = replay.parts();
-        assert_eq!((d.rew.clone(), d.discount.clone(), d.done.clone()), (vec![-1.0, -2.0], vec![g, g], vec![0.0, 0.0]));
+        assert_eq!(
+            (d.rew.clone(), d.discount.clone(), d.terminated.clone()),
+            (vec![-1.0, -2.0], vec![g, g], vec![0.0, 0.0])
+        );
     }
 
     #[test]
@@ -373,7 +376,7 @@ mod tests {
         // The terminal transition of a relabelled success is done; the original's colours are untouched.
         let mut replay = ReplayBuffer::new(spec.dim(), 4, 10);
         grey.store_transitions(&mut replay, 0.98, 1);
-        assert_eq!(replay.parts().0.done, vec![0.0, 1.0]);
+        assert_eq!(replay.parts().0.terminated, vec![0.0, 1.0]);
         assert_eq!(colour_of(&ep.obs[0], 2), Grey.one_hot().to_vec());
         assert!(
             Episode { contacts: None, ..ep }.relabelled(&spec, 4, hindsight::Strategy::BlueTouched, 50).is_empty(),

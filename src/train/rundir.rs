@@ -13,7 +13,7 @@ pub struct RunDir {
 impl RunDir {
     /// `config.json`.
     pub fn config(&self) -> PathBuf {
-        self.dir.join("config.json")
+        self.dir.join(crate::saved::CONFIG_FILE)
     }
     /// `progress.csv`.
     pub fn progress(&self) -> PathBuf {

@@ -10,9 +10,9 @@ use super::learner::{Algorithm, Expert, Learner};
 use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
 use super::rundir::{read_progress, write_progress, RunDir};
 use super::{computation_differences, plot, run_task, EpochRow, ReplayLayout, TrainConfig};
-use crate::agents::algorithm::Spec;
+use crate::agents::algorithm::{Spec, UpdateStats};
 use crate::agents::arch::Arch;
-use crate::agents::ddpg::UpdateStats;
+use crate::agents::registry::Algo;
 use crate::agents::replay::{Batch, ReplayBuffer};
 use crate::agents::AnyPolicy;
 use crate::env::{registry, EnvConfig, VectorEnv};
@@ -75,22 +75,17 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         bound.check_usize(v).map_err(anyhow::Error::msg)?;
     }
     crate::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?;
-    config.ddpg.validate().map_err(anyhow::Error::msg)?;
+    Algo::validate(&config.shared, &config.algos).map_err(anyhow::Error::msg)?;
     if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
     }
-    config.ddpg.precision.check().map_err(anyhow::Error::msg)?;
     config.net.validate().map_err(anyhow::Error::msg)?;
     super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
         bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
     }
-    config.algo.check(&config.ddpg, &config.pggd, expert).map_err(anyhow::Error::msg)?;
-    let (lr, sigma_min) = (config.pggd.lr, config.pggd.sigma_min);
-    if !lr.is_finite() || lr <= 0.0 || !sigma_min.is_finite() || sigma_min < 0.0 {
-        bail!("--pg-lr must be a positive number and --pg-sigma-min a number ≥ 0");
-    }
+    config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
     let t0 = config.aggrevated.t0;
     if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
         bail!("--beta0 must be in [0, 1] and --t0 at least 0");
@@ -112,8 +107,8 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
 
 /// The memory a run needs at most, in bytes: its replay buffers when full
 /// (or when they hold every transition the run collects, if fewer), one
-/// update's batches and activations, and the networks (actor, critic, their
-/// targets and Adam's two moments of each: eight copies, twelve with TD3's twin).
+/// update's batches and activations, and the learner's networks and
+/// optimiser state (as its registration counts them, for MLPs of the run's shape).
 fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> u64 {
     let (workers, shards) = match config.replay_layout() {
         ReplayLayout::PerWorker => (1, config.workers),
@@ -130,11 +125,11 @@ fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episo
     let transition = 4 * (2 * obs_dim + act_dim + 4) as u64;
     let replay = stored.saturating_mul(transition).saturating_mul(shards as u64);
     let batch_rows = (config.batch_size as u64).saturating_mul(config.workers as u64);
-    let (hidden, layers) = (config.ddpg.hidden as u64, config.ddpg.layers as u64);
-    let activations = hidden * layers * 16;
-    let weights = hidden * (hidden * (layers - 1) + 2 * obs_dim as u64 + 2 * act_dim as u64 + 2);
-    let copies = if config.ddpg.td3 { 12 } else { 8 };
-    replay.saturating_add(batch_rows.saturating_mul(transition + activations)).saturating_add(4 * copies * weights)
+    let activations = (config.shared.hidden as u64) * (config.shared.layers as u64) * 16;
+    let spec = Spec { arch: Arch::mlp(obs_dim), act_dim, shared: &config.shared };
+    replay
+        .saturating_add(batch_rows.saturating_mul(transition + activations))
+        .saturating_add(config.algo.memory(&spec, &config.algos))
 }
 
 /// Refuses a run whose replay buffers and batches would not fit in this
@@ -156,8 +151,8 @@ fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episod
             config.buffer_size,
             config.batch_size,
             config.epochs,
-            config.ddpg.layers,
-            config.ddpg.hidden,
+            config.shared.layers,
+            config.shared.hidden,
             crate::limits::gigabytes(have)
         );
     }
@@ -231,7 +226,7 @@ fn run_config(
 }
 
 /// Where a run begins: a fresh agent and empty buffers, or a checkpoint's.
-struct Begun {
+struct StartingPoint {
     agent: Box<dyn Algorithm>,
     replays: Vec<ReplayBuffer>,
     replay_log: checkpoint::ReplayLog,
@@ -240,11 +235,11 @@ struct Begun {
     rows: Vec<EpochRow>,
 }
 
-impl Begun {
+impl StartingPoint {
     /// The agent and buffers fit the run's settings.
     fn check(&self, config: &TrainConfig, mine: &RunDir) -> Result<()> {
-        if self.agent.algo() != config.algo {
-            let (file, held) = (mine.checkpoint(), self.agent.algo());
+        if self.agent.name() != config.algo.name() {
+            let (file, held) = (mine.checkpoint(), Algo::named(self.agent.name()).map_err(anyhow::Error::msg)?);
             bail!("{} holds a {held:?} agent, not {:?}; pass --algo {held}", file.display(), config.algo);
         }
         let layout = config.replay_layout();
@@ -270,15 +265,15 @@ fn fresh(
     run: &RunDir,
     mine: &RunDir,
     dims: (Arch, usize),
-) -> Result<Begun> {
+) -> Result<StartingPoint> {
     let (arch, act_dim) = dims;
     let obs_dim = arch.obs_dim;
     if mine.checkpoint().exists() || run.checkpoint().exists() {
         bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
-    let spec = Spec { arch, act_dim, ddpg: &config.ddpg, pggd: &config.pggd };
-    let agent = config.algo.build(&spec, &mut rng).map_err(anyhow::Error::msg)?;
+    let spec = Spec { arch, act_dim, shared: &config.shared };
+    let agent = config.algo.build(&spec, &config.algos, &mut rng);
     let state = RunState {
         env_id: task.id().to_owned(),
         obs_dim,
@@ -298,7 +293,7 @@ fn fresh(
         ReplayLayout::Shared => 1,
     };
     let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
-    Ok(Begun { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
+    Ok(StartingPoint { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
 }
 
 /// A resumed run: this rank's checkpoint of the last epoch every rank
@@ -311,7 +306,7 @@ fn resumed(
     mine: &RunDir,
     saved_config: Option<TrainConfig>,
     dims: (Arch, usize),
-) -> Result<Begun> {
+) -> Result<StartingPoint> {
     let path = resume_checkpoint(comm, &mine.checkpoint(), run)?;
     if comm.is_root() {
         let mut saved = match saved_config {
@@ -333,14 +328,20 @@ fn resumed(
         bail!("--resume: {} was saved with other networks than --net asks for", path.display());
     }
     // A resume has the checkpoint's settings; a branch's first epoch, its own.
-    loaded.agent.take_branch_settings(&config.ddpg);
+    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos);
     let epoch = loaded.state.epoch;
     let rows = if comm.is_root() {
         read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < epoch).collect()
     } else {
         Vec::new()
     };
-    Ok(Begun { agent: loaded.agent, replays: loaded.replays, replay_log: loaded.log, state: loaded.state, rows })
+    Ok(StartingPoint {
+        agent: loaded.agent,
+        replays: loaded.replays,
+        replay_log: loaded.log,
+        state: loaded.state,
+        rows,
+    })
 }
 
 /// Everything a run holds between epochs.
@@ -541,7 +542,7 @@ impl<'a> Trainer<'a> {
                 ReplayLayout::PerWorker => &mut self.replays[i / config.rollouts],
                 ReplayLayout::Shared => &mut self.replays[0],
             };
-            ep.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
+            ep.store_transitions(replay, config.shared.gamma, config.shared.n_step);
             rows.extend(ep.obs.iter().flatten());
             // Hindsight colours: the same episode under other colourings, beside the original.
             for other in
@@ -549,7 +550,7 @@ impl<'a> Trainer<'a> {
             {
                 tally.relabelled += 1;
                 tally.relabelled_wins += other.success as usize;
-                other.store_transitions(replay, config.ddpg.gamma, config.ddpg.n_step);
+                other.store_transitions(replay, config.shared.gamma, config.shared.n_step);
                 rows.extend(other.obs.iter().flatten());
             }
         }
@@ -719,7 +720,7 @@ impl<'a> Trainer<'a> {
             }
         }
         self.state.best_finals = self.state.best_finals.max(row.finals_success);
-        let (agent, settings) = (&*self.learner.agent, (&self.config.ddpg, &self.config.pggd));
+        let (agent, settings) = (&mut *self.learner.agent, (&self.config.shared, &self.config.algos));
         checkpoint::save(&self.mine.checkpoint(), &self.state, agent, settings, &self.replays, &mut self.replay_log)?;
         self.created.drain(..).for_each(crate::io::CreatedDir::keep);
         // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).

@@ -78,6 +78,7 @@ fn the_environment_core_uses_nothing_of_the_training_stack() {
         "actor",
         "align",
         "check",
+        "diff",
         "env",
         "evaluate",
         "hindsight",
@@ -103,5 +104,35 @@ fn the_environment_core_uses_nothing_of_the_training_stack() {
     for m in core {
         let bad: Vec<_> = reach(&graph, m).into_iter().filter(|d| stack.contains(&d.as_str())).collect();
         assert!(bad.is_empty(), "the core module {m} uses {bad:?}");
+    }
+}
+
+/// Inside agents/, imports go one way: the interface (algorithm.rs) and the shared settings
+/// (shared.rs) name no algorithm, the algorithm files do not name the list of them
+/// (registry.rs), and the list names every algorithm file.
+#[test]
+fn the_algorithm_interface_knows_no_algorithm_and_no_algorithm_knows_the_list() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/agents");
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+    let registry = read("registry.rs");
+    let algorithms: Vec<&str> =
+        ["ddpg", "pggd", "sac"].into_iter().filter(|a| registry.contains(&format!("{a}: super::{a}::"))).collect();
+    assert_eq!(algorithms, ["ddpg", "pggd", "sac"], "registry.rs lists every algorithm file");
+    let names = |text: &str, module: &str| {
+        text.contains(&format!("super::{module}::")) || text.contains(&format!("agents::{module}::"))
+    };
+    for interface in ["algorithm.rs", "shared.rs"] {
+        let text = read(interface);
+        for a in algorithms.iter().copied().chain(["registry"]) {
+            assert!(!names(&text, a), "{interface} names {a}");
+        }
+    }
+    for a in &algorithms {
+        let text = read(&format!("{a}.rs"));
+        assert!(!names(&text, "registry"), "{a}.rs names the registry");
+        for other in algorithms.iter().filter(|o| *o != a) {
+            // SAC exports its mean action as the core's tanh actor (crate::actor), not DDPG's learner.
+            assert!(!names(&text, other), "{a}.rs names {other}");
+        }
     }
 }

@@ -224,10 +224,13 @@ fn ddpg_bench_times_set_network_options_and_refuses_them_without_a_set_network()
 }
 
 #[test]
-fn ddpg_only_bench_options_need_ddpg() {
+fn training_bench_options_need_train() {
     let o = bp(&["bench", "--updates", "5"]);
     assert!(!o.status.success());
-    assert!(text(&o).contains("--ddpg"), "{}", text(&o));
+    assert!(text(&o).contains("--train"), "{}", text(&o));
+    // `--ddpg` is the flag's older name.
+    let o = bp(&["bench", "--ddpg", "--updates", "5", "--steps", "1", "--algo", "ppo"]);
+    assert!(text(&o).contains("invalid value 'ppo' for '--algo"), "{}", text(&o));
 }
 
 #[test]

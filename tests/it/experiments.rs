@@ -3,7 +3,7 @@
 //! the settings results/headline.md reports, and the command line wins over the file.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::ddpg::Precision;
+use blockpuzzle::agents::shared::Precision;
 use blockpuzzle::cli::train_config;
 use blockpuzzle::train::{Algo, TrainConfig};
 use std::path::{Path, PathBuf};
@@ -58,8 +58,8 @@ fn the_study_recipes_are_the_reported_settings_and_flags_win() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/study");
     let c = recipe(&dir.join("ours-nol2-pre-rho9.toml"), &["--workers", "2"]).unwrap();
     assert_eq!((c.algo, c.env.as_str(), c.snapshot_every), (Algo::DDPG, "BlocksChoose-v0", 10));
-    let d = &c.ddpg;
-    assert!(d.td3 && d.n_step == 3 && d.precision == Precision::Bf16, "{d:?}");
+    let (d, s) = (&c.algos.ddpg, &c.shared);
+    assert!(d.td3 && s.n_step == 3 && s.precision == Precision::Bf16, "{d:?} {s:?}");
     assert_eq!(
         (c.level_replay, c.challenge_share, d.action_l2, d.preact_l2, d.noise_correlation),
         (0.2, 0.25, 0.0, 0.01, 0.9)
@@ -73,7 +73,7 @@ fn the_study_recipes_are_the_reported_settings_and_flags_win() {
     assert_eq!(paper, plain);
     // A flag on the command line wins over the file.
     let f32 = recipe(&dir.join("ours.toml"), &["--precision", "f32", "--n-step", "5"]).unwrap();
-    assert_eq!((f32.ddpg.precision, f32.ddpg.n_step), (Precision::F32, 5));
+    assert_eq!((f32.shared.precision, f32.shared.n_step), (Precision::F32, 5));
 }
 
 #[test]

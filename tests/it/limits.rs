@@ -584,8 +584,8 @@ fn options_a_run_would_ignore_are_refused_from_flags_recipes_and_bench() {
     std::fs::write(&recipe, "env = \"BlocksTouch-v0\"\nepochs = true\n").unwrap();
     let o = bp_in(dir.path(), &["train", "--config", recipe.to_str().unwrap()]);
     refused(&o, &["r.toml", "`epochs` takes a value"]);
-    // bench --ddpg goes by the same table.
-    let o = bp_in(dir.path(), &["bench", "--ddpg", "--set-pooling", "attention", "--steps", "10", "--updates", "1"]);
+    // bench --train (and its older name, --ddpg) goes by the same table.
+    let o = bp_in(dir.path(), &["bench", "--train", "--set-pooling", "attention", "--steps", "10", "--updates", "1"]);
     refused(&o, &["--set-pooling is only used with --net set"]);
     let o = bp_in(dir.path(), &["bench", "--ddpg", "--algo", "pggd", "--precision", "bf16", "--steps", "10"]);
     refused(&o, &["--precision is only used with --algo ddpg or --algo sac"]);

@@ -1,4 +1,4 @@
-//! The set network as a policy (issue 31): on real `objects` observations its
+//! The set network as a policy: on real `objects` observations its
 //! action does not depend on the order of the object rows nor on padded rows,
 //! it plays observations with more slots exactly as with fewer, and it
 //! round-trips through the zoo (format 3) acting identically.
@@ -6,6 +6,7 @@
 
 use blockpuzzle::agents::arch::{Arch, NetConfig, NetKind, Pooling};
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::agents::shared::SharedConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, ObsMode, ObsSpec};
 use blockpuzzle::saved::SavedPolicy;
@@ -23,8 +24,8 @@ fn set_agent(id: &str, pooling: Pooling, seed: u64) -> (Ddpg, Vec<Vec<f32>>) {
     env.set_level(env.max_level()).unwrap();
     let net = NetConfig { net: NetKind::Set, set_pooling: pooling, ..NetConfig::default() };
     let arch = Arch::of(&env.obs_spec(), &net).unwrap();
-    let config = DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() };
-    let mut agent = Ddpg::build(arch, 4, config, &mut ChaCha8Rng::seed_from_u64(seed));
+    let shared = SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() };
+    let mut agent = Ddpg::build(arch, 4, shared, DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(seed));
     let obs: Vec<Vec<f32>> = (0..20).map(|s| env.reset(Some(s)).unwrap().0.to_vec()).collect();
     agent.norm.update(&obs.concat());
     (agent, obs)
@@ -55,7 +56,7 @@ fn padded(spec: &ObsSpec, obs: &[f32], extra: usize) -> Vec<f32> {
 fn a_set_policy_ignores_row_order_and_padding_on_real_observations() {
     for pooling in [Pooling::MeanMax, Pooling::Attention, Pooling::Colour] {
         let (agent, observations) = set_agent("BlocksChooseN-v0", pooling, 1);
-        let policy = AnyPolicy::Ddpg(agent.policy());
+        let policy = AnyPolicy::Deterministic(agent.policy());
         let spec = objects_env("BlocksChooseN-v0").obs_spec();
         let bigger = policy.with_slots(spec.max_objects + 3);
         let mut moved = 0;
@@ -88,7 +89,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             epoch: 3,
             env_steps: Some(1000),
             finals_success: 0.0,
-            policy: AnyPolicy::Ddpg(agent.policy()),
+            policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
         };
         let info = ExportInfo {

@@ -4,6 +4,7 @@
 
 use blockpuzzle::agents::arch::{NetConfig, NetKind, Pooling};
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::agents::shared::SharedConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::load::load_policy;
 use blockpuzzle::train::{
@@ -30,9 +31,9 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         snapshot_every: 1,
         level_replay: 0.0,
         challenge_share: 0.0,
-        ddpg: DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() },
+        shared: SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() },
         algo: Algo::DDPG,
-        pggd: Default::default(),
+        algos: Default::default(),
         aggrevated: Default::default(),
         hindsight_colours: 0,
         hindsight_strategy: Default::default(),
@@ -150,8 +151,8 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
     let saved: TrainConfig = serde_json::from_slice(&std::fs::read(same.join("config.json")).unwrap()).unwrap();
     assert_eq!(saved.branched_from.as_ref().map(|r| r.epoch), Some(2));
     assert_eq!(saved.options(), "5 batches per cycle, branched at epoch 2");
-    let label =
-        TrainConfig { batches: 60, ddpg: DdpgConfig { action_l2: 0.0, td3: true, ..config(1).ddpg }, ..config(1) };
+    let mut label = TrainConfig { batches: 60, ..config(1) };
+    label.algos.ddpg = DdpgConfig { action_l2: 0.0, td3: true, ..DdpgConfig::default() };
     assert_eq!(label.options(), "TD3, no action penalty, 60 batches per cycle");
 
     // Changed draws: recorded, and the branch goes its own way from epoch 2 on.
@@ -171,9 +172,10 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
 
     // The action penalties: the branch's agent uses its own from the first update,
     // and its checkpoints carry it (a branch resumed is the branch trained straight).
-    let free = |epochs| TrainConfig {
-        ddpg: DdpgConfig { action_l2: 0.0, preact_l2: 0.01, ..config(epochs).ddpg },
-        ..config(epochs)
+    let free = |epochs| {
+        let mut c = config(epochs);
+        c.algos.ddpg = DdpgConfig { action_l2: 0.0, preact_l2: 0.01, ..DdpgConfig::default() };
+        c
     };
     let (split, whole) = (root.path().join("free-split"), root.path().join("free-whole"));
     assert_eq!(branch(parent.path(), &split, &free(3)).unwrap().changed, ["--action-l2", "--preact-l2"]);
@@ -186,7 +188,7 @@ fn a_branch_continues_the_parent_exactly_and_leaves_it_alone() {
     assert_eq!(comparable(&d[..2]), comparable(&a[..2]));
 
     // Refused: a setting the checkpoint fixes, an existing directory, a directory without a run.
-    let other = TrainConfig { ddpg: DdpgConfig { gamma: 0.9, ..config(3).ddpg }, ..config(3) };
+    let other = TrainConfig { shared: SharedConfig { gamma: 0.9, ..config(3).shared }, ..config(3) };
     let err = branch(parent.path(), &root.path().join("gamma"), &other).unwrap_err().to_string();
     assert!(err.contains("--gamma") && err.contains("--challenge-share"), "{err}");
     assert!(!root.path().join("gamma").exists());
@@ -240,10 +242,10 @@ fn replay_log_appends_prunes_and_rebuilds_the_buffer_exactly() {
 /// This project's options: TD3, 3-step returns, the pre-tanh penalty, correlated noise, lower levels replayed.
 fn tiny_ours(env: &str, epochs: usize) -> TrainConfig {
     let mut c = tiny(env, epochs);
-    c.ddpg.td3 = true;
-    c.ddpg.n_step = 3;
-    c.ddpg.preact_l2 = 0.01;
-    c.ddpg.noise_correlation = 0.8;
+    c.algos.ddpg.td3 = true;
+    c.shared.n_step = 3;
+    c.algos.ddpg.preact_l2 = 0.01;
+    c.algos.ddpg.noise_correlation = 0.8;
     c.level_replay = 0.5;
     c.success_threshold = Some(0.0); // climb a level each epoch, so that lower levels exist
     c
@@ -285,15 +287,15 @@ fn bad_settings_are_refused_before_anything_is_written() {
     let run = dir.path().join("run");
     type Change = Box<dyn Fn(&mut TrainConfig)>;
     let bad: Vec<(&str, Change)> = vec![
-        ("--lr-actor", Box::new(|c| c.ddpg.lr_actor = f64::NAN)),
-        ("--lr-actor", Box::new(|c| c.ddpg.lr_actor = -1.0)),
-        ("--lr-critic", Box::new(|c| c.ddpg.lr_critic = f64::INFINITY)),
-        ("--polyak", Box::new(|c| c.ddpg.polyak = 1.5)),
-        ("--random-eps", Box::new(|c| c.ddpg.random_eps = f64::NAN)),
-        ("--n-step", Box::new(|c| c.ddpg.n_step = 0)),
-        ("--policy-delay", Box::new(|c| c.ddpg.policy_delay = 0)),
+        ("--lr-actor", Box::new(|c| c.shared.lr_actor = f64::NAN)),
+        ("--lr-actor", Box::new(|c| c.shared.lr_actor = -1.0)),
+        ("--lr-critic", Box::new(|c| c.shared.lr_critic = f64::INFINITY)),
+        ("--polyak", Box::new(|c| c.shared.polyak = 1.5)),
+        ("--random-eps", Box::new(|c| c.algos.ddpg.random_eps = f64::NAN)),
+        ("--n-step", Box::new(|c| c.shared.n_step = 0)),
+        ("--policy-delay", Box::new(|c| c.algos.ddpg.policy_delay = 0)),
         ("--level-replay", Box::new(|c| c.level_replay = 2.0)),
-        ("--pg-lr", Box::new(|c| c.pggd.lr = 0.0)),
+        ("--pg-lr", Box::new(|c| c.algos.pggd.lr = 0.0)),
         ("--t0", Box::new(|c| c.aggrevated.t0 = f64::NAN)),
         ("--challenge-share", Box::new(|c| c.challenge_share = 0.5)),
         ("--epochs", Box::new(|c| c.epochs = 0)),
@@ -347,14 +349,14 @@ fn resume_with_other_settings_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     train(&tiny("GripperTouch-v0", 1), dir.path(), false, &mut quiet).unwrap();
     let mut other = tiny("GripperTouch-v0", 2);
-    other.ddpg.gamma = 0.9;
+    other.shared.gamma = 0.9;
     other.seed = 8;
     other.batch_size = 64;
     let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("differ from") && err.contains("--gamma"), "{err}");
     assert!(err.contains("--seed") && err.contains("--batch-size") && !err.contains("--epochs"), "{err}");
     let mut other = tiny("GripperTouch-v0", 2);
-    other.ddpg.td3 = true;
+    other.algos.ddpg.td3 = true;
     let err = train(&other, dir.path(), true, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--td3"), "{err}");
     // --epochs and thread counts may change.
@@ -458,10 +460,8 @@ fn bad_expert_settings_are_clear_errors() {
     let sac = TrainConfig { algo: Algo::named("sac").unwrap(), ..ddpg };
     let err = train(&sac, dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("SAC trains without an expert"), "{err}");
-    let td3 = TrainConfig {
-        ddpg: DdpgConfig { td3: true, ..tiny("BlocksChoose-v0", 1).ddpg },
-        ..tiny_sac("BlocksChoose-v0", 1)
-    };
+    let mut td3 = tiny_sac("BlocksChoose-v0", 1);
+    td3.algos.ddpg.td3 = true;
     let err = train(&td3, dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--td3 is only used with --algo ddpg"), "{err}");
 }
@@ -469,7 +469,7 @@ fn bad_expert_settings_are_clear_errors() {
 fn tiny_sac(env: &str, epochs: usize) -> TrainConfig {
     TrainConfig {
         algo: Algo::named("sac").unwrap(),
-        ddpg: DdpgConfig { n_step: 2, ..tiny(env, epochs).ddpg },
+        shared: SharedConfig { n_step: 2, ..tiny(env, epochs).shared },
         ..tiny(env, epochs)
     }
 }
@@ -487,11 +487,11 @@ fn sac_resumes_exactly_and_saves_a_deterministic_policy() {
     assert_eq!(comparable(&a), comparable(&b));
     assert!(a.iter().all(|r| r.critic_loss > 0.0 && r.critic_loss.is_finite()), "{a:?}");
     let pa = load_policy(&straight.path().join("policy.json")).unwrap();
-    assert!(matches!(pa.policy, AnyPolicy::Ddpg(_)), "the mean action, as a deterministic actor");
+    assert!(matches!(pa.policy, AnyPolicy::Deterministic(_)), "the mean action, as a deterministic actor");
     assert!(pa.critic.is_some(), "Q1 saved beside it");
     assert_eq!(pa.policy, load_policy(&split.path().join("policy.json")).unwrap().policy);
     let loaded = checkpoint::load(&split.path().join("checkpoint.bin"), "GripperTouch-v0", 29, 4).unwrap();
-    assert_eq!(loaded.agent.algo().name(), "sac");
+    assert_eq!(loaded.agent.name(), "sac");
     assert_eq!(tiny_sac("GripperTouch-v0", 1).default_run_dir().display().to_string(), "runs/GripperTouch-v0-sac-s7");
     // A DDPG resume of a SAC run is refused, naming the flag that differs.
     let err = train(&tiny("GripperTouch-v0", 4), split.path(), true, &mut quiet).unwrap_err();
@@ -604,16 +604,17 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
 }
 
 /// A checkpoint written before algorithms declared their state (Adam step
-/// counts and TD3's seed as fixed header fields, no `counters`) loads to
-/// the same agent.
+/// counts and TD3's seed as fixed header fields, no `counters`) and before
+/// they had settings of their own (every shared setting in the `ddpg` group)
+/// loads to the same agent; a `config.json` of that time reads as it did.
 #[test]
 fn checkpoints_with_the_old_counter_fields_still_load() {
     let dir = tempfile::tempdir().unwrap();
-    let config =
-        TrainConfig { ddpg: DdpgConfig { td3: true, ..tiny("GripperTouch-v0", 1).ddpg }, ..tiny("GripperTouch-v0", 1) };
+    let mut config = tiny("GripperTouch-v0", 1);
+    config.algos.ddpg.td3 = true;
     train(&config, dir.path(), false, &mut quiet).unwrap();
     let path = dir.path().join("checkpoint.bin");
-    let now = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
+    let mut now = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let hlen = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
     let mut header: serde_json::Value = serde_json::from_slice(&bytes[16..16 + hlen]).unwrap();
@@ -623,23 +624,44 @@ fn checkpoints_with_the_old_counter_fields_still_load() {
     header["actor_adam_t"] = counters["actor_adam.t"].clone();
     header["critic_adam_t"] = counters["critic_adam.t"].clone();
     header["twin"] = serde_json::json!([counters["critic2_adam.t"], counters["critic2.noise_seed"]]);
+    old_settings(&mut header);
+    assert!(header["ddpg"]["td3"] == true && header["ddpg"]["hidden"] == 32, "{}", header["ddpg"]);
     let json = serde_json::to_vec(&header).unwrap();
     let mut old = bytes[..8].to_vec();
     old.extend_from_slice(&(json.len() as u64).to_le_bytes());
     old.extend_from_slice(&json);
     old.extend_from_slice(&bytes[16 + hlen..]);
     std::fs::write(&path, old).unwrap();
-    let then = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
+    let mut then = checkpoint::load(&path, "GripperTouch-v0", 29, 4).unwrap();
     assert_eq!(then.agent.state(), now.agent.state());
     assert_eq!(then.agent.norm(), now.agent.norm());
+
+    let run = blockpuzzle::train::RunDir { dir: dir.path().to_owned() };
+    let recorded = run.read_config().unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(run.config()).unwrap()).unwrap();
+    old_settings(&mut json);
+    std::fs::write(run.config(), serde_json::to_vec(&json).unwrap()).unwrap();
+    assert_eq!(run.read_config().unwrap(), recorded);
 }
 
-/// The set network over the `objects` observation (issue 31), with hindsight colours and TD3.
+/// The settings groups as files held them before the algorithms had settings
+/// of their own: the shared ones and DDPG's together in `ddpg`, no `shared`.
+fn old_settings(file: &mut serde_json::Value) {
+    let map = file.as_object_mut().unwrap();
+    let mut ddpg = map.remove("shared").unwrap();
+    for (k, v) in map["ddpg"].as_object().unwrap() {
+        ddpg[k] = v.clone();
+    }
+    map.insert("ddpg".into(), ddpg);
+    map.remove("sac");
+}
+
+/// The set network over the `objects` observation, with hindsight colours and TD3.
 fn tiny_set(env: &str, epochs: usize, pooling: Pooling) -> TrainConfig {
     let mut c = tiny(env, epochs);
     c.net = NetConfig { net: NetKind::Set, set_pooling: pooling, ..NetConfig::default() };
     c.hindsight_colours = 2;
-    c.ddpg.td3 = true;
+    c.algos.ddpg.td3 = true;
     c
 }
 
@@ -713,7 +735,7 @@ fn set_networks_refuse_what_they_cannot_do() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
     c.algo = Algo::PGGD;
-    c.ddpg.td3 = false;
+    c.algos.ddpg.td3 = false;
     c.aggrevated.expert = Some("zoo-name-that-does-not-matter".into());
     let err = train(&c, &dir.path().join("x"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--expert") && err.contains("--net mlp"), "{err}");
@@ -754,8 +776,8 @@ fn flat_critics_train_a_set_actor_resume_exactly_and_are_refused_where_they_mean
         let flat = |epochs| {
             let mut c = tiny_set("BlocksChoose-v0", epochs, Pooling::MeanMax);
             c.algo = Algo::named(algo).unwrap();
-            c.ddpg.td3 = algo == "ddpg";
-            c.ddpg.flat_critic = true;
+            c.algos.ddpg.td3 = algo == "ddpg";
+            c.shared.flat_critic = true;
             c
         };
         let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
@@ -771,17 +793,17 @@ fn flat_critics_train_a_set_actor_resume_exactly_and_are_refused_where_they_mean
         assert!(cfg.default_run_dir().to_string_lossy().contains("-set-flatcritic-s"));
         // Resuming with set critics is refused, naming the flag.
         let mut same = flat(3);
-        same.ddpg.flat_critic = false;
+        same.shared.flat_critic = false;
         let err = train(&same, split.path(), true, &mut quiet).unwrap_err().to_string();
         assert!(err.contains("--flat-critic"), "{algo}: {err}");
     }
     let dir = tempfile::tempdir().unwrap();
     let mut c = tiny("BlocksChoose-v0", 1);
-    c.ddpg.flat_critic = true;
+    c.shared.flat_critic = true;
     let err = train(&c, &dir.path().join("mlp"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--flat-critic") && err.contains("--net set"), "{err}");
     let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
-    (c.algo, c.ddpg.td3, c.ddpg.flat_critic) = (Algo::PGGD, false, true);
+    (c.algo, c.algos.ddpg.td3, c.shared.flat_critic) = (Algo::PGGD, false, true);
     let err = train(&c, &dir.path().join("pggd"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--flat-critic") && err.contains("PGGD"), "{err}");
     assert!(!dir.path().join("mlp").exists() && !dir.path().join("pggd").exists(), "nothing written");
@@ -793,7 +815,7 @@ fn sac_and_pggd_train_set_networks_too() {
         let dir = tempfile::tempdir().unwrap();
         let mut c = tiny_set("BlocksAvoid-v0", 1, Pooling::Colour);
         c.algo = Algo::named(algo).unwrap();
-        c.ddpg.td3 = false;
+        c.algos.ddpg.td3 = false;
         train(&c, dir.path(), false, &mut quiet).unwrap();
         let saved = load_policy(&dir.path().join("policy.json")).unwrap();
         let set = saved.policy.net().set.expect("a set network");
@@ -826,4 +848,51 @@ fn counts_train_recorded_refuse_to_change_on_resume_and_bad_ones_write_nothing()
     let err = train(&bad, &dir.path().join("x"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("holds 4 copies of grey") && err.contains("0-4"), "{err}");
     assert!(!dir.path().join("x").exists(), "nothing written");
+}
+
+/// The configurations of the runs recorded in results/ (written by earlier versions, the oldest
+/// before n-step returns and TD3) read as they were written: the shared settings from their `ddpg`
+/// group, each algorithm's own from its group or the defaults.
+#[test]
+fn the_recorded_runs_configurations_still_read() {
+    fn walk(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.to_string_lossy().ends_with("config.json") {
+                out.push(path);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("results"), &mut files);
+    let mut read = 0;
+    for path in files {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let file: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let c: TrainConfig = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let old = &file["ddpg"];
+        assert!(file.get("shared").is_none(), "{}: already the new layout", path.display());
+        let shared = &c.shared;
+        assert_eq!(
+            (shared.layers, shared.hidden),
+            (old["layers"].as_u64().unwrap() as usize, old["hidden"].as_u64().unwrap() as usize)
+        );
+        assert_eq!(
+            (shared.gamma, shared.lr_critic),
+            (old["gamma"].as_f64().unwrap(), old["lr_critic"].as_f64().unwrap())
+        );
+        assert_eq!(shared.n_step, old.get("n_step").map_or(1, |v| v.as_u64().unwrap() as usize));
+        assert_eq!(c.algos.ddpg.td3, old.get("td3").is_some_and(|v| v.as_bool().unwrap()));
+        assert_eq!(c.algos.ddpg.noise_eps, old["noise_eps"].as_f64().unwrap());
+        if let Some(p) = file.get("pggd") {
+            assert_eq!(c.algos.pggd.lr, p["lr"].as_f64().unwrap());
+        }
+        // Written again, it is the new layout and reads back the same.
+        let again: TrainConfig = serde_json::from_value(serde_json::to_value(&c).unwrap()).unwrap();
+        assert_eq!(again, c);
+        read += 1;
+    }
+    assert!(read >= 20, "{read} recorded configurations");
 }

@@ -6,6 +6,7 @@
 use blockpuzzle::agents::arch::Arch;
 use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::agents::pggd::{Pggd, PggdConfig};
+use blockpuzzle::agents::shared::SharedConfig;
 use blockpuzzle::agents::AnyPolicy;
 use blockpuzzle::env::registry;
 use blockpuzzle::load::load_policy;
@@ -30,7 +31,8 @@ fn random_obs(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
 fn ddpg_saved(seed: u64) -> SavedPolicy {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let d = obs_dim();
-    let mut a = Ddpg::new(d, 4, DdpgConfig { hidden: 32, layers: 2, ..DdpgConfig::default() }, &mut rng);
+    let shared = SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() };
+    let mut a = Ddpg::new(d, 4, shared, DdpgConfig::default(), &mut rng);
     let rows = random_obs(&mut rng, 50 * d);
     a.norm.update(&rows);
     SavedPolicy {
@@ -39,7 +41,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         epoch: 12,
         env_steps: Some(34_000),
         finals_success: 0.5,
-        policy: AnyPolicy::Ddpg(a.policy()),
+        policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
     }
 }

@@ -16,10 +16,11 @@
 //! The networks are untrained (seeded), which does not change the cost of a
 //! forward pass or an update.
 
-use crate::agents::algorithm::{Algo, Algorithm, Spec};
+use crate::agents::algorithm::{Algorithm, Spec};
 use crate::agents::arch::{Arch, NetConfig};
-use crate::agents::ddpg::{DdpgConfig, Precision};
+use crate::agents::registry::{Algo, AlgoConfigs};
 use crate::agents::replay::ReplayBuffer;
+use crate::agents::shared::{Precision, SharedConfig};
 use crate::env::registry;
 use crate::train::{play_all, stream_seed, Behaviour};
 use anyhow::{bail, Result};
@@ -30,7 +31,7 @@ use std::time::Instant;
 
 /// What to measure.
 #[derive(Debug, Clone)]
-pub struct DdpgBenchConfig {
+pub struct TrainBenchConfig {
     /// Environment id or task file (.toml).
     pub env: String,
     /// Workers stepping environments in parallel during collection.
@@ -57,7 +58,7 @@ pub struct DdpgBenchConfig {
 
 /// Measured rates.
 #[derive(Debug, Clone, Serialize)]
-pub struct DdpgBenchReport {
+pub struct TrainBenchReport {
     /// Always "blockpuzzle".
     pub r#impl: &'static str,
     /// The algorithm.
@@ -104,7 +105,7 @@ const WARMUP_UPDATES: usize = 20;
 ///
 /// # Errors
 /// Unknown environment id, zero counts, environment failures.
-pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
+pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
     use crate::limits::{BATCH_SIZE, BENCH_STEPS, BENCH_UPDATES, WORKERS};
     for (bound, v) in
         [(WORKERS, c.workers), (BENCH_STEPS, c.steps), (BENCH_UPDATES, c.updates), (BATCH_SIZE, c.batch_size)]
@@ -114,13 +115,14 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     if c.torch_threads == 0 {
         bail!("--torch-threads must be at least 1");
     }
-    let ddpg = DdpgConfig { precision: c.precision, flat_critic: c.flat_critic, ..DdpgConfig::default() };
+    let shared = SharedConfig { precision: c.precision, flat_critic: c.flat_critic, ..SharedConfig::default() };
+    let algos = AlgoConfigs::default();
     // The options table `train` goes by: a bench setting the timed run would not use is refused.
     crate::train::options::check(&crate::train::options::Options {
         algo: c.algo,
         net: &c.net,
-        ddpg: &ddpg,
-        pggd: &Default::default(),
+        shared: &shared,
+        algos: &algos,
         aggrevated: &Default::default(),
         hindsight_colours: 0,
         hindsight_strategy_given: false,
@@ -133,9 +135,9 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
     let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
     c.precision.check().map_err(anyhow::Error::msg)?;
-    let gamma = ddpg.gamma;
-    let spec = Spec { arch, act_dim, ddpg: &ddpg, pggd: &Default::default() };
-    let mut agent = c.algo.build(&spec, &mut ChaCha8Rng::seed_from_u64(c.seed)).map_err(anyhow::Error::msg)?;
+    let gamma = shared.gamma;
+    let spec = Spec { arch, act_dim, shared: &shared };
+    let mut agent = c.algo.build(&spec, &algos, &mut ChaCha8Rng::seed_from_u64(c.seed));
     let mut replay = ReplayBuffer::new(obs_dim, act_dim, 1_000_000);
 
     // Collect: one episode per worker per round, as in a training cycle.
@@ -179,7 +181,7 @@ pub fn run(c: &DdpgBenchConfig) -> Result<DdpgBenchReport> {
     }
     let train_seconds = t.elapsed().as_secs_f64();
 
-    Ok(DdpgBenchReport {
+    Ok(TrainBenchReport {
         r#impl: "blockpuzzle",
         algo: c.algo,
         net: match (c.net.describe(), c.flat_critic) {

@@ -1,0 +1,240 @@
+//! The commands that play and show episodes: `rollout` (a trajectory dump, optionally rendered)
+//! and `render` (a dump's episode, or a policy's), with the camera and movie flags they share.
+
+use crate::env::{registry, BlockEnv};
+use crate::outcome::{Outcome, Outcomes};
+use crate::policy::{Policy, RandomPolicy};
+use crate::rollout::{run_episode, DumpWriter};
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, clap::Args)]
+pub(super) struct RolloutArgs {
+    /// Environment id (see `blockpuzzle envs`) or task file (.toml).
+    #[arg(long)]
+    env: String,
+    /// Which policy acts: `random` (seeded by --seed), a baseline (`scripted`, `obs-hash`), or a
+    /// trained policy (file, run directory or zoo name).
+    #[arg(long, default_value = "scripted")]
+    policy: String,
+    /// Number of episodes.
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::ROLLOUT_EPISODES.parser::<usize>())]
+    episodes: usize,
+    /// Seed of the first episode (episode k uses seed + k).
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
+    seed: u64,
+    /// Curriculum level (default: the maximum, i.e. the evaluation distribution).
+    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = crate::limits::COUNT.parser::<usize>())]
+    level: Option<usize>,
+    /// Use the challenge distribution (the same as --distribution challenge).
+    #[arg(long, conflicts_with = "distribution")]
+    challenge: bool,
+    /// Use a named evaluation distribution of the task file ([distributions.NAME]).
+    #[arg(long)]
+    distribution: Option<String>,
+    /// Output file (JSON Lines); written atomically.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also render the first episode: FILE.gif, FILE.png with --filmstrip N, or a folder.
+    #[arg(long)]
+    render: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewArgs,
+    #[command(flatten)]
+    movie: MovieArgs,
+}
+
+/// Frame size and camera (the Fetch viewer's by default).
+#[derive(Debug, Clone, clap::Args)]
+pub(super) struct ViewArgs {
+    /// Frame width in pixels.
+    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
+    width: usize,
+    /// Frame height in pixels.
+    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
+    height: usize,
+    /// Camera distance from the point it looks at (m).
+    #[arg(long, default_value_t = 2.5)]
+    distance: f64,
+    /// Camera azimuth (degrees).
+    #[arg(long, default_value_t = 132.0)]
+    azimuth: f64,
+    /// Camera elevation (degrees, negative looks down).
+    #[arg(long, default_value_t = -14.0, allow_negative_numbers = true)]
+    elevation: f64,
+}
+
+/// What a rendered episode is written as (`rollout --render`, `render`).
+#[derive(Debug, Clone, clap::Args)]
+pub(super) struct MovieArgs {
+    /// Frames per second of a GIF.
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::FPS.parser::<u32>())]
+    fps: u32,
+    /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
+    #[arg(long, value_parser = crate::limits::FILMSTRIP.parser::<usize>())]
+    filmstrip: Option<usize>,
+}
+
+impl ViewArgs {
+    /// The camera, checked (a command checks it before any work).
+    pub(super) fn view(&self) -> Result<crate::render::View> {
+        let view = crate::render::View {
+            width: self.width,
+            height: self.height,
+            distance: self.distance,
+            azimuth: self.azimuth,
+            elevation: self.elevation,
+            ..Default::default()
+        };
+        view.check().map_err(anyhow::Error::msg)?;
+        Ok(view)
+    }
+}
+
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("source").required(true).args(["traj", "policy"])))]
+pub(super) struct RenderArgs {
+    /// Trajectory dump written by `rollout` (JSON Lines).
+    #[arg(long)]
+    traj: Option<PathBuf>,
+    /// Which episode of the dump (0-based).
+    #[arg(long, default_value_t = 0, requires = "traj", value_parser = crate::limits::COUNT.parser::<usize>())]
+    episode: usize,
+    /// Or play one episode of a trained policy (file, run directory or zoo name) and render it.
+    #[arg(long)]
+    policy: Option<PathBuf>,
+    /// With --policy: the task (default: the one the policy was trained on).
+    #[arg(long, requires = "policy")]
+    env: Option<String>,
+    /// With --policy: the episode's seed.
+    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy", value_parser = crate::limits::SEED.parser::<u64>())]
+    seed: u64,
+    /// With --policy: the challenge distribution.
+    #[arg(long, requires = "policy")]
+    challenge: bool,
+    /// Output: FILE.gif (animation), FILE.png with --filmstrip N, or a folder (one PNG per frame).
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    view: ViewArgs,
+    #[command(flatten)]
+    movie: MovieArgs,
+}
+
+/// `blockpuzzle rollout`.
+pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
+    // Check the --render output before spending time on the episodes.
+    let render_kind = a
+        .render
+        .as_deref()
+        .map(|out| crate::render::replay::Output::for_path(out, a.movie.filmstrip, a.movie.fps))
+        .transpose()?;
+    if a.render.is_some() {
+        a.view.view()?;
+    }
+    let mut env: BlockEnv = registry::make(&a.env)?;
+    if a.challenge {
+        env.set_challenge(true)?;
+    }
+    env.set_distribution(a.distribution.as_deref().or(a.challenge.then_some("challenge")))?;
+    let level = a.level.unwrap_or(env.max_level());
+    env.set_level(level)?;
+    crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
+    let mut writer = DumpWriter::create(&a.out)?;
+    let mut policy: Box<dyn Policy> = match (a.policy.as_str(), crate::evaluate::Baseline::named(&a.policy)) {
+        ("random", _) => Box::new(RandomPolicy::new(a.seed)),
+        (_, Some(baseline)) => baseline.policy(&env),
+        (path, None) => {
+            let saved = crate::load::load_policy(Path::new(path))?;
+            env.set_obs_mode(saved.policy.obs_mode());
+            Box::new(crate::evaluate::trained_policy(Path::new(path), saved, &env)?)
+        }
+    };
+    let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
+    for k in 0..a.episodes {
+        let seed = a.seed + k as u64;
+        let ep = run_episode(&mut env, policy.as_mut(), seed).with_context(|| format!("episode {k} (seed {seed})"))?;
+        outcomes.add(Outcome::of(&ep));
+        steps += ep.steps.len();
+        writer.write(&ep)?;
+    }
+    writer.finish()?;
+    if let (Some(out), Some(kind)) = (&a.render, &render_kind) {
+        // The dump is whole by now: a failed rendering keeps it and says so.
+        let (frames, fps) =
+            crate::render::replay::render_dump(&a.out, 0, &a.view.view()?, out, kind).with_context(|| {
+                format!(
+                    "the episodes are saved in {}, but --render failed; render them with \
+                     `blockpuzzle render --traj {}` once rendering works",
+                    a.out.display(),
+                    a.out.display()
+                )
+            })?;
+        println!("rendered episode 0: {frames} frames ({fps:.1} frames/s) -> {}", out.display());
+    }
+    let n = a.episodes as f64;
+    println!(
+        "{} {} policy, level {}{}: success {:.3} ({}/{}), mean length {:.1}; not successful: {}; wrote {}",
+        a.env,
+        a.policy,
+        level,
+        env.distribution_name().map_or(String::new(), |d| format!(" ({d})")),
+        outcomes.success as f64 / n,
+        outcomes.success,
+        a.episodes,
+        steps as f64 / n,
+        outcomes.summary(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+pub(super) fn render(a: RenderArgs) -> Result<()> {
+    let kind = crate::render::replay::Output::for_path(&a.out, a.movie.filmstrip, a.movie.fps)?;
+    let view = a.view.view()?;
+    let (frames, fps, what) = match (&a.traj, &a.policy) {
+        (Some(traj), _) => {
+            let (frames, fps) = crate::render::replay::render_dump(traj, a.episode, &view, &a.out, &kind)?;
+            (frames, fps, format!("episode {}", a.episode))
+        }
+        (None, Some(path)) => {
+            let saved = crate::load::load_policy(path)?;
+            let task = policy_task(a.env.as_deref(), &saved)?;
+            let mode = saved.policy.obs_mode();
+            let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode: mode, ..crate::env::EnvConfig::new(task) })?;
+            env.set_distribution(a.challenge.then_some("challenge"))?;
+            let level = env.max_level();
+            env.set_level(level)?;
+            let mut policy = crate::evaluate::trained_policy(path, saved, &env)?;
+            let ep = run_episode(&mut env, &mut policy, a.seed)?;
+            let (frames, seconds) = crate::render::replay::episode_frames(&ep, &view)?;
+            kind.write(&a.out, &frames)?;
+            let outcome = if ep.success {
+                "success"
+            } else if ep.failure {
+                "failure"
+            } else {
+                "neither"
+            };
+            (frames.len(), frames.len() as f64 / seconds.max(1e-9), format!("seed {} ({outcome})", a.seed))
+        }
+        (None, None) => bail!("give --traj DUMP or --policy POLICY"),
+    };
+    println!(
+        "rendered {frames} frames of {what} at {}x{} ({fps:.1} frames/s) -> {}",
+        a.view.width,
+        a.view.height,
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// The task to run a policy on: the one named, else the one it was trained
+/// on (its recorded copy if the file moved or changed).
+pub(super) fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) -> Result<crate::task::Task> {
+    Ok(match (env, &saved.task) {
+        (Some(env), _) => registry::task(env)?,
+        (None, Some(source)) => registry::recorded(source)?,
+        (None, None) => registry::task(&saved.env_id)?,
+    })
+}

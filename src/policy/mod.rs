@@ -1,0 +1,281 @@
+//! Policies that need no learning: uniform random actions, and scripted
+//! controllers that prove the tasks solvable: pushing blue onto green,
+//! reaching green with a blue gripper (over any red wall), toppling a tower
+//! with a red gripper, and picking blue up and putting it on green.
+//!
+//! Both read only the observation (plus, for the scripted one, which task it
+//! is playing), so they run on exactly what an agent sees.
+
+mod pick;
+mod push;
+mod reach;
+mod topple;
+
+use crate::env::{EnvConfig, ObsSpec, ACTION_DIM, ROBOT_OBS};
+use crate::rules::Colour;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Something that maps observations to actions.
+pub trait Policy {
+    /// Called at the start of each episode.
+    fn reset(&mut self) {}
+    /// The action for `obs`.
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM];
+}
+
+/// Uniform actions in [-1, 1]^4 from its own seeded generator.
+pub struct RandomPolicy {
+    rng: ChaCha8Rng,
+}
+
+impl RandomPolicy {
+    /// A random policy with a fixed seed.
+    pub fn new(seed: u64) -> Self {
+        Self { rng: ChaCha8Rng::seed_from_u64(seed) }
+    }
+}
+
+impl Policy for RandomPolicy {
+    fn act(&mut self, _obs: &[f32]) -> [f32; ACTION_DIM] {
+        std::array::from_fn(|_| self.rng.gen_range(-1.0..=1.0))
+    }
+}
+
+/// Pseudo-random actions that are a function of the observation alone: a
+/// hash of the observation's bits (FNV-1a over each value's `f32` bit
+/// pattern, then murmur3's finaliser once per action component) mapped to
+/// [-1, 1). Stateless, so a batch, a thread or another language (Python's
+/// `blockpuzzle.policies.obs_hash`, the same integer arithmetic in numpy)
+/// gives bit-identical actions: the reference policy for checking one
+/// evaluation harness against another.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ObsHashPolicy;
+
+impl ObsHashPolicy {
+    /// The action for `obs`.
+    pub fn action(obs: &[f32]) -> [f32; ACTION_DIM] {
+        let mut h: u32 = 0x811c_9dc5;
+        for v in obs {
+            h = (h ^ v.to_bits()).wrapping_mul(0x0100_0193);
+        }
+        std::array::from_fn(|k| {
+            let mut x = h ^ (k as u32 + 1).wrapping_mul(0x9e37_79b9);
+            x ^= x >> 16;
+            x = x.wrapping_mul(0x85eb_ca6b);
+            x ^= x >> 13;
+            x = x.wrapping_mul(0xc2b2_ae35);
+            x ^= x >> 16;
+            // 24 bits: exact in f32, as are the scaling and the shift.
+            (x >> 8) as f32 * (1.0 / 16_777_216.0) * 2.0 - 1.0
+        })
+    }
+}
+
+impl Policy for ObsHashPolicy {
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        Self::action(obs)
+    }
+}
+
+/// A block as seen in the observation.
+#[derive(Debug, Clone, Copy)]
+struct SeenBlock {
+    pos: [f64; 3],
+    colour: Colour,
+    /// Its slot in the observation.
+    slot: usize,
+}
+
+/// The blocks present in `obs` (laid out as `spec` says): position and
+/// colour. A slot is absent when the mask says so or, in the flat layout,
+/// when its row is zero (no colour).
+fn read_blocks(spec: &ObsSpec, obs: &[f32]) -> Vec<SeenBlock> {
+    let present = |k: usize| spec.mask(obs).map_or(true, |m| m.get(k).is_some_and(|&v| v > 0.5));
+    spec.objects(obs)
+        .enumerate()
+        .filter(|&(k, b)| present(k) && ObsSpec::colour(b).iter().any(|&v| v > 0.5))
+        .map(|(slot, b)| {
+            let hot = ObsSpec::colour(b);
+            let k = (0..4).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3);
+            SeenBlock { pos: [b[0] as f64, b[1] as f64, b[2] as f64], colour: Colour::ALL[k], slot }
+        })
+        .collect()
+}
+
+/// Grip-site height that clears the blocks (block top 0.45 m, fingers reach
+/// about 0.019 m below the grip site).
+const SAFE_Z: f64 = 0.50;
+/// Grip-site height for pushing: fingers just above the table.
+const PUSH_Z: f64 = 0.425;
+/// Distance behind the block's centre where a push starts.
+const STANDOFF: f64 = 0.065;
+/// Proportional gain from metres of error to action units.
+const GAIN: f64 = 1.0 / 0.05;
+
+/// Which scripted behaviour a task calls for, chosen from its colours and
+/// whether the gripper action is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Script {
+    /// Grey gripper, blocked fingers: push blue against green.
+    Push,
+    /// Blue gripper: move onto the green block, over any red block in the way.
+    Reach,
+    /// Red gripper: knock the tower under the blue block over without touching blue.
+    Topple,
+    /// Gripper action on: pick blue up and put it on green.
+    PickPlace,
+    /// Gripper action on, several blue blocks: put each on the green one, side by side.
+    Gather,
+}
+
+/// The scripted controller: for block tasks, get behind the blue block and
+/// push it towards the green one (or push the green one onto the blue one if
+/// that path is clearer of grey blocks); for a blue-gripper task, move the
+/// gripper onto the green block, above the top of any red block until over
+/// it; for a red-gripper tower, push the grey blocks out from under the blue
+/// one; with the gripper action, pick blue up and put it on green (each
+/// blue in turn, side by side, when there are several). With red blocks on
+/// the table, the push goes around them: through a waypoint chosen at the
+/// start of the episode so that blue's path stays clear of every red block.
+///
+/// Each behaviour is its own small type (push.rs, reach.rs, topple.rs,
+/// pick.rs) holding its episode's state; this one picks it and starts it
+/// afresh at every reset.
+#[derive(Debug, Clone)]
+pub struct ScriptedPolicy {
+    script: Script,
+    /// Where the observation holds what.
+    spec: ObsSpec,
+    /// Each slot's half extents (the task's; shuffles only swap alike objects).
+    sizes: Vec<[f64; 3]>,
+    /// The behaviour and its state in this episode.
+    running: Running,
+}
+
+/// A behaviour with its episode's state.
+#[derive(Debug, Clone)]
+enum Running {
+    Push(push::Push),
+    Reach(reach::Reach),
+    Topple(topple::Topple),
+    PickPlace(pick::PickPlace),
+    Gather(pick::Gather),
+}
+
+impl Running {
+    /// `script`'s behaviour at the start of an episode.
+    fn start(script: Script) -> Self {
+        match script {
+            Script::Push => Self::Push(Default::default()),
+            Script::Reach => Self::Reach(Default::default()),
+            Script::Topple => Self::Topple(Default::default()),
+            Script::PickPlace => Self::PickPlace(Default::default()),
+            Script::Gather => Self::Gather(Default::default()),
+        }
+    }
+
+    fn behaviour(&mut self) -> &mut dyn Behaviour {
+        match self {
+            Self::Push(b) => b,
+            Self::Reach(b) => b,
+            Self::Topple(b) => b,
+            Self::PickPlace(b) => b,
+            Self::Gather(b) => b,
+        }
+    }
+}
+
+/// What a behaviour reads at a step: the grip site, the fingers, the blocks
+/// present and each slot's size.
+struct Seen<'a> {
+    grip: [f64; 3],
+    fingers: [f64; 2],
+    blocks: &'a [SeenBlock],
+    sizes: &'a [[f64; 3]],
+}
+
+/// One scripted behaviour: its action at a step, from what the observation shows (and its own
+/// state in the episode).
+trait Behaviour {
+    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM];
+}
+
+impl ScriptedPolicy {
+    /// The controller for an environment configuration.
+    pub fn for_env(config: &EnvConfig) -> Self {
+        let blues = config.task.colours().iter().filter(|&&c| c == Colour::Blue).count();
+        let script = if config.task.spec.robot.gripper_action {
+            if blues > 1 {
+                Script::Gather
+            } else {
+                Script::PickPlace
+            }
+        } else {
+            match config.gripper() {
+                Colour::Blue => Script::Reach,
+                Colour::Red => Script::Topple,
+                _ => Script::Push,
+            }
+        };
+        let spec = config.obs_spec();
+        let sizes = config.task.objects().map(|o| o.half_extents).collect();
+        Self { script, spec, sizes, running: Running::start(script) }
+    }
+
+    /// The behaviour in use.
+    pub fn script(&self) -> Script {
+        self.script
+    }
+}
+
+fn toward(from: [f64; 3], to: [f64; 3]) -> [f32; ACTION_DIM] {
+    let mut a = [0.0f32; ACTION_DIM];
+    for k in 0..3 {
+        a[k] = ((to[k] - from[k]) * GAIN).clamp(-1.0, 1.0) as f32;
+    }
+    a
+}
+
+fn xy_dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Distance from `p` to the segment `a`–`b` in the plane.
+fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+    (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+}
+
+impl Policy for ScriptedPolicy {
+    fn reset(&mut self) {
+        self.running = Running::start(self.script);
+    }
+
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        if obs.len() < ROBOT_OBS {
+            return [0.0; ACTION_DIM]; // not a BlockPuzzle observation: stand still
+        }
+        let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
+        let fingers = [obs[3] as f64, obs[4] as f64];
+        let blocks = read_blocks(&self.spec, obs);
+        let seen = Seen { grip, fingers, blocks: &blocks, sizes: &self.sizes };
+        self.running.behaviour().act(&seen)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn obs_hash_actions_are_pinned_across_languages() {
+        // The same bits python/tests/test_evaluate.py pins for blockpuzzle.policies.obs_hash.
+        let bits = |obs: &[f32]| ObsHashPolicy::action(obs).map(f32::to_bits);
+        assert_eq!(bits(&[0.5, 1.0, -2.0]), [0x3e9cc9bc, 0xbd467480, 0x3eb28cc8, 0xbf50d8e4]);
+        assert_eq!(bits(&[0.0, 0.0, 0.0]), [0xbf2d9f90, 0x3f5afb30, 0x3f49a61c, 0x3ecbabcc]);
+        assert!(ObsHashPolicy::action(&[1.0; 30]).iter().all(|a| (-1.0..1.0).contains(a)));
+    }
+}
