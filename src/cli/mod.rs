@@ -56,7 +56,7 @@ enum Command {
     /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
     Render(RenderArgs),
     #[cfg(feature = "train")]
-    /// Train an agent with the task's curriculum: DDPG, PGGD, or PGGD with AggreVaTeD (--expert).
+    /// Train an agent with the task's curriculum (--algo: DDPG, PGGD, SAC; PGGD with --expert is AggreVaTeD).
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
