@@ -46,10 +46,10 @@ test-fast: setup
 # keeps the two builds apart).
 setup-mujoco3: setup
 	bash scripts/setup_mujoco3.sh
-M3 = --no-default-features --features mujoco3,render
+M3 = --profile release-test --no-default-features --features mujoco3,render --target-dir target/mujoco3
 # The environment core, its tests and the renderer's on MuJoCo 3.11 (the training stack is engine-agnostic),
-# built as `cargo test` builds the default engine's, in the same target folder: the dependencies whose
-# features agree are compiled once for both engines.
+# in release code without LTO (Cargo.toml's `release-test` profile; in the default target folder with the
+# test profile it took longer: its dependencies' features differ from the default build's anyway).
 # With them the alignment with gymnasium-robotics FetchPush-v4 on the same engine (tests/it/align_mujoco3.rs),
 # whose reference bench/align_fetchpush.sh records first (a venv with gymnasium-robotics and mujoco 3.11).
 test-mujoco3: setup-mujoco3
