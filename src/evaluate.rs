@@ -63,12 +63,9 @@ impl Baseline {
         Self::ALL.into_iter().find(|b| b.name() == name)
     }
 
-    /// Its policy in `env`.
+    /// Its policy in `env` (the one suites evaluate).
     pub fn policy(self, env: &BlockEnv) -> Box<dyn Policy> {
-        match self {
-            Baseline::Scripted => Box::new(ScriptedPolicy::for_env(env.config())),
-            Baseline::ObsHash => Box::new(ObsHashPolicy),
-        }
+        Box::new(Actor::baseline(self, env))
     }
 
     /// Its name in outputs: `scripted`, `obs-hash`.
@@ -121,9 +118,16 @@ impl Actor {
     fn fit(subject: Subject, env: &BlockEnv) -> Result<Actor> {
         Ok(match subject {
             Subject::Saved(path, saved) => Actor::Trained(trained_policy(path, saved.clone(), env)?),
-            Subject::Baseline(Baseline::Scripted) => Actor::Scripted(ScriptedPolicy::for_env(env.config())),
-            Subject::Baseline(Baseline::ObsHash) => Actor::ObsHash,
+            Subject::Baseline(b) => Actor::baseline(b, env),
         })
+    }
+
+    /// The baseline `b` made for `env`.
+    fn baseline(b: Baseline, env: &BlockEnv) -> Actor {
+        match b {
+            Baseline::Scripted => Actor::Scripted(ScriptedPolicy::for_env(env.config())),
+            Baseline::ObsHash => Actor::ObsHash,
+        }
     }
 
     fn grey_blind(&self) -> bool {
