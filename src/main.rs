@@ -5,6 +5,8 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // libtorch's OpenBLAS kernels (only the training build loads them).
+    #[cfg(feature = "train")]
     blockpuzzle::blas::ensure_fast_kernels();
     std::process::exit(blockpuzzle::cli::run(std::env::args_os().collect()));
 }

@@ -2,6 +2,7 @@
 //! paper's results table).
 
 use super::episodes::policy_task;
+#[cfg(feature = "train")]
 use crate::env::registry;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};

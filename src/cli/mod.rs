@@ -3,6 +3,7 @@
 
 use anyhow::{bail, Result};
 use clap::{Parser, Subcommand};
+#[cfg(feature = "train")]
 use std::path::PathBuf;
 
 use crate::env::registry;
@@ -32,6 +33,22 @@ use runs::{PlotArgs, TrainArgs};
 use task::TaskCommand;
 use zoo::ZooCommand;
 
+/// The commands only the training build has (the `train` feature: libtorch, plots, benchmarks). A
+/// build without it (the Python package's command, or `--no-default-features --features cli`) says
+/// so when given one, rather than clap's "unrecognized subcommand".
+pub const TRAINING_COMMANDS: &[&str] = &["train", "bench", "table", "plot", "report", "align", "zoo export"];
+
+/// The entry of [`TRAINING_COMMANDS`] the command line `args` (from the program name on) runs, if
+/// any: its first words after the program that are not options.
+pub fn training_command(args: &[std::ffi::OsString]) -> Option<&'static str> {
+    let words: Vec<&str> =
+        args.iter().skip(1).filter_map(|a| a.to_str()).filter(|a| !a.starts_with('-')).take(2).collect();
+    TRAINING_COMMANDS.iter().copied().find(|c| {
+        let c: Vec<&str> = c.split(' ').collect();
+        words.len() >= c.len() && words[..c.len()] == c[..]
+    })
+}
+
 /// BlockPuzzle: coloured-block puzzles for the Fetch robot in MuJoCo.
 #[derive(Debug, Parser)]
 #[command(name = "blockpuzzle", version, about)]
@@ -45,8 +62,8 @@ pub struct Cli {
 enum Command {
     /// List the registered environment ids.
     Envs,
-    /// The engine and numeric libraries this process runs with (MuJoCo
-    /// version, OpenBLAS kernels, OpenMP wait policy, cores, bf16 support).
+    /// The engine this process runs with (MuJoCo version, cores) and, in the training build,
+    /// libtorch's numeric libraries (OpenBLAS kernels, OpenMP wait policy, bf16 support).
     Info,
     /// Roll out a policy and write a trajectory dump (JSON Lines, one episode per line).
     Rollout(RolloutArgs),
@@ -157,6 +174,14 @@ pub fn error_text(e: &anyhow::Error) -> String {
 /// # Errors
 /// An unreadable recipe, or clap's error (help and version included).
 fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
+    #[cfg(not(feature = "train"))]
+    if let Some(name) = training_command(&args) {
+        bail!(
+            "`{name}` is a command of the training build, which this one is not (it was built without \
+             the `train` feature, as the Python package's command is): run it with the Rust command \
+             line built with its default features (`cargo install --path .` in a checkout, or `make build`)"
+        );
+    }
     let cmd = command();
     #[cfg(feature = "train")]
     let args = {

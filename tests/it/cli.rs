@@ -2,10 +2,10 @@
 #![cfg(feature = "train")]
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn bp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().expect("run blockpuzzle")
+    crate::common::blockpuzzle(args).output().expect("run blockpuzzle")
 }
 
 fn text(o: &Output) -> String {
@@ -124,8 +124,7 @@ fn unwritable_out_leaves_nothing_behind() {
 
 /// `rollout --env BlocksTouch-v0 --out DIR/x.jsonl` with `BLOCKPUZZLE_MODELS_DIR=DIR`.
 fn rollout_with_models_dir(dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["rollout", "--env", "BlocksTouch-v0", "--out"])
+    crate::common::blockpuzzle(&["rollout", "--env", "BlocksTouch-v0", "--out"])
         .arg(dir.join("x.jsonl"))
         .env("BLOCKPUZZLE_MODELS_DIR", dir)
         .output()
@@ -323,8 +322,7 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
         zoo.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["table", "--zoo", "--episodes", "3", "--allow-missing"])
+    let o = crate::common::blockpuzzle(&["table", "--zoo", "--episodes", "3", "--allow-missing"])
         .env("BLOCKPUZZLE_ZOO", &zoo)
         .output()
         .unwrap();
@@ -421,7 +419,8 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     // blockpuzzle does not set OMP_WAIT_POLICY (PASSIVE halves the update rate on an idle
     // machine, results/ddpg.md); a value the user set reaches the process unchanged.
     let info = |value: Option<&str>| {
-        let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
+        // What only the training build prints: its own binary.
+        let mut c = std::process::Command::new(crate::common::FULL_CLI);
         c.arg("info");
         match value {
             Some(v) => c.env("OMP_WAIT_POLICY", v),
@@ -496,4 +495,39 @@ fn train_branch_from_names_refused_changes_and_continues_the_parent() {
     assert!(text(&o).contains("branched from") && text(&o).contains("at epoch 1"), "{}", text(&o));
     let rows = std::fs::read_to_string(child.join("progress.csv")).unwrap();
     assert_eq!(rows.lines().count(), 3, "the parent's epoch and the branch's own: {rows}");
+}
+
+#[test]
+fn training_commands_are_named_once_and_the_build_without_them_says_where_they_are() {
+    use blockpuzzle::cli::{check_args, training_command, TRAINING_COMMANDS};
+    let line = |words: &[&str]| -> Vec<std::ffi::OsString> {
+        std::iter::once("blockpuzzle").chain(words.iter().copied()).map(Into::into).collect()
+    };
+    assert_eq!(training_command(&line(&["zoo", "export", "--from", "x"])), Some("zoo export"));
+    assert_eq!(training_command(&line(&["train", "--env", "BlocksTouch-v0"])), Some("train"));
+    assert_eq!(training_command(&line(&["zoo", "list"])), None);
+    assert_eq!(training_command(&line(&["--version"])), None);
+    // Every entry is a command of this (the training) build: its help prints.
+    for c in TRAINING_COMMANDS {
+        let mut words: Vec<&str> = c.split(' ').collect();
+        words.push("--help");
+        let e = check_args(line(&words)).expect_err("--help ends the parse");
+        let kind = e.downcast_ref::<clap::Error>().map(clap::Error::kind);
+        assert_eq!(kind, Some(clap::error::ErrorKind::DisplayHelp), "{c}: {e}");
+    }
+    let Some(core) = std::env::var_os(crate::common::CORE_CLI_VAR) else {
+        crate::common::skipped("the build without `train` (BLOCKPUZZLE_CORE_CLI unset; `make test` sets it)");
+        return;
+    };
+    for c in TRAINING_COMMANDS {
+        let o = std::process::Command::new(&core).args(c.split(' ')).arg("--help").output().unwrap();
+        assert!(!o.status.success(), "{c}");
+        let t = text(&o);
+        assert!(
+            t.contains(&format!("`{c}` is a command of the training build")) && t.contains("default features"),
+            "{c}: {t}"
+        );
+    }
+    let o = std::process::Command::new(&core).arg("--help").output().unwrap();
+    assert!(o.status.success() && text(&o).contains("rollout") && !text(&o).contains("\n  train "), "{}", text(&o));
 }

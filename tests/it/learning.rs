@@ -7,10 +7,8 @@
 //! gets its fast kernels (see src/blas.rs).
 #![cfg(feature = "train")]
 
-use std::process::Command;
-
 fn bp(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().expect("run blockpuzzle");
+    let out = crate::common::blockpuzzle(args).output().expect("run blockpuzzle");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "blockpuzzle {args:?} failed: {text}");
     text

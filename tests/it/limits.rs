@@ -10,7 +10,7 @@ const BP: &str = env!("CARGO_BIN_EXE_blockpuzzle");
 
 /// Runs blockpuzzle in `cwd`.
 fn bp_in(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(BP).current_dir(cwd).args(args).output().expect("run blockpuzzle")
+    crate::common::blockpuzzle(args).current_dir(cwd).output().expect("run blockpuzzle")
 }
 
 fn text(o: &Output) -> String {
@@ -213,8 +213,7 @@ fn zoo_commands_fail_loudly_and_never_overwrite_silently() {
     let cwd = dir.path();
     let o = bp_in(cwd, &["zoo", "list", "--zoo", "/missing-zoo"]);
     refused(&o, &["the zoo folder /missing-zoo does not exist"]);
-    let o = Command::new(BP)
-        .args(["eval", "--checkpoint", "Nope"])
+    let o = crate::common::blockpuzzle(&["eval", "--checkpoint", "Nope"])
         .env("BLOCKPUZZLE_ZOO", "/missing-zoo")
         .output()
         .unwrap();
@@ -460,7 +459,7 @@ fn with_target(args: &[String], target: &Path) -> Vec<String> {
 }
 
 fn run_args(cwd: &Path, args: &[String]) -> Output {
-    Command::new(BP).current_dir(cwd).args(args).output().expect("run blockpuzzle")
+    crate::common::blockpuzzle(args).current_dir(cwd).output().expect("run blockpuzzle")
 }
 
 #[test]

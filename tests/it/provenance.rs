@@ -9,10 +9,10 @@ use blockpuzzle::evaluate::{evaluate_suite, Baseline, Subject, SuiteResult};
 use blockpuzzle::provenance::Harness;
 use blockpuzzle::results::{self, ResultFile};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn bp(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap()
+    crate::common::blockpuzzle(args).output().unwrap()
 }
 
 fn text(o: &Output) -> String {

@@ -56,11 +56,9 @@ mod cli {
     use super::*;
     use blockpuzzle::rules::Colour;
     use image::AnimationDecoder;
-    use std::process::Command;
 
     fn bp(args: &[&str], no_egl: bool) -> std::process::Output {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"));
-        cmd.args(args);
+        let mut cmd = crate::common::blockpuzzle(args);
         if no_egl {
             cmd.env(blockpuzzle::render::egl::DISABLE_VAR, "1");
         } else {

@@ -97,11 +97,18 @@ fn eval_suite_writes_json_and_markdown_and_skips_rows_that_do_not_fit() {
     let file = dir.path().join("tiny.toml");
     std::fs::write(&file, TINY).unwrap();
     let out = dir.path().join("r.json");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["eval", "--suite", file.to_str().unwrap(), "--checkpoint", "BlocksChoose-v0-ddpg", "--threads", "2"])
-        .args(["--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let o = crate::common::blockpuzzle(&[
+        "eval",
+        "--suite",
+        file.to_str().unwrap(),
+        "--checkpoint",
+        "BlocksChoose-v0-ddpg",
+        "--threads",
+        "2",
+    ])
+    .args(["--out", out.to_str().unwrap()])
+    .output()
+    .unwrap();
     let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(o.status.success(), "{text}");
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
@@ -118,11 +125,17 @@ fn eval_suite_writes_json_and_markdown_and_skips_rows_that_do_not_fit() {
     assert_eq!(r["score"].as_f64().unwrap(), challenge);
     // The same numbers as `eval` of the row alone.
     let single = dir.path().join("single.json");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["eval", "--checkpoint", "BlocksChoose-v0-ddpg", "--env", "BlocksChoose-v0", "--challenge"])
-        .args(["--episodes", "6", "--seed", "1000000", "--out", single.to_str().unwrap()])
-        .output()
-        .unwrap();
+    let o = crate::common::blockpuzzle(&[
+        "eval",
+        "--checkpoint",
+        "BlocksChoose-v0-ddpg",
+        "--env",
+        "BlocksChoose-v0",
+        "--challenge",
+    ])
+    .args(["--episodes", "6", "--seed", "1000000", "--out", single.to_str().unwrap()])
+    .output()
+    .unwrap();
     assert!(o.status.success());
     let single: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&single).unwrap()).unwrap();
     assert_eq!(single["success_rate"].as_f64().unwrap(), challenge);
@@ -153,13 +166,7 @@ seed = 1000000
 episodes = 6
 "#;
     std::fs::write(&file, text).unwrap();
-    let run = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-            .args(args)
-            .current_dir(dir.path())
-            .output()
-            .unwrap()
-    };
+    let run = |args: &[&str]| crate::common::blockpuzzle(args).current_dir(dir.path()).output().unwrap();
     let o = run(&["eval", "--suite", file.to_str().unwrap(), "--baseline", "scripted", "--threads", "2"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = dir.path().join("eval-scripted-suite-counts.json");

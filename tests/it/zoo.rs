@@ -15,7 +15,6 @@ use blockpuzzle::zoo::{self, ExportInfo};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
-use std::process::Command;
 
 const ENV: &str = "BlocksTouch-v0";
 
@@ -199,10 +198,17 @@ fn absurd_or_non_finite_weights_are_refused() {
 fn an_entry_on_another_task_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let entry = zoo::export(dir.path(), &ddpg_saved(1), &info("touch")).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_blockpuzzle"))
-        .args(["eval", "--checkpoint", entry.to_str().unwrap(), "--env", "GripperTouch-v0", "--episodes", "2"])
-        .output()
-        .unwrap();
+    let out = crate::common::blockpuzzle(&[
+        "eval",
+        "--checkpoint",
+        entry.to_str().unwrap(),
+        "--env",
+        "GripperTouch-v0",
+        "--episodes",
+        "2",
+    ])
+    .output()
+    .unwrap();
     let text = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(text.contains("expects 48-dimensional") && text.contains("GripperTouch-v0"), "{text}");
@@ -232,7 +238,7 @@ fn shipped_entries_load_and_act_as_their_source() {
 
 #[test]
 fn cli_takes_zoo_names() {
-    let bp = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap();
+    let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("eval.json");
     let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "4", "--out", out.to_str().unwrap()]);
@@ -286,7 +292,7 @@ fn cli_takes_zoo_names() {
 
 #[test]
 fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
-    let bp = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_blockpuzzle")).args(args).output().unwrap();
+    let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let (z, eval) = (dir.path().join("zoo"), dir.path().join("eval.json"));
     let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "3", "--out", eval.to_str().unwrap()]);
