@@ -12,7 +12,7 @@ resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
 # Set-up, build, test, the main job, a demo and the benchmark. Every other experiment is a recipe
 # file in experiments/ run with `blockpuzzle train --config FILE` (docs/training.md lists them).
-.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel test-fast core-cli demo test bench train build leaderboard
+.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel test-fast demo test bench train build leaderboard
 
 setup:
 	bash scripts/setup.sh
@@ -27,18 +27,8 @@ demo: build
 	$(CARGO) run --release --quiet -- rollout --env BlocksTouch-v0 --policy scripted \
 		--episodes 50 --seed 0 --out $(OUT)/BlocksTouch-v0-scripted.jsonl
 
-# The command line without the training stack (the Python package's, here on 2.2.2): the tests run
-# the core's commands on it (tests/it/common.rs), which start without loading libtorch (0.15 s of CPU
-# against 0.9 s each, for the few hundred commands the tests run). Built in the test profile, whose
-# dependencies the test build shares, and copied aside before that build replaces target/debug/blockpuzzle.
-CORE_CLI = $(CURDIR)/target/core-cli/blockpuzzle
-core-cli: setup
-	$(CARGO) build --profile test --no-default-features --features cli --bin blockpuzzle
-	mkdir -p $(dir $(CORE_CLI))
-	cp target/debug/blockpuzzle $(CORE_CLI).part && mv $(CORE_CLI).part $(CORE_CLI)
-
-test: setup core-cli
-	BLOCKPUZZLE_CORE_CLI=$(CORE_CLI) $(CARGO) test --all
+test: setup
+	$(CARGO) test --all
 	bash scripts/zoo_python_check.sh
 	$(MAKE) test-mujoco3
 	$(MAKE) test-wheel
@@ -47,9 +37,9 @@ test: setup core-cli
 # (environments, tasks, rules, suites, the CLI, provenance), without the training runs, MPI and the
 # bad-input rounds. `make test` (what CI runs) is the full suite.
 FAST_SKIP = --skip learning:: --skip train:: --skip mpi:: --skip limits:: --skip aggrevated:: --skip set_network::
-test-fast: setup core-cli
+test-fast: setup
 	$(CARGO) test --lib
-	BLOCKPUZZLE_CORE_CLI=$(CORE_CLI) $(CARGO) test --test it -- $(FAST_SKIP)
+	$(CARGO) test --test it -- $(FAST_SKIP)
 
 # The opt-in second engine, MuJoCo 3.11.0 from its PyPI wheel (engines/mujoco-3.11.0, sha256-pinned):
 # `cargo build --release --features mujoco3 --target-dir target/mujoco3` (its own target folder

@@ -48,7 +48,8 @@ impl Policy for Trained {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Baseline {
-    /// The scripted controller of each task (`src/policy.rs`).
+    /// The solver: the scripted controllers, choosing what to do from the `entities`
+    /// observation alone ([`ScriptedPolicy::solver`]).
     Scripted,
     /// Pseudo-random actions from a hash of the observation ([`ObsHashPolicy`]), the same in Python.
     ObsHash,
@@ -96,11 +97,13 @@ impl Subject<'_> {
         }
     }
 
-    /// The observation it reads: a saved policy's, or the flat one (baselines).
+    /// The observation it reads: a saved policy's; the solver's `entities` one (the scripted
+    /// baseline), the flat one (`obs-hash`).
     pub fn obs_mode(&self) -> ObsMode {
         match self {
             Subject::Saved(_, saved) => saved.policy.obs_mode(),
-            Subject::Baseline(_) => ObsMode::Flat,
+            Subject::Baseline(Baseline::Scripted) => ObsMode::Entities,
+            Subject::Baseline(Baseline::ObsHash) => ObsMode::Flat,
         }
     }
 }
@@ -125,7 +128,7 @@ impl Actor {
     /// The baseline `b` made for `env`.
     fn baseline(b: Baseline, env: &BlockEnv) -> Actor {
         match b {
-            Baseline::Scripted => Actor::Scripted(ScriptedPolicy::for_env(env.config())),
+            Baseline::Scripted => Actor::Scripted(ScriptedPolicy::solver(env.obs_spec().max_objects)),
             Baseline::ObsHash => Actor::ObsHash,
         }
     }
@@ -148,6 +151,13 @@ impl Policy for Actor {
             Actor::Trained(p) => p.act(obs),
             Actor::Scripted(p) => p.act(obs),
             Actor::ObsHash => ObsHashPolicy::action(obs),
+        }
+    }
+    fn reads(&self) -> Option<ObsMode> {
+        match self {
+            Actor::Trained(p) => p.reads(),
+            Actor::Scripted(p) => p.reads(),
+            Actor::ObsHash => None,
         }
     }
 }
@@ -174,7 +184,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
                 spec.object_dim()
             );
         }
-        return Ok(Trained { policy: saved.policy.with_slots(spec.max_objects), grey_blind: false });
+        return Ok(Trained { policy: saved.policy.with_slots(spec.rows()), grey_blind: false });
     }
     let dim = env.observation_space().dim();
     let wanted = saved.policy.obs_dim();

@@ -16,6 +16,7 @@ pub mod check;
 pub mod diff;
 pub mod env;
 pub mod evaluate;
+pub mod generate;
 pub mod hindsight;
 pub mod io;
 pub mod limits;

@@ -104,6 +104,9 @@ pub const ROLLOUT_EPISODES: Bound =
 /// Resets per level and distribution of `task check`.
 pub const CHECK_SAMPLES: Bound =
     bound("--samples", 1, 100_000, "per level and distribution; 100,000 estimate a redraw rate to ±0.3%");
+/// Tasks of one `task generate`.
+pub const GENERATE_COUNT: Bound =
+    bound("--count", 1, 100_000, "each task is checked by the solver's episodes: 100,000 take hours");
 /// Steps per thread of `bench` and `align --bench-steps`.
 pub const BENCH_STEPS: Bound = bound("--steps", 1, 10_000_000, "about an hour of stepping per thread");
 /// Gradient updates of `bench --ddpg`.

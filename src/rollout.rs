@@ -154,8 +154,13 @@ pub fn play_episode(
     let (mut obs, _) = env.reset(Some(seed))?;
     on_event(Event::Reset { env, obs: &obs });
     policy.reset();
+    // A policy that reads another layout than the environment presents sees that view of each state.
+    let view = policy.reads().filter(|&m| m != env.obs_spec().mode);
     loop {
-        let action = policy.act(&obs);
+        let action = match view {
+            Some(mode) => policy.act(&env.observation_as(mode)),
+            None => policy.act(&obs),
+        };
         let step = env.step(&action)?;
         on_event(Event::Step { env, obs: &obs, action: &action, step: &step });
         if step.terminated || step.truncated {
@@ -235,8 +240,11 @@ pub fn episode_digest(
     let mut env = crate::env::registry::make(id)?;
     env.set_level(level)?;
     env.set_challenge(challenge)?;
-    let mut policy: Box<dyn Policy> =
-        if scripted { Box::new(ScriptedPolicy::for_env(env.config())) } else { Box::new(RandomPolicy::new(seed)) };
+    let mut policy: Box<dyn Policy> = if scripted {
+        Box::new(ScriptedPolicy::solver(env.obs_spec().max_objects))
+    } else {
+        Box::new(RandomPolicy::new(seed))
+    };
     let mut h = Sha256::new();
     let f64s = |h: &mut Sha256, v: &[f64]| v.iter().for_each(|x| h.update(x.to_bits().to_le_bytes()));
     for k in 0..3 {

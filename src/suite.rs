@@ -54,11 +54,18 @@ struct SuiteSpec {
     splits: BTreeMap<String, Vec<RowSpec>>,
 }
 
-/// One row as written.
+/// One row as written: a task, or a family and a range of generator seeds (one row per task).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RowSpec {
-    task: String,
+    #[serde(default)]
+    task: Option<String>,
+    /// A shipped family's name or a family file (relative to the suite's folder).
+    #[serde(default)]
+    family: Option<String>,
+    /// The generator seeds `[first, end)` whose tasks the row stands for.
+    #[serde(default)]
+    generator_seeds: Option<[u64; 2]>,
     distribution: Option<String>,
     level: Option<usize>,
     seed: u64,
@@ -95,8 +102,11 @@ pub struct Split {
 pub struct Row {
     /// The task.
     pub task: Task,
-    /// The id or resolved file path the task was made from (what `registry::task` takes).
+    /// The id or resolved file path the task was made from (what `registry::task` takes), or for a
+    /// generated task `FAMILY-SEED-v0 (family F, seed S)` (its text is `task.source.toml`).
     pub source: String,
+    /// Whether the task was generated from a family (no file holds it).
+    pub generated: bool,
     /// A named distribution of the task (None: the curriculum's, at `level`).
     pub distribution: Option<String>,
     /// Curriculum level (None: the maximum).
@@ -179,37 +189,92 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
     let mut names: Vec<&String> = spec.splits.keys().collect();
     names.sort_by_key(|n| (n.as_str() != "train", n.as_str() != "test", n.as_str().to_owned()));
     let mut splits = Vec::new();
+    let mut families = Vec::new();
     for name in names {
         let rows = &spec.splits[name];
         if rows.is_empty() {
             return Err(invalid(format!("split {name} is empty")));
         }
-        let rows = rows
-            .iter()
-            .enumerate()
-            .map(|(i, r)| row(r, dir).map_err(|m| invalid(format!("splits.{name}[{i}] ({}): {m}", r.task))))
-            .collect::<Result<Vec<_>, _>>()?;
-        splits.push(Split { name: name.clone(), rows });
+        let mut out = Vec::new();
+        for (i, r) in rows.iter().enumerate() {
+            let what = r.task.as_deref().or(r.family.as_deref()).unwrap_or("?");
+            let at = |m: String| invalid(format!("splits.{name}[{i}] ({what}): {m}"));
+            match (&r.task, &r.family, r.generator_seeds) {
+                (Some(_), None, None) => out.push(row(r, dir).map_err(at)?),
+                (None, Some(f), Some(seeds)) => {
+                    let family = crate::task::family::Family::load(f, dir).map_err(|e| at(e.to_string()))?;
+                    families.push(family.hash.clone());
+                    out.extend(generated_rows(r, &family, seeds).map_err(at)?);
+                }
+                _ => {
+                    return Err(at(
+                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]`, not both".into(),
+                    ))
+                }
+            }
+        }
+        splits.push(Split { name: name.clone(), rows: out });
     }
     check_disjoint(&splits).map_err(invalid)?;
     check_no_repeats(&splits).map_err(invalid)?;
-    Ok(Suite {
-        name: spec.name,
-        summary: spec.summary,
-        sha256: hex(&Sha256::digest(text.as_bytes())),
-        splits,
-        episodes_per_row: None,
-    })
+    // The suite's identity covers the families its rows draw from.
+    let mut h = Sha256::new();
+    h.update(text.as_bytes());
+    for f in &families {
+        h.update(f.as_bytes());
+    }
+    Ok(Suite { name: spec.name, summary: spec.summary, sha256: hex(&h.finalize()), splits, episodes_per_row: None })
+}
+
+/// Most generator seeds one row may name (each is a task checked by the solver when the suite loads).
+pub const MAX_GENERATED_ROWS: u64 = 200;
+
+/// The rows of a family's generator seeds: one per seed, each its generated task (a seed without
+/// one is an error naming it).
+fn generated_rows(
+    r: &RowSpec,
+    family: &crate::task::family::Family,
+    [first, end]: [u64; 2],
+) -> Result<Vec<Row>, String> {
+    if first >= end || end - first > MAX_GENERATED_ROWS {
+        return Err(format!(
+            "generator_seeds = [{first}, {end}] must be a range [first, end) of 1 to {MAX_GENERATED_ROWS} seeds"
+        ));
+    }
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let results = crate::generate::generate(family, first, (end - first) as usize, threads)?;
+    results
+        .into_iter()
+        .map(|g| {
+            let Some(t) = g.task else {
+                return Err(format!(
+                    "generator seed {} of family {} gives no task within {} candidates; leave it out of the range",
+                    g.seed, family.spec.family, family.spec.check.max_candidates
+                ));
+            };
+            let task = Task::from_toml(&t.toml, None).map_err(|e| e.to_string())?;
+            let source = format!("{} (family {}, seed {})", t.id, family.spec.family, g.seed);
+            let mut row = row_of(task, source, r)?;
+            row.generated = true;
+            Ok(row)
+        })
+        .collect()
 }
 
 /// One row compiled and checked.
 fn row(r: &RowSpec, dir: Option<&Path>) -> Result<Row, String> {
-    let id = if registry::is_path(&r.task) {
-        dir.map_or_else(|| PathBuf::from(&r.task), |d| d.join(&r.task)).display().to_string()
+    let name = r.task.as_deref().unwrap_or_default();
+    let id = if registry::is_path(name) {
+        dir.map_or_else(|| PathBuf::from(name), |d| d.join(name)).display().to_string()
     } else {
-        r.task.clone()
+        name.to_owned()
     };
     let task = registry::task(&id).map_err(|e: EnvError| e.to_string())?;
+    row_of(task, id, r)
+}
+
+/// The row of `task` (made from `source`) with `r`'s distribution, level, seed and episodes, checked.
+fn row_of(task: Task, id: String, r: &RowSpec) -> Result<Row, String> {
     let distribution = match r.distribution.as_deref() {
         None | Some("normal") => None,
         Some(name) => {
@@ -231,7 +296,7 @@ fn row(r: &RowSpec, dir: Option<&Path>) -> Result<Row, String> {
     }
     crate::limits::Bound { name: "episodes", ..crate::limits::EVAL_EPISODES }.check_usize(r.episodes)?;
     crate::limits::seed_range(r.seed, r.episodes as u64)?;
-    Ok(Row { task, source: id, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
+    Ok(Row { task, source: id, generated: false, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
 }
 
 /// The seeds of every train row and every test row must not overlap.

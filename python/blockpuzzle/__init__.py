@@ -88,10 +88,21 @@ def assets_dir() -> _pathlib.Path:
 
 
 __all__ = ["__version__", "BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_ROBOTICS_PIN", "MUJOCO_PIN", "NAMESPACE",
-           "assets_dir", "env_ids", "evaluate", "make_task", "make_vec", "mujoco_version", "policies", "zoo"]
+           "assets_dir", "env_ids", "evaluate", "generate_tasks", "make_task", "make_vec", "mujoco_version", "policies",
+           "zoo"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"
+
+
+def generate_tasks(family, out, seed: int = 0, count: int = 10, threads: int | None = None) -> dict:
+    """Task files drawn from a task family file (``families/*.toml``), one per generator seed from
+    ``seed`` on, each kept where the solver can play it: ``blockpuzzle task generate``'s code.
+    Writes ``out/ID.toml`` per task and ``out/generated.json``, and returns that record (the family's
+    hash, each task's id, hash and the solver's success, the rejections by reason). Deterministic
+    in the seeds, whatever ``threads``."""
+    import json
+    return json.loads(_native.generate_tasks(str(family), str(out), seed, count, threads))
 
 
 def make_task(path: str, **kwargs) -> gymnasium.Env:

@@ -12,15 +12,19 @@ from __future__ import annotations
 import signal
 import sys
 
-#: Commands of the Rust command line that the package does not have (they need libtorch or plotting).
-RUST_ONLY = ("train", "table", "bench", "plot", "report", "align")
+from . import _native  # the package (and with it the engine check) is imported by now
+
+#: Commands of the Rust command line that the package does not have (they need libtorch or plotting):
+#: the core's list (``cli::TRAINING_COMMANDS``), e.g. ``train``, ``zoo export``.
+RUST_ONLY = tuple(_native.training_commands())
 
 
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line on ``argv`` (default: ``sys.argv[1:]``) and returns its exit status."""
     args = sys.argv[1:] if argv is None else list(argv)
-    if args and args[0] in RUST_ONLY or args[:2] == ["zoo", "export"]:
-        what = " ".join(args[:2]) if args[0] == "zoo" else args[0]
+    words = [a for a in args if not a.startswith("-")][:2]
+    what = next((c for c in RUST_ONLY if words[:len(c.split())] == c.split()), None)
+    if what is not None:
         print(f"error: `blockpuzzle {what}` is in the Rust command line, not in the Python package (it needs "
               f"libtorch): from a checkout, `cargo run --release -- {what} ...` (docs/training.md)", file=sys.stderr)
         return 2
@@ -29,7 +33,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     import os  # noqa: PLC0415
 
-    from . import _native, zoo  # noqa: PLC0415 (importing the package checks the engine and the Fetch files)
+    from . import zoo  # noqa: PLC0415
 
     # Zoo names are the package's entries unless $BLOCKPUZZLE_ZOO names another folder.
     os.environ.setdefault("BLOCKPUZZLE_ZOO", str(zoo.FOLDER))

@@ -17,8 +17,10 @@ class BlockPuzzleEnv(gymnasium.Env):
 
     Observation: float32 vector (gripper, fingers, and per block its position, rotation, velocities
     and colour one-hot); with ``obs_mode="objects"`` a ``Dict`` of ``robot``, ``objects`` (one row
-    per object slot) and ``mask`` (1 where a slot holds an object). ``obs_layout`` names every
-    component. Action: float32 in [-1, 1]^4 (gripper displacement, finger command).
+    per object slot) and ``mask`` (1 where a slot holds an object); with ``obs_mode="entities"`` a
+    ``Dict`` of ``robot``, ``entities`` (the blocks' rows, then the gripper's, the table's and the
+    floor's, each with a type one-hot, so that every colour the rules read is observed) and
+    ``mask``. ``obs_layout`` names every component. Action: float32 in [-1, 1]^4 (gripper displacement, finger command).
     Reward: -1 per step, 0 on success, minus the steps left on failure. ``terminated`` when the
     colour rules end the episode (success: every blue object touches a green one; failure: red
     touches blue), ``truncated`` at the task's step limit or on numerical instability.

@@ -13,6 +13,7 @@ for outcome count; any other callable plays through this module's loop. Every re
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 
@@ -104,10 +105,12 @@ _RED, _BLUE, _GREEN, _GREY = range(4)
 
 
 def _rows(obs, layout: dict) -> np.ndarray:
-    """The object rows of a batch of observations: ``(n, max_objects, features)``."""
+    """The blocks' rows of a batch of observations: ``(n, max_objects, features)`` (in the
+    ``entities`` mode the gripper's, table's and floor's rows follow them, left out here)."""
+    m = layout["max_objects"]
     if isinstance(obs, dict):
-        return np.asarray(obs["objects"])
-    r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+        return np.asarray(obs[layout["rows_key"]])[:, :m]
+    r, f = layout["robot_dim"], layout["object_dim"]
     return np.asarray(obs)[:, r:r + m * f].reshape(len(obs), m, f)
 
 
@@ -132,7 +135,16 @@ def _outcome(success, failure, unstable, matrix, surfaces, z0, colour_end, z_end
 def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -> dict:
     episodes, first = row["episodes"], row["seed"]
     n = min(num_envs, episodes)
-    envs = make_vec(row["task"], num_envs=n, threads=threads, obs_mode=obs_mode)
+    if row["generated"]:
+        # A task drawn from a family (no file holds it): its text, in a file of its own while it runs.
+        import tempfile  # noqa: PLC0415
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, f"{row['task_id']}.toml")
+            with open(path, "w") as f:
+                f.write(row["toml"])
+            envs = make_vec(path, num_envs=n, threads=threads, obs_mode=obs_mode)
+    else:
+        envs = make_vec(row["task"], num_envs=n, threads=threads, obs_mode=obs_mode)
     names = {"red": _RED, "blue": _BLUE, "green": _GREEN, "grey": _GREY}
     rule = [(name, names[c]) for name, c in envs.rule_objects]
     surfaces = [rule[0][1], rule[1][1]] + ([rule[-1][1]] if rule[-1][0] == "floor" else [])

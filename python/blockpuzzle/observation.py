@@ -1,8 +1,10 @@
-"""Observation layouts: the flat vector every id has by default, and the object-centric ``Dict``
-(``robot``, ``objects`` of max objects x features, ``mask``) chosen with ``obs_mode="objects"``.
+"""Observation layouts: the flat vector every id has by default, the object-centric ``Dict``
+(``robot``, ``objects`` of max objects x features, ``mask``) chosen with ``obs_mode="objects"``, and
+the entity ``Dict`` (``robot``, ``entities``: the blocks' rows then the gripper's, the table's and
+the floor's, each with a type one-hot, ``mask``) chosen with ``obs_mode="entities"``.
 
-The Rust core describes the layout (``_native.Env.obs_layout()``); in the ``objects`` mode the
-native vector is laid out robot | object rows | mask, and ``split`` views it as the ``Dict``.
+The Rust core describes the layout (``_native.Env.obs_layout()``); in the set modes the native
+vector is laid out robot | rows | mask, and ``split`` views it as the ``Dict``.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ def check_mode(obs_mode: str) -> str:
 
 #: The modes this module lays out: each is handled by ``space`` and ``split`` (a mode the extension
 #: knows and this module does not is an error there, and in ``tests/test_observation.py``).
-LAID_OUT = ("flat", "objects")
+LAID_OUT = ("flat", "objects", "entities")
 
 
 def _known(layout: dict) -> str:
@@ -39,13 +41,13 @@ def space(layout: dict, low: np.ndarray, high: np.ndarray) -> spaces.Space:
     mode = _known(layout)
     if mode == "flat":
         return spaces.Box(low=low, high=high, dtype=np.float32)
-    r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+    r, f, m, key = layout["robot_dim"], layout["object_dim"], layout["rows"], layout["rows_key"]
     # sort_keys=False keeps this order (by default a Dict sorts its keys: mask | objects | robot), and
     # batch_space keeps the setting, so gymnasium's FlattenObservation gives the documented
-    # robot | objects | mask vector for one environment and for a batch.
+    # robot | rows | mask vector for one environment and for a batch.
     return spaces.Dict({
         "robot": spaces.Box(-np.inf, np.inf, (r,), np.float32),
-        "objects": spaces.Box(-np.inf, np.inf, (m, f), np.float32),
+        key: spaces.Box(-np.inf, np.inf, (m, f), np.float32),
         "mask": spaces.Box(0.0, 1.0, (m,), np.float32),
     }, sort_keys=False)
 
@@ -55,11 +57,11 @@ def split(obs: np.ndarray, layout: dict):
     form: itself for ``flat``, else a dict of views of it."""
     if _known(layout) == "flat":
         return obs
-    r, f, m = layout["robot_dim"], layout["object_dim"], layout["max_objects"]
+    r, f, m, key = layout["robot_dim"], layout["object_dim"], layout["rows"], layout["rows_key"]
     lead = obs.shape[:-1]
     return {
         "robot": obs[..., :r],
-        "objects": obs[..., r:r + m * f].reshape(*lead, m, f),
+        key: obs[..., r:r + m * f].reshape(*lead, m, f),
         "mask": obs[..., r + m * f:],
     }
 

@@ -160,8 +160,10 @@ impl Env {
         Ok(self.env()?.observation_space().dim())
     }
 
-    /// The observation's layout: a dict of `mode` ("flat" or "objects"),
-    /// `robot_dim`, `object_dim`, `max_objects`, `dim` and `names` (one per component).
+    /// The observation's layout: a dict of `mode` ("flat", "objects" or "entities"), `mask`,
+    /// `robot_dim`, `object_dim` (features per row), `max_objects` (block slots), `rows` (every
+    /// row: the blocks', then in the `entities` mode the gripper's, table's and floor's),
+    /// `rows_key` (the `Dict` key of the rows, None for flat), `dim` and `names` (one per component).
     fn obs_layout<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let spec = self.env()?.obs_spec();
         let d = PyDict::new(py);
@@ -170,6 +172,8 @@ impl Env {
         d.set_item("robot_dim", spec.robot_dim())?;
         d.set_item("object_dim", spec.object_dim())?;
         d.set_item("max_objects", spec.max_objects)?;
+        d.set_item("rows", spec.rows())?;
+        d.set_item("rows_key", spec.mode.rows_key())?;
         d.set_item("dim", spec.dim())?;
         d.set_item("names", spec.names())?;
         Ok(d)
@@ -442,6 +446,8 @@ fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<
         for r in &split.rows {
             let row = PyDict::new(py);
             row.set_item("task", &r.source)?;
+            row.set_item("generated", r.generated)?;
+            row.set_item("toml", &r.task.source.toml)?;
             row.set_item("task_id", r.task.id())?;
             row.set_item("task_sha256", &r.task.source.hash)?;
             row.set_item("distribution", r.distribution.as_deref())?;
@@ -454,6 +460,37 @@ fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<
     }
     d.set_item("splits", splits)?;
     Ok(d)
+}
+
+/// Task files drawn from the family file `family` for generator seeds `seed .. seed + count`, each
+/// kept where the solver can play it (`blockpuzzle task generate`), written to the folder `out`
+/// (ID.toml per task and generated.json); returns generated.json's record as JSON text. The GIL is
+/// released while the candidates are checked.
+#[pyfunction]
+#[pyo3(signature = (family, out, seed=0, count=10, threads=None))]
+fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usize, threads: Option<usize>) -> PyResult<String> {
+    use blockpuzzle::limits::{GENERATE_COUNT, THREADS};
+    GENERATE_COUNT.check_usize(count).map_err(PyValueError::new_err)?;
+    blockpuzzle::limits::seed_range(seed, count as u64).map_err(PyValueError::new_err)?;
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
+    let path = std::path::Path::new(family);
+    if let Err(source) = std::fs::metadata(path) {
+        return Err(read_err(&source, format!("cannot read the family file {family}: {source}")));
+    }
+    let fam = blockpuzzle::task::family::Family::read(path).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let out = std::path::PathBuf::from(out);
+    let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
+        let results = blockpuzzle::generate::generate(&fam, seed, count, threads)?;
+        blockpuzzle::generate::write_folder(&out, &fam, path, seed, &results).map_err(|e| format!("{e:#}"))
+    });
+    manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
+}
+
+/// The commands only the Rust command line's training build has (`cli::TRAINING_COMMANDS`).
+#[pyfunction]
+fn training_commands() -> Vec<&'static str> {
+    blockpuzzle::cli::TRAINING_COMMANDS.to_vec()
 }
 
 /// The observation modes, by name (`obs_mode`): the core's closed set, in its order.
@@ -531,6 +568,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(obs_modes, m)?)?;
+    m.add_function(wrap_pyfunction!(generate_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(training_commands, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;
     m.add_function(wrap_pyfunction!(assets_dir, m)?)?;

@@ -1,5 +1,6 @@
-"""Observation modes: the flat vector (every id's default) and obs_mode="objects", a Dict of robot
-features, object rows and a mask, in the single and the vector environment."""
+"""Observation modes: the flat vector (every id's default), obs_mode="objects", a Dict of robot
+features, object rows and a mask, and obs_mode="entities", whose rows add the gripper, the table and
+the floor, in the single and the vector environment."""
 
 import gymnasium as gym
 import numpy as np
@@ -57,9 +58,9 @@ def test_vector_objects_mode_batches_the_dict():
 
 
 def test_an_unknown_mode_is_refused_naming_the_known_ones():
-    with pytest.raises(ValueError, match="flat, objects"):
+    with pytest.raises(ValueError, match="flat, objects, entities"):
         gym.make("BlockPuzzle/BlocksTouch-v0", obs_mode="pixels")
-    with pytest.raises(ValueError, match="flat, objects"):
+    with pytest.raises(ValueError, match="flat, objects, entities"):
         blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, obs_mode="set")
 
 
@@ -125,5 +126,38 @@ def test_every_mode_of_the_core_has_a_python_layout():
         obs, _ = env.reset(seed=0)
         assert env.observation_space.contains(obs), mode
         assert env.unwrapped.obs_layout["mask"] == (mode != "flat")
-    with pytest.raises(ValueError, match="unknown obs_mode 'entities'"):
-        gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="entities")
+    with pytest.raises(ValueError, match="unknown obs_mode 'pixels'"):
+        gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="pixels")
+
+
+def test_entities_mode_shows_the_gripper_table_and_floor_and_passes_the_checkers():
+    # BlocksAvoid-v0: grey gripper, grey table, red floor; three blocks.
+    env = gym.make("BlockPuzzle/BlocksAvoid-v0", obs_mode="entities")
+    space = env.observation_space
+    assert list(space.spaces) == ["robot", "entities", "mask"]
+    assert space["entities"].shape == (6, 26) and space["mask"].shape == (6,)
+    layout = env.unwrapped.obs_layout
+    assert (layout["rows"], layout["max_objects"], layout["rows_key"]) == (6, 3, "entities")
+    assert layout["names"][10 + 3 * 26] == "gripper/pos.x" and layout["names"][-3:] == ["mask/gripper", "mask/table", "mask/floor"]
+    check_env(env.unwrapped, skip_render_check=True)
+    obs, _ = env.reset(seed=3)
+    rows = obs["entities"]
+    colour, kind = rows[:, 15:19].argmax(axis=1), rows[:, 22:26].argmax(axis=1)
+    assert list(kind) == [3, 3, 3, 0, 1, 2], "blocks, then gripper, table, floor"
+    assert list(colour) == [1, 2, 0, 3, 3, 0], "blue, green, red blocks; grey gripper and table; red floor"
+    assert np.array_equal(obs["mask"], np.ones(6, np.float32))
+    np.testing.assert_array_equal(rows[3, :3], obs["robot"][:3])  # the gripper row is at the grip
+    assert rows[4, 2] == pytest.approx(0.4, abs=1e-6) and rows[4, 21] == pytest.approx(0.2)  # the table's top, half height
+    env.close()
+    # Without a coloured floor its row is zero and masked.
+    touch = gym.make("BlockPuzzle/BlocksTouch-v0", obs_mode="entities")
+    obs, _ = touch.reset(seed=0)
+    assert list(obs["mask"]) == [1, 1, 1, 1, 0] and not obs["entities"][4].any()
+    touch.close()
+    envs = blockpuzzle.make_vec("BlocksAvoid-v0", num_envs=2, threads=2, obs_mode="entities")
+    assert envs.observation_space["entities"].shape == (2, 6, 26)
+    obs, _ = envs.reset(seed=0)
+    for _ in range(3):
+        assert envs.observation_space.contains(obs)
+        obs, *_ = envs.step(np.zeros((2, 4), np.float32))
+    envs.close()

@@ -99,7 +99,7 @@ pub const COLOURS: usize = 4;
 pub const ATTENTION_LAYERS: usize = 4;
 
 impl SetLayout {
-    /// The layout of an `objects` observation, with `encoder_layers` encoder layers.
+    /// The layout of a set observation (`objects`, `entities`: rows and a mask), with `encoder_layers` encoder layers.
     ///
     /// # Errors
     /// A flat observation: a set network reads object rows and a mask.
@@ -113,7 +113,7 @@ impl SetLayout {
         Ok(Self {
             robot: spec.robot_dim(),
             object: spec.object_dim(),
-            slots: spec.max_objects,
+            slots: spec.rows(),
             encoder_layers,
             attention: false,
             by_colour: false,

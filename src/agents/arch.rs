@@ -132,7 +132,9 @@ impl Arch {
         match net.net {
             NetKind::Mlp => match obs.mode {
                 ObsMode::Flat => Ok(Self::mlp(obs.dim())),
-                ObsMode::Objects => Err("--net mlp reads the flat observation, not the `objects` one".into()),
+                ObsMode::Objects | ObsMode::Entities => {
+                    Err(format!("--net mlp reads the flat observation, not the `{}` one", obs.mode))
+                }
             },
             NetKind::Set => {
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;

@@ -32,6 +32,11 @@ pub(super) struct RolloutArgs {
     /// Use a named evaluation distribution of the task file ([distributions.NAME]).
     #[arg(long)]
     distribution: Option<String>,
+    /// The observation the environment presents (flat, objects, entities): what `random` and
+    /// `obs-hash` act on (default: flat). The solver (`scripted`) reads the `entities` one and a
+    /// trained policy its own.
+    #[arg(long)]
+    obs_mode: Option<crate::env::ObsMode>,
     /// Output file (JSON Lines); written atomically.
     #[arg(long)]
     out: PathBuf,
@@ -133,6 +138,7 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
         a.view.view()?;
     }
     let mut env: BlockEnv = registry::make(&a.env)?;
+    env.set_obs_mode(a.obs_mode.unwrap_or_default());
     if a.challenge {
         env.set_challenge(true)?;
     }
@@ -146,7 +152,11 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
         (_, Some(baseline)) => baseline.policy(&env),
         (path, None) => {
             let saved = crate::load::load_policy(Path::new(path))?;
-            env.set_obs_mode(saved.policy.obs_mode());
+            let reads = saved.policy.obs_mode();
+            if let Some(mode) = a.obs_mode.filter(|&m| m != reads) {
+                bail!("policy {path} reads the `{reads}` observation, not the `{mode}` one: leave --obs-mode out");
+            }
+            env.set_obs_mode(reads);
             Box::new(crate::evaluate::trained_policy(Path::new(path), saved, &env)?)
         }
     };

@@ -95,8 +95,9 @@ enum Command {
         #[arg(long, default_value_t = 0.95, value_parser = crate::limits::parse_fraction)]
         target: f64,
     },
-    /// Task files: `task check FILE` validates a task and samples its layouts.
-    #[command(subcommand)]
+    /// Task files: `task check FILE` validates a task and samples its layouts; `task generate
+    /// FAMILY` writes tasks drawn from a task family (`tasks` is another name for it).
+    #[command(subcommand, alias = "tasks")]
     Task(TaskCommand),
     /// The model zoo (trained policies shipped in zoo/): list, check, export, evaluate.
     #[command(subcommand)]
@@ -242,6 +243,7 @@ fn dispatch(command: Command) -> Result<()> {
         #[cfg(feature = "train")]
         Command::Table(a) => eval::table(a),
         Command::Task(TaskCommand::Check(a)) => task::check(a),
+        Command::Task(TaskCommand::Generate(a)) => task::generate(a),
         #[cfg(feature = "train")]
         Command::Plot(a) => runs::plot(a),
         #[cfg(feature = "train")]

@@ -1,5 +1,6 @@
 //! `blockpuzzle task check`: a task file validated, its layouts sampled at every level and
-//! distribution, optionally one reset state of each rendered.
+//! distribution, optionally one reset state of each rendered; `task generate`: task files drawn
+//! from a family and kept where the solver can play them.
 
 use super::episodes::ViewArgs;
 use crate::env::{registry, BlockEnv};
@@ -14,6 +15,29 @@ pub(super) enum TaskCommand {
     /// layouts were redrawn and why; --render writes a filmstrip of one reset
     /// state per level and distribution.
     Check(TaskCheckArgs),
+    /// Generate task files from a task family file: --count tasks, one per generator seed from
+    /// --seed on, each the first candidate the solver can play (success over the family's check
+    /// episodes at least its threshold) and not decided at the first step; writes DIR/ID.toml per
+    /// task and DIR/generated.json (hashes, the solver's success, rejections by reason).
+    Generate(TaskGenerateArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub(super) struct TaskGenerateArgs {
+    /// Family file (.toml; `families/` has the shipped ones).
+    family: PathBuf,
+    /// The first generator seed (task k comes from seed + k, the same whatever --count).
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
+    seed: u64,
+    /// How many tasks (generator seeds).
+    #[arg(long, default_value_t = 10, value_parser = crate::limits::GENERATE_COUNT.parser::<usize>())]
+    count: usize,
+    /// Output folder (made if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Threads checking candidates (default: one per core); the tasks do not depend on it.
+    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    threads: Option<usize>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -31,6 +55,46 @@ pub(super) struct TaskCheckArgs {
     render: Option<PathBuf>,
     #[command(flatten)]
     view: ViewArgs,
+}
+
+/// `blockpuzzle task generate`.
+pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
+    crate::limits::seed_range(a.seed, a.count as u64).map_err(anyhow::Error::msg)?;
+    let family = crate::task::family::Family::read(&a.family)?;
+    if std::fs::metadata(&a.out).is_ok_and(|m| !m.is_dir()) {
+        bail!("--out {} is not a folder; give a folder for the task files", a.out.display());
+    }
+    let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let results = crate::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
+    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results)?;
+    let kept: Vec<&crate::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
+    let missing: Vec<u64> = results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect();
+    let rejected = crate::generate::rejections(&results);
+    println!(
+        "{}: {} of {} seeds gave a task (seeds {}..{}), written to {}",
+        family.spec.family,
+        kept.len(),
+        a.count,
+        a.seed,
+        a.seed + a.count as u64,
+        a.out.display()
+    );
+    let tried: usize = rejected.values().sum::<usize>() + kept.len();
+    println!("candidates tried {tried}, rejected {}:", tried - kept.len());
+    let examples = crate::generate::examples(&results);
+    for (why, n) in &rejected {
+        println!("  {n:>5}  {why}");
+        if let Some(e) = examples.get(why) {
+            println!("         e.g. {}", crate::limits::cut_long_lines(e));
+        }
+    }
+    if !missing.is_empty() {
+        println!(
+            "no task within {} candidates for seeds {:?}: loosen the family's ranges or its check",
+            family.spec.check.max_candidates, missing
+        );
+    }
+    Ok(())
 }
 
 /// `blockpuzzle task check`.

@@ -15,7 +15,10 @@ mod reset;
 pub mod vector;
 
 pub use config::{EnvConfig, EnvError};
-pub use obs::{obs_dim, ObsMode, ObsSpec, BLOCK_OBS, COLOUR_FEATURE, OBJECT_FEATURES, ROBOT_FEATURES, ROBOT_OBS};
+pub use obs::{
+    obs_dim, Fixture, ObsMode, ObsSpec, BLOCK_OBS, COLOUR_FEATURE, ENTITY_FEATURES, OBJECT_FEATURES, ROBOT_FEATURES,
+    ROBOT_OBS, TYPE_FEATURE,
+};
 pub use registry::{ids, make, REGISTRY};
 pub use vector::{ResetOptions, VecError, VecStep, VectorEnv};
 
@@ -258,15 +261,40 @@ impl BlockEnv {
     }
     /// Writes the current observation into `self.obs`.
     fn write_obs(&mut self) {
-        let (spec, dt) = (self.config.obs_spec(), self.dt());
-        let ctx = obs::ObsContext { spec: &spec, colours: &self.colours, sizes: &self.sizes, present: &self.present };
-        obs::write(&ctx, &self.scene, &self.data, dt, &mut self.obs);
+        let mut obs = std::mem::take(&mut self.obs);
+        self.observe(self.config.obs_mode, &mut obs);
+        self.obs = obs;
+    }
+    /// The current state's observation as `mode` presents it, whatever mode the environment
+    /// presents (a policy that reads another layout than the one recorded: the solver).
+    pub fn observation_as(&self, mode: ObsMode) -> Vec<f32> {
+        let mut out = Vec::new();
+        self.observe(mode, &mut out);
+        out
+    }
+    /// Writes the current state's observation in `mode` into `out`.
+    fn observe(&self, mode: ObsMode, out: &mut Vec<f32>) {
+        let (spec, dt) = (ObsSpec { mode, ..self.config.obs_spec() }, self.dt());
+        let colour = |o: usize| self.objects[o].colour;
+        let fixtures = obs::FixtureColours {
+            gripper: colour(crate::scene::GRIPPER_OBJECT),
+            table: colour(crate::scene::TABLE_OBJECT),
+            floor: self.scene.floor_object.map(colour),
+        };
+        let ctx = obs::ObsContext {
+            spec: &spec,
+            colours: &self.colours,
+            sizes: &self.sizes,
+            present: &self.present,
+            fixtures,
+        };
+        obs::write(&ctx, &self.scene, &self.data, dt, out);
     }
     /// The observation as one box of [`ObsSpec::dim`] values: unbounded,
-    /// the `objects` mode's mask in [0, 1].
+    /// the mask (where the mode has one) in [0, 1].
     pub fn observation_space(&self) -> BoxSpace {
         let spec = self.obs_spec();
-        let (n, features) = (spec.dim(), spec.robot_dim() + spec.object_dim() * spec.max_objects);
+        let (n, features) = (spec.dim(), spec.robot_dim() + spec.object_dim() * spec.rows());
         let low = (0..n).map(|i| if i < features { f32::NEG_INFINITY } else { 0.0 }).collect();
         let high = (0..n).map(|i| if i < features { f32::INFINITY } else { 1.0 }).collect();
         BoxSpace { low, high }

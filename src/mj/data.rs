@@ -249,6 +249,10 @@ impl Data {
     pub fn geom_xpos(&self) -> &[[f64; 3]] {
         self.vecs(self.raw().geom_xpos, self.model.ngeom())
     }
+    /// Geom orientations as row-major 3×3 matrices (`geom_xmat`).
+    pub fn geom_xmat(&self) -> &[[f64; 9]] {
+        self.vecs(self.raw().geom_xmat, self.model.ngeom())
+    }
     /// Site positions in world coordinates (`site_xpos`).
     pub fn site_xpos(&self) -> &[[f64; 3]] {
         self.vecs(self.raw().site_xpos, self.model.nsite())

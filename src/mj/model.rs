@@ -276,6 +276,16 @@ impl Model {
         Ok(())
     }
 
+    /// Size parameters of each geom (`geom_size`: a box's half extents).
+    pub fn geom_size(&self) -> &[[f64; 3]] {
+        let (p, n) = (self.raw().geom_size, self.ngeom());
+        if n == 0 || p.is_null() {
+            return &[];
+        }
+        // SAFETY: MuJoCo sizes geom_size as ngeom × 3 reals; the model outlives `&self`.
+        unsafe { std::slice::from_raw_parts(p as *const [f64; 3], n) }
+    }
+
     /// RGBA of each material (`mat_rgba`).
     pub fn mat_rgba(&self) -> &[[f32; 4]] {
         let (p, n) = (self.raw().mat_rgba, self.nmat());

@@ -3,15 +3,21 @@
 //! reaching green with a blue gripper (over any red wall), toppling a tower
 //! with a red gripper, and picking blue up and putting it on green.
 //!
-//! Both read only the observation (plus, for the scripted one, which task it
-//! is playing), so they run on exactly what an agent sees.
+//! Both read only the observation. The scripted controller as a solver
+//! ([`ScriptedPolicy::solver`], the `scripted` baseline) decides what to do
+//! from the `entities` observation alone: which blocks are blue, green, red,
+//! and whether the gripper or the table takes part in the rules.
+//! [`ScriptedPolicy::for_env`] is told the behaviour by the task's
+//! configuration instead, and reads the layout that configuration presents
+//! (flat or `objects`, which show no gripper or table colour): the reference
+//! the solver is tested against.
 
 mod pick;
 mod push;
 mod reach;
 mod topple;
 
-use crate::env::{EnvConfig, ObsSpec, ACTION_DIM, ROBOT_OBS};
+use crate::env::{EnvConfig, Fixture, ObsMode, ObsSpec, ACTION_DIM, ROBOT_OBS};
 use crate::rules::Colour;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -22,6 +28,11 @@ pub trait Policy {
     fn reset(&mut self) {}
     /// The action for `obs`.
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM];
+    /// The observation mode it reads, where it needs one whatever the environment presents: the
+    /// episode loop ([`crate::rollout::play_episode`]) then gives it that view of each state.
+    fn reads(&self) -> Option<ObsMode> {
+        None
+    }
 }
 
 /// Uniform actions in [-1, 1]^4 from its own seeded generator.
@@ -95,11 +106,7 @@ fn read_blocks(spec: &ObsSpec, obs: &[f32]) -> Vec<SeenBlock> {
     spec.objects(obs)
         .enumerate()
         .filter(|&(k, b)| present(k) && ObsSpec::colour(b).iter().any(|&v| v > 0.5))
-        .map(|(slot, b)| {
-            let hot = ObsSpec::colour(b);
-            let k = (0..4).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3);
-            SeenBlock { pos: [b[0] as f64, b[1] as f64, b[2] as f64], colour: Colour::ALL[k], slot }
-        })
+        .map(|(slot, b)| SeenBlock { pos: [b[0] as f64, b[1] as f64, b[2] as f64], colour: colour_of(b), slot })
         .collect()
 }
 
@@ -119,6 +126,8 @@ const GAIN: f64 = 1.0 / 0.05;
 pub enum Script {
     /// Grey gripper, blocked fingers: push blue against green.
     Push,
+    /// Red gripper, green blocks: push green onto blue, never touching blue.
+    PushGreen,
     /// Blue gripper: move onto the green block, over any red block in the way.
     Reach,
     /// Red gripper: knock the tower under the blue block over without touching blue.
@@ -127,6 +136,89 @@ pub enum Script {
     PickPlace,
     /// Gripper action on, several blue blocks: put each on the green one, side by side.
     Gather,
+}
+
+/// Why the solver cannot play a task: what its observation shows, in words.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unsolvable(pub String);
+
+impl std::fmt::Display for Unsolvable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl Script {
+    /// The behaviour the rules shown in an `entities` observation call for (`spec` says where
+    /// what is): by the gripper's colour (blue: reach green; red: topple onto a green table, or
+    /// elsewhere push a green block onto the one blue block), then
+    /// by the blocks and the table (several blue blocks: gather them on green; a red table: pick
+    /// blue up and put it on green; otherwise push blue against green).
+    ///
+    /// # Errors
+    /// What the solver cannot do: a layout without the gripper's and table's rows; a blue gripper
+    /// with blue blocks or without a green one; a red gripper with other than one blue block and no
+    /// green table; a green gripper; no blue block, or no green block for it to reach.
+    pub fn from_observation(spec: &ObsSpec, obs: &[f32]) -> Result<Script, Unsolvable> {
+        let fixture = |f: Fixture| -> Option<Colour> {
+            let row = spec.fixture_row(f)?;
+            let present = spec.mask(obs).and_then(|m| m.get(row)).is_some_and(|&v| v > 0.5);
+            let rows = spec.all_rows(obs);
+            present.then(|| rows.clone().nth(row)).flatten().map(colour_of)
+        };
+        let (Some(gripper), Some(table)) = (fixture(Fixture::Gripper), fixture(Fixture::Table)) else {
+            return Err(Unsolvable(format!(
+                "the {} observation does not show the gripper's and the table's colours (the solver reads the `entities` one)",
+                spec.mode
+            )));
+        };
+        let blocks = read_blocks(spec, obs);
+        let count = |c: Colour| blocks.iter().filter(|b| b.colour == c).count();
+        let green_anywhere =
+            count(Colour::Green) > 0 || table == Colour::Green || fixture(Fixture::Floor) == Some(Colour::Green);
+        match gripper {
+            Colour::Blue if count(Colour::Blue) > 0 => Err(Unsolvable(
+                "a blue gripper and blue blocks (the solver reaches green with the gripper alone)".into(),
+            )),
+            Colour::Blue if count(Colour::Green) > 0 => Ok(Script::Reach),
+            Colour::Blue => Err(Unsolvable("a blue gripper with no green block to reach".into())),
+            Colour::Red if table == Colour::Green && count(Colour::Blue) > 0 => Ok(Script::Topple),
+            Colour::Red if count(Colour::Blue) == 1 && count(Colour::Green) > 0 => Ok(Script::PushGreen),
+            Colour::Red => {
+                Err(Unsolvable("a red gripper with other than one blue block to bring a green block to".into()))
+            }
+            Colour::Green => Err(Unsolvable(
+                "a green gripper (the solver brings blue to green blocks, not the gripper to blue)".into(),
+            )),
+            Colour::Grey if count(Colour::Blue) == 0 => Err(Unsolvable("no blue object to move".into())),
+            Colour::Grey if !green_anywhere => Err(Unsolvable("no green object to reach".into())),
+            Colour::Grey if count(Colour::Green) == 0 => Err(Unsolvable(
+                "blue must reach a green table or floor, not a green block (the solver moves blue onto green blocks)"
+                    .into(),
+            )),
+            Colour::Grey if count(Colour::Blue) > 1 => Ok(Script::Gather),
+            Colour::Grey if table == Colour::Red => Ok(Script::PickPlace),
+            Colour::Grey => Ok(Script::Push),
+        }
+    }
+
+    /// Its name in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Script::Push => "push",
+            Script::PushGreen => "push-green",
+            Script::Reach => "reach",
+            Script::Topple => "topple",
+            Script::PickPlace => "pick-place",
+            Script::Gather => "gather",
+        }
+    }
+}
+
+/// The colour a one-hot row shows (its largest component).
+fn colour_of(row: &[f32]) -> Colour {
+    let hot = ObsSpec::colour(row);
+    Colour::ALL[(0..hot.len()).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3)]
 }
 
 /// The scripted controller: for block tasks, get behind the blue block and
@@ -144,13 +236,26 @@ pub enum Script {
 /// afresh at every reset.
 #[derive(Debug, Clone)]
 pub struct ScriptedPolicy {
-    script: Script,
+    /// How the behaviour is chosen.
+    choice: Choice,
     /// Where the observation holds what.
     spec: ObsSpec,
-    /// Each slot's half extents (the task's; shuffles only swap alike objects).
+    /// Each slot's half extents: the task's ([`ScriptedPolicy::for_env`]), or read off the
+    /// observation's rows at the start of each episode (the solver).
     sizes: Vec<[f64; 3]>,
-    /// The behaviour and its state in this episode.
-    running: Running,
+    /// The behaviour and its state in this episode; `None` until the solver has chosen.
+    running: Option<Running>,
+    /// Why the solver could not play this episode, if it could not.
+    unsolvable: Option<Unsolvable>,
+}
+
+/// Where the behaviour comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Choice {
+    /// The task's configuration named it.
+    Fixed(Script),
+    /// The observation at the start of each episode decides it ([`Script::from_observation`]).
+    Observed,
 }
 
 /// A behaviour with its episode's state.
@@ -168,10 +273,22 @@ impl Running {
     fn start(script: Script) -> Self {
         match script {
             Script::Push => Self::Push(Default::default()),
+            Script::PushGreen => Self::Push(push::Push::green_onto_blue()),
             Script::Reach => Self::Reach(Default::default()),
             Script::Topple => Self::Topple(Default::default()),
             Script::PickPlace => Self::PickPlace(Default::default()),
             Script::Gather => Self::Gather(Default::default()),
+        }
+    }
+
+    fn script(&self) -> Script {
+        match self {
+            Self::Push(p) if p.pushes_green() => Script::PushGreen,
+            Self::Push(_) => Script::Push,
+            Self::Reach(_) => Script::Reach,
+            Self::Topple(_) => Script::Topple,
+            Self::PickPlace(_) => Script::PickPlace,
+            Self::Gather(_) => Script::Gather,
         }
     }
 
@@ -202,7 +319,11 @@ trait Behaviour {
 }
 
 impl ScriptedPolicy {
-    /// The controller for an environment configuration.
+    /// The controller for an environment configuration, told its behaviour by the task (its
+    /// gripper's colour and whether the gripper action is on), reading the observation as
+    /// `config` presents it (flat or `objects` too). The `scripted` baseline is
+    /// [`ScriptedPolicy::solver`], which chooses the same behaviour on every built-in task from
+    /// the observation alone (tests/it/entities.rs).
     pub fn for_env(config: &EnvConfig) -> Self {
         let blues = config.task.colours().iter().filter(|&&c| c == Colour::Blue).count();
         let script = if config.task.spec.robot.gripper_action {
@@ -219,15 +340,45 @@ impl ScriptedPolicy {
             }
         };
         let spec = config.obs_spec();
-        let sizes = config.task.objects().map(|o| o.half_extents).collect();
-        Self { script, spec, sizes, running: Running::start(script) }
+        // As the observation holds them (f32), so that the solver, which reads them there, acts alike.
+        let sizes = config.task.objects().map(|o| o.half_extents.map(|v| v as f32 as f64)).collect();
+        Self { choice: Choice::Fixed(script), spec, sizes, running: Some(Running::start(script)), unsolvable: None }
     }
 
-    /// The behaviour in use.
-    pub fn script(&self) -> Script {
-        self.script
+    /// The solver: a controller that reads nothing but the `entities` observation with `blocks`
+    /// block slots, and at the start of each episode chooses its behaviour from the rules the
+    /// observation shows ([`Script::from_observation`]); where it cannot play a task it stands
+    /// still and [`ScriptedPolicy::unsolvable`] says why. It asks the episode loop for that
+    /// layout ([`Policy::reads`]) whatever the environment presents.
+    pub fn solver(blocks: usize) -> Self {
+        let spec = ObsSpec::new(ObsMode::Entities, blocks);
+        Self { choice: Choice::Observed, spec, sizes: Vec::new(), running: None, unsolvable: None }
+    }
+
+    /// The behaviour in use: the one the task names, or the solver's choice this episode (`None`
+    /// before its first step, or where it cannot play the task).
+    pub fn script(&self) -> Option<Script> {
+        self.running.as_ref().map(Running::script)
+    }
+
+    /// Why the solver cannot play this episode's task, where it cannot.
+    pub fn unsolvable(&self) -> Option<&Unsolvable> {
+        self.unsolvable.as_ref()
+    }
+
+    /// The solver's start of an episode: the behaviour and each block slot's size, from `obs`.
+    fn choose(&mut self, obs: &[f32]) {
+        let size_at = OBJECT_FEATURES_LEN;
+        self.sizes = self.spec.objects(obs).map(|r| std::array::from_fn(|k| r[size_at + k] as f64)).collect();
+        match Script::from_observation(&self.spec, obs) {
+            Ok(script) => self.running = Some(Running::start(script)),
+            Err(why) => self.unsolvable = Some(why),
+        }
     }
 }
+
+/// Where a row's size begins (after [`crate::env::OBJECT_FEATURES`]).
+const OBJECT_FEATURES_LEN: usize = crate::env::OBJECT_FEATURES.len();
 
 fn toward(from: [f64; 3], to: [f64; 3]) -> [f32; ACTION_DIM] {
     let mut a = [0.0f32; ACTION_DIM];
@@ -251,18 +402,32 @@ fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
 
 impl Policy for ScriptedPolicy {
     fn reset(&mut self) {
-        self.running = Running::start(self.script);
+        self.unsolvable = None;
+        self.running = match self.choice {
+            Choice::Fixed(script) => Some(Running::start(script)),
+            Choice::Observed => None,
+        };
     }
 
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
         if obs.len() < ROBOT_OBS {
             return [0.0; ACTION_DIM]; // not a BlockPuzzle observation: stand still
         }
+        if self.running.is_none() && self.unsolvable.is_none() && self.choice == Choice::Observed {
+            self.choose(obs);
+        }
+        let Some(running) = self.running.as_mut() else {
+            return [0.0; ACTION_DIM]; // a task the solver cannot play: stand still
+        };
         let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
         let fingers = [obs[3] as f64, obs[4] as f64];
         let blocks = read_blocks(&self.spec, obs);
         let seen = Seen { grip, fingers, blocks: &blocks, sizes: &self.sizes };
-        self.running.behaviour().act(&seen)
+        running.behaviour().act(&seen)
+    }
+
+    fn reads(&self) -> Option<ObsMode> {
+        (self.choice == Choice::Observed).then_some(ObsMode::Entities)
     }
 }
 

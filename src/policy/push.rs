@@ -1,6 +1,6 @@
 //! The pushing behaviour: get behind the blue block and push it towards the green one (or the
 //! green one onto blue, where that path is clearer of grey blocks), around red blocks through a
-//! waypoint planned at the episode's first step.
+//! waypoint planned at the episode's first step; with a red gripper, always green onto blue.
 
 use super::{seg_dist, toward, xy_dist, Behaviour, Seen, ACTION_DIM, PUSH_Z, SAFE_Z, STANDOFF};
 use crate::rules::Colour;
@@ -11,6 +11,8 @@ use crate::rules::Colour;
 pub(super) struct Push {
     /// The route planned at the episode's first step (with red blocks on the table).
     route: Option<Route>,
+    /// Never touch blue (a red gripper): always push green onto blue.
+    green_onto_blue: bool,
 }
 
 /// A push's route around red blocks: the waypoint and where blue started
@@ -24,6 +26,9 @@ impl Behaviour for Push {
         let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
             return [0.0; ACTION_DIM];
         };
+        if self.green_onto_blue {
+            return push_line(grip, green, blue);
+        }
         let reds: Vec<[f64; 3]> = blocks.iter().filter(|b| b.colour == Colour::Red).map(|b| b.pos).collect();
         if !reds.is_empty() {
             return self.push_around(grip, blue, green, &reds);
@@ -43,6 +48,16 @@ impl Behaviour for Push {
 }
 
 impl Push {
+    /// Whether it pushes green onto blue whatever the layout.
+    pub(super) fn pushes_green(&self) -> bool {
+        self.green_onto_blue
+    }
+
+    /// The push of a red gripper, which must never touch blue: green onto blue, straight.
+    pub(super) fn green_onto_blue() -> Self {
+        Self { route: None, green_onto_blue: true }
+    }
+
     /// Push blue to green along the route planned at the episode's first
     /// step: straight, or through a waypoint, whichever clears the red blocks.
     fn push_around(&mut self, grip: [f64; 3], blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> [f32; ACTION_DIM] {

@@ -128,6 +128,12 @@ pub struct Scene {
     pub gripper_body: usize,
     /// The rule object of the floor, if it is one.
     pub floor_object: Option<usize>,
+    /// The table's box geom.
+    pub table_geom: usize,
+    /// The floor's plane geom.
+    pub floor_geom: usize,
+    /// The right and left fingers' box geoms.
+    pub finger_geoms: [usize; 2],
     /// Index of `robot0:mocap` among mocap bodies.
     pub mocap: usize,
     /// qpos addresses of the right and left finger joints.
@@ -247,6 +253,14 @@ impl Scene {
             objects.len() - 1
         });
         let floor_geom = model.id(ObjType::Geom, "floor0")?;
+        let finger_geoms = [
+            model.id(ObjType::Geom, "robot0:r_gripper_finger_link")?,
+            model.id(ObjType::Geom, "robot0:l_gripper_finger_link")?,
+        ];
+        // The table body's one geom: its top is what the blocks stand on.
+        let table_geom = (0..model.ngeom())
+            .find(|&g| model.geom_bodyid()[g] as usize == table_body)
+            .ok_or_else(|| MjError::UnknownName { kind: "geom of body", name: "table0".into() })?;
         let geom_object = (0..model.ngeom())
             .map(|g| {
                 let b = model.geom_bodyid()[g] as usize;
@@ -272,6 +286,9 @@ impl Scene {
             finger_dof: [rd, ld],
             slide_qpos,
             floor_object,
+            table_geom,
+            floor_geom,
+            finger_geoms,
             blocks,
             objects,
             geom_object,

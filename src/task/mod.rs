@@ -11,6 +11,7 @@ pub mod counts;
 mod diagnostics;
 mod exact;
 pub mod expr;
+pub mod family;
 pub mod sampler;
 pub mod spec;
 

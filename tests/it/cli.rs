@@ -419,8 +419,7 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     // blockpuzzle does not set OMP_WAIT_POLICY (PASSIVE halves the update rate on an idle
     // machine, results/ddpg.md); a value the user set reaches the process unchanged.
     let info = |value: Option<&str>| {
-        // What only the training build prints: its own binary.
-        let mut c = std::process::Command::new(crate::common::FULL_CLI);
+        let mut c = std::process::Command::new(crate::common::CLI);
         c.arg("info");
         match value {
             Some(v) => c.env("OMP_WAIT_POLICY", v),
@@ -498,7 +497,7 @@ fn train_branch_from_names_refused_changes_and_continues_the_parent() {
 }
 
 #[test]
-fn training_commands_are_named_once_and_the_build_without_them_says_where_they_are() {
+fn training_commands_are_named_once() {
     use blockpuzzle::cli::{check_args, training_command, TRAINING_COMMANDS};
     let line = |words: &[&str]| -> Vec<std::ffi::OsString> {
         std::iter::once("blockpuzzle").chain(words.iter().copied()).map(Into::into).collect()
@@ -515,19 +514,6 @@ fn training_commands_are_named_once_and_the_build_without_them_says_where_they_a
         let kind = e.downcast_ref::<clap::Error>().map(clap::Error::kind);
         assert_eq!(kind, Some(clap::error::ErrorKind::DisplayHelp), "{c}: {e}");
     }
-    let Some(core) = std::env::var_os(crate::common::CORE_CLI_VAR) else {
-        crate::common::skipped("the build without `train` (BLOCKPUZZLE_CORE_CLI unset; `make test` sets it)");
-        return;
-    };
-    for c in TRAINING_COMMANDS {
-        let o = std::process::Command::new(&core).args(c.split(' ')).arg("--help").output().unwrap();
-        assert!(!o.status.success(), "{c}");
-        let t = text(&o);
-        assert!(
-            t.contains(&format!("`{c}` is a command of the training build")) && t.contains("default features"),
-            "{c}: {t}"
-        );
-    }
-    let o = std::process::Command::new(&core).arg("--help").output().unwrap();
-    assert!(o.status.success() && text(&o).contains("rollout") && !text(&o).contains("\n  train "), "{}", text(&o));
+    // The build without them (the Python package's command) says which build has them:
+    // python/tests/test_cli.py.
 }

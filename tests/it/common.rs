@@ -68,35 +68,14 @@ pub fn skipped(what: &str) {
     let _ = writeln!(std::io::stderr().lock(), "SKIPPED in {test}: {what}");
 }
 
-/// The variable naming the command line built without the `train` feature, which `make test`
-/// builds: the core's commands run on it, started without loading libtorch (about 0.15 s of CPU
-/// here against 0.9 s, most of it libtorch's start-up, for each of the few hundred commands the
-/// tests run). Unset, every command runs on this build's `blockpuzzle`.
-pub const CORE_CLI_VAR: &str = "BLOCKPUZZLE_CORE_CLI";
-
-/// This build's `blockpuzzle`, which has every command.
+/// This build's `blockpuzzle`.
 #[cfg(feature = "cli")]
-pub const FULL_CLI: &str = env!("CARGO_BIN_EXE_blockpuzzle");
+pub const CLI: &str = env!("CARGO_BIN_EXE_blockpuzzle");
 
-/// The program that runs the command line `args` (from the subcommand on): the command line without
-/// the training stack where [`CORE_CLI_VAR`] names one and `args` is not a training command, this
-/// build's otherwise. Tests of what only the training build prints (`info`'s libtorch settings) use
-/// [`FULL_CLI`].
-#[cfg(feature = "cli")]
-pub fn cli_for<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::path::PathBuf {
-    let mut line = vec![std::ffi::OsString::from("blockpuzzle")];
-    line.extend(args.iter().map(|a| a.as_ref().to_owned()));
-    let training = blockpuzzle::cli::training_command(&line).is_some();
-    match std::env::var_os(CORE_CLI_VAR) {
-        Some(core) if !training => core.into(),
-        _ => FULL_CLI.into(),
-    }
-}
-
-/// A `blockpuzzle` command with `args`, on the program [`cli_for`] picks.
+/// A `blockpuzzle` command with `args` (from the subcommand on): how every test starts the command line.
 #[cfg(feature = "cli")]
 pub fn blockpuzzle<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> std::process::Command {
-    let mut c = std::process::Command::new(cli_for(args));
+    let mut c = std::process::Command::new(CLI);
     c.args(args);
     c
 }

@@ -156,15 +156,18 @@ fn every_command_line_in_the_docs_parses() {
 }
 
 #[test]
-fn every_toml_block_in_the_docs_is_a_valid_task_or_suite_file() {
+fn every_toml_block_in_the_docs_is_a_valid_task_family_or_suite_file() {
     let dir = tempfile::tempdir().unwrap();
     let tomls: Vec<Block> = docs().iter().flat_map(|p| blocks(p)).filter(|b| b.lang == "toml" && !b.fragment).collect();
     assert!(tomls.len() >= 2);
     for b in &tomls {
         let file = dir.path().join("block.toml");
         std::fs::write(&file, &b.text).unwrap();
-        // A task file has an id; a suite file has splits.
-        if b.text.lines().any(|l| l.starts_with("id =")) {
+        // A task file has an id; a family file a family; a suite file has splits.
+        if b.text.lines().any(|l| l.starts_with("family =")) {
+            let family = blockpuzzle::task::family::Family::from_toml(&b.text, &b.at);
+            assert!(family.is_ok(), "{}: {}", b.at, family.err().unwrap());
+        } else if b.text.lines().any(|l| l.starts_with("id =")) {
             let task = blockpuzzle::task::Task::from_file(&file);
             assert!(task.is_ok(), "{}: {}", b.at, task.err().unwrap());
         } else {

@@ -34,7 +34,8 @@ fn the_spec_describes_each_layout() {
         assert_eq!(spec.names().len(), spec.dim(), "{mode}");
         assert_eq!(spec.object_dim(), BLOCK_OBS + mode.extra_object_features().len(), "{mode}");
         let obs = vec![1.0; spec.dim()];
-        assert_eq!(spec.mask(&obs).map(<[f32]>::len), mode.has_mask().then_some(2), "{mode}");
+        assert_eq!(spec.mask(&obs).map(<[f32]>::len), mode.has_mask().then_some(spec.rows()), "{mode}");
+        assert_eq!(spec.rows(), 2 + mode.fixtures().len(), "{mode}");
         assert_eq!(spec.objects(&obs).count(), 2, "{mode}");
     }
 }

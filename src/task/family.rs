@@ -1,0 +1,412 @@
+//! Task families: a family file (TOML, versioned) describes ranges over the framework — the
+//! gripper's, table's and floor's colours, whether the gripper action is on, groups of blocks with
+//! a colour, a count range, a size range and a placement rule — and [`Family::draw`] turns a
+//! (generator seed, candidate) pair into one task, deterministically. Which candidates are kept
+//! (the solver can play them, they are not decided at the first step) is decided above the
+//! environment (`crate::generate`); this module is data, like the rest of `task`.
+
+use super::spec::{
+    CurriculumSpec, Kind, ObjectSpec, PlacementSpec, RobotSpec, StartSpec, SurfaceSpec, TaskSpec, FORMAT_VERSION,
+};
+use super::{Task, TaskError, RESERVED_NAMES};
+use crate::rules::Colour;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// The family file format version this build reads.
+pub const FAMILY_VERSION: u32 = 1;
+
+/// Most block groups and most blocks a generated task may have (the task format's own limit is
+/// higher; generated tasks stay where the solver and the set networks are tested).
+pub const MAX_FAMILY_BLOCKS: usize = 12;
+
+/// The shipped families (`families/NAME.toml`, built in like the tasks): (name, text).
+pub const BUILTIN_FAMILIES: &[(&str, &str)] =
+    &[("push", include_str!("../../families/push.toml")), ("gripper", include_str!("../../families/gripper.toml"))];
+
+/// A floor choice: no rule object, or one of the four colours.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FloorChoice {
+    /// The floor takes no part in the rules.
+    None,
+    /// Red.
+    Red,
+    /// Blue.
+    Blue,
+    /// Green.
+    Green,
+    /// Grey.
+    Grey,
+}
+
+impl FloorChoice {
+    /// The floor's colour as a rule object, if it is one.
+    pub fn colour(self) -> Option<Colour> {
+        match self {
+            FloorChoice::None => None,
+            FloorChoice::Red => Some(Colour::Red),
+            FloorChoice::Blue => Some(Colour::Blue),
+            FloorChoice::Green => Some(Colour::Green),
+            FloorChoice::Grey => Some(Colour::Grey),
+        }
+    }
+}
+
+/// A family file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FamilySpec {
+    /// Format version: 1.
+    pub version: u32,
+    /// The family's name: generated task ids are `NAME-SEED-v0` (e.g. `push-17-v0`).
+    pub family: String,
+    /// One line on what its tasks ask.
+    #[serde(default)]
+    pub summary: String,
+    /// Steps before `truncated`, in every generated task.
+    #[serde(default = "default_steps")]
+    pub max_episode_steps: usize,
+    /// The gripper colours to draw from (uniformly).
+    pub gripper: Vec<Colour>,
+    /// Whether the gripper action is on, to draw from (default: off).
+    #[serde(default = "default_action")]
+    pub gripper_action: Vec<bool>,
+    /// The table colours to draw from.
+    pub table: Vec<Colour>,
+    /// The floor to draw from: "none" (no rule object) or a colour (default: "none").
+    #[serde(default = "default_floor")]
+    pub floor: Vec<FloorChoice>,
+    /// What a generated task must pass to be kept.
+    pub check: CheckSpec,
+    /// The block groups, placed in this order.
+    pub blocks: Vec<Spanned<BlockGroup>>,
+}
+
+fn default_steps() -> usize {
+    50
+}
+fn default_action() -> Vec<bool> {
+    vec![false]
+}
+fn default_floor() -> Vec<FloorChoice> {
+    vec![FloorChoice::None]
+}
+
+/// The checks a candidate task passes before it is kept.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckSpec {
+    /// Episodes the solver plays on each candidate (seeds 0 .. episodes).
+    #[serde(default = "default_episodes")]
+    pub episodes: usize,
+    /// The solver's success over those episodes must reach this (no impossible task).
+    pub min_solver_success: f64,
+    /// The share of episodes decided (success or failure) at the first step must stay below this
+    /// (no trivial task; at most 1).
+    #[serde(default = "default_decided")]
+    pub max_decided_at_first_step: f64,
+    /// Candidates tried per generator seed before the seed is given up.
+    #[serde(default = "default_candidates")]
+    pub max_candidates: usize,
+}
+
+fn default_episodes() -> usize {
+    20
+}
+fn default_decided() -> f64 {
+    0.5
+}
+fn default_candidates() -> usize {
+    20
+}
+
+/// A group of blocks of one colour.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlockGroup {
+    /// Its name in the generated task (copies `NAME.0`, `NAME.1`, … where there are several);
+    /// placement rules refer to groups by it.
+    pub name: String,
+    /// Their colour.
+    pub colour: Colour,
+    /// How many, `[min, max]`, drawn per task (0 leaves the group out).
+    #[serde(default = "default_count")]
+    pub count: [usize; 2],
+    /// Half side of the (cubic) blocks in metres, `[min, max]`, drawn per task (to the millimetre).
+    #[serde(default = "default_size")]
+    pub size: [f64; 2],
+    /// Fixed half extents (x, y, z) instead of drawn cubes (a wall, a pillar).
+    #[serde(default)]
+    pub half_extents: Option<[f64; 3]>,
+    /// Mass in kg (default: a task file's, 2).
+    #[serde(default = "default_mass")]
+    pub mass: f64,
+    /// Where they start: a task file's `start` (references name groups, the gripper or the table).
+    #[serde(default)]
+    pub start: StartSpec,
+}
+
+fn default_count() -> [usize; 2] {
+    [1, 1]
+}
+fn default_size() -> [f64; 2] {
+    [0.025, 0.025]
+}
+fn default_mass() -> f64 {
+    2.0
+}
+
+/// A checked family: its spec, its text's hash, and where it came from.
+#[derive(Debug, Clone)]
+pub struct Family {
+    /// The spec.
+    pub spec: FamilySpec,
+    /// `sha256:` of the file's text (suites that name the family record it).
+    pub hash: String,
+    /// Where the text came from, for errors.
+    pub origin: String,
+}
+
+/// What [`Family::draw`] chose for one candidate, besides the task.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Drawn {
+    /// The task file's text.
+    pub toml: String,
+    /// The compiled task.
+    pub task: Task,
+}
+
+impl Family {
+    /// Parses and checks a family file's text; `origin` names it in errors.
+    ///
+    /// # Errors
+    /// [`TaskError`] with the line: malformed TOML, an unknown key or colour, an empty choice, an
+    /// impossible range (min above max, a size outside 5 mm – 10 cm), too many blocks, a group
+    /// named like the gripper or another group, a threshold outside [0, 1].
+    pub fn from_toml(text: &str, origin: &str) -> Result<Family, TaskError> {
+        let spec: FamilySpec = toml::from_str(text).map_err(|e| TaskError {
+            origin: origin.to_owned(),
+            line: e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+            message: e.message().trim_end().to_owned(),
+        })?;
+        let at = |span: Option<std::ops::Range<usize>>, message: String| TaskError {
+            origin: origin.to_owned(),
+            line: span.map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+            message,
+        };
+        let err = |message: String| at(None, message);
+        if spec.version != FAMILY_VERSION {
+            return Err(err(format!(
+                "family format version {} is not one this build reads (it reads version {FAMILY_VERSION})",
+                spec.version
+            )));
+        }
+        let plain = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_';
+        if !spec.family.starts_with(|c: char| c.is_ascii_alphabetic())
+            || spec.family.len() > 32
+            || !spec.family.chars().all(plain)
+        {
+            return Err(err(format!(
+                "family name {:?}: a letter, then letters, digits, '-' or '_', at most 32 (generated ids are NAME-SEED-v0)",
+                spec.family
+            )));
+        }
+        for (what, empty) in [
+            ("gripper", spec.gripper.is_empty()),
+            ("gripper_action", spec.gripper_action.is_empty()),
+            ("table", spec.table.is_empty()),
+            ("floor", spec.floor.is_empty()),
+            ("blocks", spec.blocks.is_empty()),
+        ] {
+            if empty {
+                return Err(err(format!("`{what}` lists nothing to draw from: give at least one choice")));
+            }
+        }
+        if spec.max_episode_steps == 0 {
+            return Err(err("max_episode_steps must be at least 1".into()));
+        }
+        let c = &spec.check;
+        if !(0.0..=1.0).contains(&c.min_solver_success) {
+            return Err(err(format!("check.min_solver_success {} must be in [0, 1]", c.min_solver_success)));
+        }
+        if !(c.max_decided_at_first_step > 0.0 && c.max_decided_at_first_step <= 1.0) {
+            return Err(err(format!(
+                "check.max_decided_at_first_step {} must be in (0, 1]",
+                c.max_decided_at_first_step
+            )));
+        }
+        if c.episodes == 0 || c.episodes > 1000 || c.max_candidates == 0 || c.max_candidates > 1000 {
+            return Err(err(format!(
+                "check.episodes ({}) and check.max_candidates ({}) must be 1 to 1000",
+                c.episodes, c.max_candidates
+            )));
+        }
+        let mut most = 0;
+        let mut names: Vec<&str> = Vec::new();
+        for g in &spec.blocks {
+            let span = Some(g.span());
+            let g = g.get_ref();
+            if RESERVED_NAMES.contains(&g.name.as_str()) || names.contains(&g.name.as_str()) || g.name.is_empty() {
+                return Err(at(span, format!("block group name {:?} is empty, reserved or used twice", g.name)));
+            }
+            names.push(&g.name);
+            if g.count[0] > g.count[1] {
+                return Err(at(
+                    span,
+                    format!("group {}: count [{}, {}] has min above max", g.name, g.count[0], g.count[1]),
+                ));
+            }
+            if !(g.size[0] <= g.size[1] && g.size[0] >= 0.005 && g.size[1] <= 0.1) {
+                return Err(at(
+                    span,
+                    format!(
+                        "group {}: size [{}, {}] must be a range within 0.005 to 0.1 m",
+                        g.name, g.size[0], g.size[1]
+                    ),
+                ));
+            }
+            if let Some(h) = g.half_extents.filter(|h| h.iter().any(|&v| !(0.005..=0.2).contains(&v))) {
+                return Err(at(
+                    span,
+                    format!("group {}: half_extents {h:?} must each be within 0.005 to 0.2 m", g.name),
+                ));
+            }
+            if !(g.mass > 0.0 && g.mass <= 100.0) {
+                return Err(at(span, format!("group {}: mass {} must be above 0 and at most 100 kg", g.name, g.mass)));
+            }
+            most += g.count[1];
+        }
+        if most > MAX_FAMILY_BLOCKS {
+            return Err(err(format!("the groups may draw {most} blocks; a family draws at most {MAX_FAMILY_BLOCKS}")));
+        }
+        let hash = {
+            use sha2::{Digest, Sha256};
+            let d = Sha256::digest(text.as_bytes());
+            format!("sha256:{}", d.iter().map(|b| format!("{b:02x}")).collect::<String>())
+        };
+        Ok(Family { spec, hash, origin: origin.to_owned() })
+    }
+
+    /// Reads and checks a family file.
+    ///
+    /// # Errors
+    /// An unreadable file, or what [`Family::from_toml`] refuses.
+    pub fn read(path: &std::path::Path) -> Result<Family, TaskError> {
+        let origin = path.display().to_string();
+        let text = crate::io::read_text(path, "family file", crate::limits::TEXT_FILE_BYTES)
+            .map_err(|e| TaskError { origin: origin.clone(), line: None, message: e.to_string() })?;
+        Family::from_toml(&text, &origin)
+    }
+
+    /// A shipped family by name, or a family file (relative paths against `dir` where given).
+    ///
+    /// # Errors
+    /// Neither a shipped family nor a readable file, or what [`Family::from_toml`] refuses.
+    pub fn load(name_or_path: &str, dir: Option<&std::path::Path>) -> Result<Family, TaskError> {
+        if let Some((name, text)) = BUILTIN_FAMILIES.iter().find(|(n, _)| *n == name_or_path) {
+            return Family::from_toml(text, &format!("families/{name}.toml"));
+        }
+        let path = std::path::Path::new(name_or_path);
+        if path.extension().is_some_and(|e| e == "toml") || path.exists() {
+            let path = dir.map_or_else(|| path.to_owned(), |d| d.join(path));
+            return Family::read(&path);
+        }
+        let known: Vec<&str> = BUILTIN_FAMILIES.iter().map(|(n, _)| *n).collect();
+        Err(TaskError {
+            origin: name_or_path.to_owned(),
+            line: None,
+            message: format!(
+                "no such family: the shipped ones are {}; or give a family file (.toml)",
+                known.join(", ")
+            ),
+        })
+    }
+
+    /// The id of the task generator seed `seed` gives.
+    pub fn task_id(&self, seed: u64) -> String {
+        format!("{}-{seed}-v0", self.spec.family)
+    }
+
+    /// Candidate `candidate` of generator seed `seed`: every choice drawn from a generator seeded
+    /// by the pair alone, so the same family, seed and candidate give the same task anywhere.
+    ///
+    /// # Errors
+    /// A drawn task that does not compile (a placement rule naming a group drawn empty, say),
+    /// with the compiler's message.
+    pub fn draw(&self, seed: u64, candidate: usize) -> Result<Drawn, TaskError> {
+        let s = &self.spec;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(candidate as u64);
+        let pick = |rng: &mut ChaCha8Rng, n: usize| rng.gen_range(0..n);
+        let gripper = s.gripper[pick(&mut rng, s.gripper.len())];
+        let action = s.gripper_action[pick(&mut rng, s.gripper_action.len())];
+        let table = s.table[pick(&mut rng, s.table.len())];
+        let floor = s.floor[pick(&mut rng, s.floor.len())].colour();
+        let mut objects = Vec::new();
+        let mut summary = Vec::new();
+        for g in &s.blocks {
+            let g = g.get_ref();
+            let n = rng.gen_range(g.count[0]..=g.count[1]);
+            let size = (rng.gen_range(g.size[0]..=g.size[1]) * 1000.0).round() / 1000.0;
+            if n == 0 {
+                continue;
+            }
+            summary.push(format!("{n} {}", g.colour));
+            objects.push(Spanned::new(
+                0..0,
+                ObjectSpec {
+                    name: g.name.clone(),
+                    colour: g.colour,
+                    kind: Kind::Box,
+                    half_extents: g.half_extents.unwrap_or([size; 3]),
+                    mass: g.mass,
+                    friction: None,
+                    start: g.start.clone(),
+                    count: (n > 1).then_some([n, n]),
+                },
+            ));
+        }
+        let id = self.task_id(seed);
+        let spec = TaskSpec {
+            version: FORMAT_VERSION,
+            id: id.clone(),
+            summary: format!(
+                "{} family, seed {seed} (candidate {candidate}): {} gripper{}, {} table, {} floor; {}",
+                s.family,
+                gripper,
+                if action { " with the gripper action" } else { "" },
+                table,
+                floor.map_or("neutral".to_owned(), |c| c.to_string()),
+                summary.join(", ")
+            ),
+            max_episode_steps: s.max_episode_steps,
+            shuffle: Vec::new(),
+            robot: RobotSpec { gripper, gripper_action: action, ..RobotSpec::default() },
+            table: SurfaceSpec { colour: table },
+            floor: floor.map(|colour| SurfaceSpec { colour }),
+            curriculum: CurriculumSpec::default(),
+            placement: PlacementSpec::default(),
+            objects,
+            distributions: BTreeMap::new(),
+        };
+        let body = toml::to_string(&spec).map_err(|e| TaskError {
+            origin: id.clone(),
+            line: None,
+            message: format!("cannot write the task: {e}"),
+        })?;
+        let toml = format!(
+            "# Generated by `blockpuzzle task generate` from family {} ({}), seed {seed}, candidate {candidate}.\n{body}",
+            s.family, self.hash
+        );
+        let task = Task::from_toml(&toml, None).map_err(|e| TaskError {
+            origin: format!("{} (seed {seed}, candidate {candidate})", self.origin),
+            line: None,
+            message: e.to_string(),
+        })?;
+        Ok(Drawn { toml, task })
+    }
+}

@@ -1,0 +1,117 @@
+//! Task families and the generator: family files checked like task files, generated tasks
+//! deterministic in the seed and valid, candidates the solver cannot play rejected and counted.
+
+use blockpuzzle::generate::{generate, generate_seed, rejections};
+use blockpuzzle::task::family::Family;
+use blockpuzzle::task::Task;
+
+fn shipped(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/families/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// A shipped family with fewer check episodes (the checks' logic is the same; the tests run faster).
+fn quick(name: &str) -> Family {
+    let text = shipped(name).replace("episodes = 20", "episodes = 4");
+    assert_ne!(text, shipped(name));
+    Family::from_toml(&text, name).unwrap()
+}
+
+#[test]
+fn the_shipped_families_read() {
+    for name in ["push", "gripper"] {
+        let f = Family::from_toml(&shipped(name), name).unwrap();
+        assert_eq!(f.spec.family, name);
+        assert!(f.hash.starts_with("sha256:"));
+    }
+}
+
+#[test]
+fn family_errors_name_the_problem_and_the_line() {
+    let base = shipped("push");
+    let refused = |text: &str, want: &[&str]| {
+        let e = Family::from_toml(text, "f.toml").expect_err("refused").to_string();
+        for w in want {
+            assert!(e.contains(w), "{w:?} missing from: {e}");
+        }
+    };
+    // An impossible range, with the line of its group.
+    let line = base.lines().position(|l| l.starts_with("name = \"red\"")).unwrap();
+    refused(
+        &base.replace("count = [0, 2]\nstart = { around = [\"blue\"", "count = [3, 2]\nstart = { around = [\"blue\""),
+        &["count [3, 2] has min above max", &format!("f.toml:{}:", line)],
+    );
+    refused(&base.replace("size = [0.02, 0.03]", "size = [0.03, 0.02]"), &["size [0.03, 0.02]"]);
+    // An unknown colour, an empty choice, an unknown key, a bad version, too many blocks.
+    refused(&base.replace("table = [\"grey\"]", "table = [\"purple\"]"), &["purple"]);
+    refused(&base.replace("table = [\"grey\"]", "table = []"), &["`table` lists nothing to draw from"]);
+    refused(&base.replace("max_candidates = 20", "max_candidates = 20\nretries = 3"), &["retries"]);
+    refused(&base.replace("version = 1", "version = 9"), &["version 9", "reads version 1"]);
+    refused(&base.replace("count = [0, 2]", "count = [0, 9]"), &["a family draws at most 12"]);
+    refused(&base.replace("min_solver_success = 0.5", "min_solver_success = 1.5"), &["[0, 1]"]);
+    refused(
+        &base.replace("name = \"green2\"", "name = \"gripper\""),
+        &["\"gripper\" is empty, reserved or used twice"],
+    );
+}
+
+/// The same seed gives the same task whatever the range it is generated in and the thread count;
+/// every kept task compiles to the hash recorded; rejections are counted by reason.
+#[test]
+fn generation_is_deterministic_valid_and_counts_its_rejections() {
+    let family = quick("gripper");
+    let one = generate(&family, 0, 4, 1).unwrap();
+    let two = generate(&family, 0, 4, 2).unwrap();
+    let key = |r: &[blockpuzzle::generate::SeedResult]| -> Vec<Option<(String, String, usize)>> {
+        r.iter().map(|s| s.task.as_ref().map(|t| (t.id.clone(), t.hash.clone(), t.candidate))).collect()
+    };
+    assert_eq!(key(&one), key(&two));
+    let alone = generate_seed(&family, 2);
+    assert_eq!(alone.task.as_ref().map(|t| &t.toml), one[2].task.as_ref().map(|t| &t.toml));
+    let kept: Vec<_> = one.iter().filter_map(|s| s.task.as_ref()).collect();
+    assert!(!kept.is_empty(), "{:?}", rejections(&one));
+    for t in &kept {
+        let task = Task::from_toml(&t.toml, None).unwrap();
+        assert_eq!(task.source.hash, t.hash);
+        assert_eq!(task.id(), t.id);
+        assert!(t.solver_success >= family.spec.check.min_solver_success, "{t:?}");
+        assert!(["reach", "push-green"].contains(&t.script.as_str()), "{}", t.script);
+    }
+    // A blue gripper with a blue block is beyond the solver: such draws are counted, not kept.
+    let all = rejections(&generate(&family, 0, 12, 2).unwrap());
+    assert!(all.keys().any(|k| k.contains("blue gripper and blue blocks")), "{all:?}");
+}
+
+/// The command writes one file per kept task and a record of the run.
+#[cfg(feature = "cli")]
+#[test]
+fn task_generate_writes_the_tasks_and_their_record() {
+    let dir = tempfile::tempdir().unwrap();
+    let fam = dir.path().join("push.toml");
+    std::fs::write(&fam, shipped("push").replace("episodes = 20", "episodes = 3")).unwrap();
+    let out = dir.path().join("tasks");
+    let o = crate::common::blockpuzzle(&["tasks", "generate", fam.to_str().unwrap(), "--seed", "5", "--count", "2"])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{text}");
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("generated.json")).unwrap()).unwrap();
+    assert_eq!(record["first_seed"], 5);
+    assert!(record["family_hash"].as_str().unwrap().starts_with("sha256:"));
+    for t in record["tasks"].as_array().unwrap() {
+        let file = out.join(format!("{}.toml", t["id"].as_str().unwrap()));
+        let task = Task::from_toml(&std::fs::read_to_string(&file).unwrap(), Some(&file)).unwrap();
+        assert_eq!(task.source.hash, t["hash"].as_str().unwrap());
+    }
+    assert!(text.contains("seeds gave a task"), "{text}");
+    // A family that is not a file, and an --out that is a file, are refused by name.
+    let o = crate::common::blockpuzzle(&["task", "generate", "/no/such.toml", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("/no/such.toml"));
+    let o = crate::common::blockpuzzle(&["task", "generate", fam.to_str().unwrap(), "--out", fam.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is not a folder"), "{}", String::from_utf8_lossy(&o.stderr));
+}
