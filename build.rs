@@ -40,7 +40,17 @@ fn main() {
 /// `-dirty` when a file that goes into the build differs from it. The script runs again when
 /// HEAD moves or one of those files changes (a folder is watched as a whole).
 fn commit(manifest: &Path) -> Option<String> {
-    let inputs = ["src", "tasks", "suites", "models/scene.xml", "Cargo.toml", "Cargo.lock", "build.rs", "mujoco-sys"];
+    let inputs = [
+        "src",
+        "tasks",
+        "suites",
+        "families",
+        "models/scene.xml",
+        "Cargo.toml",
+        "Cargo.lock",
+        "build.rs",
+        "mujoco-sys",
+    ];
     for input in inputs {
         println!("cargo:rerun-if-changed={input}");
     }

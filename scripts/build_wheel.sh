@@ -29,7 +29,7 @@ export VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" PYO3_PYTHON="$VENV/bin/python"
 # The commit the sources come from (the sdist has no .git): results of the wheel record it.
 if COMMIT="$(git -C "$ROOT" rev-parse HEAD 2>/dev/null)"; then
     # What goes into the build (the package's tests do not).
-    if [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no -- src tasks suites models/scene.xml \
+    if [ -n "$(git -C "$ROOT" status --porcelain --untracked-files=no -- src tasks suites families models/scene.xml \
         Cargo.toml Cargo.lock build.rs mujoco-sys python/src python/blockpuzzle python/Cargo.toml \
         python/Cargo.lock python/build.rs python/pyproject.toml zoo)" ]; then
         COMMIT="$COMMIT-dirty"

@@ -42,6 +42,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("cross-task", include_str!("../suites/cross-task.toml")),
     ("count", include_str!("../suites/count.toml")),
     ("obstacles", include_str!("../suites/obstacles.toml")),
+    ("procgen", include_str!("../suites/procgen.toml")),
 ];
 
 /// A suite file as written.

@@ -131,23 +131,26 @@ def test_every_mode_of_the_core_has_a_python_layout():
 
 
 def test_entities_mode_shows_the_gripper_table_and_floor_and_passes_the_checkers():
-    # BlocksAvoid-v0: grey gripper, grey table, red floor; three blocks.
+    # BlocksAvoid-v0: grey gripper, grey table, red floor; blue, green and 1-3 reds (five block slots).
     env = gym.make("BlockPuzzle/BlocksAvoid-v0", obs_mode="entities")
     space = env.observation_space
     assert list(space.spaces) == ["robot", "entities", "mask"]
-    assert space["entities"].shape == (6, 26) and space["mask"].shape == (6,)
+    assert space["entities"].shape == (8, 26) and space["mask"].shape == (8,)
     layout = env.unwrapped.obs_layout
-    assert (layout["rows"], layout["max_objects"], layout["rows_key"]) == (6, 3, "entities")
-    assert layout["names"][10 + 3 * 26] == "gripper/pos.x" and layout["names"][-3:] == ["mask/gripper", "mask/table", "mask/floor"]
+    assert (layout["rows"], layout["max_objects"], layout["rows_key"]) == (8, 5, "entities")
+    assert layout["names"][10 + 5 * 26] == "gripper/pos.x" and layout["names"][-3:] == ["mask/gripper", "mask/table", "mask/floor"]
     check_env(env.unwrapped, skip_render_check=True)
     obs, _ = env.reset(seed=3)
-    rows = obs["entities"]
+    rows, mask = obs["entities"], obs["mask"]
     colour, kind = rows[:, 15:19].argmax(axis=1), rows[:, 22:26].argmax(axis=1)
-    assert list(kind) == [3, 3, 3, 0, 1, 2], "blocks, then gripper, table, floor"
-    assert list(colour) == [1, 2, 0, 3, 3, 0], "blue, green, red blocks; grey gripper and table; red floor"
-    assert np.array_equal(obs["mask"], np.ones(6, np.float32))
-    np.testing.assert_array_equal(rows[3, :3], obs["robot"][:3])  # the gripper row is at the grip
-    assert rows[4, 2] == pytest.approx(0.4, abs=1e-6) and rows[4, 21] == pytest.approx(0.2)  # the table's top, half height
+    present = mask[:5] == 1
+    assert present[:3].all() and list(kind[:5][present]) == [3] * int(present.sum()), "present blocks are blocks"
+    assert list(colour[:3]) == [1, 2, 0], "blue, green, a red block"
+    assert not rows[:5][~present].any(), "absent blocks are zero rows"
+    assert list(kind[5:]) == [0, 1, 2] and list(colour[5:]) == [3, 3, 0], "grey gripper and table, red floor"
+    assert list(mask[5:]) == [1, 1, 1]
+    np.testing.assert_array_equal(rows[5, :3], obs["robot"][:3])  # the gripper row is at the grip
+    assert rows[6, 2] == pytest.approx(0.4, abs=1e-6) and rows[6, 21] == pytest.approx(0.2)  # the table's top, half height
     env.close()
     # Without a coloured floor its row is zero and masked.
     touch = gym.make("BlockPuzzle/BlocksTouch-v0", obs_mode="entities")
@@ -155,7 +158,7 @@ def test_entities_mode_shows_the_gripper_table_and_floor_and_passes_the_checkers
     assert list(obs["mask"]) == [1, 1, 1, 1, 0] and not obs["entities"][4].any()
     touch.close()
     envs = blockpuzzle.make_vec("BlocksAvoid-v0", num_envs=2, threads=2, obs_mode="entities")
-    assert envs.observation_space["entities"].shape == (2, 6, 26)
+    assert envs.observation_space["entities"].shape == (2, 8, 26)
     obs, _ = envs.reset(seed=0)
     for _ in range(3):
         assert envs.observation_space.contains(obs)

@@ -115,3 +115,70 @@ fn task_generate_writes_the_tasks_and_their_record() {
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a folder"), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Suite rows drawn from a family: one row per generator seed, each the seed's task; the suite's
+/// hash covers the family's; what a family row must say is checked.
+#[test]
+fn suites_draw_rows_from_families() {
+    use blockpuzzle::suite;
+    let s = suite::load("procgen").unwrap();
+    let (train, test) = (&s.splits[0], &s.splits[1]);
+    assert_eq!((train.rows.len(), test.rows.len()), (16, 16));
+    assert!(train.rows.iter().chain(&test.rows).all(|r| r.generated && r.task.spec.curriculum.max_level == 0));
+    assert_eq!(train.rows[0].task.id(), "push-0-v0");
+    assert!(train.rows[0].source.contains("family push, seed 0"), "{}", train.rows[0].source);
+    assert_eq!(test.rows[8].task.id(), "gripper-1000-v0");
+    let text = suite::BUILTIN.iter().find(|(n, _)| *n == "procgen").unwrap().1;
+    use sha2::Digest;
+    let plain: String = sha2::Sha256::digest(text.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
+    assert_ne!(s.sha256, plain, "the identity covers the families");
+    let tiny = |row: &str| {
+        format!(
+            "version = 1\nname = \"t\"\nsummary = \"s\"\n[[splits.train]]\n{row}\nseed = 0\nepisodes = 2\n\
+             [[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 10\nepisodes = 2\n"
+        )
+    };
+    let refused = |row: &str, want: &str| {
+        let e = suite::parse(&tiny(row), "t.toml", None).unwrap_err().to_string();
+        assert!(e.contains(want), "{want:?} missing from: {e}");
+    };
+    refused("family = \"push\"\ngenerator_seeds = [5, 5]", "must be a range [first, end) of 1 to 200 seeds");
+    refused("family = \"push\"\ntask = \"BlocksTouch-v0\"\ngenerator_seeds = [0, 1]", "not both");
+    refused("family = \"push\"", "not both");
+    refused("family = \"nope\"\ngenerator_seeds = [0, 1]", "no such family: the shipped ones are push, gripper");
+    let ok = suite::parse(&tiny("family = \"push\"\ngenerator_seeds = [3, 5]"), "t.toml", None).unwrap();
+    assert_eq!(ok.splits[0].rows.iter().map(|r| r.task.id()).collect::<Vec<_>>(), ["push-3-v0", "push-4-v0"]);
+}
+
+/// The scripted baseline (the solver) on a suite of generated tasks, through the command line:
+/// each row records its generated task's hash, and the solver keeps the success it was kept for.
+#[cfg(feature = "cli")]
+#[test]
+fn the_solver_plays_a_suite_of_generated_tasks() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("gen.toml");
+    std::fs::write(
+        &file,
+        "version = 1\nname = \"gen\"\nsummary = \"s\"\n[[splits.train]]\nfamily = \"gripper\"\ngenerator_seeds = [0, 2]\n\
+         seed = 100\nepisodes = 20\n[[splits.test]]\nfamily = \"push\"\ngenerator_seeds = [50, 52]\nseed = 0\nepisodes = 20\n",
+    )
+    .unwrap();
+    let out = dir.path().join("r.json");
+    let o = crate::common::blockpuzzle(&["eval", "--suite", file.to_str().unwrap(), "--baseline", "scripted"])
+        .args(["--threads", "2", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let suite = blockpuzzle::suite::load(file.to_str().unwrap()).unwrap();
+    for (split, rows) in r["splits"].as_array().unwrap().iter().zip(&suite.splits) {
+        for (row, want) in split["rows"].as_array().unwrap().iter().zip(&rows.rows) {
+            assert_eq!(row["task_sha256"].as_str().unwrap(), want.task.source.hash, "{row}");
+            // The generator kept the task at a success of at least 0.5 over seeds 0-19: the test
+            // rows play those episodes.
+            if rows.name == "test" {
+                assert!(row["evaluation"]["success_rate"].as_f64().unwrap() >= 0.5, "{row}");
+            }
+        }
+    }
+}
