@@ -102,8 +102,28 @@ fn check(family: &Family, seed: u64, candidate: usize) -> Result<Generated, Reje
     })
 }
 
-/// The task of generator seed `seed`: its candidates in order until one passes.
+/// The task of generator seed `seed`: its candidates in order until one passes. A seed's result
+/// depends on the family's content (its hash) and the seed alone, so a process keeps each one it
+/// has worked out (suites that draw from families load again without checking again).
 pub fn generate_seed(family: &Family, seed: u64) -> SeedResult {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    type Memo = Mutex<HashMap<(String, u64), SeedResult>>;
+    static MEMO: OnceLock<Memo> = OnceLock::new();
+    let memo = MEMO.get_or_init(Default::default);
+    let key = (family.hash.clone(), seed);
+    if let Some(r) = memo.lock().ok().and_then(|m| m.get(&key).cloned()) {
+        return r;
+    }
+    let r = check_seed(family, seed);
+    if let Ok(mut m) = memo.lock() {
+        m.insert(key, r.clone());
+    }
+    r
+}
+
+/// [`generate_seed`]'s work: the seed's candidates in order until one passes.
+fn check_seed(family: &Family, seed: u64) -> SeedResult {
     let (mut rejected, mut examples) = (BTreeMap::new(), BTreeMap::new());
     for candidate in 0..family.spec.check.max_candidates {
         match check(family, seed, candidate) {
@@ -159,7 +179,8 @@ pub fn examples(results: &[SeedResult]) -> BTreeMap<String, String> {
 }
 
 /// Writes the kept tasks of `results` (generator seeds `first ..`, `family`'s) to `out` as ID.toml,
-/// and `out/generated.json`: the family, its file and hash, the build, each kept task's record,
+/// and `out/generated.json`: the family, its file and hash, `build` (what made them: the caller's
+/// `provenance::Build`, which this module, below provenance, cannot name), each kept task's record,
 /// the seeds without a task and the rejections by reason; returns that record. `out` is made if
 /// missing.
 ///
@@ -171,6 +192,7 @@ pub fn write_folder(
     family_file: &std::path::Path,
     first: u64,
     results: &[SeedResult],
+    build: &impl Serialize,
 ) -> anyhow::Result<serde_json::Value> {
     match std::fs::metadata(out) {
         Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
@@ -188,7 +210,7 @@ pub fn write_folder(
         "family_hash": family.hash,
         "first_seed": first,
         "count": results.len(),
-        "build": crate::provenance::Build::current(),
+        "build": build,
         "tasks": kept,
         "seeds_without_a_task": results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect::<Vec<_>>(),
         "rejected": rejections(results),

@@ -43,6 +43,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("count", include_str!("../suites/count.toml")),
     ("obstacles", include_str!("../suites/obstacles.toml")),
     ("procgen", include_str!("../suites/procgen.toml")),
+    ("compose", include_str!("../suites/compose.toml")),
+    ("cross-task-v2", include_str!("../suites/cross-task-v2.toml")),
 ];
 
 /// A suite file as written.
@@ -67,6 +69,9 @@ struct RowSpec {
     /// The generator seeds `[first, end)` whose tasks the row stands for.
     #[serde(default)]
     generator_seeds: Option<[u64; 2]>,
+    /// Narrower choices than the family's (one rule variation alone, or a combination).
+    #[serde(default)]
+    choose: Option<crate::task::family::Narrowing>,
     distribution: Option<String>,
     level: Option<usize>,
     seed: u64,
@@ -201,15 +206,19 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
             let what = r.task.as_deref().or(r.family.as_deref()).unwrap_or("?");
             let at = |m: String| invalid(format!("splits.{name}[{i}] ({what}): {m}"));
             match (&r.task, &r.family, r.generator_seeds) {
-                (Some(_), None, None) => out.push(row(r, dir).map_err(at)?),
+                (Some(_), None, None) if r.choose.is_none() => out.push(row(r, dir).map_err(at)?),
                 (None, Some(f), Some(seeds)) => {
-                    let family = crate::task::family::Family::load(f, dir).map_err(|e| at(e.to_string()))?;
+                    let mut family = crate::task::family::Family::load(f, dir).map_err(|e| at(e.to_string()))?;
+                    if let Some(n) = &r.choose {
+                        family = family.narrowed(n).map_err(|e| at(e.message))?;
+                    }
                     families.push(family.hash.clone());
                     out.extend(generated_rows(r, &family, seeds).map_err(at)?);
                 }
                 _ => {
                     return Err(at(
-                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]`, not both".into(),
+                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`), not both"
+                            .into(),
                     ))
                 }
             }

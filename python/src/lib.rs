@@ -482,7 +482,8 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     let out = std::path::PathBuf::from(out);
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
         let results = blockpuzzle::generate::generate(&fam, seed, count, threads)?;
-        blockpuzzle::generate::write_folder(&out, &fam, path, seed, &results).map_err(|e| format!("{e:#}"))
+        let build = blockpuzzle::provenance::Build::current();
+        blockpuzzle::generate::write_folder(&out, &fam, path, seed, &results, &build).map_err(|e| format!("{e:#}"))
     });
     manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
 }

@@ -66,7 +66,7 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let results = crate::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
-    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results)?;
+    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results, &crate::provenance::Build::current())?;
     let kept: Vec<&crate::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
     let missing: Vec<u64> = results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect();
     let rejected = crate::generate::rejections(&results);

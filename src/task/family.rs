@@ -160,6 +160,29 @@ fn default_mass() -> f64 {
     2.0
 }
 
+/// A narrowing of a family (a suite row's `choose`): fewer choices for the gripper, the table,
+/// the floor or the gripper action, and narrower count ranges for named groups, each within the
+/// family's own.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Narrowing {
+    /// Gripper colours (each one of the family's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gripper: Option<Vec<Colour>>,
+    /// Whether the gripper action is on (each one of the family's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gripper_action: Option<Vec<bool>>,
+    /// Table colours.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table: Option<Vec<Colour>>,
+    /// Floor choices.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<Vec<FloorChoice>>,
+    /// Count ranges by group name (within the group's range).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub counts: BTreeMap<String, [usize; 2]>,
+}
+
 /// A checked family: its spec, its text's hash, and where it came from.
 #[derive(Debug, Clone)]
 pub struct Family {
@@ -324,6 +347,58 @@ impl Family {
                 known.join(", ")
             ),
         })
+    }
+
+    /// The family narrowed as `n` says: a family of its own, whose hash covers this one's and the
+    /// narrowing, whose tasks are drawn from the narrower choices and ranges.
+    ///
+    /// # Errors
+    /// A choice the family does not offer, a group it does not have, a count range outside the
+    /// group's, an empty list.
+    pub fn narrowed(&self, n: &Narrowing) -> Result<Family, TaskError> {
+        let err = |message: String| TaskError { origin: self.origin.clone(), line: None, message };
+        fn subset<T: PartialEq + Copy + std::fmt::Debug>(
+            what: &str,
+            of: &[T],
+            pick: &Option<Vec<T>>,
+        ) -> Result<Vec<T>, String> {
+            let Some(pick) = pick else { return Ok(of.to_vec()) };
+            if pick.is_empty() {
+                return Err(format!("choose.{what} is empty: give at least one of {of:?}"));
+            }
+            match pick.iter().find(|p| !of.contains(p)) {
+                Some(p) => Err(format!("choose.{what}: {p:?} is not one of the family's {of:?}")),
+                None => Ok(pick.clone()),
+            }
+        }
+        let mut spec = self.spec.clone();
+        spec.gripper = subset("gripper", &self.spec.gripper, &n.gripper).map_err(err)?;
+        spec.gripper_action = subset("gripper_action", &self.spec.gripper_action, &n.gripper_action).map_err(err)?;
+        spec.table = subset("table", &self.spec.table, &n.table).map_err(err)?;
+        spec.floor = subset("floor", &self.spec.floor, &n.floor).map_err(err)?;
+        for (name, range) in &n.counts {
+            let Some(g) = spec.blocks.iter_mut().map(Spanned::get_mut).find(|g| &g.name == name) else {
+                let names: Vec<&str> = self.spec.blocks.iter().map(|g| g.get_ref().name.as_str()).collect();
+                return Err(err(format!(
+                    "choose.counts: the family has no group {name:?} (it has {})",
+                    names.join(", ")
+                )));
+            };
+            if range[0] > range[1] || range[0] < g.count[0] || range[1] > g.count[1] {
+                return Err(err(format!(
+                    "choose.counts.{name} = [{}, {}] must be a range within the group's [{}, {}]",
+                    range[0], range[1], g.count[0], g.count[1]
+                )));
+            }
+            g.count = *range;
+        }
+        let hash = {
+            use sha2::{Digest, Sha256};
+            let narrowing = serde_json::to_string(n).unwrap_or_default();
+            let d = Sha256::digest(format!("{}\n{narrowing}", self.hash).as_bytes());
+            format!("sha256:{}", d.iter().map(|b| format!("{b:02x}")).collect::<String>())
+        };
+        Ok(Family { spec, hash, origin: format!("{} (narrowed)", self.origin) })
     }
 
     /// The id of the task generator seed `seed` gives.

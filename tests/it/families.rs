@@ -182,3 +182,58 @@ fn the_solver_plays_a_suite_of_generated_tasks() {
         }
     }
 }
+
+/// `compose`: rows narrowed to one rule variation in training and to combinations in testing; a
+/// narrowing outside the family is refused by name.
+#[test]
+fn compose_rows_narrow_their_families() {
+    use blockpuzzle::rules::Colour;
+    let s = blockpuzzle::suite::load("compose").unwrap();
+    let (train, test) = (&s.splits[0], &s.splits[1]);
+    assert_eq!((train.rows.len(), test.rows.len()), (16, 16));
+    let floor = |r: &blockpuzzle::suite::Row| r.task.spec.floor.as_ref().map(|f| f.colour);
+    let gripper = |r: &blockpuzzle::suite::Row| r.task.spec.robot.gripper;
+    let reds = |r: &blockpuzzle::suite::Row| r.task.colours().iter().filter(|&&c| c == Colour::Red).count();
+    // Training: never two variations together.
+    for r in &train.rows {
+        let variations = [floor(r) == Some(Colour::Red), reds(r) > 0, gripper(r) != Colour::Grey];
+        assert_eq!(variations.iter().filter(|&&v| v).count(), 1, "{}: {variations:?}", r.source);
+    }
+    // Testing: a red floor with another variation, always.
+    for r in &test.rows {
+        assert!(floor(r) == Some(Colour::Red) && (reds(r) > 0 || gripper(r) != Colour::Grey), "{}", r.source);
+    }
+    let family = Family::from_toml(&shipped("push"), "push").unwrap();
+    let narrow = |toml: &str| family.narrowed(&toml::from_str(toml).unwrap()).map_err(|e| e.to_string());
+    assert!(narrow("floor = [\"blue\"]").unwrap_err().contains("Blue is not one of the family's"));
+    assert!(narrow("counts = { red = [0, 3] }").unwrap_err().contains("within the group's [0, 2]"));
+    assert!(narrow("counts = { purple = [0, 0] }").unwrap_err().contains("no group \"purple\""));
+    let n = narrow("floor = [\"red\"]").unwrap();
+    assert_eq!(n.spec.floor.len(), 1);
+    assert_ne!(n.hash, family.hash);
+}
+
+/// `cross-task-v2` trains on every rule object's colour at work and tests the other tasks; the first
+/// version stays as it was (the hash its recorded results carry).
+#[test]
+fn cross_task_v2_shows_the_rules_in_training_and_version_1_is_unchanged() {
+    let v1 = blockpuzzle::suite::load("cross-task").unwrap();
+    let recorded: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/results/generalization/mujoco-2.2.2/baseline-scripted.cross-task.json"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(recorded["suite"]["sha256"].as_str().unwrap(), v1.sha256);
+    let v2 = blockpuzzle::suite::load("cross-task-v2").unwrap();
+    let ids = |split: usize| -> Vec<String> { v2.splits[split].rows.iter().map(|r| r.task.id().to_owned()).collect() };
+    assert_eq!(ids(1), ["ReachAvoid-v0", "ToppleTower-v0", "BlocksStack-v0"]);
+    let train = ids(0);
+    assert!(train.contains(&"GripperTouch-v0".to_owned()) && train.contains(&"BlocksAvoid-v0".to_owned()));
+    assert!(v2.splits[0]
+        .rows
+        .iter()
+        .any(|r| r.generated && r.task.spec.robot.gripper == blockpuzzle::rules::Colour::Red));
+}
