@@ -213,12 +213,12 @@ impl Family {
     pub fn from_toml(text: &str, origin: &str) -> Result<Family, TaskError> {
         let spec: FamilySpec = toml::from_str(text).map_err(|e| TaskError {
             origin: origin.to_owned(),
-            line: e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+            line: e.span().map(|s| super::diagnostics::line_of(text, s.start)),
             message: e.message().trim_end().to_owned(),
         })?;
         let at = |span: Option<std::ops::Range<usize>>, message: String| TaskError {
             origin: origin.to_owned(),
-            line: span.map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1),
+            line: span.map(|s| super::diagnostics::line_of(text, s.start)),
             message,
         };
         let err = |message: String| at(None, message);
