@@ -189,7 +189,7 @@ pub fn examples(results: &[SeedResult]) -> BTreeMap<String, String> {
 pub fn write_folder(
     out: &std::path::Path,
     family: &Family,
-    family_file: &std::path::Path,
+    family_source: &str,
     first: u64,
     results: &[SeedResult],
     build: &impl Serialize,
@@ -206,7 +206,7 @@ pub fn write_folder(
     }
     let manifest = serde_json::json!({
         "family": family.spec.family,
-        "family_file": family_file.display().to_string(),
+        "family_file": family_source,
         "family_hash": family.hash,
         "first_seed": first,
         "count": results.len(),

@@ -474,16 +474,18 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     blockpuzzle::limits::seed_range(seed, count as u64).map_err(PyValueError::new_err)?;
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
-    let path = std::path::Path::new(family);
-    if let Err(source) = std::fs::metadata(path) {
-        return Err(read_err(&source, format!("cannot read the family file {family}: {source}")));
+    let shipped = blockpuzzle::task::family::BUILTIN_FAMILIES.iter().any(|(n, _)| *n == family);
+    if !shipped {
+        if let Err(source) = std::fs::metadata(family) {
+            return Err(read_err(&source, format!("cannot read the family file {family}: {source}")));
+        }
     }
-    let fam = blockpuzzle::task::family::Family::read(path).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let fam = blockpuzzle::task::family::Family::load(family, None).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let out = std::path::PathBuf::from(out);
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
         let results = blockpuzzle::generate::generate(&fam, seed, count, threads)?;
         let build = blockpuzzle::provenance::Build::current();
-        blockpuzzle::generate::write_folder(&out, &fam, path, seed, &results, &build).map_err(|e| format!("{e:#}"))
+        blockpuzzle::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| format!("{e:#}"))
     });
     manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
 }

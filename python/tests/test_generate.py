@@ -46,6 +46,9 @@ def test_generated_tasks_are_deterministic_and_run(tmp_path):
         obs, _ = env.reset(seed=0)
         assert env.observation_space.contains(obs)
         env.close()
+    # A shipped family by name.
+    s = blockpuzzle.generate_tasks("stack", tmp_path / "s", seed=2, count=1, threads=1)
+    assert s["family"] == "stack" and s["tasks"][0]["script"] == "pick-place", s
 
 
 def test_a_bad_family_is_a_clear_error(tmp_path):

@@ -24,8 +24,8 @@ pub(super) enum TaskCommand {
 
 #[derive(Debug, clap::Args)]
 pub(super) struct TaskGenerateArgs {
-    /// Family file (.toml; `families/` has the shipped ones).
-    family: PathBuf,
+    /// A shipped family by name (push, gripper, stack: `families/`) or a family file (.toml).
+    family: String,
     /// The first generator seed (task k comes from seed + k, the same whatever --count).
     #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
     seed: u64,
@@ -60,7 +60,7 @@ pub(super) struct TaskCheckArgs {
 /// `blockpuzzle task generate`.
 pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     crate::limits::seed_range(a.seed, a.count as u64).map_err(anyhow::Error::msg)?;
-    let family = crate::task::family::Family::read(&a.family)?;
+    let family = crate::task::family::Family::load(&a.family, None)?;
     if std::fs::metadata(&a.out).is_ok_and(|m| !m.is_dir()) {
         bail!("--out {} is not a folder; give a folder for the task files", a.out.display());
     }

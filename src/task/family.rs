@@ -24,8 +24,11 @@ pub const FAMILY_VERSION: u32 = 1;
 pub const MAX_FAMILY_BLOCKS: usize = 12;
 
 /// The shipped families (`families/NAME.toml`, built in like the tasks): (name, text).
-pub const BUILTIN_FAMILIES: &[(&str, &str)] =
-    &[("push", include_str!("../../families/push.toml")), ("gripper", include_str!("../../families/gripper.toml"))];
+pub const BUILTIN_FAMILIES: &[(&str, &str)] = &[
+    ("push", include_str!("../../families/push.toml")),
+    ("gripper", include_str!("../../families/gripper.toml")),
+    ("stack", include_str!("../../families/stack.toml")),
+];
 
 /// A floor choice: no rule object, or one of the four colours.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -82,6 +85,10 @@ pub struct FamilySpec {
     pub floor: Vec<FloorChoice>,
     /// What a generated task must pass to be kept.
     pub check: CheckSpec,
+    /// Every generated task's `[placement]` (a task file's table, its defaults included): a family
+    /// whose blocks start on others sets `settle_seconds`, as BlocksStack-v0 does.
+    #[serde(default)]
+    pub placement: PlacementSpec,
     /// The block groups, placed in this order.
     pub blocks: Vec<Spanned<BlockGroup>>,
 }
@@ -464,7 +471,7 @@ impl Family {
             table: SurfaceSpec { colour: table },
             floor: floor.map(|colour| SurfaceSpec { colour }),
             curriculum: CurriculumSpec::default(),
-            placement: PlacementSpec::default(),
+            placement: s.placement.clone(),
             objects,
             distributions: BTreeMap::new(),
         };

@@ -18,7 +18,7 @@ fn quick(name: &str) -> Family {
 
 #[test]
 fn the_shipped_families_read() {
-    for name in ["push", "gripper"] {
+    for name in ["push", "gripper", "stack"] {
         let f = Family::from_toml(&shipped(name), name).unwrap();
         assert_eq!(f.spec.family, name);
         assert!(f.hash.starts_with("sha256:"));
@@ -114,6 +114,21 @@ fn task_generate_writes_the_tasks_and_their_record() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a folder"), "{}", String::from_utf8_lossy(&o.stderr));
+    // A shipped family by name: the `stack` family's seed 2 draws a red table, which the solver
+    // plays by picking blue up.
+    let out = dir.path().join("stack");
+    let o = crate::common::blockpuzzle(&["task", "generate", "stack", "--seed", "2", "--count", "1"])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("generated.json")).unwrap()).unwrap();
+    assert_eq!(record["family_file"], "stack");
+    assert_eq!(record["tasks"][0]["script"], "pick-place", "{record}");
+    let file = out.join("stack-2-v0.toml");
+    let task = Task::from_toml(&std::fs::read_to_string(&file).unwrap(), Some(&file)).unwrap();
+    assert_eq!(task.spec.table.colour, blockpuzzle::rules::Colour::Red);
 }
 
 /// Suite rows drawn from a family: one row per generator seed, each the seed's task; the suite's
