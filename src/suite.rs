@@ -72,6 +72,10 @@ struct RowSpec {
     /// Narrower choices than the family's (one rule variation alone, or a combination).
     #[serde(default)]
     choose: Option<crate::task::family::Narrowing>,
+    /// Each seed's candidate, pinned (`task generate` records them): the rows are those draws,
+    /// whatever the solver and the engine would choose today, and the suite loads without playing.
+    #[serde(default)]
+    candidates: Option<Vec<usize>>,
     distribution: Option<String>,
     level: Option<usize>,
     seed: u64,
@@ -109,7 +113,7 @@ pub struct Row {
     /// The task.
     pub task: Task,
     /// The id or resolved file path the task was made from (what `registry::task` takes), or for a
-    /// generated task `FAMILY-SEED-v0 (family F, seed S)` (its text is `task.source.toml`).
+    /// generated task `FAMILY-SEED-v0 (family F, seed S, candidate C)` (its text is `task.source.toml`).
     pub source: String,
     /// Whether the task was generated from a family (no file holds it).
     pub generated: bool,
@@ -206,7 +210,9 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
             let what = r.task.as_deref().or(r.family.as_deref()).unwrap_or("?");
             let at = |m: String| invalid(format!("splits.{name}[{i}] ({what}): {m}"));
             match (&r.task, &r.family, r.generator_seeds) {
-                (Some(_), None, None) if r.choose.is_none() => out.push(row(r, dir).map_err(at)?),
+                (Some(_), None, None) if r.choose.is_none() && r.candidates.is_none() => {
+                    out.push(row(r, dir).map_err(at)?)
+                }
                 (None, Some(f), Some(seeds)) => {
                     let mut family = crate::task::family::Family::load(f, dir).map_err(|e| at(e.to_string()))?;
                     if let Some(n) = &r.choose {
@@ -217,7 +223,7 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
                 }
                 _ => {
                     return Err(at(
-                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`), not both"
+                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`, `candidates`), not both"
                             .into(),
                     ))
                 }
@@ -251,6 +257,35 @@ fn generated_rows(
             "generator_seeds = [{first}, {end}] must be a range [first, end) of 1 to {MAX_GENERATED_ROWS} seeds"
         ));
     }
+    let as_row = |task: Task, id: &str, seed: u64, candidate: usize| -> Result<Row, String> {
+        let source = format!("{id} (family {}, seed {seed}, candidate {candidate})", family.spec.family);
+        let mut row = row_of(task, source, r)?;
+        row.generated = true;
+        Ok(row)
+    };
+    if let Some(pins) = &r.candidates {
+        if pins.len() as u64 != end - first {
+            return Err(format!(
+                "candidates lists {} entries for the {} generator seeds [{first}, {end}): give one per seed",
+                pins.len(),
+                end - first
+            ));
+        }
+        let most = family.spec.check.max_candidates;
+        return (first..end)
+            .zip(pins)
+            .map(|(seed, &c)| {
+                if c >= most {
+                    return Err(format!(
+                        "candidates: {c} for seed {seed} is beyond the family's max_candidates = {most} (0 to {})",
+                        most - 1
+                    ));
+                }
+                let drawn = family.draw(seed, c).map_err(|e| format!("seed {seed}, candidate {c}: {}", e.message))?;
+                as_row(drawn.task, &family.task_id(seed), seed, c)
+            })
+            .collect();
+    }
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let results = crate::generate::generate(family, first, (end - first) as usize, threads)?;
     results
@@ -263,10 +298,7 @@ fn generated_rows(
                 ));
             };
             let task = Task::from_toml(&t.toml, None).map_err(|e| e.to_string())?;
-            let source = format!("{} (family {}, seed {})", t.id, family.spec.family, g.seed);
-            let mut row = row_of(task, source, r)?;
-            row.generated = true;
-            Ok(row)
+            as_row(task, &t.id, g.seed, t.candidate)
         })
         .collect()
 }

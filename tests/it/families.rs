@@ -143,6 +143,14 @@ fn suites_draw_rows_from_families() {
     assert_eq!(train.rows[0].task.id(), "push-0-v0");
     assert!(train.rows[0].source.contains("family push, seed 0"), "{}", train.rows[0].source);
     assert_eq!(test.rows[8].task.id(), "gripper-1000-v0");
+    // The pinned candidates are the generator's choices (here on MuJoCo 2.2.2, where they were made):
+    // gripper seed 1000 kept candidate 2.
+    assert!(test.rows[8].source.ends_with("candidate 2)"), "{}", test.rows[8].source);
+    #[cfg(not(feature = "mujoco3"))]
+    {
+        let kept = generate_seed(&Family::load("gripper", None).unwrap(), 1000).task.unwrap();
+        assert_eq!((kept.candidate, &kept.hash), (2, &test.rows[8].task.source.hash));
+    }
     let text = suite::BUILTIN.iter().find(|(n, _)| *n == "procgen").unwrap().1;
     use sha2::Digest;
     let plain: String = sha2::Sha256::digest(text.as_bytes()).iter().map(|b| format!("{b:02x}")).collect();
@@ -161,6 +169,12 @@ fn suites_draw_rows_from_families() {
     refused("family = \"push\"\ntask = \"BlocksTouch-v0\"\ngenerator_seeds = [0, 1]", "not both");
     refused("family = \"push\"", "not both");
     refused("family = \"nope\"\ngenerator_seeds = [0, 1]", "no such family: the shipped ones are push, gripper");
+    refused("family = \"push\"\ngenerator_seeds = [3, 5]\ncandidates = [0]", "candidates lists 1 entries for the 2");
+    refused(
+        "family = \"push\"\ngenerator_seeds = [3, 4]\ncandidates = [20]",
+        "beyond the family's max_candidates = 20",
+    );
+    refused("task = \"BlocksTouch-v0\"\ncandidates = [0]", "not both");
     let ok = suite::parse(&tiny("family = \"push\"\ngenerator_seeds = [3, 5]"), "t.toml", None).unwrap();
     assert_eq!(ok.splits[0].rows.iter().map(|r| r.task.id()).collect::<Vec<_>>(), ["push-3-v0", "push-4-v0"]);
 }
