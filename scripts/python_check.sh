@@ -24,7 +24,7 @@ trap 'rm -rf "$NATIVE" "$WORK"' EXIT
 echo "[python] installing it into a fresh venv ($WORK/venv)"
 python3 -m venv "$WORK/venv"
 "$WORK/venv/bin/pip" install -q --disable-pip-version-check "$WHEEL" pytest==9.2.0 pytest-xdist==3.8.0 \
-    gymnasium==1.4.0 numpy==2.2.6
+    gymnasium==1.4.0 numpy==2.2.6 minari==0.5.4 h5py==3.16.0
 mkdir -p "$WORK/home"
 cd "$WORK"
 # Two pytest workers (pytest-xdist; PYTEST_WORKERS=N for another count), each test module in one of them.

@@ -256,7 +256,7 @@ pub struct EvalSpec<'a> {
 }
 
 /// The environment of `spec`, its observation presented as `obs_mode` (the policy's).
-fn make_env(spec: &EvalSpec, obs_mode: ObsMode) -> Result<BlockEnv> {
+pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode) -> Result<BlockEnv> {
     let mut env = BlockEnv::new(EnvConfig { obs_mode, ..EnvConfig::new(spec.task.clone()) })?;
     if spec.challenge {
         env.set_challenge(true)?;

@@ -13,6 +13,7 @@
 pub mod actor;
 pub mod align;
 pub mod check;
+pub mod demos;
 pub mod diff;
 pub mod env;
 pub mod evaluate;

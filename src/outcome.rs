@@ -20,8 +20,9 @@ use crate::scene::xml::TABLE_TOP_Z;
 use crate::task::RESERVED_NAMES;
 use serde::{Deserialize, Serialize};
 
-/// One episode's outcome (see the module documentation for the order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// One episode's outcome (see the module documentation for the order); serialised as [`Outcome::name`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// The task's success.
     Success,

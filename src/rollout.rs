@@ -175,9 +175,36 @@ pub fn play_episode(
 /// # Errors
 /// Whatever the environment reports (placement, invalid scene).
 pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Result<EpisodeRecord, RolloutError> {
+    record_episode(env, policy, seed, None)
+}
+
+/// [`run_episode`], keeping as well every observation the environment presented: the reset's, then
+/// each step's (one more than the steps).
+///
+/// # Errors
+/// Whatever the environment reports (placement, invalid scene).
+pub fn run_episode_observed(
+    env: &mut BlockEnv,
+    policy: &mut dyn Policy,
+    seed: u64,
+) -> Result<(EpisodeRecord, Vec<Vec<f32>>), RolloutError> {
+    let mut observations = Vec::new();
+    let rec = record_episode(env, policy, seed, Some(&mut observations))?;
+    Ok((rec, observations))
+}
+
+fn record_episode(
+    env: &mut BlockEnv,
+    policy: &mut dyn Policy,
+    seed: u64,
+    mut observations: Option<&mut Vec<Vec<f32>>>,
+) -> Result<EpisodeRecord, RolloutError> {
     let mut rec = None;
     play_episode(env, policy, seed, |event| match event {
-        Event::Reset { env, .. } => {
+        Event::Reset { env, obs } => {
+            if let Some(o) = observations.as_deref_mut() {
+                o.push(obs.to_vec());
+            }
             rec = Some(EpisodeRecord {
                 env_id: env.id().to_owned(),
                 task: Some(env.config().task.source.clone()),
@@ -199,6 +226,9 @@ pub fn run_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> Re
             })
         }
         Event::Step { env, action, step: s, .. } => {
+            if let Some(o) = observations.as_deref_mut() {
+                o.push(s.obs.clone());
+            }
             let Some(rec) = rec.as_mut() else { return };
             rec.episode_return += s.reward;
             rec.success |= s.info.is_success;

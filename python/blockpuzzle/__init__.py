@@ -74,9 +74,10 @@ if _assets is not None:
 #: The package version (the Rust crate's; results record it in their ``provenance``).
 __version__ = _native.build_info()["blockpuzzle"]
 
-from . import policies, zoo  # noqa: E402
+from . import datasets, policies, zoo  # noqa: E402
 from ._native import env_ids, mujoco_version  # noqa: E402
 from .env import BlockPuzzleEnv  # noqa: E402
+from .datasets import load_demos, record_demos, to_minari  # noqa: E402
 from .evaluation import evaluate  # noqa: E402
 from .vector import BlockPuzzleVectorEnv, make_vec  # noqa: E402
 
@@ -88,8 +89,8 @@ def assets_dir() -> _pathlib.Path:
 
 
 __all__ = ["__version__", "BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_ROBOTICS_PIN", "MUJOCO_PIN", "NAMESPACE",
-           "assets_dir", "env_ids", "evaluate", "generate_tasks", "make_task", "make_vec", "mujoco_version", "policies",
-           "zoo"]
+           "assets_dir", "datasets", "env_ids", "evaluate", "generate_tasks", "load_demos", "make_task", "make_vec",
+           "mujoco_version", "policies", "record_demos", "to_minari", "zoo"]
 
 #: Gymnasium namespace of the registered ids: ``BlockPuzzle/BlocksTouch-v0``.
 NAMESPACE = "BlockPuzzle"

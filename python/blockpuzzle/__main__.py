@@ -1,8 +1,8 @@
 """``blockpuzzle`` / ``python -m blockpuzzle``: the command line of the package.
 
 The Rust command line's own commands and flags, those that need no libtorch: ``envs``, ``info``,
-``rollout``, ``render``, ``eval`` (``--suite`` included), ``zoo list|check|evaluate``, ``results``,
-``task check`` and ``scene``, on the package's engine (MuJoCo 3.11.0). Training (``train``,
+``rollout``, ``render``, ``eval`` (``--suite`` included), ``demos``, ``zoo list|check|evaluate``,
+``results``, ``task check|generate`` and ``scene``, on the package's engine (MuJoCo 3.11.0). Training (``train``,
 ``table``, ``bench``, ``plot``, ``report``, ``align``, ``zoo export``) is in the Rust command line
 (``cargo run --release -- train ...``, docs/training.md); asked for here, they are named as such.
 """

@@ -60,9 +60,9 @@ def _native_actor(path: pathlib.Path, required: bool):
     return _native.ZooActor(str(path))
 
 
-def read_safetensors(path: str | pathlib.Path) -> dict[str, np.ndarray]:
+def read_safetensors(path: str | pathlib.Path, fix: str = "restore the zoo entry") -> dict[str, np.ndarray]:
     """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data.
-    A damaged file raises ValueError naming it."""
+    A damaged file raises ValueError naming it and ``fix``."""
     raw = pathlib.Path(path).read_bytes()
     try:
         n = int.from_bytes(raw[:8], "little")
@@ -81,7 +81,7 @@ def read_safetensors(path: str | pathlib.Path) -> dict[str, np.ndarray]:
                 raise ValueError(f"tensor {key} lies beyond the end of the file (cut short?)")
             out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(t["shape"]).astype(np.float32)
     except (ValueError, KeyError, TypeError, AttributeError) as e:
-        raise ValueError(f"{path} is not a usable safetensors file: {e}; restore the zoo entry") from e
+        raise ValueError(f"{path} is not a usable safetensors file: {e}; {fix}") from e
     return out
 
 

@@ -490,6 +490,36 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
 }
 
+/// The solver's episodes on a suite split, written to `out` as a demos file (`blockpuzzle demos`'s
+/// code, harness "python"); returns the number of episodes, steps and successes as JSON.
+#[pyfunction]
+#[pyo3(signature = (suite, out, split="train", episodes=None, threads=None))]
+fn record_demos(
+    py: Python<'_>,
+    suite: &str,
+    out: &str,
+    split: &str,
+    episodes: Option<usize>,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    use blockpuzzle::limits::{EVAL_EPISODES, THREADS};
+    if let Some(n) = episodes {
+        EVAL_EPISODES.check_usize(n).map_err(PyValueError::new_err)?;
+    }
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
+    let s = blockpuzzle::suite::load(suite).map_err(suite_err)?;
+    let out = std::path::PathBuf::from(out);
+    let done = py.allow_threads(|| -> anyhow::Result<serde_json::Value> {
+        blockpuzzle::io::check_output(&out)?;
+        let d = blockpuzzle::demos::record(&s, split, episodes, threads, blockpuzzle::provenance::Harness::Python)?;
+        d.write(&out)?;
+        let successes = d.episodes.iter().filter(|e| e.outcome == blockpuzzle::outcome::Outcome::Success).count();
+        Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps(), "successes": successes, "rows": d.layout.rows}))
+    });
+    done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(format!("{e:#}")))
+}
+
 /// The commands only the Rust command line's training build has (`cli::TRAINING_COMMANDS`).
 #[pyfunction]
 fn training_commands() -> Vec<&'static str> {
@@ -572,6 +602,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(obs_modes, m)?)?;
     m.add_function(wrap_pyfunction!(generate_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(record_demos, m)?)?;
     m.add_function(wrap_pyfunction!(training_commands, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;

@@ -8,6 +8,48 @@ use crate::rollout::{run_episode, DumpWriter};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
+/// `blockpuzzle demos`.
+#[derive(Debug, clap::Args)]
+pub(super) struct DemosArgs {
+    /// Built-in suite name or suite file (.toml) whose rows are played.
+    #[arg(long)]
+    suite: String,
+    /// The split whose rows are played (train, test, ...).
+    #[arg(long, default_value = "train")]
+    split: String,
+    /// Episodes per row, from the row's seed on (default: the row's own count).
+    #[arg(long, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    episodes: Option<usize>,
+    /// Threads, each with its own environment (default: the machine's cores); the same episodes whatever the count.
+    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    threads: Option<usize>,
+    /// Output file (safetensors); written atomically.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// `blockpuzzle demos`: the solver's episodes on a suite split, for imitation and offline RL.
+pub(super) fn demos(a: DemosArgs) -> Result<()> {
+    let suite = crate::suite::load(&a.suite)?;
+    crate::io::check_output(&a.out)?;
+    let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let d = crate::demos::record(&suite, &a.split, a.episodes, threads, crate::provenance::Harness::Cli)?;
+    d.write(&a.out)?;
+    let successes = d.episodes.iter().filter(|e| e.outcome == crate::outcome::Outcome::Success).count();
+    println!(
+        "{} episodes ({} steps, {} rows of {} entities) of suite {} split {}, the solver's success {:.3} -> {}",
+        d.episodes.len(),
+        d.steps(),
+        d.observations(),
+        d.layout.rows,
+        suite.name,
+        a.split,
+        successes as f64 / d.episodes.len().max(1) as f64,
+        a.out.display()
+    );
+    Ok(())
+}
+
 #[derive(Debug, clap::Args)]
 pub(super) struct RolloutArgs {
     /// Environment id (see `blockpuzzle envs`) or task file (.toml).

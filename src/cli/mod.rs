@@ -21,7 +21,7 @@ mod task;
 mod zoo;
 #[cfg(feature = "train")]
 use bench::BenchArgs;
-use episodes::{policy_task, RenderArgs, RolloutArgs};
+use episodes::{policy_task, DemosArgs, RenderArgs, RolloutArgs};
 use eval::EvalArgs;
 #[cfg(feature = "train")]
 use eval::TableArgs;
@@ -70,6 +70,9 @@ enum Command {
     #[cfg(feature = "train")]
     /// Measure environment steps/s and raw mj_step/s.
     Bench(BenchArgs),
+    /// Record the solver's episodes on a suite split (entities observations, actions, rewards,
+    /// outcomes, each episode's task hash) as a safetensors file, for imitation and offline RL.
+    Demos(DemosArgs),
     /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
     Render(RenderArgs),
     #[cfg(feature = "train")]
@@ -232,6 +235,7 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Envs => envs(),
         Command::Info => info(),
         Command::Rollout(a) => episodes::rollout(a),
+        Command::Demos(a) => episodes::demos(a),
         #[cfg(feature = "train")]
         Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval::eval(a),

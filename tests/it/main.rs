@@ -12,6 +12,7 @@ mod collision_filter;
 mod common;
 mod counts;
 mod curriculum;
+mod demos;
 mod docs;
 mod entities;
 mod env;
