@@ -80,6 +80,13 @@ pub struct Demos {
     pub split: String,
     /// The episodes, in order.
     pub episodes: Vec<DemoEpisode>,
+    /// Their observations and steps.
+    pub tensors: DemoTensors,
+}
+
+/// The episodes' observations (O of them) and steps (T), one after another.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DemoTensors {
     /// [O, R] robot features.
     pub robot: Vec<f32>,
     /// [O, E, F] entity rows.
@@ -96,16 +103,16 @@ pub struct Demos {
     pub truncations: Vec<f32>,
 }
 
-/// One episode as played: its facts and the rows it adds to each tensor.
-struct Played {
-    episode: DemoEpisode,
-    robot: Vec<f32>,
-    entities: Vec<f32>,
-    mask: Vec<f32>,
-    actions: Vec<f32>,
-    rewards: Vec<f32>,
-    terminations: Vec<f32>,
-    truncations: Vec<f32>,
+impl DemoTensors {
+    fn append(&mut self, other: DemoTensors) {
+        self.robot.extend(other.robot);
+        self.entities.extend(other.entities);
+        self.mask.extend(other.mask);
+        self.actions.extend(other.actions);
+        self.rewards.extend(other.rewards);
+        self.terminations.extend(other.terminations);
+        self.truncations.extend(other.truncations);
+    }
 }
 
 /// The most bytes a demos file may hold (the tensors are built in memory first): 10,000 episodes
@@ -175,7 +182,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                 specs[i].rows()
             );
         }
-        let by_thread: Vec<Result<Vec<(usize, Played)>>> = envs.each(|t, env| {
+        let by_thread: Vec<Result<Vec<(usize, (DemoEpisode, DemoTensors))>>> = envs.each(|t, env| {
             let mut out = Vec::new();
             for e in (t..n).step_by(k) {
                 let seed = row.seed + e as u64;
@@ -183,24 +190,16 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                 let (rec, obs) = crate::rollout::run_episode_observed(env, &mut solver, seed)
                     .with_context(|| format!("{} episode seed {seed}", row.task.id()))?;
                 let spec = env.obs_spec();
-                let mut p = Played {
-                    episode: DemoEpisode {
-                        task: row.task.id().to_owned(),
-                        task_sha256: row.task.source.hash.clone(),
-                        row: i,
-                        seed,
-                        steps: rec.steps.len(),
-                        episode_return: rec.episode_return,
-                        outcome: Outcome::of(&rec),
-                    },
-                    robot: Vec::new(),
-                    entities: Vec::new(),
-                    mask: Vec::new(),
-                    actions: Vec::new(),
-                    rewards: Vec::new(),
-                    terminations: Vec::new(),
-                    truncations: Vec::new(),
+                let episode = DemoEpisode {
+                    task: row.task.id().to_owned(),
+                    task_sha256: row.task.source.hash.clone(),
+                    row: i,
+                    seed,
+                    steps: rec.steps.len(),
+                    episode_return: rec.episode_return,
+                    outcome: Outcome::of(&rec),
                 };
+                let mut p = DemoTensors::default();
                 for o in &obs {
                     p.robot.extend_from_slice(spec.robot(o));
                     let present = spec.mask(o).expect("the entities observation has a mask");
@@ -217,7 +216,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                     p.terminations.push(f32::from(u8::from(st.terminated)));
                     p.truncations.push(f32::from(u8::from(st.truncated)));
                 }
-                out.push((e, p));
+                out.push((e, (episode, p)));
             }
             Ok(out)
         });
@@ -234,23 +233,11 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         provenance: Provenance::new(harness, policy, Some(suite.id())),
         split: split.to_owned(),
         episodes: Vec::with_capacity(played.len()),
-        robot: Vec::new(),
-        entities: Vec::new(),
-        mask: Vec::new(),
-        actions: Vec::new(),
-        rewards: Vec::new(),
-        terminations: Vec::new(),
-        truncations: Vec::new(),
+        tensors: DemoTensors::default(),
     };
-    for p in played {
-        d.episodes.push(p.episode);
-        d.robot.extend(p.robot);
-        d.entities.extend(p.entities);
-        d.mask.extend(p.mask);
-        d.actions.extend(p.actions);
-        d.rewards.extend(p.rewards);
-        d.terminations.extend(p.terminations);
-        d.truncations.extend(p.truncations);
+    for (episode, tensors) in played {
+        d.episodes.push(episode);
+        d.tensors.append(tensors);
     }
     Ok(d)
 }
@@ -258,25 +245,25 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
 impl Demos {
     /// Observations (steps + episodes).
     pub fn observations(&self) -> usize {
-        self.mask.len() / self.layout.rows.max(1)
+        self.tensors.mask.len() / self.layout.rows.max(1)
     }
 
     /// Steps.
     pub fn steps(&self) -> usize {
-        self.rewards.len()
+        self.tensors.rewards.len()
     }
 
     /// The tensors by name with their shapes.
     fn tensors(&self) -> Vec<(&'static str, Vec<usize>, &[f32])> {
-        let (o, t, l) = (self.observations(), self.steps(), &self.layout);
+        let (o, t, l, d) = (self.observations(), self.steps(), &self.layout, &self.tensors);
         vec![
-            ("robot", vec![o, l.robot.len()], &self.robot[..]),
-            ("entities", vec![o, l.rows, l.entity.len()], &self.entities[..]),
-            ("mask", vec![o, l.rows], &self.mask[..]),
-            ("actions", vec![t, crate::env::ACTION_DIM], &self.actions[..]),
-            ("rewards", vec![t], &self.rewards[..]),
-            ("terminations", vec![t], &self.terminations[..]),
-            ("truncations", vec![t], &self.truncations[..]),
+            ("robot", vec![o, l.robot.len()], &d.robot[..]),
+            ("entities", vec![o, l.rows, l.entity.len()], &d.entities[..]),
+            ("mask", vec![o, l.rows], &d.mask[..]),
+            ("actions", vec![t, crate::env::ACTION_DIM], &d.actions[..]),
+            ("rewards", vec![t], &d.rewards[..]),
+            ("terminations", vec![t], &d.terminations[..]),
+            ("truncations", vec![t], &d.truncations[..]),
         ]
     }
 
@@ -352,7 +339,7 @@ impl Demos {
             Ok(v.data().chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect())
         };
         let (r, e, f) = (layout.robot.len(), layout.rows, layout.entity.len());
-        Ok(Demos {
+        let tensors = DemoTensors {
             robot: tensor("robot", vec![o, r])?,
             entities: tensor("entities", vec![o, e, f])?,
             mask: tensor("mask", vec![o, e])?,
@@ -360,10 +347,7 @@ impl Demos {
             rewards: tensor("rewards", vec![t])?,
             terminations: tensor("terminations", vec![t])?,
             truncations: tensor("truncations", vec![t])?,
-            layout,
-            provenance,
-            split,
-            episodes,
-        })
+        };
+        Ok(Demos { tensors, layout, provenance, split, episodes })
     }
 }

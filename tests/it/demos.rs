@@ -32,8 +32,11 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     let suite = blockpuzzle::suite::parse(SUITE, "demo-test.toml", None).unwrap();
     let one = demos::record(&suite, "train", None, 1, Harness::Cli).unwrap();
     let two = demos::record(&suite, "train", None, 2, Harness::Cli).unwrap();
-    assert_eq!(one.robot, two.robot, "the same episodes whatever the thread count");
-    assert_eq!((one.entities == two.entities, one.actions == two.actions, &one.episodes), (true, true, &two.episodes));
+    assert_eq!(one.tensors.robot, two.tensors.robot, "the same episodes whatever the thread count");
+    assert_eq!(
+        (one.tensors.entities == two.tensors.entities, one.tensors.actions == two.tensors.actions, &one.episodes),
+        (true, true, &two.episodes)
+    );
     assert_eq!(one.episodes.len(), 6);
     assert_eq!(
         one.episodes.iter().map(|e| (e.row, e.seed)).collect::<Vec<_>>(),
@@ -45,21 +48,28 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     assert_eq!(o, t + one.episodes.len());
     let (rows, f) = (one.layout.rows, one.layout.entity.len());
     assert_eq!((rows, f, one.layout.robot.len()), (8, 26, 10));
-    assert_eq!((one.entities.len(), one.mask.len(), one.actions.len()), (o * rows * f, o * rows, t * 4));
+    assert_eq!(
+        (one.tensors.entities.len(), one.tensors.mask.len(), one.tensors.actions.len()),
+        (o * rows * f, o * rows, t * 4)
+    );
     let touch = blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().object_count();
-    let first_obs_mask = &one.mask[..rows];
+    let first_obs_mask = &one.tensors.mask[..rows];
     // BlocksTouch-v0: its blocks, the gripper and the table present, the floor (no rule object) and
     // the padding not.
     let present: Vec<f32> = (0..rows).map(|r| if r < touch + 2 { 1.0 } else { 0.0 }).collect();
     assert_eq!(first_obs_mask, present.as_slice());
-    assert!(one.entities[(touch + 3) * f..rows * f].iter().all(|&x| x == 0.0), "padding rows are zero");
+    assert!(one.tensors.entities[(touch + 3) * f..rows * f].iter().all(|&x| x == 0.0), "padding rows are zero");
     // Each episode's last step ends it, and its outcome is what the suite evaluator counts.
     let mut start = 0;
     for e in &one.episodes {
         let last = start + e.steps - 1;
-        assert!(one.terminations[last] + one.truncations[last] == 1.0, "{e:?}");
-        assert_eq!(e.outcome == Outcome::Success, one.terminations[last] == 1.0 && one.rewards[last] == 0.0, "{e:?}");
-        assert_eq!(e.episode_return, one.rewards[start..=last].iter().sum::<f32>());
+        assert!(one.tensors.terminations[last] + one.tensors.truncations[last] == 1.0, "{e:?}");
+        assert_eq!(
+            e.outcome == Outcome::Success,
+            one.tensors.terminations[last] == 1.0 && one.tensors.rewards[last] == 0.0,
+            "{e:?}"
+        );
+        assert_eq!(e.episode_return, one.tensors.rewards[start..=last].iter().sum::<f32>());
         start = last + 1;
     }
     let result =
