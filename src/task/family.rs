@@ -28,6 +28,7 @@ pub const BUILTIN_FAMILIES: &[(&str, &str)] = &[
     ("push", include_str!("../../families/push.toml")),
     ("gripper", include_str!("../../families/gripper.toml")),
     ("stack", include_str!("../../families/stack.toml")),
+    ("gather", include_str!("../../families/gather.toml")),
 ];
 
 /// A floor choice: no rule object, or one of the four colours.
