@@ -7,6 +7,8 @@ Usage: python3 scripts/generalization_table.py [--engine 3.11.0]   # default: 2.
        python3 scripts/generalization_table.py --agents   # issue 31's training snapshots
                                                          # (results/generalization/mujoco-2.2.2/agents/RUN-epochE.SUITE.json)
        python3 scripts/generalization_table.py --agents-summary [EPOCH]   # one row per snapshot
+       python3 scripts/generalization_table.py --generated [--engine 3.11.0]   # issue 46's suites of
+                                                         # generated tasks: mean success (rows taken / rows)
 """
 import json
 import math
@@ -15,6 +17,7 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SUITES = ["colour", "layout", "cross-task", "count", "obstacles"]
+GENERATED = ["procgen", "compose", "cross-task-v2"]
 BASELINES = ["baseline-scripted", "baseline-obs-hash"]
 ENGINE = sys.argv[sys.argv.index("--engine") + 1] if "--engine" in sys.argv else "2.2.2"
 DIR = ROOT / "results" / "generalization" / f"mujoco-{ENGINE}"
@@ -137,8 +140,40 @@ def agents_summary(epoch=None):
         print(f"| {agent} | " + " | ".join(cells) + " |")
 
 
+def generated():
+    """Issue 46's suites: per baseline and zoo policy, each split's mean success over the rows it
+    takes, with (rows taken / rows); then the suites' versions and the engine."""
+    subjects = BASELINES[::-1] + sorted({f.name.split(".")[0] for f in DIR.glob("*.json")} - set(BASELINES))
+    head = " | ".join(f"{s} {sp}" for s in GENERATED for sp in ("train", "test"))
+    print(f"| policy | {head} |")
+    print("|---|" + "---:|" * (2 * len(GENERATED)))
+    shas, engines = {}, set()
+    for p in subjects:
+        cells = []
+        for s in GENERATED:
+            f = DIR / f"{p}.{s}.json"
+            if not f.exists():
+                cells += ["–", "–"]
+                continue
+            r = json.loads(f.read_text())
+            shas.setdefault(s, set()).add(r["suite"]["sha256"][:12])
+            engines.add(r["provenance"]["mujoco"])
+            for sp in r["splits"]:
+                taken = sum(row["skipped"] is None for row in sp["rows"])
+                mean = "–" if sp["mean_success"] is None else f"{sp['mean_success']:.3f}"
+                cells.append(f"{mean} ({taken}/{len(sp['rows'])})")
+        print(f"| {p} | " + " | ".join(cells) + " |")
+    print()
+    assert all(len(v) == 1 for v in shas.values()), f"results of several versions of a suite: {shas}"
+    assert engines == {ENGINE}, f"{DIR} holds results of MuJoCo {engines}"
+    print("Suite versions (sha256, first 12 hex digits): "
+          + ", ".join(f"{s} `{next(iter(v))}`" for s, v in shas.items()) + f". All on MuJoCo {ENGINE}.")
+
+
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--agents"]:
+    if sys.argv[1:2] == ["--generated"]:
+        generated()
+    elif sys.argv[1:2] == ["--agents"]:
         agents()
     elif sys.argv[1:2] == ["--agents-summary"]:
         agents_summary(sys.argv[2] if len(sys.argv) > 2 else None)

@@ -5,8 +5,12 @@ fn main() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // libtorch's OpenBLAS kernels (only the training build loads them).
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    // libtorch's OpenBLAS kernels (only the training build loads them), for the commands that use
+    // or report them: a second start costs every other command as much again.
     #[cfg(feature = "train")]
-    blockpuzzle::blas::ensure_fast_kernels();
-    std::process::exit(blockpuzzle::cli::run(std::env::args_os().collect()));
+    if blockpuzzle::blas::wants_fast_kernels(&args) {
+        blockpuzzle::blas::ensure_fast_kernels();
+    }
+    std::process::exit(blockpuzzle::cli::run(args));
 }

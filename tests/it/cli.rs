@@ -435,6 +435,11 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     assert!(missing.iter().all(|(k, _)| *k == "OPENBLAS_CORETYPE"), "{missing:?}");
     let set = blockpuzzle::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
     assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
+    // Only the commands that run or report libtorch's products start a second time for them.
+    let wants =
+        |line: &str| blockpuzzle::blas::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
+    assert!(wants("blockpuzzle train --env BlocksTouch-v0") && wants("blockpuzzle bench --train") && wants("bp info"));
+    assert!(!wants("blockpuzzle eval --suite layout") && !wants("blockpuzzle envs") && !wants("blockpuzzle --help"));
 }
 
 /// `align` replays a reference file (here a made-up one: no joints set, so
