@@ -173,15 +173,17 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
         // A set network plays any number of objects with the same row features.
         if !spec.mode.is_set() || (spec.robot_dim(), spec.object_dim()) != (layout.robot, layout.object) {
             bail!(
-                "policy {} is a set network over `objects` observations ({} robot and {} object features); {} \
-                 gives {:?} observations with {} and {} (give the environment obs_mode objects)",
+                "policy {} is a set network over `{}` observations ({} robot and {} row features); {} \
+                 gives `{}` observations with {} and {} (give the environment obs_mode {})",
                 path.display(),
+                saved.policy.obs_mode(),
                 layout.robot,
                 layout.object,
                 env.id(),
                 spec.mode,
                 spec.robot_dim(),
-                spec.object_dim()
+                spec.object_dim(),
+                saved.policy.obs_mode()
             );
         }
         return Ok(Trained { policy: saved.policy.with_slots(spec.rows()), grey_blind: false });

@@ -60,6 +60,11 @@ def _native_actor(path: pathlib.Path, required: bool):
     return _native.ZooActor(str(path))
 
 
+#: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how a set
+#: network's layout tells the two observations apart.
+ENTITY_FEATURES = 26
+
+
 def read_safetensors(path: str | pathlib.Path, fix: str = "restore the zoo entry") -> dict[str, np.ndarray]:
     """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data.
     A damaged file raises ValueError naming it and ``fix``."""
@@ -121,8 +126,11 @@ class ZooPolicy:
 
     @property
     def obs_mode(self) -> str:
-        """The observation mode it reads: "objects" for a set network, else "flat"."""
-        return "flat" if self.set is None else "objects"
+        """The observation mode it reads: "flat" for an MLP; for a set network "entities" where its
+        rows have the entities' 26 features (``train --net entity``), else "objects"."""
+        if self.set is None:
+            return "flat"
+        return "entities" if self.set["object"] == ENTITY_FEATURES else "objects"
 
     @property
     def evaluations(self) -> list[dict]:
@@ -147,7 +155,8 @@ class ZooPolicy:
         """Actions for one observation (a vector or a dict of arrays) or a batch of them: the
         extension's forward pass where there is one (``native``), else ``act_numpy``."""
         if isinstance(obs, dict):
-            parts = [np.asarray(obs[k], np.float32) for k in ("robot", "objects", "mask")]
+            rows = "entities" if self.obs_mode == "entities" else "objects"
+            parts = [np.asarray(obs[k], np.float32) for k in ("robot", rows, "mask")]
             batch = parts[0].ndim == 2
             n = len(parts[0]) if batch else 1
             flat = np.concatenate([p.reshape(n, -1) for p in parts], axis=1)

@@ -50,9 +50,12 @@ impl AnyPolicy {
 
     /// The observation the policy reads: flat, or `objects` for a set network.
     pub fn obs_mode(&self) -> crate::env::ObsMode {
+        use crate::env::{ObsMode, ObsSpec};
         match self.net().set {
-            None => crate::env::ObsMode::Flat,
-            Some(_) => crate::env::ObsMode::Objects,
+            None => ObsMode::Flat,
+            // The two set layouts differ in their rows' features (the entities' type one-hot).
+            Some(l) if l.object == ObsSpec::new(ObsMode::Entities, 0).object_dim() => ObsMode::Entities,
+            Some(_) => ObsMode::Objects,
         }
     }
 

@@ -23,6 +23,28 @@ pub enum NetKind {
     Mlp,
     /// A permutation-invariant set network over the `objects` observation.
     Set,
+    /// The same set network over the `entities` observation: the blocks' rows and the gripper's,
+    /// table's and floor's, with their colours, so that every rule object is in view.
+    Entity,
+}
+
+impl NetKind {
+    /// As `--net` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            NetKind::Mlp => "mlp",
+            NetKind::Set => "set",
+            NetKind::Entity => "entity",
+        }
+    }
+
+    /// Whether it is a set network (`set` or `entity`).
+    pub fn is_set(self) -> bool {
+        match self {
+            NetKind::Mlp => false,
+            NetKind::Set | NetKind::Entity => true,
+        }
+    }
 }
 
 /// How a set network combines its object rows (`--set-pooling`).
@@ -41,9 +63,10 @@ pub enum Pooling {
 /// The network settings of a run (shared by every algorithm).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::Args)]
 pub struct NetConfig {
-    /// Network: `mlp` (the flat observation; the paper's) or `set` (the `objects`
+    /// Network: `mlp` (the flat observation; the paper's), `set` (the `objects`
     /// observation: a per-object encoder shared across objects, masked pooling, a head;
-    /// its output does not depend on the order or the number of objects).
+    /// its output does not depend on the order or the number of objects) or `entity` (that
+    /// set network over the `entities` observation: the gripper, table and floor as rows too).
     #[arg(long = "net", value_enum, default_value = "mlp")]
     #[serde(default)]
     pub net: NetKind,
@@ -80,6 +103,7 @@ impl NetConfig {
         match self.net {
             NetKind::Mlp => ObsMode::Flat,
             NetKind::Set => ObsMode::Objects,
+            NetKind::Entity => ObsMode::Entities,
         }
     }
 
@@ -93,11 +117,15 @@ impl NetConfig {
 
     /// How the run's title names the network (empty: the paper's MLP).
     pub fn describe(&self) -> String {
-        let kind = match (self.net, self.set_pooling) {
-            (NetKind::Mlp, _) => return String::new(),
-            (NetKind::Set, Pooling::MeanMax) => "set network",
-            (NetKind::Set, Pooling::Attention) => "set network + attention",
-            (NetKind::Set, Pooling::Colour) => "set network, pooled by colour",
+        let rows = match self.net {
+            NetKind::Mlp => return String::new(),
+            NetKind::Set => "set network",
+            NetKind::Entity => "entity set network",
+        };
+        let kind = match self.set_pooling {
+            Pooling::MeanMax => rows.to_owned(),
+            Pooling::Attention => format!("{rows} + attention"),
+            Pooling::Colour => format!("{rows}, pooled by colour"),
         };
         if self.set_norm {
             format!("{kind}, layer-normalised")
@@ -136,7 +164,15 @@ impl Arch {
                     Err(format!("--net mlp reads the flat observation, not the `{}` one", obs.mode))
                 }
             },
-            NetKind::Set => {
+            NetKind::Set | NetKind::Entity => {
+                if obs.mode != net.obs_mode() {
+                    return Err(format!(
+                        "--net {} reads the `{}` observation, not the `{}` one",
+                        net.net.name(),
+                        net.obs_mode(),
+                        obs.mode
+                    ));
+                }
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;
                 layout.by_colour = net.set_pooling == Pooling::Colour;

@@ -361,10 +361,10 @@ impl TrainConfig {
     /// The default run directory, `runs/TASK-METHOD-sSEED`.
     pub fn default_run_dir(&self) -> std::path::PathBuf {
         let net = match (self.net.net, self.net.set_pooling) {
-            (NetKind::Mlp, _) => "",
-            (NetKind::Set, Pooling::MeanMax) => "-set",
-            (NetKind::Set, Pooling::Attention) => "-set-attention",
-            (NetKind::Set, Pooling::Colour) => "-set-colour",
+            (NetKind::Mlp, _) => String::new(),
+            (kind, Pooling::MeanMax) => format!("-{}", kind.name()),
+            (kind, Pooling::Attention) => format!("-{}-attention", kind.name()),
+            (kind, Pooling::Colour) => format!("-{}-colour", kind.name()),
         };
         let norm = if self.net.set_norm { "-norm" } else { "" };
         let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };

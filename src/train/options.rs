@@ -12,7 +12,7 @@
 //! changes nothing either way.
 
 use super::learner::AggrevatedConfig;
-use crate::agents::arch::{NetConfig, NetKind};
+use crate::agents::arch::NetConfig;
 use crate::agents::registry::{Algo, AlgoConfigs};
 use crate::agents::shared::SharedConfig;
 
@@ -54,7 +54,7 @@ struct Defaults {
 }
 
 fn set(o: &Options) -> bool {
-    o.net.net == NetKind::Set
+    o.net.net.is_set()
 }
 fn expert(o: &Options) -> bool {
     o.aggrevated.expert.is_some()

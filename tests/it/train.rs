@@ -751,6 +751,37 @@ fn set_networks_refuse_what_they_cannot_do() {
     assert!(!dir.path().join("z").exists(), "nothing written");
 }
 
+/// `--net entity`: the set network over the `entities` observation (its gripper, table and floor
+/// rows included) trains with hindsight colours, saves a policy that asks for that observation and
+/// plays another task's rows; an `objects` environment is refused, naming the observation.
+#[test]
+fn an_entity_set_network_trains_and_its_policy_reads_the_entities() {
+    use blockpuzzle::env::{EnvConfig, ObsMode, ObsSpec};
+    let dir = tempfile::tempdir().unwrap();
+    let mut c = tiny_set("ToppleTower-v0", 1, Pooling::MeanMax);
+    c.net.net = NetKind::Entity;
+    train(&c, dir.path(), false, &mut quiet).unwrap();
+    let path = dir.path().join("policy.json");
+    let saved = load_policy(&path).unwrap();
+    assert_eq!(saved.policy.obs_mode(), ObsMode::Entities);
+    let blocks = blockpuzzle::env::registry::task("ToppleTower-v0").unwrap().object_count();
+    assert!(saved.policy.net().set.is_some_and(|s| s.slots == blocks + 3 && s.object == 26));
+    assert!(c.title().contains("entity set network") && c.default_run_dir().to_string_lossy().contains("-entity-s"));
+    let env_of = |id: &str, mode| {
+        let task = blockpuzzle::env::registry::task(id).unwrap();
+        blockpuzzle::env::BlockEnv::new(EnvConfig { obs_mode: mode, ..EnvConfig::new(task) }).unwrap()
+    };
+    let mut avoid = env_of("BlocksAvoid-v0", ObsMode::Entities);
+    let mut t = blockpuzzle::evaluate::trained_policy(&path, saved.clone(), &avoid).unwrap();
+    let (obs, _) = avoid.reset(Some(0)).unwrap();
+    let a = blockpuzzle::policy::Policy::act(&mut t, &obs);
+    assert!(a.iter().all(|x| x.abs() <= 1.0), "{a:?}");
+    let e = blockpuzzle::evaluate::trained_policy(&path, saved, &env_of("BlocksAvoid-v0", ObsMode::Objects));
+    assert!(e.unwrap_err().to_string().contains("give the environment obs_mode entities"));
+    let wrong = blockpuzzle::agents::arch::Arch::of(&ObsSpec::new(ObsMode::Objects, 3), &c.net).unwrap_err();
+    assert!(wrong.contains("--net entity reads the `entities` observation"), "{wrong}");
+}
+
 #[test]
 fn a_layer_normalised_set_network_trains_saves_and_refuses_to_resume_without_it() {
     let dir = tempfile::tempdir().unwrap();
