@@ -30,12 +30,15 @@ impl Checker<'_> {
 }
 
 fn canonical_hash(spec: &TaskSpec) -> String {
-    use sha2::{Digest, Sha256};
     // serde_json keeps struct field order and sorts nothing else: BTreeMaps are
     // already ordered, so equal specs give equal bytes.
-    let bytes = serde_json::to_vec(spec).unwrap_or_default();
-    let digest = Sha256::digest(&bytes);
-    format!("sha256:{}", digest.iter().map(|b| format!("{b:02x}")).collect::<String>())
+    sha256_id(&serde_json::to_vec(spec).unwrap_or_default())
+}
+
+/// `sha256:` and the hex digest of `bytes`: how tasks and families are identified.
+pub(crate) fn sha256_id(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    format!("sha256:{}", Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect::<String>())
 }
 
 impl Task {

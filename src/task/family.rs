@@ -314,11 +314,7 @@ impl Family {
         if most > MAX_FAMILY_BLOCKS {
             return Err(err(format!("the groups may draw {most} blocks; a family draws at most {MAX_FAMILY_BLOCKS}")));
         }
-        let hash = {
-            use sha2::{Digest, Sha256};
-            let d = Sha256::digest(text.as_bytes());
-            format!("sha256:{}", d.iter().map(|b| format!("{b:02x}")).collect::<String>())
-        };
+        let hash = super::compile::sha256_id(text.as_bytes());
         Ok(Family { spec, hash, origin: origin.to_owned() })
     }
 
@@ -400,12 +396,8 @@ impl Family {
             }
             g.count = *range;
         }
-        let hash = {
-            use sha2::{Digest, Sha256};
-            let narrowing = serde_json::to_string(n).unwrap_or_default();
-            let d = Sha256::digest(format!("{}\n{narrowing}", self.hash).as_bytes());
-            format!("sha256:{}", d.iter().map(|b| format!("{b:02x}")).collect::<String>())
-        };
+        let narrowing = serde_json::to_string(n).unwrap_or_default();
+        let hash = super::compile::sha256_id(format!("{}\n{narrowing}", self.hash).as_bytes());
         Ok(Family { spec, hash, origin: format!("{} (narrowed)", self.origin) })
     }
 
