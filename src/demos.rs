@@ -158,6 +158,8 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         );
     }
     let mut played = Vec::new();
+    // On a terminal only (indicatif draws nothing elsewhere).
+    let bar = crate::progress::bar(s.rows.iter().map(|r| episodes.unwrap_or(r.episodes) as u64).sum(), "episode");
     for (i, row) in s.rows.iter().enumerate() {
         let n = episodes.unwrap_or(row.episodes);
         crate::limits::seed_range(row.seed, n as u64).map_err(anyhow::Error::msg)?;
@@ -217,6 +219,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                     p.truncations.push(f32::from(u8::from(st.truncated)));
                 }
                 out.push((e, (episode, p)));
+                bar.inc(1);
             }
             Ok(out)
         });
@@ -227,6 +230,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         row_played.sort_by_key(|(e, _)| *e);
         played.extend(row_played.into_iter().map(|(_, p)| p));
     }
+    bar.finish_and_clear();
     let policy = PolicyId { name: "baseline:scripted".to_owned(), sha256: None };
     let mut d = Demos {
         layout,

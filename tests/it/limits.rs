@@ -388,6 +388,11 @@ fn long_commands_show_progress_on_a_terminal() {
     let o = on_tty(&format!("eval --checkpoint BlocksTouch-v0-ddpg --episodes 3 --threads 1 --out {}", out.display()))
         .unwrap();
     assert!(text(&o).contains("episode 1/3") || text(&o).contains("episode 0/3"), "{}", text(&o));
+    let suite = tiny_suite(dir.path());
+    let demos = dir.path().join("d.safetensors");
+    let o = on_tty(&format!("demos --suite {} --episodes 3 --threads 1 --out {}", suite.display(), demos.display()))
+        .unwrap();
+    assert!(text(&o).contains("episode 1/3") || text(&o).contains("episode 0/3"), "{}", text(&o));
 }
 
 /// A one-episode-a-split suite file in `dir`.
