@@ -94,6 +94,10 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     // An unknown split, and files that are not demos, are named.
     let e = demos::record(&suite, "valid", None, 1, Harness::Cli).unwrap_err().to_string();
     assert!(e.contains("no split \"valid\" (it has train, test)"), "{e}");
+    // A recording beyond the file bound is refused before any episode is played.
+    let e = demos::record(&suite, "train", Some(1_000_000), 1, Harness::Cli).unwrap_err().to_string();
+    assert!(e.contains("1000000 episodes per row of split train would make a demos file of up to"), "{e}");
+    assert!(e.contains("lower --episodes"), "{e}");
     let zoo = format!("{}/zoo/BlocksTouch-v0-ddpg.safetensors", env!("CARGO_MANIFEST_DIR"));
     let e = Demos::read(std::path::Path::new(&zoo)).unwrap_err().to_string();
     assert!(
