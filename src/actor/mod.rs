@@ -48,7 +48,8 @@ impl AnyPolicy {
         }
     }
 
-    /// The observation the policy reads: flat, or `objects` for a set network.
+    /// The observation the policy reads: flat for an MLP; for a set network `entities` where its rows
+    /// have the entities' width (`--net entity`), else `objects`.
     pub fn obs_mode(&self) -> crate::env::ObsMode {
         use crate::env::{ObsMode, ObsSpec};
         match self.net().set {
