@@ -15,8 +15,8 @@ fi
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$ROOT/zoo"
 
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, mean-max with
-# --set-norm), exported to a
-# scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
+# --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too),
+# exported to a scratch zoo, must act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
 BP="${BLOCKPUZZLE_BIN:-}"
@@ -28,10 +28,14 @@ fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for variant in mean-max attention colour mean-max-norm; do
-    flags=(--set-pooling "${variant%-norm}")
-    if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi
-    "$BP" train --env BlocksChooseN-v0 --net set "${flags[@]}" --epochs 1 --cycles 2 --batches 3 \
+for variant in mean-max attention colour mean-max-norm entity; do
+    if [ "$variant" = entity ]; then
+        flags=(--net entity)
+    else
+        flags=(--net set --set-pooling "${variant%-norm}")
+        if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi
+    fi
+    "$BP" train --env BlocksChooseN-v0 "${flags[@]}" --epochs 1 --cycles 2 --batches 3 \
         --batch-size 32 --hidden 32 --layers 2 --test-episodes 1 --torch-threads 1 \
         --run-dir "$SCRATCH/run-$variant" > /dev/null
     "$BP" zoo export --from "$SCRATCH/run-$variant" --name "set-$variant" --description "zoo_python_check" \
