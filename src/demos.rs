@@ -246,7 +246,31 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
     Ok(d)
 }
 
+/// [`record`] into the demos file `out`, which is checked before any episode is played (a folder,
+/// a FIFO nobody reads, a read-only file are refused at once), then written by [`Demos::write`].
+///
+/// # Errors
+/// What [`record`] and [`Demos::write`] report, or an output the writer refuses.
+pub fn record_to(
+    out: &Path,
+    suite: &Suite,
+    split: &str,
+    episodes: Option<usize>,
+    threads: usize,
+    harness: Harness,
+) -> Result<Demos> {
+    crate::io::check_output(out)?;
+    let d = record(suite, split, episodes, threads, harness)?;
+    d.write(out)?;
+    Ok(d)
+}
+
 impl Demos {
+    /// Episodes that ended in success.
+    pub fn successes(&self) -> usize {
+        self.episodes.iter().filter(|e| e.outcome == Outcome::Success).count()
+    }
+
     /// Observations (steps + episodes).
     pub fn observations(&self) -> usize {
         self.tensors.mask.len() / self.layout.rows.max(1)

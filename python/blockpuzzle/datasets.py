@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import pathlib
 
 import numpy as np
 
@@ -68,12 +67,15 @@ class Demos:
 
 def _header(path) -> dict:
     """The demos file's one metadata entry (version, split, provenance, layout, episodes)."""
-    raw = pathlib.Path(path).read_bytes()
-    n = int.from_bytes(raw[:8], "little")
+    # The header alone (the tensors, perhaps gigabytes, are read once, by read_safetensors).
     fix = "record one with `blockpuzzle demos`"
-    if len(raw) < 8 or 8 + n > len(raw):
-        raise ValueError(f"{path} is not a usable demos file: cut short; {fix}")
-    meta = json.loads(raw[8:8 + n]).get("__metadata__") or {}
+    with open(path, "rb") as f:
+        size = f.seek(0, 2)
+        f.seek(0)
+        n = int.from_bytes(f.read(8), "little")
+        if size < 8 or 8 + n > size:
+            raise ValueError(f"{path} is not a usable demos file: cut short; {fix}")
+        meta = json.loads(f.read(n)).get("__metadata__") or {}
     if FORMAT not in meta:
         other = f" (it is a {meta['format']} file)" if "format" in meta else ""
         raise ValueError(f"{path} is not a usable demos file: its metadata has no {FORMAT!r} entry{other}; {fix}")

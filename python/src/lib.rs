@@ -511,11 +511,9 @@ fn record_demos(
     let s = blockpuzzle::suite::load(suite).map_err(suite_err)?;
     let out = std::path::PathBuf::from(out);
     let done = py.allow_threads(|| -> anyhow::Result<serde_json::Value> {
-        blockpuzzle::io::check_output(&out)?;
-        let d = blockpuzzle::demos::record(&s, split, episodes, threads, blockpuzzle::provenance::Harness::Python)?;
-        d.write(&out)?;
-        let successes = d.episodes.iter().filter(|e| e.outcome == blockpuzzle::outcome::Outcome::Success).count();
-        Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps(), "successes": successes, "rows": d.layout.rows}))
+        let harness = blockpuzzle::provenance::Harness::Python;
+        let d = blockpuzzle::demos::record_to(&out, &s, split, episodes, threads, harness)?;
+        Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps(), "successes": d.successes(), "rows": d.layout.rows}))
     });
     done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(format!("{e:#}")))
 }

@@ -31,11 +31,8 @@ pub(super) struct DemosArgs {
 /// `blockpuzzle demos`: the solver's episodes on a suite split, for imitation and offline RL.
 pub(super) fn demos(a: DemosArgs) -> Result<()> {
     let suite = crate::suite::load(&a.suite)?;
-    crate::io::check_output(&a.out)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let d = crate::demos::record(&suite, &a.split, a.episodes, threads, crate::provenance::Harness::Cli)?;
-    d.write(&a.out)?;
-    let successes = d.episodes.iter().filter(|e| e.outcome == crate::outcome::Outcome::Success).count();
+    let d = crate::demos::record_to(&a.out, &suite, &a.split, a.episodes, threads, crate::provenance::Harness::Cli)?;
     println!(
         "{} episodes ({} steps, {} rows of {} entities) of suite {} split {}, the solver's success {:.3} -> {}",
         d.episodes.len(),
@@ -44,7 +41,7 @@ pub(super) fn demos(a: DemosArgs) -> Result<()> {
         d.layout.rows,
         suite.name,
         a.split,
-        successes as f64 / d.episodes.len().max(1) as f64,
+        d.successes() as f64 / d.episodes.len().max(1) as f64,
         a.out.display()
     );
     Ok(())
