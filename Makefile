@@ -27,8 +27,10 @@ demo: build
 	$(CARGO) run --release --quiet -- rollout --env BlocksTouch-v0 --policy scripted \
 		--episodes 50 --seed 0 --out $(OUT)/BlocksTouch-v0-scripted.jsonl
 
+# The Python venvs of the later steps are made (scripts/python_venvs.sh) while cargo builds and tests.
 test: setup
-	$(CARGO) test --all
+	mkdir -p target && { bash scripts/python_venvs.sh > target/python-venvs.log 2>&1 & venvs=$$!; }; \
+	$(CARGO) test --all && { wait $$venvs && cat target/python-venvs.log || { cat target/python-venvs.log; exit 1; }; }
 	bash scripts/zoo_python_check.sh
 	$(MAKE) test-mujoco3
 	$(MAKE) test-wheel

