@@ -66,6 +66,9 @@ pub struct Info {
     pub about: &'static str,
     /// Whether it learns from an AggreVaTeD expert (`--expert`).
     pub takes_expert: bool,
+    /// Whether it imitates the solver ([`Algorithm::solver_share`]): the solver, which reads the
+    /// entities observation, labels its exploration steps, so it trains `--net entity`.
+    pub imitates: bool,
     /// The flags of the shared settings ([`SharedConfig`]) it reads; a run that
     /// gives any other is refused, naming the algorithms that read it.
     pub reads: &'static [&'static str],
@@ -175,6 +178,14 @@ pub trait Algorithm: Send {
 
     /// The exploring policy, frozen, for this cycle's episodes.
     fn explorer(&self) -> Box<dyn Explorer>;
+
+    /// An imitation learner's probability that the solver acts at a step of
+    /// `epoch`'s exploration episodes (the learner's explorer acts otherwise);
+    /// the solver then labels every step, and the replay buffer holds its label
+    /// as the action. None for the others.
+    fn solver_share(&self, _epoch: usize) -> Option<f64> {
+        None
+    }
 
     /// A critic Q(s̄, a) of the policy as a plain network, saved beside it
     /// (for AggreVaTeD's `expert-advantage`); None where there is none.

@@ -44,6 +44,7 @@ pub const REGISTRATION: Registration<DdpgConfig> = Registration {
         title: "DDPG",
         about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
         takes_expert: false,
+        imitates: false,
         // Every shared setting.
         reads: SharedConfig::FLAGS,
         flag_prefix: "",

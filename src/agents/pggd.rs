@@ -32,6 +32,7 @@ pub const REGISTRATION: Registration<PggdConfig> = Registration {
         title: "PGGD",
         about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
         takes_expert: true,
+        imitates: false,
         // The network's shape, the normaliser and the discount of the return-to-go; no critic.
         reads: &["--layers", "--hidden", "--gamma", "--norm-eps", "--norm-clip"],
         flag_prefix: "pg-",

@@ -56,6 +56,8 @@ algorithms! {
     ddpg: super::ddpg::DdpgConfig,
     pggd: super::pggd::PggdConfig,
     sac: super::sac::SacConfig,
+    bc: super::bc::BcConfig,
+    dagger: super::dagger::DaggerConfig,
 }
 
 /// The flags of `config`'s settings that differ from their defaults.

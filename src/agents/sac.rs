@@ -51,6 +51,7 @@ pub const REGISTRATION: Registration<SacConfig> = Registration {
         title: "SAC",
         about: "soft actor-critic with automatic entropy tuning (twin critics)",
         takes_expert: false,
+        imitates: false,
         // Every shared setting.
         reads: SharedConfig::FLAGS,
         flag_prefix: "sac-",

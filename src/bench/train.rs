@@ -148,9 +148,12 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
             let t = Instant::now();
             while steps < target {
                 let explorer = agent.explorer();
-                let eps = play_all(&mut envs, &Behaviour::Explore(&*explorer), 1, None, |w, _| {
-                    stream_seed(c.seed, &[9, w as u64, round])
-                })?;
+                // An imitation learner's episodes: the solver labels every step and acts on its share.
+                let behaviour = match agent.solver_share(0) {
+                    Some(share) => Behaviour::Imitate { learner: &*explorer, share },
+                    None => Behaviour::Explore(&*explorer),
+                };
+                let eps = play_all(&mut envs, &behaviour, 1, None, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
                 round += 1;
                 for ep in &eps {
                     steps += ep.len();

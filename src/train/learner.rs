@@ -194,9 +194,13 @@ impl Learner {
         self.agent.end_cycle();
     }
 
-    /// β of the AggreVaTeD mixture at `epoch` (None without an expert).
+    /// β at `epoch`: of the AggreVaTeD mixture, or an imitation learner's
+    /// share of the solver (None for neither).
     pub(crate) fn beta(&self, epoch: usize, config: &TrainConfig) -> Option<f64> {
-        self.expert.as_ref().map(|_| beta(epoch, config.aggrevated.beta0, config.aggrevated.t0))
+        match &self.expert {
+            Some(_) => Some(beta(epoch, config.aggrevated.beta0, config.aggrevated.t0)),
+            None => self.agent.solver_share(epoch),
+        }
     }
 
     /// The roll-in of this cycle: AggreVaTeD's mixture of the expert and

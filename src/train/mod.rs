@@ -244,10 +244,11 @@ pub struct EpochRow {
     /// policies, checkpoint); `wall_seconds` includes it.
     #[serde(rename = "time/persist_seconds", default)]
     pub persist_seconds: f64,
-    /// AggreVaTeD: probability that the expert acts in this epoch's roll-ins (0 without an expert).
+    /// AggreVaTeD: probability that the expert acts in this epoch's roll-ins;
+    /// BC and DAgger: that the solver acts (0 for the others).
     #[serde(rename = "aggrevated/beta", default)]
     pub beta: f64,
-    /// AggreVaTeD: share of this epoch's exploration steps taken by the expert.
+    /// AggreVaTeD: share of this epoch's exploration steps taken by the expert; BC and DAgger: by the solver.
     #[serde(rename = "aggrevated/expert_share", default)]
     pub expert_share: f64,
     /// Hindsight colours: relabelled episodes stored per exploration episode.

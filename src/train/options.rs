@@ -5,14 +5,15 @@
 //! and hindsight's. A setting given away from its default that the
 //! run would not use is refused, naming it and what uses it, rather than
 //! ignored: `--target-noise` without `--td3`, `--noise-eps` with `--algo sac`,
-//! `--set-pooling` without `--net set`.
+//! `--set-pooling` without `--net set`. It also refuses what an imitation
+//! learner cannot learn from (another network than `--net entity`, hindsight colours).
 //!
 //! A setting is "given" when it differs from its default (a recipe's key and a
 //! flag are the same setting), so a value equal to the default passes: it
 //! changes nothing either way.
 
 use super::learner::AggrevatedConfig;
-use crate::agents::arch::NetConfig;
+use crate::agents::arch::{NetConfig, NetKind};
 use crate::agents::registry::{Algo, AlgoConfigs};
 use crate::agents::shared::SharedConfig;
 
@@ -113,11 +114,33 @@ const RULES: &[Rule] = &[
     },
 ];
 
+/// Refuses what an imitation learner (`--algo bc|dagger`) cannot learn from: a network over
+/// another observation than the solver's, and hindsight colours.
+fn check_imitation(o: &Options) -> Result<(), String> {
+    let info = o.algo.registration().info;
+    if info.imitates && o.net.net != NetKind::Entity {
+        return Err(format!(
+            "--algo {} imitates the solver, which reads the entities observation (the gripper's, table's and \
+             floor's rows too): train with --net entity",
+            info.name
+        ));
+    }
+    if info.imitates && o.hindsight_colours > 0 {
+        return Err(format!(
+            "--hindsight-colours: the solver's labels are its actions under the colours it saw, not under others; \
+             --algo {} takes none",
+            info.name
+        ));
+    }
+    Ok(())
+}
+
 /// Refuses settings the run would not use (see the module), all of them in one message.
 ///
 /// # Errors
 /// Each setting given and unused, with what uses it and the fix.
 pub fn check(o: &Options) -> Result<(), String> {
+    check_imitation(o)?;
     let d = Defaults { net: NetConfig::default(), aggrevated: AggrevatedConfig::default() };
     let unused: Vec<String> = o
         .algo
@@ -144,7 +167,7 @@ pub fn check(o: &Options) -> Result<(), String> {
 fn describe(o: &Options) -> String {
     let mut s = format!("{}: --algo {}", o.algo.title(), o.algo.name());
     if set(o) {
-        s += " --net set";
+        s += &format!(" --net {}", o.net.net.name());
     }
     if expert(o) {
         s += " --expert";

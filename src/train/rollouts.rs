@@ -1,6 +1,7 @@
 //! Playing episodes for training: the behaviour policies (the algorithm's
-//! exploration, AggreVaTeD's mixture, deterministic for tests), one
-//! episode, and all workers' episodes in parallel threads.
+//! exploration, AggreVaTeD's mixture, the solver's mixture with an imitation
+//! learner, deterministic for tests), one episode, and all workers' episodes
+//! in parallel threads.
 
 use crate::agents::algorithm::Explorer;
 use crate::agents::expert::{Actor, Mixture};
@@ -9,7 +10,7 @@ use crate::agents::replay::ReplayBuffer;
 use crate::agents::AnyPolicy;
 use crate::env::{BlockEnv, EnvError, ObsSpec, VectorEnv, ACTION_DIM};
 use crate::hindsight;
-use crate::policy::Policy;
+use crate::policy::{Policy, ScriptedPolicy};
 use crate::rollout::{play_episode, Event};
 use crate::rules::{Colour, Touching};
 use anyhow::Result;
@@ -26,19 +27,39 @@ pub(crate) enum Behaviour<'a> {
     Explore(&'a dyn Explorer),
     /// AggreVaTeD's roll-in mixture of expert and learner.
     Mixture(&'a Mixture<'a>),
+    /// An imitation learner's episodes: the solver labels every step and acts
+    /// on it with probability `share`, the learner's explorer otherwise.
+    Imitate {
+        /// The learner, frozen.
+        learner: &'a dyn Explorer,
+        /// The probability that the solver acts at a step.
+        share: f64,
+    },
 }
 
 impl Behaviour<'_> {
     /// `(action to store, whether the expert chose it)`; the environment
     /// receives the stored action clipped to [−1, 1]. `noise` is the
     /// episode's exploration-noise state (empty at its start).
-    fn act(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> (Vec<f32>, bool) {
+    ///
+    /// # Panics
+    /// [`Behaviour::Imitate`] without the solver's label (an [`Acting`] builds one).
+    fn act(&self, obs: &[f32], label: Option<&[f32]>, noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> (Vec<f32>, bool) {
         match self {
             Self::Greedy(p) => (p.act(obs), false),
             Self::Explore(e) => (e.explore(obs, noise, rng), false),
             Self::Mixture(m) => {
                 let (who, a) = m.act(obs, noise, rng);
                 (a, who == Actor::Expert)
+            }
+            Self::Imitate { learner, share } => {
+                use rand::Rng;
+                let label = label.expect("the solver labels an imitation episode");
+                if rng.gen_bool(share.clamp(0.0, 1.0)) {
+                    (label.to_vec(), true)
+                } else {
+                    (learner.explore(obs, noise, rng), false)
+                }
             }
         }
     }
@@ -52,7 +73,7 @@ pub(crate) struct Episode {
     pub(crate) rew: Vec<f32>,
     pub(crate) terminated: bool,
     pub(crate) success: bool,
-    /// Steps on which the expert acted.
+    /// Steps on which the expert (or the solver, for an imitation learner) acted.
     pub(crate) expert_steps: usize,
     /// Seconds spent in the policy (forward passes and noise).
     pub(crate) forward_seconds: f64,
@@ -197,11 +218,16 @@ impl Draw {
 }
 
 /// A behaviour acting in one episode, as a [`Policy`]: its exploration
-/// noise state and generator, and what it spent.
+/// noise state and generator, the solver that labels an imitation episode,
+/// and what it spent.
 struct Acting<'a> {
     behaviour: &'a Behaviour<'a>,
     rng: ChaCha8Rng,
     noise: Vec<f32>,
+    /// For [`Behaviour::Imitate`]: the solver, following the episode whoever acts.
+    solver: Option<ScriptedPolicy>,
+    /// The solver's label of each step so far (with a solver).
+    labels: Vec<Vec<f32>>,
     /// Actions the expert chose.
     expert_steps: usize,
     forward_seconds: f64,
@@ -210,14 +236,21 @@ struct Acting<'a> {
 impl Policy for Acting<'_> {
     fn reset(&mut self) {
         self.noise.clear();
+        self.labels.clear();
+        if let Some(s) = &mut self.solver {
+            s.reset();
+        }
     }
 
-    /// The action to store (the environment clips it to [−1, 1] itself).
+    /// The action taken (the environment clips it to [−1, 1] itself); the
+    /// episode stores it, or the solver's label where there is one.
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
         let t = Instant::now();
-        let (a, by_expert) = self.behaviour.act(obs, &mut self.noise, &mut self.rng);
+        let label = self.solver.as_mut().map(|s| s.act(obs).to_vec());
+        let (a, by_expert) = self.behaviour.act(obs, label.as_deref(), &mut self.noise, &mut self.rng);
         self.forward_seconds += t.elapsed().as_secs_f64();
         self.expert_steps += by_expert as usize;
+        self.labels.extend(label);
         std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
     }
 }
@@ -233,7 +266,11 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
     }
     // The layout comes from `seed`; the exploration noise from a stream derived from it.
     let rng = ChaCha8Rng::seed_from_u64(stream_seed(seed, &[5]));
-    let mut acting = Acting { behaviour, rng, noise: Vec::new(), expert_steps: 0, forward_seconds: 0.0 };
+    // The solver reads the entities observation, which an imitation learner's environment presents.
+    let solver =
+        matches!(behaviour, Behaviour::Imitate { .. }).then(|| ScriptedPolicy::solver(env.obs_spec().max_objects));
+    let mut acting =
+        Acting { behaviour, rng, noise: Vec::new(), solver, labels: Vec::new(), expert_steps: 0, forward_seconds: 0.0 };
     let mut ep = Episode {
         obs: vec![],
         act: vec![],
@@ -265,6 +302,11 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
         }
     })?;
     (ep.expert_steps, ep.forward_seconds) = (acting.expert_steps, acting.forward_seconds);
+    if acting.solver.is_some() {
+        // What an imitation learner learns: the solver's action in every state visited.
+        debug_assert_eq!(acting.labels.len(), ep.act.len());
+        ep.act = acting.labels;
+    }
     Ok(ep)
 }
 
@@ -382,6 +424,29 @@ mod tests {
             Episode { contacts: None, ..ep }.relabelled(&spec, 4, hindsight::Strategy::BlueTouched, 50).is_empty(),
             "nothing recorded, nothing relabelled"
         );
+    }
+
+    #[test]
+    fn an_imitation_episode_stores_the_solvers_labels_whoever_acts() {
+        use crate::env::{EnvConfig, ObsMode};
+        struct Still;
+        impl Explorer for Still {
+            fn explore(&self, _: &[f32], _: &mut Vec<f32>, _: &mut ChaCha8Rng) -> Vec<f32> {
+                vec![0.0; ACTION_DIM]
+            }
+        }
+        let task = crate::env::registry::task("BlocksTouch-v0").unwrap();
+        let mut env = BlockEnv::new(EnvConfig { obs_mode: ObsMode::Entities, ..EnvConfig::new(task) }).unwrap();
+        for share in [0.0, 1.0] {
+            let ep = play(&mut env, &Behaviour::Imitate { learner: &Still, share }, 3, None).unwrap();
+            assert_eq!(ep.expert_steps, if share == 1.0 { ep.len() } else { 0 });
+            // A fresh solver over the recorded observations gives the stored actions.
+            let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
+            solver.reset();
+            let labels: Vec<Vec<f32>> = ep.obs[..ep.len()].iter().map(|o| solver.act(o).to_vec()).collect();
+            assert_eq!(ep.act, labels, "share {share}");
+            assert!(ep.act.iter().any(|a| a.iter().any(|&x| x != 0.0)), "the solver moves, whoever acts");
+        }
     }
 
     #[test]

@@ -105,6 +105,17 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a task the solver cannot play (an imitation learner would learn to
+/// stand still): the solver's reason, read off a first reset's observation.
+fn solver_plays(envs: &mut VectorEnv, task: &Task, seed: u64) -> Result<()> {
+    let env = &mut envs.envs_mut()[0];
+    let (obs, _) = env.reset(Some(seed))?;
+    crate::policy::Script::from_observation(&env.obs_spec(), &obs).map_err(|why| {
+        anyhow::anyhow!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id())
+    })?;
+    Ok(())
+}
+
 /// The memory a run needs at most, in bytes: its replay buffers when full
 /// (or when they hold every transition the run collects, if fewer), one
 /// update's batches and activations, and the learner's networks and
@@ -418,6 +429,9 @@ impl<'a> Trainer<'a> {
         let mut envs = VectorEnv::new(&env_config, config.workers, config.workers)?;
         // Hindsight colours replay the rules over every substep's contacts: the environments record them.
         envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
+        if config.algo.registration().info.imitates {
+            solver_plays(&mut envs, &task, config.seed)?;
+        }
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
         let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
@@ -512,9 +526,10 @@ impl<'a> Trainer<'a> {
         let config = &self.config;
         let explorer = self.learner.agent.explorer();
         let mixture = self.learner.mixture(&*explorer, epoch, config);
-        let behaviour = match &mixture {
-            Some(m) => Behaviour::Mixture(m),
-            None => Behaviour::Explore(&*explorer),
+        let behaviour = match (&mixture, self.learner.agent.solver_share(epoch)) {
+            (Some(m), _) => Behaviour::Mixture(m),
+            (None, Some(share)) => Behaviour::Imitate { learner: &*explorer, share },
+            (None, None) => Behaviour::Explore(&*explorer),
         };
         let base = self.state.episodes_per_worker;
         let draw = Draw {

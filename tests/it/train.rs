@@ -927,3 +927,60 @@ fn the_recorded_runs_configurations_still_read() {
     }
     assert!(read >= 20, "{read} recorded configurations");
 }
+
+#[test]
+fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_cannot_use() {
+    let imitate = |algo: &str, epochs| {
+        let mut c = tiny("BlocksTouch-v0", epochs);
+        c.algo = Algo::named(algo).unwrap();
+        c.net = NetConfig { net: NetKind::Entity, ..NetConfig::default() };
+        if algo == "dagger" {
+            c.algos.dagger.t0 = 1.0;
+        }
+        c
+    };
+    // BC: the solver plays every exploration step; no critic.
+    let dir = tempfile::tempdir().unwrap();
+    let rows = train(&imitate("bc", 2), dir.path(), false, &mut quiet).unwrap();
+    assert!(rows.iter().all(|r| r.beta == 1.0 && r.expert_share == 1.0), "{rows:?}");
+    assert!(rows.iter().all(|r| r.critic_loss == 0.0 && r.mean_q == 0.0 && r.actor_loss > 0.0), "{rows:?}");
+    assert!(rows[0].train_success >= 0.5, "the solver's own episodes at level 0: {rows:?}");
+    let saved = load_policy(&dir.path().join("policy.json")).unwrap();
+    assert_eq!(saved.policy.obs_mode(), blockpuzzle::env::ObsMode::Entities);
+    // DAgger: the solver's share decays (1, e^-1, e^-2) and a resumed run continues exactly.
+    let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = train(&imitate("dagger", 3), straight.path(), false, &mut quiet).unwrap();
+    train(&imitate("dagger", 2), split.path(), false, &mut quiet).unwrap();
+    let b = train(&imitate("dagger", 3), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert_eq!(a[0].beta, 1.0);
+    assert!((a[2].beta - (-2.0f64).exp()).abs() < 1e-12, "{}", a[2].beta);
+    assert!(
+        a[2].expert_share < 0.5 && a[2].expert_share > 0.0,
+        "the learner acts on most steps: {}",
+        a[2].expert_share
+    );
+    assert!(imitate("dagger", 1).title().contains("DAgger"), "{}", imitate("dagger", 1).title());
+    // What they cannot use is refused before anything is written.
+    let refused = |c: TrainConfig, words: &[&str]| {
+        let dir = tempfile::tempdir().unwrap();
+        let e = format!("{:#}", train(&c, &dir.path().join("run"), false, &mut quiet).unwrap_err());
+        assert!(words.iter().all(|w| e.contains(w)), "{e}");
+        assert!(!dir.path().join("run").exists(), "{e}");
+    };
+    refused(TrainConfig { net: NetConfig::default(), ..imitate("bc", 1) }, &["--algo bc", "--net entity"]);
+    refused(TrainConfig { hindsight_colours: 2, ..imitate("dagger", 1) }, &["--hindsight-colours", "--algo dagger"]);
+    let mut bad = imitate("dagger", 1);
+    bad.algos.dagger.beta0 = 1.5;
+    refused(bad, &["--dagger-beta0", "[0, 1]"]);
+    // A task the solver cannot play (a green gripper): nothing to imitate, and the solver's reason.
+    let tasks = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"))
+        .unwrap()
+        .replace("id = \"BlocksTouch-v0\"", "id = \"GreenGripperTouch-v0\"")
+        .replace("gripper = \"grey\"", "gripper = \"green\"");
+    let file = tasks.path().join("green-gripper.toml");
+    std::fs::write(&file, text).unwrap();
+    let green = TrainConfig { env: file.display().to_string(), ..imitate("bc", 1) };
+    refused(green, &["the solver cannot play GreenGripperTouch-v0", "a green gripper", "nothing to imitate"]);
+}
