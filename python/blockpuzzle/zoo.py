@@ -94,8 +94,9 @@ class ZooPolicy:
     """The deterministic action of a zoo entry: normalise, the network, tanh (DDPG) or clip(mu) (PGGD).
 
     The network is an MLP (ReLU layers) or, where the metadata gives a ``set`` layout, a set network
-    over the ``objects`` observation (robot | object rows | mask): a per-object encoder, optionally a
-    self-attention block, masked mean and max pooling (overall, or per colour), and a head. A set
+    over the ``objects`` or ``entities`` observation (robot | rows | mask): a per-row encoder (of the
+    row, or with ``robot_tokens`` of the robot features and the row), optionally a self-attention
+    block, masked mean and max pooling (overall, or per colour), and a head. A set
     network takes any number of object slots: the slot count is read from the observation's length.
     """
 
@@ -212,7 +213,11 @@ class ZooPolicy:
         slots = (len(x) - r) // (f + 1)
         rows = x[r:r + slots * f].reshape(slots, f)
         present = x[r + slots * f:r + slots * f + slots] > 0.5
-        h, rows = rows[present], rows[present]
+        rows = rows[present]
+        # Robot tokens: each row with the robot features before it (an actor has no extra inputs).
+        h = rows
+        if self.set.get("robot_tokens", False):
+            h = np.concatenate([np.tile(x[:r], (len(rows), 1)), rows], axis=1)
         for i in range(e):
             h = self._dense(i, h, relu=True)
         first = e

@@ -73,6 +73,11 @@ pub struct SetLayout {
     /// however large the encoder's outputs grow.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub norm: bool,
+    /// Robot tokens: the encoder reads each row with the robot features before it and the extra
+    /// inputs (a critic's action) after it, `robot | row | extra`, instead of the row alone
+    /// (Zhou et al. 2022, "Policy Architectures for Compositional Generalization in Control").
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub robot_tokens: bool,
 }
 
 /// The variance floor of [`SetLayout::norm`] (libtorch's `layer_norm` default).
@@ -118,7 +123,18 @@ impl SetLayout {
             attention: false,
             by_colour: false,
             norm: false,
+            robot_tokens: false,
         })
+    }
+
+    /// The encoder's input size, with `extra` inputs after the observation: a row, or with
+    /// [`SetLayout::robot_tokens`] the robot features, a row and the extra inputs.
+    pub fn token_width(&self, extra: usize) -> usize {
+        if self.robot_tokens {
+            self.robot + self.object + extra
+        } else {
+            self.object
+        }
     }
 
     /// The index of the head's first layer: after the encoder and the attention block.
@@ -206,7 +222,7 @@ impl PlainNet {
                 ));
             }
         }
-        let mut width = self.set.map_or(n_in, |s| s.object);
+        let mut width = self.set.map_or(n_in, |s| s.token_width(n_in - s.obs_dim()));
         for (i, l) in self.layers.iter().enumerate() {
             if let Some(s) = self.set.filter(|s| s.head_start() == i) {
                 width = s.head_input(width, n_in - s.obs_dim());
@@ -252,7 +268,9 @@ impl PlainNet {
             .filter(|&k| x.get(rows_end + k).is_some_and(|&m| m > 0.5))
             .map(|k| &x[s.robot + k * s.object..s.robot + (k + 1) * s.object])
             .collect();
-        let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, row.to_vec())).collect();
+        let extra = x.get(rows_end + s.slots..).unwrap_or(&[]);
+        let token = |row: &[f32]| if s.robot_tokens { [&x[..s.robot], row, extra].concat() } else { row.to_vec() };
+        let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, token(row))).collect();
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
         }
@@ -272,7 +290,7 @@ impl PlainNet {
         if s.norm {
             layer_norm(&mut input[s.robot..]);
         }
-        input.extend_from_slice(x.get(rows_end + s.slots..).unwrap_or(&[]));
+        input.extend_from_slice(extra);
         run(head, input, self.tanh_out)
     }
 }

@@ -254,6 +254,7 @@ mod tests {
             attention: false,
             by_colour: false,
             norm: false,
+            robot_tokens: false,
         };
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [

@@ -85,6 +85,12 @@ pub struct NetConfig {
     #[arg(long)]
     #[serde(default)]
     pub set_norm: bool,
+    /// Set network: the encoder reads robot tokens, each row with the robot features before it and
+    /// (a critic's) the action after it, instead of the row alone (Zhou et al. 2022): every row is
+    /// seen relative to the gripper, and a set critic's action reaches every row.
+    #[arg(long)]
+    #[serde(default)]
+    pub set_robot_tokens: bool,
 }
 
 fn two() -> usize {
@@ -93,7 +99,13 @@ fn two() -> usize {
 
 impl Default for NetConfig {
     fn default() -> Self {
-        Self { net: NetKind::Mlp, set_encoder_layers: two(), set_pooling: Pooling::MeanMax, set_norm: false }
+        Self {
+            net: NetKind::Mlp,
+            set_encoder_layers: two(),
+            set_pooling: Pooling::MeanMax,
+            set_norm: false,
+            set_robot_tokens: false,
+        }
     }
 }
 
@@ -127,10 +139,11 @@ impl NetConfig {
             Pooling::Attention => format!("{rows} + attention"),
             Pooling::Colour => format!("{rows}, pooled by colour"),
         };
+        let kind = if self.set_robot_tokens { format!("{kind}, robot tokens") } else { kind };
         if self.set_norm {
             format!("{kind}, layer-normalised")
         } else {
-            kind.into()
+            kind
         }
     }
 }
@@ -177,6 +190,7 @@ impl Arch {
                 layout.attention = net.set_pooling == Pooling::Attention;
                 layout.by_colour = net.set_pooling == Pooling::Colour;
                 layout.norm = net.set_norm;
+                layout.robot_tokens = net.set_robot_tokens;
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

@@ -666,6 +666,7 @@ mod tests {
             attention: false,
             by_colour: false,
             norm: false,
+            robot_tokens: false,
         };
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
         let mut rng = ChaCha8Rng::seed_from_u64(4);

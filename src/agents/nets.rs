@@ -66,7 +66,7 @@ impl Net {
         rng: &mut impl Rng,
     ) -> Self {
         let layout = SetLayout { encoder_layers: encoder_layers.max(1), ..layout };
-        let mut shapes = vec![(layout.object, hidden)];
+        let mut shapes = vec![(layout.token_width(extra), hidden)];
         shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.encoder_layers - 1));
         if layout.attention {
             shapes.extend(std::iter::repeat((hidden, hidden)).take(super::mlp::ATTENTION_LAYERS));
@@ -161,7 +161,13 @@ impl Net {
         let rows = x.narrow(1, r, m * f).reshape(&[n * m, f]);
         let mask = x.narrow(1, r + m * f, m).gt(0.5).to_kind(Kind::Float).unsqueeze(2);
         let extra = x.narrow(1, r + m * f + m, x.size()[1] - (r + m * f + m));
-        let mut h = rows;
+        let mut h = if s.robot_tokens {
+            // Each token: the robot features, the row, the extra inputs ([n·m, r + f + e]).
+            let each = |t: &Tensor| t.unsqueeze(1).expand(&[n, m, t.size()[1]], false);
+            Tensor::cat(&[each(&robot), rows.reshape(&[n, m, f]), each(&extra)], 2).reshape(&[n * m, -1])
+        } else {
+            rows
+        };
         for l in 0..s.encoder_layers {
             h = self.affine(&h, l, l > 0).relu();
         }
@@ -459,8 +465,16 @@ mod tests {
     }
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
-    const SET: SetLayout =
-        SetLayout { robot: 3, object: 5, slots: 4, encoder_layers: 2, attention: false, by_colour: false, norm: false };
+    const SET: SetLayout = SetLayout {
+        robot: 3,
+        object: 5,
+        slots: 4,
+        encoder_layers: 2,
+        attention: false,
+        by_colour: false,
+        norm: false,
+        robot_tokens: false,
+    };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
     fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
@@ -489,18 +503,24 @@ mod tests {
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let cases = [
-            (0, 4, true, false, false),
-            (4, 1, false, false, false),
-            (0, 4, true, true, false),
-            (4, 1, false, true, false),
-            (0, 4, true, false, true),
-            (4, 1, false, true, true),
+            (0, 4, true, false, false, false),
+            (4, 1, false, false, false, false),
+            (0, 4, true, true, false, false),
+            (4, 1, false, true, false, false),
+            (0, 4, true, false, true, false),
+            (4, 1, false, true, true, false),
+            (0, 4, true, false, false, true),
+            (4, 1, false, false, false, true),
+            (4, 1, false, true, true, true),
         ];
-        for (extra, out, tanh, attention, norm) in cases {
+        for (extra, out, tanh, attention, norm, robot_tokens) in cases {
             // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
             // with mean-max pooling or a self-attention block first, the pooled features
-            // layer-normalised or not.
-            let net = Net::new_set(SetLayout { attention, norm, ..SET }, extra, (16, 2, 2), out, tanh, &mut rng);
+            // layer-normalised or not, the encoder reading rows or robot tokens.
+            let layout = SetLayout { attention, norm, robot_tokens, ..SET };
+            let net = Net::new_set(layout, extra, (16, 2, 2), out, tanh, &mut rng);
+            let tokens = if robot_tokens { SET.robot + SET.object + extra } else { SET.object };
+            assert_eq!(net.to_plain().layers[0].n_in, tokens);
             assert_eq!(net.sizes()[0], SET.obs_dim() + extra);
             let plain = net.to_plain();
             plain.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap();
@@ -592,6 +612,7 @@ mod tests {
             attention: false,
             by_colour: true,
             norm: false,
+            robot_tokens: false,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.

@@ -56,6 +56,9 @@ pub(super) struct BenchArgs {
     /// With --train --net set: layer-normalise the pooled features (as `train --set-norm`).
     #[arg(long, requires = "train")]
     set_norm: bool,
+    /// With --train --net set: the encoder reads robot tokens (as `train --set-robot-tokens`).
+    #[arg(long, requires = "train")]
+    set_robot_tokens: bool,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]
     flat_critic: bool,
@@ -118,6 +121,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
             net: a.net,
             set_pooling: a.set_pooling,
             set_norm: a.set_norm,
+            set_robot_tokens: a.set_robot_tokens,
             ..Default::default()
         },
         flat_critic: a.flat_critic,

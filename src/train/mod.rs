@@ -367,7 +367,12 @@ impl TrainConfig {
             (kind, Pooling::Attention) => format!("-{}-attention", kind.name()),
             (kind, Pooling::Colour) => format!("-{}-colour", kind.name()),
         };
-        let norm = if self.net.set_norm { "-norm" } else { "" };
+        let norm = match (self.net.set_robot_tokens, self.net.set_norm) {
+            (false, false) => "",
+            (false, true) => "-norm",
+            (true, false) => "-tokens",
+            (true, true) => "-tokens-norm",
+        };
         let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self

@@ -105,6 +105,7 @@ const RULES: &[Rule] = &[
     },
     Rule { flag: "--set-pooling", given: |o, d| o.net.set_pooling != d.net.set_pooling, used: set, by: SET },
     Rule { flag: "--set-norm", given: |o, _| o.net.set_norm, used: set, by: SET },
+    Rule { flag: "--set-robot-tokens", given: |o, _| o.net.set_robot_tokens, used: set, by: SET },
     // Hindsight colours'.
     Rule {
         flag: "--hindsight-strategy",
