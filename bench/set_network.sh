@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Update rates of the set networks against the flat MLP (issue 31), f32 and bf16, side by side:
-# `blockpuzzle bench --train` on BlocksChoose-v0 for each network, the whole list ROUNDS times,
-# alternated so that a change in the machine's load touches every network alike. Prints one JSON
-# line per measurement (bench --json) and a table of the medians and their ratios to the MLP's.
+# Update rates of the set and entity networks against the flat MLP (issues 31 and 47), f32 and bf16,
+# side by side: `blockpuzzle bench --train` on BlocksChoose-v0 for each network (DDPG's actor and
+# critics, or DAgger's actor alone), the whole list ROUNDS times, alternated so that a change in the
+# machine's load touches every network alike. Prints one JSON line per measurement (bench --json,
+# with the row's label) and a table of the medians and their ratios to the MLP's.
 #   bash bench/set_network.sh [ROUNDS] [UPDATES]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,13 +13,30 @@ BP=target/release/blockpuzzle
 [ -x "$BP" ] || cargo build --release --quiet
 PRECISIONS=(f32)
 if "$BP" info 2>/dev/null | grep -q "bf16 updates yes"; then PRECISIONS+=(bf16); fi
+# label|flags; the first is the baseline.
+VARIANTS=(
+    "mlp|--net mlp"
+    "set mean-max|--net set"
+    "set mean-max --set-norm|--net set --set-norm"
+    "set mean-max --flat-critic|--net set --flat-critic"
+    "set attention|--net set --set-pooling attention"
+    "set colour|--net set --set-pooling colour"
+    "entity|--net entity"
+    "entity --flat-critic|--net entity --flat-critic"
+    "entity --set-robot-tokens|--net entity --set-robot-tokens"
+    "entity, DAgger (actor alone)|--net entity --algo dagger"
+    "entity --set-robot-tokens, DAgger (actor alone)|--net entity --set-robot-tokens --algo dagger"
+)
 OUT="$(mktemp)"
 for _ in $(seq "$ROUNDS"); do
     for precision in "${PRECISIONS[@]}"; do
-        for net in "mlp mean-max" "set mean-max" "set mean-max --set-norm" "set mean-max --flat-critic" "set attention" "set colour"; do
-            set -- $net
-            "$BP" bench --train --json --env BlocksChoose-v0 --net "$1" --set-pooling "$2" ${3:-} --precision "$precision" \
-                --updates "$UPDATES" --steps 500 --torch-threads 1 | tee -a "$OUT"
+        for variant in "${VARIANTS[@]}"; do
+            label="${variant%%|*}"
+            # shellcheck disable=SC2086
+            "$BP" bench --train --json --env BlocksChoose-v0 ${variant#*|} --precision "$precision" \
+                --updates "$UPDATES" --steps 500 --torch-threads 1 |
+                python3 -c 'import json, sys; r = json.loads(sys.stdin.read().splitlines()[-1]); r["label"] = sys.argv[1]; print(json.dumps(r))' \
+                    "$label" | tee -a "$OUT"
         done
     done
 done
@@ -27,7 +45,7 @@ import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 rates = {}
 for r in rows:
-    rates.setdefault((r["precision"], r["net"]), []).append(r["updates_per_s"])
+    rates.setdefault((r["precision"], r["label"]), []).append(r["updates_per_s"])
 print("| network | precision | updates/s (median) | × the MLP's (same precision) | × its f32 rate |")
 print("|---|---|---:|---:|---:|")
 for (precision, net), v in rates.items():

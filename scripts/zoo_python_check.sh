@@ -18,8 +18,8 @@ fi
 
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, mean-max with
 # --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too;
-# and with --set-robot-tokens, trained by DAgger), exported to a scratch zoo, must act in numpy as in
-# Rust too; the shipped entries may hold none of them.
+# and with --set-robot-tokens and --set-type-norm, trained by DAgger), exported to a scratch zoo, must
+# act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
 BP="${BLOCKPUZZLE_BIN:-}"
@@ -35,7 +35,7 @@ for variant in mean-max attention colour mean-max-norm entity entity-tokens-dagg
     if [ "$variant" = entity ]; then
         flags=(--net entity)
     elif [ "$variant" = entity-tokens-dagger ]; then
-        flags=(--net entity --set-robot-tokens --algo dagger)
+        flags=(--net entity --set-robot-tokens --set-type-norm --algo dagger)
     else
         flags=(--net set --set-pooling "${variant%-norm}")
         if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi

@@ -200,11 +200,18 @@ class ZooPolicy:
         t, clip = self.tensors, self.meta["norm_clip"]
         mean, std = t["obs_norm.mean"], t["obs_norm.std"]
         if self.set is not None:
-            # Object rows share one mean and std per feature (slot 0's); the mask passes unchanged.
-            r, f = self.set["robot"], self.set["object"]
-            slots = (len(x) - r) // (f + 1)
-            mean = np.concatenate([mean[:r], np.tile(mean[r:r + f], slots), np.zeros(slots, np.float32)])
-            std = np.concatenate([std[:r], np.tile(std[r:r + f], slots), np.ones(slots, np.float32)])
+            # Block rows share one mean and std per feature (slot 0's); the last `fixtures` rows (the
+            # gripper's, table's and floor's, with statistics per row type) keep their own, those of
+            # the saved vector's last rows; the mask passes unchanged.
+            r, f, fx = self.set["robot"], self.set["object"], self.set.get("fixtures", 0)
+            slots, saved = (len(x) - r) // (f + 1), (len(mean) - r) // (f + 1)
+
+            def rows(v):
+                own = [v[r + (saved - fx + i) * f:r + (saved - fx + i + 1) * f] for i in range(fx)]
+                return np.concatenate([np.tile(v[r:r + f], slots - fx), *own]) if fx else np.tile(v[r:r + f], slots)
+
+            mean = np.concatenate([mean[:r], rows(mean), np.zeros(slots, np.float32)])
+            std = np.concatenate([std[:r], rows(std), np.ones(slots, np.float32)])
         return np.clip((x - mean) / std, -clip, clip)
 
     def _pool(self, x):

@@ -78,6 +78,15 @@ pub struct SetLayout {
     /// (Zhou et al. 2022, "Policy Architectures for Compositional Generalization in Control").
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub robot_tokens: bool,
+    /// Statistics per type of row: the last `fixtures` rows (the `entities` observation's gripper,
+    /// table and floor) are each normalised with statistics of their own, the blocks' rows with
+    /// those they share (0: every row shares one set). The network itself reads the rows alike.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub fixtures: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// The variance floor of [`SetLayout::norm`] (libtorch's `layer_norm` default).
@@ -124,6 +133,7 @@ impl SetLayout {
             by_colour: false,
             norm: false,
             robot_tokens: false,
+            fixtures: 0,
         })
     }
 

@@ -21,9 +21,13 @@ pub struct Normalizer {
     /// Object rows share their statistics (kept in slot 0's entries of the sums).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     set: Option<SetLayout>,
-    /// Object rows counted (present ones), with `set`.
+    /// Object rows counted (present ones), with `set`: the blocks' rows where the layout keeps
+    /// statistics per type ([`SetLayout::fixtures`]).
     #[serde(default)]
     rows: u64,
+    /// With [`SetLayout::fixtures`]: each fixture row's count (present ones), in row order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    fixture_rows: Vec<u64>,
 }
 
 impl Normalizer {
@@ -39,6 +43,7 @@ impl Normalizer {
             clip,
             set: None,
             rows: 0,
+            fixture_rows: Vec::new(),
         }
     }
 
@@ -55,7 +60,7 @@ impl Normalizer {
         let n = count as f64;
         let sum = mean.iter().map(|&m| f64::from(m) * n).collect();
         let sumsq = mean.iter().zip(&std).map(|(&m, &s)| (f64::from(s).powi(2) + f64::from(m).powi(2)) * n).collect();
-        Self { sum, sumsq, count, mean, std, eps, clip, set: None, rows: 0 }
+        Self { sum, sumsq, count, mean, std, eps, clip, set: None, rows: 0, fixture_rows: Vec::new() }
     }
 
     /// The clip range of normalised values.
@@ -130,9 +135,13 @@ impl Normalizer {
         }
     }
 
-    /// [`Normalizer::update`] with object rows sharing their statistics.
+    /// [`Normalizer::update`] with object rows sharing their statistics: the
+    /// blocks' in slot 0's entries of the sums, each fixture's (with
+    /// [`SetLayout::fixtures`]) in its own slot's.
     fn update_set(&mut self, s: &SetLayout, rows: &[f32]) {
         let (r, f, m) = (s.robot, s.object, s.slots);
+        let blocks = m.saturating_sub(s.fixtures);
+        self.fixture_rows.resize(m - blocks, 0);
         let d = self.dim();
         for row in rows.chunks_exact(d) {
             for (k, &x) in row[..r].iter().enumerate() {
@@ -140,11 +149,15 @@ impl Normalizer {
                 self.sumsq[k] += f64::from(x) * f64::from(x);
             }
             for slot in (0..m).filter(|&k| row[r + m * f + k] > 0.5) {
+                let into = if slot < blocks { 0 } else { slot };
                 for (j, &x) in row[r + slot * f..r + (slot + 1) * f].iter().enumerate() {
-                    self.sum[r + j] += f64::from(x);
-                    self.sumsq[r + j] += f64::from(x) * f64::from(x);
+                    self.sum[r + into * f + j] += f64::from(x);
+                    self.sumsq[r + into * f + j] += f64::from(x) * f64::from(x);
                 }
-                self.rows += 1;
+                match slot.checked_sub(blocks) {
+                    None => self.rows += 1,
+                    Some(i) => self.fixture_rows[i] += 1,
+                }
             }
             self.count += 1;
         }
@@ -160,9 +173,13 @@ impl Normalizer {
         for j in 0..f {
             if self.rows > 0 {
                 let (mean, std) = stats(self.sum[r + j], self.sumsq[r + j], self.rows);
-                for slot in 0..m {
+                for slot in 0..blocks {
                     (self.mean[r + slot * f + j], self.std[r + slot * f + j]) = (mean, std);
                 }
+            }
+            for (i, &n) in self.fixture_rows.iter().enumerate().filter(|(_, &n)| n > 0) {
+                let at = r + (blocks + i) * f + j;
+                (self.mean[at], self.std[at]) = stats(self.sum[at], self.sumsq[at], n);
             }
         }
         // The mask: (x − 0) / 1, as it is; so are the colour one-hots that a network pooling by
@@ -180,15 +197,19 @@ impl Normalizer {
 
     /// This normaliser of a set network's observations for `layout` (the
     /// same robot and row features, another number of slots): the robot
-    /// statistics, slot 0's row statistics in every slot (set statistics are
-    /// shared by the slots), the mask passed unchanged. Acting only: the
-    /// running sums are rebuilt from the statistics.
+    /// statistics, slot 0's row statistics in every block slot (set
+    /// statistics are shared by the slots), each fixture's own (the last
+    /// [`SetLayout::fixtures`] rows, those of the last rows here), the mask
+    /// passed unchanged. Acting only: the running sums are rebuilt from the statistics.
     pub fn with_slots(&self, layout: SetLayout) -> Self {
         let (r, f) = (layout.robot, layout.object);
+        let here = (self.dim().saturating_sub(r)) / (f + 1);
         let pick = |v: &[f32], pass: f32| -> Vec<f32> {
             let mut out = v[..r.min(v.len())].to_vec();
-            for _ in 0..layout.slots {
-                out.extend_from_slice(v.get(r..r + f).unwrap_or(&[]));
+            let row = |slot: usize| v.get(r + slot * f..r + (slot + 1) * f).unwrap_or(&[]);
+            for slot in 0..layout.slots {
+                let fixture = (slot + layout.fixtures).checked_sub(layout.slots);
+                out.extend_from_slice(fixture.map_or(row(0), |i| row(here.saturating_sub(layout.fixtures) + i)));
             }
             out.extend(std::iter::repeat(pass).take(layout.slots));
             out
@@ -196,6 +217,7 @@ impl Normalizer {
         let mut n = Self::from_stats(pick(&self.mean, 0.0), pick(&self.std, 1.0), self.count, self.eps, self.clip);
         n.set = Some(layout);
         n.rows = self.rows;
+        n.fixture_rows = self.fixture_rows.clone();
         n
     }
 
@@ -255,6 +277,7 @@ mod tests {
             by_colour: false,
             norm: false,
             robot_tokens: false,
+            fixtures: 0,
         };
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [
@@ -285,6 +308,50 @@ mod tests {
         m.update(&b);
         m.update(&a);
         assert_eq!((m.mean(), m.std()), (n.mean(), n.std()));
+    }
+
+    #[test]
+    fn fixture_rows_keep_statistics_of_their_own_and_the_blocks_share_theirs() {
+        // Two block slots, then two fixtures (as the entities rows end with the gripper, table, floor).
+        let layout = SetLayout {
+            robot: 1,
+            object: 2,
+            slots: 4,
+            encoder_layers: 1,
+            attention: false,
+            by_colour: false,
+            norm: false,
+            robot_tokens: false,
+            fixtures: 2,
+        };
+        // robot | block, block, fixture 0, fixture 1 | mask; the second fixture absent in `b`.
+        let a = [0.0, /**/ 1.0, 10.0, 3.0, 30.0, 100.0, -1.0, 7.0, 7.0, /**/ 1.0, 1.0, 1.0, 1.0];
+        let b = [2.0, /**/ 5.0, 50.0, 9.0, 9.0, 300.0, 1.0, 0.0, 0.0, /**/ 1.0, 0.0, 1.0, 0.0];
+        let mut n = Normalizer::for_set(layout, 0.01, 5.0);
+        n.update(&[a, b].concat());
+        // Blocks: rows (1, 10), (3, 30), (5, 50), in both block slots.
+        for slot in 0..2 {
+            assert_eq!(&n.mean()[1 + slot * 2..3 + slot * 2], &[3.0, 30.0]);
+        }
+        // Fixture 0: (100, -1) and (300, 1); fixture 1: (7, 7) alone (its std floored).
+        assert_eq!((&n.mean()[5..7], &n.std()[5..7]), (&[200.0, 0.0][..], &[100.0, 1.0][..]));
+        assert_eq!((&n.mean()[7..9], &n.std()[7..9]), (&[7.0, 7.0][..], &[0.01, 0.01][..]));
+        // Without fixtures, the four rows would share one set.
+        let shared = Normalizer::for_set(SetLayout { fixtures: 0, ..layout }, 0.01, 5.0);
+        assert_eq!(shared.fixture_rows.len(), 0);
+        // Another slot count keeps the blocks' statistics in every block slot and each fixture's own.
+        let wider = n.with_slots(SetLayout { slots: 5, ..layout });
+        assert_eq!(wider.dim(), 1 + 5 * 2 + 5);
+        for slot in 0..3 {
+            assert_eq!(&wider.mean()[1 + slot * 2..3 + slot * 2], &[3.0, 30.0]);
+        }
+        assert_eq!((&wider.mean()[7..11], &wider.std()[7..11]), (&n.mean()[5..9], &n.std()[5..9]));
+        assert_eq!(&wider.std()[11..], &[1.0; 5]);
+        // The running counts survive a checkpoint (JSON) and resume the same statistics.
+        let mut back: Normalizer = serde_json::from_str(&serde_json::to_string(&n).unwrap()).unwrap();
+        back.update(&a);
+        n.update(&a);
+        assert_eq!((back.mean(), back.std()), (n.mean(), n.std()));
     }
 
     #[test]

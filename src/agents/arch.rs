@@ -91,6 +91,11 @@ pub struct NetConfig {
     #[arg(long)]
     #[serde(default)]
     pub set_robot_tokens: bool,
+    /// Entity set network: normalise by type of row, the gripper's, the table's and the floor's each
+    /// with statistics of its own and the blocks' with theirs, instead of one set for every row.
+    #[arg(long)]
+    #[serde(default)]
+    pub set_type_norm: bool,
 }
 
 fn two() -> usize {
@@ -105,6 +110,7 @@ impl Default for NetConfig {
             set_pooling: Pooling::MeanMax,
             set_norm: false,
             set_robot_tokens: false,
+            set_type_norm: false,
         }
     }
 }
@@ -140,6 +146,7 @@ impl NetConfig {
             Pooling::Colour => format!("{rows}, pooled by colour"),
         };
         let kind = if self.set_robot_tokens { format!("{kind}, robot tokens") } else { kind };
+        let kind = if self.set_type_norm { format!("{kind}, statistics per row type") } else { kind };
         if self.set_norm {
             format!("{kind}, layer-normalised")
         } else {
@@ -191,6 +198,7 @@ impl Arch {
                 layout.by_colour = net.set_pooling == Pooling::Colour;
                 layout.norm = net.set_norm;
                 layout.robot_tokens = net.set_robot_tokens;
+                layout.fixtures = if net.set_type_norm { obs.mode.fixtures().len() } else { 0 };
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

@@ -667,6 +667,7 @@ mod tests {
             by_colour: false,
             norm: false,
             robot_tokens: false,
+            fixtures: 0,
         };
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
         let mut rng = ChaCha8Rng::seed_from_u64(4);

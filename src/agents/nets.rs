@@ -474,6 +474,7 @@ mod tests {
         by_colour: false,
         norm: false,
         robot_tokens: false,
+        fixtures: 0,
     };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
@@ -613,6 +614,7 @@ mod tests {
             by_colour: true,
             norm: false,
             robot_tokens: false,
+            fixtures: 0,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.

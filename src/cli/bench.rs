@@ -59,6 +59,9 @@ pub(super) struct BenchArgs {
     /// With --train --net set: the encoder reads robot tokens (as `train --set-robot-tokens`).
     #[arg(long, requires = "train")]
     set_robot_tokens: bool,
+    /// With --train --net entity: statistics per row type (as `train --set-type-norm`).
+    #[arg(long, requires = "train")]
+    set_type_norm: bool,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]
     flat_critic: bool,
@@ -122,6 +125,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
             set_pooling: a.set_pooling,
             set_norm: a.set_norm,
             set_robot_tokens: a.set_robot_tokens,
+            set_type_norm: a.set_type_norm,
             ..Default::default()
         },
         flat_critic: a.flat_critic,

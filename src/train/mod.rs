@@ -367,12 +367,15 @@ impl TrainConfig {
             (kind, Pooling::Attention) => format!("-{}-attention", kind.name()),
             (kind, Pooling::Colour) => format!("-{}-colour", kind.name()),
         };
-        let norm = match (self.net.set_robot_tokens, self.net.set_norm) {
-            (false, false) => "",
-            (false, true) => "-norm",
-            (true, false) => "-tokens",
-            (true, true) => "-tokens-norm",
-        };
+        let norm = [
+            (self.net.set_robot_tokens, "-tokens"),
+            (self.net.set_type_norm, "-typenorm"),
+            (self.net.set_norm, "-norm"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, s)| *s)
+        .collect::<String>();
         let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self

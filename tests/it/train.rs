@@ -935,9 +935,11 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         c.algo = Algo::named(algo).unwrap();
         c.net = NetConfig { net: NetKind::Entity, ..NetConfig::default() };
         if algo == "dagger" {
-            // DAgger's runs also read robot tokens (the robot features beside every row).
+            // DAgger's runs also read robot tokens (the robot features beside every row) and keep
+            // statistics per row type.
             c.algos.dagger.t0 = 1.0;
             c.net.set_robot_tokens = true;
+            c.net.set_type_norm = true;
         }
         c
     };
@@ -963,7 +965,7 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         a[2].expert_share
     );
     let tokens = load_policy(&straight.path().join("policy.json")).unwrap();
-    assert!(tokens.policy.net().set.is_some_and(|s| s.robot_tokens && s.object == 26));
+    assert!(tokens.policy.net().set.is_some_and(|s| s.robot_tokens && s.object == 26 && s.fixtures == 3));
     assert!(!saved.policy.net().set.unwrap().robot_tokens);
     assert!(imitate("dagger", 1).title().contains("DAgger"), "{}", imitate("dagger", 1).title());
     // What they cannot use is refused before anything is written.
@@ -977,6 +979,11 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     let mlp =
         TrainConfig { net: NetConfig { set_robot_tokens: true, ..NetConfig::default() }, ..tiny("BlocksTouch-v0", 1) };
     refused(mlp, &["--set-robot-tokens is only used with --net set"]);
+    let set = NetConfig { net: NetKind::Set, set_type_norm: true, ..NetConfig::default() };
+    refused(
+        TrainConfig { net: set, ..tiny("BlocksChoose-v0", 1) },
+        &["--set-type-norm is only used with --net entity"],
+    );
     refused(TrainConfig { hindsight_colours: 2, ..imitate("dagger", 1) }, &["--hindsight-colours", "--algo dagger"]);
     let mut bad = imitate("dagger", 1);
     bad.algos.dagger.beta0 = 1.5;
