@@ -187,6 +187,13 @@ pub trait Algorithm: Send {
         None
     }
 
+    /// An imitation learner's standard deviation of the Gaussian noise added to
+    /// the solver's actions where the solver acts (its labels stay clean), so that
+    /// the episodes visit states off the solver's path (DART, Laskey et al. 2017).
+    fn solver_noise(&self) -> f64 {
+        0.0
+    }
+
     /// A critic Q(s̄, a) of the policy as a plain network, saved beside it
     /// (for AggreVaTeD's `expert-advantage`); None where there is none.
     fn critic(&self) -> Option<PlainNet> {

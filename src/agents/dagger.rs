@@ -19,7 +19,7 @@ pub const REGISTRATION: Registration<DaggerConfig> = Registration {
         flag_prefix: "dagger-",
         branchable: &["beta0", "t0"],
     },
-    new: |spec, own, rng| Box::new(Cloner::new("dagger", spec, own.schedule(), rng)),
+    new: |spec, own, rng| Box::new(Cloner::new("dagger", spec, own.schedule(), 0.0, rng)),
     validate: DaggerConfig::validate,
     unused: |_| Vec::new(),
     // The actor with Adam's two moments.

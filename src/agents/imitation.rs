@@ -12,7 +12,8 @@
 //!   action's components; one Adam step at `--lr-actor` per batch. No critic.
 //! * Who acts is where the two differ ([`Cloner::solver_share`]): in behaviour
 //!   cloning the solver always acts, so the learner sees the solver's states
-//!   only; in DAgger (Ross, Gordon and Bagnell 2011) the solver acts at each
+//!   only (or states near them, with Gaussian noise on the solver's actions:
+//!   `--bc-noise`, DART, Laskey et al. 2017); in DAgger (Ross, Gordon and Bagnell 2011) the solver acts at each
 //!   step with probability β, which decays from 1 epoch by epoch, and the
 //!   learner's own action is taken otherwise, so the solver labels the states
 //!   the learner visits.
@@ -61,6 +62,8 @@ pub struct Cloner {
     name: &'static str,
     /// Who acts in exploration episodes.
     pub schedule: Schedule,
+    /// The noise on the solver's actions where it acts ([`Algorithm::solver_noise`]).
+    pub noise: f64,
     /// Observation normaliser.
     pub norm: Normalizer,
     /// The actor π.
@@ -71,13 +74,14 @@ pub struct Cloner {
 }
 
 impl Cloner {
-    /// A fresh learner with the networks of `spec`; `rng` fixes the initial weights.
-    pub fn new(name: &'static str, spec: &Spec, schedule: Schedule, rng: &mut impl Rng) -> Self {
+    /// A fresh learner with the networks of `spec`, `noise` on the solver's actions;
+    /// `rng` fixes the initial weights.
+    pub fn new(name: &'static str, spec: &Spec, schedule: Schedule, noise: f64, rng: &mut impl Rng) -> Self {
         let s = spec.shared;
         let actor = spec.arch.net((s.hidden, s.layers), 0, spec.act_dim, true, rng).with_bf16(s.bf16());
         let opt = Adam::new(&actor.params, s.lr_actor);
         let norm = spec.arch.normalizer(s.norm_eps, s.norm_clip);
-        Self { name, schedule, norm, actor, opt, act_dim: spec.act_dim }
+        Self { name, schedule, noise, norm, actor, opt, act_dim: spec.act_dim }
     }
 
     /// The frozen deterministic policy.
@@ -141,6 +145,10 @@ impl Algorithm for Cloner {
         Some(self.schedule.share(epoch))
     }
 
+    fn solver_noise(&self) -> f64 {
+        self.noise
+    }
+
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
         vec![("actor", Part::Net(&mut self.actor)), ("actor_adam", Part::Adam(&mut self.opt))]
     }
@@ -169,7 +177,7 @@ mod tests {
     fn learner(schedule: Schedule) -> Cloner {
         let shared = SharedConfig { hidden: 32, layers: 2, lr_actor: 3e-3, ..SharedConfig::default() };
         let spec = Spec { arch: Arch::mlp(3), act_dim: 2, shared: &shared };
-        Cloner::new("bc", &spec, schedule, &mut ChaCha8Rng::seed_from_u64(0))
+        Cloner::new("bc", &spec, schedule, 0.0, &mut ChaCha8Rng::seed_from_u64(0))
     }
 
     #[test]

@@ -34,6 +34,8 @@ pub(crate) enum Behaviour<'a> {
         learner: &'a dyn Explorer,
         /// The probability that the solver acts at a step.
         share: f64,
+        /// Standard deviation of the Gaussian noise on the solver's action where it acts.
+        noise: f64,
     },
 }
 
@@ -52,11 +54,19 @@ impl Behaviour<'_> {
                 let (who, a) = m.act(obs, noise, rng);
                 (a, who == Actor::Expert)
             }
-            Self::Imitate { learner, share } => {
+            Self::Imitate { learner, share, noise: sigma } => {
                 use rand::Rng;
+                use rand_distr::{Distribution, StandardNormal};
                 let label = label.expect("the solver labels an imitation episode");
                 if rng.gen_bool(share.clamp(0.0, 1.0)) {
-                    (label.to_vec(), true)
+                    if *sigma == 0.0 {
+                        return (label.to_vec(), true);
+                    }
+                    let noisy = label.iter().map(|&a| {
+                        let z: f64 = StandardNormal.sample(&mut *rng);
+                        (a + (sigma * z) as f32).clamp(-1.0, 1.0)
+                    });
+                    (noisy.collect(), true)
                 } else {
                     (learner.explore(obs, noise, rng), false)
                 }
@@ -438,7 +448,7 @@ mod tests {
         let task = crate::env::registry::task("BlocksTouch-v0").unwrap();
         let mut env = BlockEnv::new(EnvConfig { obs_mode: ObsMode::Entities, ..EnvConfig::new(task) }).unwrap();
         for share in [0.0, 1.0] {
-            let ep = play(&mut env, &Behaviour::Imitate { learner: &Still, share }, 3, None).unwrap();
+            let ep = play(&mut env, &Behaviour::Imitate { learner: &Still, share, noise: 0.0 }, 3, None).unwrap();
             assert_eq!(ep.expert_steps, if share == 1.0 { ep.len() } else { 0 });
             // A fresh solver over the recorded observations gives the stored actions.
             let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
@@ -447,6 +457,16 @@ mod tests {
             assert_eq!(ep.act, labels, "share {share}");
             assert!(ep.act.iter().any(|a| a.iter().any(|&x| x != 0.0)), "the solver moves, whoever acts");
         }
+        // Noise on the solver's actions (BC's DART): other states, the labels still the solver's clean actions.
+        let clean = play(&mut env, &Behaviour::Imitate { learner: &Still, share: 1.0, noise: 0.0 }, 3, None).unwrap();
+        let noisy = play(&mut env, &Behaviour::Imitate { learner: &Still, share: 1.0, noise: 0.3 }, 3, None).unwrap();
+        assert_ne!(noisy.obs[1..].to_vec(), clean.obs[1..clean.obs.len().min(noisy.obs.len())].to_vec());
+        assert_eq!(noisy.obs[0], clean.obs[0], "the same reset");
+        let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
+        solver.reset();
+        let labels: Vec<Vec<f32>> = noisy.obs[..noisy.len()].iter().map(|o| solver.act(o).to_vec()).collect();
+        assert_eq!(noisy.act, labels);
+        assert_eq!(noisy.expert_steps, noisy.len());
     }
 
     #[test]

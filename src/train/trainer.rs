@@ -528,7 +528,9 @@ impl<'a> Trainer<'a> {
         let mixture = self.learner.mixture(&*explorer, epoch, config);
         let behaviour = match (&mixture, self.learner.agent.solver_share(epoch)) {
             (Some(m), _) => Behaviour::Mixture(m),
-            (None, Some(share)) => Behaviour::Imitate { learner: &*explorer, share },
+            (None, Some(share)) => {
+                Behaviour::Imitate { learner: &*explorer, share, noise: self.learner.agent.solver_noise() }
+            }
             (None, None) => Behaviour::Explore(&*explorer),
         };
         let base = self.state.episodes_per_worker;

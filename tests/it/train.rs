@@ -943,9 +943,12 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         }
         c
     };
-    // BC: the solver plays every exploration step; no critic.
+    // BC: the solver plays every exploration step (with noise on its actions); no critic.
     let dir = tempfile::tempdir().unwrap();
-    let rows = train(&imitate("bc", 2), dir.path(), false, &mut quiet).unwrap();
+    let mut bc = imitate("bc", 2);
+    bc.algos.bc.noise = 0.1;
+    assert!(bc.title().contains("noise 0.1"), "{}", bc.title());
+    let rows = train(&bc, dir.path(), false, &mut quiet).unwrap();
     assert!(rows.iter().all(|r| r.beta == 1.0 && r.expert_share == 1.0), "{rows:?}");
     assert!(rows.iter().all(|r| r.critic_loss == 0.0 && r.mean_q == 0.0 && r.actor_loss > 0.0), "{rows:?}");
     assert!(rows[0].train_success >= 0.5, "the solver's own episodes at level 0: {rows:?}");
@@ -988,6 +991,9 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     let mut bad = imitate("dagger", 1);
     bad.algos.dagger.beta0 = 1.5;
     refused(bad, &["--dagger-beta0", "[0, 1]"]);
+    let mut noisy = imitate("dagger", 1);
+    noisy.algos.bc.noise = 0.2;
+    refused(noisy, &["--bc-noise is only used with --algo bc"]);
     // A task the solver cannot play (a green gripper): nothing to imitate, and the solver's reason.
     let tasks = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("tasks/BlocksTouch-v0.toml"))
