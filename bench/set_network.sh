@@ -24,6 +24,7 @@ VARIANTS=(
     "entity|--net entity"
     "entity --flat-critic|--net entity --flat-critic"
     "entity --set-robot-tokens|--net entity --set-robot-tokens"
+    "entity --set-pooling query|--net entity --set-pooling query"
     "entity, DAgger (actor alone)|--net entity --algo dagger"
     "entity --set-robot-tokens, DAgger (actor alone)|--net entity --set-robot-tokens --algo dagger"
 )

@@ -16,7 +16,7 @@ fi
 [ "${1:-}" = "--venv" ] && exit 0
 "$VENV/bin/python" "$ROOT/examples/python/zoo_policy.py" --check "$ROOT/zoo"
 
-# Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, mean-max with
+# Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, query, mean-max with
 # --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too;
 # and with --set-robot-tokens and --set-type-norm, trained by DAgger), exported to a scratch zoo, must
 # act in numpy as in Rust too; the shipped entries may hold none of them.
@@ -31,7 +31,7 @@ fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for variant in mean-max attention colour mean-max-norm entity entity-tokens-dagger; do
+for variant in mean-max attention colour query mean-max-norm entity entity-tokens-dagger; do
     if [ "$variant" = entity ]; then
         flags=(--net entity)
     elif [ "$variant" = entity-tokens-dagger ]; then

@@ -236,6 +236,16 @@ class ZooPolicy:
             h = np.maximum(h + self._dense(e + 3, w @ v, relu=False), 0.0)
             first = e + 4
         width = self.tensors[f"actor.{e - 1}.bias"].shape[0]
+        if self.set.get("query", False):
+            # Attention pooling with a learned query: a softmax of the rows' scores weighs their values.
+            pooled = np.zeros(self.tensors[f"actor.{first + 1}.bias"].shape[0], np.float32)
+            if len(h):
+                s = self._dense(first, h, relu=False)[:, 0] / np.sqrt(width, dtype=np.float32)
+                w = np.exp(s - s.max())
+                pooled = (w / w.sum()) @ self._dense(first + 1, h, relu=False)
+            if self.set.get("norm", False):
+                pooled = (pooled - pooled.mean()) / np.sqrt(pooled.var() + np.float32(1e-5))
+            return np.concatenate([x[:r], pooled.astype(np.float32)]), first + 2
         if self.set.get("by_colour", False):
             # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
             groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]

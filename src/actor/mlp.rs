@@ -83,7 +83,16 @@ pub struct SetLayout {
     /// those they share (0: every row shares one set). The network itself reads the rows alike.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub fixtures: usize,
+    /// Attention pooling with a learned query instead of the mean and max: the next
+    /// [`QUERY_LAYERS`] layers after the encoder (and any attention block) score each encoded row
+    /// (`s = w·h + b`, the query folded into `w`) and project its value (`v = V h + c`), and the
+    /// pooled vector is `Σᵢ softmaxᵢ(sᵢ / √d) vᵢ` over the present rows (zeros where none is).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub query: bool,
 }
+
+/// The layers of attention pooling with a learned query: the score and the value projections.
+pub const QUERY_LAYERS: usize = 2;
 
 fn is_zero(n: &usize) -> bool {
     *n == 0
@@ -134,6 +143,7 @@ impl SetLayout {
             norm: false,
             robot_tokens: false,
             fixtures: 0,
+            query: false,
         })
     }
 
@@ -147,8 +157,13 @@ impl SetLayout {
         }
     }
 
-    /// The index of the head's first layer: after the encoder and the attention block.
+    /// The index of the head's first layer: after the encoder, the attention block and the query pooling.
     pub fn head_start(&self) -> usize {
+        self.pool_start() + if self.query { QUERY_LAYERS } else { 0 }
+    }
+
+    /// The index of the query pooling's first layer: after the encoder and the attention block.
+    pub fn pool_start(&self) -> usize {
         self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 }
     }
 
@@ -167,6 +182,9 @@ impl SetLayout {
     /// inputs after the observation: robot, pooled mean and max (of every
     /// colour, with `by_colour`), extra.
     pub fn head_input(&self, width: usize, extra: usize) -> usize {
+        if self.query {
+            return self.robot + width + extra;
+        }
         self.robot + 2 * self.groups() * width + extra
     }
 
@@ -233,9 +251,15 @@ impl PlainNet {
             }
         }
         let mut width = self.set.map_or(n_in, |s| s.token_width(n_in - s.obs_dim()));
+        // Query pooling's two layers both read the encoded rows; the value layer's outputs are pooled.
+        let mut pooled = 0;
         for (i, l) in self.layers.iter().enumerate() {
             if let Some(s) = self.set.filter(|s| s.head_start() == i) {
-                width = s.head_input(width, n_in - s.obs_dim());
+                width = s.head_input(if s.query { pooled } else { width }, n_in - s.obs_dim());
+            }
+            let query = self.set.filter(|s| s.query).map(|s| i.checked_sub(s.pool_start()));
+            if query == Some(Some(0)) && l.b.len() != 1 {
+                return Err(format!("layer {i} scores the rows for query pooling: 1 output, not {}", l.b.len()));
             }
             if l.n_in != width || l.b.is_empty() || l.w.len() != l.b.len() * l.n_in {
                 return Err(format!(
@@ -251,7 +275,11 @@ impl PlainNet {
                     "layer {i} holds {v} (element {k}): weights must be finite and at most {max_abs:e}"
                 ));
             }
-            width = l.b.len();
+            match query {
+                Some(Some(0)) => {}
+                Some(Some(1)) => pooled = l.b.len(),
+                _ => width = l.b.len(),
+            }
         }
         if width != n_out {
             return Err(format!("the network has {width} outputs, {n_out} expected"));
@@ -270,6 +298,7 @@ impl PlainNet {
     /// The set network: encode each present row, pool, then the head.
     fn forward_set(&self, s: &SetLayout, x: &[f32]) -> Vec<f32> {
         let (front, head) = self.layers.split_at(s.head_start().min(self.layers.len()));
+        let (front, pool) = front.split_at(s.pool_start().min(front.len()));
         let (encoder, attention) = front.split_at(s.encoder_layers.min(front.len()));
         let width = encoder.last().map_or(0, |l| l.b.len());
         let rows_end = s.robot + s.slots * s.object;
@@ -283,6 +312,15 @@ impl PlainNet {
         let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, token(row))).collect();
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
+        }
+        if let [score, value] = pool {
+            let mut input = x[..s.robot].to_vec();
+            input.extend(query_pool(&rows, score, value, width));
+            if s.norm {
+                layer_norm(&mut input[s.robot..]);
+            }
+            input.extend_from_slice(extra);
+            return run(head, input, self.tanh_out);
         }
         let groups = s.groups();
         let (mut sum, mut max, mut n) = (vec![0.0f32; groups * width], vec![0.0f32; groups * width], vec![0; groups]);
@@ -334,6 +372,34 @@ fn attend(h: &[Vec<f32>], (q, k, v, o): (&Dense, &Dense, &Dense, &Dense)) -> Vec
         let mut y = Vec::new();
         o.forward(&z, &mut y);
         out.push(hi.iter().zip(&y).map(|(a, b)| (a + b).max(0.0)).collect());
+    }
+    out
+}
+
+/// Attention pooling with a learned query over the encoded rows `h` (all present): scores
+/// `sᵢ = score(hᵢ)`, values `vᵢ = value(hᵢ)`, `Σᵢ softmaxᵢ(sᵢ / √width) vᵢ` (zeros for no rows).
+fn query_pool(h: &[Vec<f32>], score: &Dense, value: &Dense, width: usize) -> Vec<f32> {
+    let mut out = vec![0.0f32; value.b.len()];
+    if h.is_empty() {
+        return out;
+    }
+    let scale = 1.0 / (width.max(1) as f32).sqrt();
+    let mut y = Vec::new();
+    let scores: Vec<f32> = h
+        .iter()
+        .map(|x| {
+            score.forward(x, &mut y);
+            y[0] * scale
+        })
+        .collect();
+    let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+    let total: f32 = weights.iter().sum();
+    for (w, x) in weights.iter().zip(h) {
+        value.forward(x, &mut y);
+        for (o, v) in out.iter_mut().zip(&y) {
+            *o += w / total * v;
+        }
     }
     out
 }

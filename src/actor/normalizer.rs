@@ -278,6 +278,7 @@ mod tests {
             norm: false,
             robot_tokens: false,
             fixtures: 0,
+            query: false,
         };
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [
@@ -323,6 +324,7 @@ mod tests {
             norm: false,
             robot_tokens: false,
             fixtures: 2,
+            query: false,
         };
         // robot | block, block, fixture 0, fixture 1 | mask; the second fixture absent in `b`.
         let a = [0.0, /**/ 1.0, 10.0, 3.0, 30.0, 100.0, -1.0, 7.0, 7.0, /**/ 1.0, 1.0, 1.0, 1.0];

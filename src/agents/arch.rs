@@ -58,6 +58,8 @@ pub enum Pooling {
     Attention,
     /// Masked mean and max of the encoded rows of each colour apart (red, blue, green, grey).
     Colour,
+    /// Attention pooling with a learned query: the rows weighted by a softmax of their scores.
+    Query,
 }
 
 /// The network settings of a run (shared by every algorithm).
@@ -75,8 +77,9 @@ pub struct NetConfig {
     #[serde(default = "two")]
     pub set_encoder_layers: usize,
     /// Set network: `mean-max` pooling (Deep Sets), `attention` (one masked
-    /// self-attention block between the encoded objects first) or `colour`
-    /// (mean and max of each colour's objects apart).
+    /// self-attention block between the encoded objects first), `colour`
+    /// (mean and max of each colour's objects apart) or `query` (attention
+    /// pooling with a learned query instead of the mean and max).
     #[arg(long, value_enum, default_value = "mean-max")]
     #[serde(default)]
     pub set_pooling: Pooling,
@@ -144,6 +147,7 @@ impl NetConfig {
             Pooling::MeanMax => rows.to_owned(),
             Pooling::Attention => format!("{rows} + attention"),
             Pooling::Colour => format!("{rows}, pooled by colour"),
+            Pooling::Query => format!("{rows}, pooled by a learned query"),
         };
         let kind = if self.set_robot_tokens { format!("{kind}, robot tokens") } else { kind };
         let kind = if self.set_type_norm { format!("{kind}, statistics per row type") } else { kind };
@@ -196,6 +200,7 @@ impl Arch {
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;
                 layout.by_colour = net.set_pooling == Pooling::Colour;
+                layout.query = net.set_pooling == Pooling::Query;
                 layout.norm = net.set_norm;
                 layout.robot_tokens = net.set_robot_tokens;
                 layout.fixtures = if net.set_type_norm { obs.mode.fixtures().len() } else { 0 };

@@ -668,6 +668,7 @@ mod tests {
             norm: false,
             robot_tokens: false,
             fixtures: 0,
+            query: false,
         };
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
         let mut rng = ChaCha8Rng::seed_from_u64(4);

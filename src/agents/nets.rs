@@ -71,6 +71,10 @@ impl Net {
         if layout.attention {
             shapes.extend(std::iter::repeat((hidden, hidden)).take(super::mlp::ATTENTION_LAYERS));
         }
+        if layout.query {
+            // The score (one output per row) and the value projection.
+            shapes.extend([(hidden, 1), (hidden, hidden)]);
+        }
         let head = mlp_sizes(layout.head_input(hidden, extra), hidden, head_layers, out);
         shapes.extend(head.windows(2).map(|w| (w[0], w[1])));
         let params = init(&shapes, rng);
@@ -175,27 +179,54 @@ impl Net {
         if s.attention {
             h = self.attend(&h, &mask, s.encoder_layers);
         }
-        // Encoded features are ≥ 0 (ReLU), so the max over masked rows (set to 0) is theirs, or 0.
-        let (mean, max) = if s.by_colour {
-            // weights [n, m, 4]: present rows of each colour (the one-hot passes the normaliser unchanged).
-            let at = crate::env::COLOUR_FEATURE as i64;
-            let hot = x.narrow(1, r, m * f).reshape(&[n, m, f]).narrow(2, at, COLOURS as i64).gt(0.5);
-            let w = hot.to_kind(Kind::Float) * &mask;
-            let count = w.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0).unsqueeze(2);
-            let mean = (w.transpose(1, 2).matmul(&h) / count).reshape(&[n, -1]);
-            let max: Vec<Tensor> =
-                (0..COLOURS as i64).map(|c| (&h * w.narrow(2, c, 1)).amax([1i64].as_slice(), false)).collect();
-            (mean, Tensor::cat(&max, 1))
+        let mut pooled = if s.query {
+            self.query_pool(&h, &mask, s.pool_start())
         } else {
-            let h = h * &mask;
-            let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
-            (h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count, h.amax([1i64].as_slice(), false))
+            let (mean, max) = self.mean_max(s, x, &h, &mask);
+            Tensor::cat(&[mean, max], 1)
         };
-        let mut pooled = Tensor::cat(&[mean, max], 1);
         if s.norm {
             let width = pooled.size()[1];
             pooled = pooled.layer_norm([width].as_slice(), None::<Tensor>, None::<Tensor>, NORM_EPS.into(), false);
         }
+        self.head(s, robot, pooled, extra)
+    }
+
+    /// Attention pooling with a learned query (layers `first`, `first + 1`: score and value) over
+    /// encoded rows `h` `[n, m, d]`, absent rows (mask 0) left out; zeros where none is present.
+    fn query_pool(&self, h: &Tensor, mask: &Tensor, first: usize) -> Tensor {
+        let d = h.size()[2] as f64;
+        let scores = (self.affine(h, first, true) / d.sqrt()).masked_fill(&mask.eq(0.0), -1e9);
+        let w = scores.softmax(1, Kind::Float);
+        let any = mask.amax([1i64].as_slice(), false);
+        (w * self.affine(h, first + 1, true)).sum_dim_intlist([1i64].as_slice(), false, Kind::Float) * any
+    }
+
+    /// The masked mean and max of encoded rows `h` `[n, m, d]` (per colour with `by_colour`).
+    fn mean_max(&self, s: &SetLayout, x: &Tensor, h: &Tensor, mask: &Tensor) -> (Tensor, Tensor) {
+        let (r, f, m) = (s.robot as i64, s.object as i64, s.slots as i64);
+        let n = x.size()[0];
+        // Encoded features are ≥ 0 (ReLU), so the max over masked rows (set to 0) is theirs, or 0.
+        if s.by_colour {
+            // weights [n, m, 4]: present rows of each colour (the one-hot passes the normaliser unchanged).
+            let at = crate::env::COLOUR_FEATURE as i64;
+            let hot = x.narrow(1, r, m * f).reshape(&[n, m, f]).narrow(2, at, COLOURS as i64).gt(0.5);
+            let w = hot.to_kind(Kind::Float) * mask;
+            let count = w.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0).unsqueeze(2);
+            let mean = (w.transpose(1, 2).matmul(&h) / count).reshape(&[n, -1]);
+            let max: Vec<Tensor> =
+                (0..COLOURS as i64).map(|c| (h * w.narrow(2, c, 1)).amax([1i64].as_slice(), false)).collect();
+            (mean, Tensor::cat(&max, 1))
+        } else {
+            let h = h * mask;
+            let count = mask.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0);
+            (h.sum_dim_intlist([1i64].as_slice(), false, Kind::Float) / count, h.amax([1i64].as_slice(), false))
+        }
+    }
+
+    /// The head on the robot features, the pooled features and the extra inputs.
+    fn head(&self, s: &SetLayout, robot: Tensor, pooled: Tensor, extra: Tensor) -> Tensor {
+        let r = s.robot as i64;
         let first = s.head_start();
         if !self.bf16 || first + 1 >= self.params.len() / 2 {
             return self.layers(Tensor::cat(&[robot, pooled, extra], 1), first, first + 1);
@@ -475,6 +506,7 @@ mod tests {
         norm: false,
         robot_tokens: false,
         fixtures: 0,
+        query: false,
     };
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
@@ -504,21 +536,25 @@ mod tests {
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let cases = [
-            (0, 4, true, false, false, false),
-            (4, 1, false, false, false, false),
-            (0, 4, true, true, false, false),
-            (4, 1, false, true, false, false),
-            (0, 4, true, false, true, false),
-            (4, 1, false, true, true, false),
-            (0, 4, true, false, false, true),
-            (4, 1, false, false, false, true),
-            (4, 1, false, true, true, true),
+            (0, 4, true, false, false, false, false),
+            (4, 1, false, false, false, false, false),
+            (0, 4, true, true, false, false, false),
+            (4, 1, false, true, false, false, false),
+            (0, 4, true, false, true, false, false),
+            (4, 1, false, true, true, false, false),
+            (0, 4, true, false, false, true, false),
+            (4, 1, false, false, false, true, false),
+            (4, 1, false, true, true, true, false),
+            (0, 4, true, false, false, false, true),
+            (4, 1, false, false, true, false, true),
+            (4, 1, false, true, false, true, true),
         ];
-        for (extra, out, tanh, attention, norm, robot_tokens) in cases {
+        for (extra, out, tanh, attention, norm, robot_tokens, query) in cases {
             // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
             // with mean-max pooling or a self-attention block first, the pooled features
-            // layer-normalised or not, the encoder reading rows or robot tokens.
-            let layout = SetLayout { attention, norm, robot_tokens, ..SET };
+            // layer-normalised or not, the encoder reading rows or robot tokens, pooled by the mean
+            // and max or by a learned query.
+            let layout = SetLayout { attention, norm, robot_tokens, query, ..SET };
             let net = Net::new_set(layout, extra, (16, 2, 2), out, tanh, &mut rng);
             let tokens = if robot_tokens { SET.robot + SET.object + extra } else { SET.object };
             assert_eq!(net.to_plain().layers[0].n_in, tokens);
@@ -615,6 +651,7 @@ mod tests {
             norm: false,
             robot_tokens: false,
             fixtures: 0,
+            query: false,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.

@@ -366,6 +366,7 @@ impl TrainConfig {
             (kind, Pooling::MeanMax) => format!("-{}", kind.name()),
             (kind, Pooling::Attention) => format!("-{}-attention", kind.name()),
             (kind, Pooling::Colour) => format!("-{}-colour", kind.name()),
+            (kind, Pooling::Query) => format!("-{}-query", kind.name()),
         };
         let norm = [
             (self.net.set_robot_tokens, "-tokens"),
