@@ -40,9 +40,10 @@ pub(crate) enum Behaviour<'a> {
 }
 
 impl Behaviour<'_> {
-    /// `(action to store, whether the expert chose it)`; the environment
-    /// receives the stored action clipped to [−1, 1]. `noise` is the
-    /// episode's exploration-noise state (empty at its start).
+    /// `(action taken, whether the expert or the solver chose it)`; the
+    /// environment receives it clipped to [−1, 1], and the episode stores it
+    /// (an imitation episode stores `label`, the solver's action, instead).
+    /// `noise` is the episode's exploration-noise state (empty at its start).
     ///
     /// # Panics
     /// [`Behaviour::Imitate`] without the solver's label (an [`Acting`] builds one).
