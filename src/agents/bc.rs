@@ -40,6 +40,6 @@ pub struct BcConfig {
     /// BC: standard deviation of the Gaussian noise added to the solver's actions in the
     /// exploration episodes (its labels stay clean), so that they visit states off the solver's
     /// path and the learner sees how the solver recovers (DART, Laskey et al. 2017; 0: none).
-    #[arg(id = "bc_noise", long = "bc-noise", default_value_t = 0.0)]
+    #[arg(id = "bc_noise", long = "bc-noise", value_name = "SIGMA", default_value_t = 0.0)]
     pub noise: f64,
 }

@@ -41,10 +41,10 @@ pub const REGISTRATION: Registration<DaggerConfig> = Registration {
 pub struct DaggerConfig {
     /// DAgger: the share β0 of the steps the solver keeps acting on in the end; the share is
     /// β = β0 + (1 − β0)·exp(−epoch / t0), 1 in the first epoch.
-    #[arg(id = "dagger_beta0", long = "dagger-beta0", default_value_t = Self::DEFAULT.beta0)]
+    #[arg(id = "dagger_beta0", long = "dagger-beta0", value_name = "BETA0", default_value_t = Self::DEFAULT.beta0)]
     pub beta0: f64,
     /// DAgger: t0 of the solver's share, in epochs (0: β0 from the first epoch).
-    #[arg(id = "dagger_t0", long = "dagger-t0", default_value_t = Self::DEFAULT.t0)]
+    #[arg(id = "dagger_t0", long = "dagger-t0", value_name = "EPOCHS", default_value_t = Self::DEFAULT.t0)]
     pub t0: f64,
 }
 
