@@ -243,17 +243,16 @@ class ZooPolicy:
                 s = self._dense(first, h, relu=False)[:, 0] / np.sqrt(width, dtype=np.float32)
                 w = np.exp(s - s.max())
                 pooled = (w / w.sum()) @ self._dense(first + 1, h, relu=False)
-            if self.set.get("norm", False):
-                pooled = (pooled - pooled.mean()) / np.sqrt(pooled.var() + np.float32(1e-5))
-            return np.concatenate([x[:r], pooled.astype(np.float32)]), first + 2
-        if self.set.get("by_colour", False):
-            # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
-            groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]
+            first += 2
         else:
-            groups = [np.ones(len(h), bool)]
-        means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
-        peaks = [h[g].max(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
-        pooled = np.concatenate([*means, *peaks])
+            if self.set.get("by_colour", False):
+                # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
+                groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]
+            else:
+                groups = [np.ones(len(h), bool)]
+            means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+            peaks = [h[g].max(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]
+            pooled = np.concatenate([*means, *peaks])
         if self.set.get("norm", False):
             # Layer normalisation without gain or bias (biased variance, libtorch's 1e-5 floor).
             pooled = (pooled - pooled.mean()) / np.sqrt(pooled.var() + np.float32(1e-5))

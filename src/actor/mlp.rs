@@ -133,10 +133,16 @@ impl SetLayout {
                 spec.mode
             ));
         }
-        Ok(Self {
-            robot: spec.robot_dim(),
-            object: spec.object_dim(),
-            slots: spec.rows(),
+        Ok(Self::new(spec.robot_dim(), spec.object_dim(), spec.rows(), encoder_layers))
+    }
+
+    /// `robot` features, `slots` rows of `object` features and a mask, read by an encoder of
+    /// `encoder_layers` layers, with every option off (mean and max pooling of the rows alone).
+    pub const fn new(robot: usize, object: usize, slots: usize, encoder_layers: usize) -> Self {
+        Self {
+            robot,
+            object,
+            slots,
             encoder_layers,
             attention: false,
             by_colour: false,
@@ -144,7 +150,7 @@ impl SetLayout {
             robot_tokens: false,
             fixtures: 0,
             query: false,
-        })
+        }
     }
 
     /// The encoder's input size, with `extra` inputs after the observation: a row, or with
@@ -313,28 +319,11 @@ impl PlainNet {
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
         }
-        if let [score, value] = pool {
-            let mut input = x[..s.robot].to_vec();
-            input.extend(query_pool(&rows, score, value, width));
-            if s.norm {
-                layer_norm(&mut input[s.robot..]);
-            }
-            input.extend_from_slice(extra);
-            return run(head, input, self.tanh_out);
-        }
-        let groups = s.groups();
-        let (mut sum, mut max, mut n) = (vec![0.0f32; groups * width], vec![0.0f32; groups * width], vec![0; groups]);
-        for (h, row) in rows.iter().zip(&present) {
-            let Some(g) = s.group(row) else { continue };
-            n[g] += 1;
-            for (i, v) in h.iter().enumerate() {
-                sum[g * width + i] += v;
-                max[g * width + i] = max[g * width + i].max(*v);
-            }
-        }
         let mut input = x[..s.robot].to_vec();
-        input.extend(sum.iter().enumerate().map(|(i, v)| v / n[i / width.max(1)].max(1) as f32));
-        input.extend(max);
+        match pool {
+            [score, value] => input.extend(query_pool(&rows, score, value, width)),
+            _ => input.extend(mean_max_pool(s, &rows, &present, width)),
+        }
         if s.norm {
             layer_norm(&mut input[s.robot..]);
         }
@@ -374,6 +363,24 @@ fn attend(h: &[Vec<f32>], (q, k, v, o): (&Dense, &Dense, &Dense, &Dense)) -> Vec
         out.push(hi.iter().zip(&y).map(|(a, b)| (a + b).max(0.0)).collect());
     }
     out
+}
+
+/// The masked mean and max of the encoded rows `h` (all present; `present` their rows as
+/// observed), per colour with [`SetLayout::by_colour`]: all means, then all maxima.
+fn mean_max_pool(s: &SetLayout, h: &[Vec<f32>], present: &[&[f32]], width: usize) -> Vec<f32> {
+    let groups = s.groups();
+    let (mut sum, mut max, mut n) = (vec![0.0f32; groups * width], vec![0.0f32; groups * width], vec![0; groups]);
+    for (h, row) in h.iter().zip(present) {
+        let Some(g) = s.group(row) else { continue };
+        n[g] += 1;
+        for (i, v) in h.iter().enumerate() {
+            sum[g * width + i] += v;
+            max[g * width + i] = max[g * width + i].max(*v);
+        }
+    }
+    let mut pooled: Vec<f32> = sum.iter().enumerate().map(|(i, v)| v / n[i / width.max(1)].max(1) as f32).collect();
+    pooled.extend(max);
+    pooled
 }
 
 /// Attention pooling with a learned query over the encoded rows `h` (all present): scores

@@ -268,18 +268,7 @@ mod tests {
 
     #[test]
     fn set_statistics_are_per_feature_over_the_rows_present_and_the_mask_passes() {
-        let layout = SetLayout {
-            robot: 2,
-            object: 3,
-            slots: 3,
-            encoder_layers: 1,
-            attention: false,
-            by_colour: false,
-            norm: false,
-            robot_tokens: false,
-            fixtures: 0,
-            query: false,
-        };
+        let layout = SetLayout::new(2, 3, 3, 1);
         // Rows (robot | 3 object rows | mask): the same objects in other slots, absent rows junk.
         let a = [
             1.0, 2.0, /**/ 1.0, 10.0, -1.0, /**/ 3.0, 20.0, 1.0, /**/ 99.0, 99.0, 99.0, /**/ 1.0,
@@ -314,18 +303,7 @@ mod tests {
     #[test]
     fn fixture_rows_keep_statistics_of_their_own_and_the_blocks_share_theirs() {
         // Two block slots, then two fixtures (as the entities rows end with the gripper, table, floor).
-        let layout = SetLayout {
-            robot: 1,
-            object: 2,
-            slots: 4,
-            encoder_layers: 1,
-            attention: false,
-            by_colour: false,
-            norm: false,
-            robot_tokens: false,
-            fixtures: 2,
-            query: false,
-        };
+        let layout = SetLayout { fixtures: 2, ..SetLayout::new(1, 2, 4, 1) };
         // robot | block, block, fixture 0, fixture 1 | mask; the second fixture absent in `b`.
         let a = [0.0, /**/ 1.0, 10.0, 3.0, 30.0, 100.0, -1.0, 7.0, 7.0, /**/ 1.0, 1.0, 1.0, 1.0];
         let b = [2.0, /**/ 5.0, 50.0, 9.0, 9.0, 300.0, 1.0, 0.0, 0.0, /**/ 1.0, 0.0, 1.0, 0.0];

@@ -658,18 +658,7 @@ mod tests {
     fn flat_critics_read_the_rows_in_order_while_the_set_actor_ignores_it() {
         use super::super::mlp::SetLayout;
         // 3 robot features, 3 slots of 4 features, a mask.
-        let layout = SetLayout {
-            robot: 3,
-            object: 4,
-            slots: 3,
-            encoder_layers: 1,
-            attention: false,
-            by_colour: false,
-            norm: false,
-            robot_tokens: false,
-            fixtures: 0,
-            query: false,
-        };
+        let layout = SetLayout::new(3, 4, 3, 1);
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let shared = SharedConfig { flat_critic: true, ..small() };

@@ -496,18 +496,7 @@ mod tests {
     }
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.
-    const SET: SetLayout = SetLayout {
-        robot: 3,
-        object: 5,
-        slots: 4,
-        encoder_layers: 2,
-        attention: false,
-        by_colour: false,
-        norm: false,
-        robot_tokens: false,
-        fixtures: 0,
-        query: false,
-    };
+    const SET: SetLayout = SetLayout::new(3, 5, 4, 2);
 
     /// One observation of [`SET`] with the slots `present` (the others hold `fill`), then `extra`.
     fn set_obs(rng: &mut impl Rng, present: &[bool; 4], fill: f32, extra: usize) -> Vec<f32> {
@@ -641,18 +630,7 @@ mod tests {
     #[test]
     fn pooling_by_colour_agrees_with_its_plain_copy_and_keeps_colours_apart() {
         use crate::env::COLOUR_FEATURE;
-        let layout = SetLayout {
-            robot: 3,
-            object: 22,
-            slots: 4,
-            encoder_layers: 1,
-            attention: false,
-            by_colour: true,
-            norm: false,
-            robot_tokens: false,
-            fixtures: 0,
-            query: false,
-        };
+        let layout = SetLayout { by_colour: true, ..SetLayout::new(3, 22, 4, 1) };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         // Rows of colours red, blue, blue (two of one colour), none (absent); then the mask.
         let obs = |rng: &mut rand_chacha::ChaCha8Rng, colours: [Option<usize>; 4]| {
