@@ -148,11 +148,7 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
             let t = Instant::now();
             while steps < target {
                 let explorer = agent.explorer();
-                // An imitation learner's episodes: the solver labels every step and acts on its share.
-                let behaviour = match agent.solver_share(0) {
-                    Some(share) => Behaviour::Imitate { learner: &*explorer, share, noise: agent.solver_noise() },
-                    None => Behaviour::Explore(&*explorer),
-                };
+                let behaviour = Behaviour::exploring(agent, &*explorer, 0);
                 let eps = play_all(&mut envs, &behaviour, 1, None, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
                 round += 1;
                 for ep in &eps {

@@ -3,7 +3,7 @@
 //! learner, deterministic for tests), one episode, and all workers' episodes
 //! in parallel threads.
 
-use crate::agents::algorithm::Explorer;
+use crate::agents::algorithm::{Algorithm, Explorer};
 use crate::agents::expert::{Actor, Mixture};
 use crate::agents::normalizer::Normalizer;
 use crate::agents::replay::ReplayBuffer;
@@ -39,7 +39,17 @@ pub(crate) enum Behaviour<'a> {
     },
 }
 
-impl Behaviour<'_> {
+impl<'a> Behaviour<'a> {
+    /// What an algorithm's exploration episodes of `epoch` play: an imitation
+    /// learner's ([`Algorithm::solver_share`]) the solver's mixture with
+    /// `explorer`, any other's `explorer` alone.
+    pub(crate) fn exploring(agent: &dyn Algorithm, explorer: &'a dyn Explorer, epoch: usize) -> Self {
+        match agent.solver_share(epoch) {
+            Some(share) => Self::Imitate { learner: explorer, share, noise: agent.solver_noise() },
+            None => Self::Explore(explorer),
+        }
+    }
+
     /// `(action taken, whether the expert or the solver chose it)`; the
     /// environment receives it clipped to [−1, 1], and the episode stores it
     /// (an imitation episode stores `label`, the solver's action, instead).

@@ -526,12 +526,9 @@ impl<'a> Trainer<'a> {
         let config = &self.config;
         let explorer = self.learner.agent.explorer();
         let mixture = self.learner.mixture(&*explorer, epoch, config);
-        let behaviour = match (&mixture, self.learner.agent.solver_share(epoch)) {
-            (Some(m), _) => Behaviour::Mixture(m),
-            (None, Some(share)) => {
-                Behaviour::Imitate { learner: &*explorer, share, noise: self.learner.agent.solver_noise() }
-            }
-            (None, None) => Behaviour::Explore(&*explorer),
+        let behaviour = match &mixture {
+            Some(m) => Behaviour::Mixture(m),
+            None => Behaviour::exploring(&*self.learner.agent, &*explorer, epoch),
         };
         let base = self.state.episodes_per_worker;
         let draw = Draw {
