@@ -149,7 +149,7 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
             while steps < target {
                 let explorer = agent.explorer();
                 let behaviour = Behaviour::exploring(agent, &*explorer, 0);
-                let eps = play_all(&mut envs, &behaviour, 1, None, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
+                let eps = play_all(&mut envs, &behaviour, 1, |w, _| stream_seed(c.seed, &[9, w as u64, round]))?;
                 round += 1;
                 for ep in &eps {
                     steps += ep.len();

@@ -125,7 +125,7 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
     if let Some(r) = rows.last() {
         println!(
             "{}: {} epochs, level {}, finals success {:.3}, {} env steps, {:.0} s; run directory {}",
-            c.env,
+            c.task_id(),
             r.epoch + 1,
             r.level,
             r.finals_success,
@@ -161,6 +161,10 @@ fn branch_run(
 /// A run directory's config and progress rows.
 /// The maximum curriculum level of a run's task (its recorded copy, else its id).
 fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
+    // A multi-task run's level is the sum of its tasks' levels.
+    if !config.tasks.is_empty() {
+        return config.tasks.iter().map(|s| Ok(registry::recorded(s)?.max_level())).sum();
+    }
     Ok(match &config.task {
         Some(source) => registry::recorded(source)?.max_level(),
         None => registry::task(&config.env)?.max_level(),

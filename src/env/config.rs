@@ -24,12 +24,22 @@ pub struct EnvConfig {
     /// How the observation is presented (flat by default; `objects`: robot,
     /// object rows and mask).
     pub obs_mode: super::ObsMode,
+    /// Block slots in the observation: the task's blocks, and absent rows (zero, mask 0) up to
+    /// this many where it is more (multi-task training presents every task in one layout).
+    pub slots: usize,
 }
 
 impl EnvConfig {
     /// The default physics around a compiled task.
     pub fn new(task: Task) -> Self {
-        Self { task, n_substeps: 20, collision_filter: true, full_forward: false, obs_mode: super::ObsMode::Flat }
+        Self {
+            task,
+            n_substeps: 20,
+            collision_filter: true,
+            full_forward: false,
+            obs_mode: super::ObsMode::Flat,
+            slots: 0,
+        }
     }
 
     /// Compiles `spec` (a task made in code) with the default physics.
@@ -48,9 +58,9 @@ impl EnvConfig {
     pub fn blocks(&self) -> Vec<Colour> {
         self.task.colours()
     }
-    /// What the observation holds: the mode and one slot per block.
+    /// What the observation holds: the mode and one slot per block (at least `slots`).
     pub fn obs_spec(&self) -> super::ObsSpec {
-        super::ObsSpec::new(self.obs_mode, self.task.object_count())
+        super::ObsSpec::new(self.obs_mode, self.task.object_count().max(self.slots))
     }
     /// Colour of the gripper.
     pub fn gripper(&self) -> Colour {

@@ -401,6 +401,9 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
             }
         }
     }
+    // Slots beyond the task's blocks (a layout shared by several tasks): absent rows.
+    let padding = spec.max_objects.saturating_sub(scene.blocks.len());
+    out.extend(std::iter::repeat(0.0).take(row * padding));
     for &fixture in spec.mode.fixtures() {
         let with = |size: [f64; 3]| -> Vec<f32> { size.iter().map(|&v| v as f32).chain(fixture.one_hot()).collect() };
         match fixture {
@@ -433,7 +436,8 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
         }
     }
     if spec.mode.has_mask() {
-        out.extend((0..spec.max_objects).map(|k| if ctx.present.get(k).copied().unwrap_or(true) { 1.0 } else { 0.0 }));
+        let present = |k: usize| k < scene.blocks.len() && ctx.present.get(k).copied().unwrap_or(true);
+        out.extend((0..spec.max_objects).map(|k| if present(k) { 1.0 } else { 0.0 }));
         out.extend(spec.mode.fixtures().iter().map(|f| match f {
             Fixture::Gripper | Fixture::Table => 1.0,
             Fixture::Floor => ctx.fixtures.floor.map_or(0.0, |_| 1.0),

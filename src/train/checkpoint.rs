@@ -51,8 +51,17 @@ pub struct RunState {
     pub act_dim: usize,
     /// Epochs completed.
     pub epoch: usize,
-    /// Curriculum level for the next epoch.
+    /// Curriculum level for the next epoch (a multi-task run: the sum of its tasks' levels).
     pub level: usize,
+    /// Each task's curriculum level for the next epoch, in the run's task order (absent in
+    /// checkpoints of one-task runs written before multi-task training: `[level]`).
+    #[serde(default)]
+    pub levels: Vec<usize>,
+    /// Each task's test episodes since its level last moved or stayed: (successes, episodes).
+    /// A task's level moves up when these reach `test_episodes` at a success rate of at least the
+    /// threshold; a one-task run tests that many every epoch, the paper's rule.
+    #[serde(default)]
+    pub tallies: Vec<[u64; 2]>,
     /// Environment steps so far (all workers).
     pub env_steps: u64,
     /// Gradient updates so far.

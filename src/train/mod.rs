@@ -31,6 +31,7 @@ pub mod plot;
 pub mod report;
 mod rollouts;
 mod rundir;
+mod tasks;
 mod trainer;
 
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
@@ -64,9 +65,20 @@ pub struct TrainConfig {
     #[arg(long, default_value = "ddpg", value_parser = Algo::parser())]
     #[serde(default)]
     pub algo: Algo,
-    /// Environment id or task file (.toml).
-    #[arg(long)]
+    /// Environment id or task file (.toml); several, comma-separated (`BlocksTouch-v0,BlocksChoose-v0`),
+    /// train one policy on all of them: a task drawn per exploration episode, each with its own
+    /// curriculum level, every observation in one layout (the most block slots of any task).
+    #[arg(long, default_value = "", hide_default_value = true, required_unless_present = "suite")]
     pub env: String,
+    /// Train on the tasks of a suite's split instead of `--env` (a suite name or file, e.g.
+    /// `procgen`; generated tasks included), as for an `--env` list.
+    #[arg(long, conflicts_with = "env")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub suite: Option<String>,
+    /// The split of `--suite` to train on.
+    #[arg(long, default_value = "train")]
+    #[serde(default = "train_split")]
+    pub split: String,
     /// Count ranges for the task's entries with a count, in every training
     /// episode (every level, challenge episodes included), e.g. `grey=0-2`
     /// or `red=0` (comma-separated for several): the count suite's train
@@ -168,11 +180,20 @@ pub struct TrainConfig {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub task: Option<crate::task::TaskSource>,
+    /// A multi-task run's tasks, by id and content, recorded when the run starts (a resumed run
+    /// refuses tasks that changed).
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tasks: Vec<crate::task::TaskSource>,
     /// The run this one branched from (`train --branch-from`), recorded in
     /// its `config.json`.
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branched_from: Option<BranchedFrom>,
+}
+
+fn train_split() -> String {
+    "train".to_owned()
 }
 
 impl Serialize for TrainConfig {
@@ -295,8 +316,12 @@ impl TrainConfig {
         }
     }
 
-    /// The task's id: the recorded one, else `--env` (a task file's stem when it is a path).
+    /// The task's id: the recorded one, else `--env` (a task file's stem when it is a path); for a
+    /// multi-task run, `SUITE-SPLIT` or the tasks' ids joined by `+`.
     pub fn task_id(&self) -> String {
+        if tasks::is_multi(self) {
+            return tasks::label(self);
+        }
         match &self.task {
             Some(t) => t.id.clone(),
             None if registry::is_path(&self.env) => {
@@ -400,7 +425,8 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
 /// Fields that may change on `--resume`: the epoch target, thread count and
 /// snapshots, the task and its id (checked by content in [`run_task`]), and
 /// the record of a branch (kept from the run's `config.json`).
-const RESUMABLE_CHANGES: &[&str] = &["epochs", "torch_threads", "snapshot_every", "task", "env", "branched_from"];
+const RESUMABLE_CHANGES: &[&str] =
+    &["epochs", "torch_threads", "snapshot_every", "task", "tasks", "env", "branched_from"];
 
 /// The fields of two configurations that differ, as the flags that set them
 /// (`--PREFIXfield-name`), each once: the groups of flags (`net`, `shared`,

@@ -331,22 +331,58 @@ fn play(env: &mut BlockEnv, behaviour: &Behaviour, seed: u64, draw: Option<&Draw
     Ok(ep)
 }
 
-/// Runs `per_worker` episodes on every worker's environment in parallel
-/// (each at the level and distribution `draw` picks, if given).
+/// One episode to play: by worker `worker` on task `task` of the run, from the layout of `seed`,
+/// at the level and in the distribution `draw` picks (without: at the environment's settings).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Planned {
+    pub(crate) worker: usize,
+    pub(crate) task: usize,
+    pub(crate) seed: u64,
+    pub(crate) draw: Option<Draw>,
+}
+
+/// Plays `plan` on `envs`, which hold one environment per worker and task (worker-major:
+/// environment `worker × tasks + task`), in parallel over environments, each playing its episodes
+/// in plan order. Returns the episodes in plan order: what each one plays depends on its
+/// seed and draw alone, so the result is the same for any split over threads.
+pub(crate) fn play_plan(
+    envs: &mut VectorEnv,
+    tasks: usize,
+    behaviour: &Behaviour,
+    plan: &[Planned],
+) -> Result<Vec<Episode>> {
+    let results: Vec<Result<Vec<(usize, Episode)>, EnvError>> = envs.each(|i, env| {
+        let (worker, task) = (i / tasks, i % tasks);
+        plan.iter()
+            .enumerate()
+            .filter(|(_, p)| p.worker == worker && p.task == task)
+            .map(|(j, p)| Ok((j, play(env, behaviour, p.seed, p.draw.as_ref())?)))
+            .collect()
+    });
+    let mut out: Vec<Option<Episode>> = (0..plan.len()).map(|_| None).collect();
+    for r in results {
+        for (j, ep) in r? {
+            out[j] = Some(ep);
+        }
+    }
+    out.into_iter()
+        .enumerate()
+        .map(|(j, ep)| ep.ok_or_else(|| anyhow::anyhow!("episode {j} of the plan names no environment")))
+        .collect()
+}
+
+/// Runs `per_worker` episodes on every worker's environment in parallel (one task).
 pub(crate) fn play_all(
     envs: &mut VectorEnv,
     behaviour: &Behaviour,
     per_worker: usize,
-    draw: Option<&Draw>,
-    seed_of: impl Fn(usize, usize) -> u64 + Sync,
+    seed_of: impl Fn(usize, usize) -> u64,
 ) -> Result<Vec<Episode>> {
-    let results: Vec<Result<Vec<Episode>, EnvError>> =
-        envs.each(|w, env| (0..per_worker).map(|k| play(env, behaviour, seed_of(w, k), draw)).collect());
-    let mut out = Vec::new();
-    for r in results {
-        out.extend(r?);
-    }
-    Ok(out)
+    let plan: Vec<Planned> = (0..envs.num_envs())
+        .flat_map(|w| (0..per_worker).map(move |k| (w, k)))
+        .map(|(worker, k)| Planned { worker, task: 0, seed: seed_of(worker, k), draw: None })
+        .collect();
+    play_plan(envs, 1, behaviour, &plan)
 }
 
 #[cfg(test)]

@@ -7,9 +7,10 @@
 use super::checkpoint::{self, RunState};
 use super::comm::Comm;
 use super::learner::{Algorithm, Expert, Learner};
-use super::rollouts::{play_all, stream_seed, Behaviour, Draw, Episode};
+use super::rollouts::{play_plan, stream_seed, Behaviour, Draw, Episode, Planned};
 use super::rundir::{read_progress, write_progress, RunDir};
-use super::{computation_differences, plot, run_task, EpochRow, ReplayLayout, TrainConfig};
+use super::tasks::{draw_task, run_tasks, test_task};
+use super::{computation_differences, plot, EpochRow, ReplayLayout, TrainConfig};
 use crate::agents::algorithm::{Spec, UpdateStats};
 use crate::agents::arch::Arch;
 use crate::agents::registry::Algo;
@@ -106,13 +107,15 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
 }
 
 /// Refuses a task the solver cannot play (an imitation learner would learn to
-/// stand still): the solver's reason, read off a first reset's observation.
-fn solver_plays(envs: &mut VectorEnv, task: &Task, seed: u64) -> Result<()> {
-    let env = &mut envs.envs_mut()[0];
-    let (obs, _) = env.reset(Some(seed))?;
-    crate::policy::Script::from_observation(&env.obs_spec(), &obs).map_err(|why| {
-        anyhow::anyhow!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id())
-    })?;
+/// stand still): the solver's reason, read off a first reset's observation of
+/// each task (worker 0's environments).
+fn solver_plays(envs: &mut VectorEnv, tasks: &[Task], seed: u64) -> Result<()> {
+    for (env, task) in envs.envs_mut().iter_mut().zip(tasks) {
+        let (obs, _) = env.reset(Some(seed))?;
+        crate::policy::Script::from_observation(&env.obs_spec(), &obs).map_err(|why| {
+            anyhow::anyhow!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id())
+        })?;
+    }
     Ok(())
 }
 
@@ -205,22 +208,25 @@ pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
     }
 }
 
-/// The run's settings and task: the task resolved by rank 0 (checked against
-/// the run's recorded copy on resume, `saved`) and built by every other rank
-/// from it; the recorded task, branch and replay layout filled in.
+/// The run's settings and tasks: the tasks resolved by rank 0 (checked against
+/// the run's recorded copies on resume, `saved`) and built by every other rank
+/// from them; the recorded tasks, branch and replay layout filled in.
 fn run_config(
     comm: &Comm,
     config: &TrainConfig,
     run: &RunDir,
     saved: Option<&TrainConfig>,
-) -> Result<(TrainConfig, Task)> {
-    let task = shared_task(comm, config, run, saved)?;
-    let task = match &config.counts {
-        Some(counts) => task.with_counts(counts)?,
-        None => task,
-    };
+) -> Result<(TrainConfig, Vec<Task>)> {
+    let mut tasks = shared_tasks(comm, config, run, saved)?;
+    if let (Some(counts), [task]) = (&config.counts, &mut tasks[..]) {
+        *task = task.with_counts(counts)?;
+    }
     let mut config = config.clone();
-    config.task = Some(task.source.clone());
+    if super::tasks::is_multi(&config) {
+        config.tasks = tasks.iter().map(|t| t.source.clone()).collect();
+    } else {
+        config.task = Some(tasks[0].source.clone());
+    }
     if let Some(saved) = saved {
         config.branched_from = saved.branched_from.clone();
     }
@@ -233,7 +239,7 @@ fn run_config(
             run.dir.display()
         );
     }
-    Ok((config, task))
+    Ok((config, tasks))
 }
 
 /// Where a run begins: a fresh agent and empty buffers, or a checkpoint's.
@@ -272,7 +278,8 @@ impl StartingPoint {
 fn fresh(
     comm: &Comm,
     config: &TrainConfig,
-    task: &Task,
+    run_id: &str,
+    tasks: usize,
     run: &RunDir,
     mine: &RunDir,
     dims: (Arch, usize),
@@ -286,11 +293,13 @@ fn fresh(
     let spec = Spec { arch, act_dim, shared: &config.shared };
     let agent = config.algo.build(&spec, &config.algos, &mut rng);
     let state = RunState {
-        env_id: task.id().to_owned(),
+        env_id: run_id.to_owned(),
         obs_dim,
         act_dim,
         epoch: 0,
         level: 0,
+        levels: vec![0; tasks],
+        tallies: vec![[0, 0]; tasks],
         env_steps: 0,
         updates: 0,
         episodes_per_worker: 0,
@@ -309,10 +318,12 @@ fn fresh(
 
 /// A resumed run: this rank's checkpoint of the last epoch every rank
 /// completed, after rank 0 checked that the settings are the run's.
+#[allow(clippy::too_many_arguments)]
 fn resumed(
     comm: &Comm,
     config: &TrainConfig,
-    task: &Task,
+    run_id: &str,
+    tasks: usize,
     run: &RunDir,
     mine: &RunDir,
     saved_config: Option<TrainConfig>,
@@ -334,7 +345,19 @@ fn resumed(
             );
         }
     }
-    let mut loaded = checkpoint::load(&path, task.id(), dims.0.obs_dim, dims.1)?;
+    let mut loaded = checkpoint::load(&path, run_id, dims.0.obs_dim, dims.1)?;
+    // One-task checkpoints written before per-task levels hold the level alone.
+    if loaded.state.levels.is_empty() && tasks == 1 {
+        loaded.state.levels = vec![loaded.state.level];
+    }
+    if loaded.state.levels.len() != tasks {
+        bail!(
+            "--resume: {} holds the levels of {} task(s), this run has {tasks}",
+            path.display(),
+            loaded.state.levels.len()
+        );
+    }
+    loaded.state.tallies.resize(tasks, [0, 0]);
     if loaded.agent.norm().set_layout() != dims.0.set {
         bail!("--resume: {} was saved with other networks than --net asks for", path.display());
     }
@@ -363,8 +386,9 @@ struct Trainer<'a> {
     run: RunDir,
     /// This rank's own files (checkpoint, expert copy).
     mine: RunDir,
-    task: Task,
-    /// One environment per worker of this rank.
+    /// The tasks (one, or a multi-task run's, in its recorded order).
+    tasks: Vec<Task>,
+    /// One environment per worker of this rank and task (worker-major: `worker × tasks + task`).
     envs: VectorEnv,
     learner: Learner,
     /// One buffer per worker (`per-worker`) or one (`shared`).
@@ -374,8 +398,10 @@ struct Trainer<'a> {
     state: RunState,
     /// progress.csv's rows (rank 0).
     rows: Vec<EpochRow>,
-    threshold: f64,
-    max_level: usize,
+    /// Each task's test success that moves its curriculum up a level.
+    thresholds: Vec<f64>,
+    /// Each task's maximum level.
+    max_levels: Vec<usize>,
     obs_dim: usize,
     /// Seconds spent persisting the previous epoch (reported in the next row).
     persist_seconds: f64,
@@ -420,34 +446,52 @@ impl<'a> Trainer<'a> {
 
         let saved_config =
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
-        let (config, task) = run_config(comm, config, &run, saved_config.as_ref())?;
-        let threshold = config.success_threshold.unwrap_or(task.spec.curriculum.success_threshold);
-        // One environment and one thread per worker.
-        let env_config = EnvConfig { obs_mode: config.net.obs_mode(), ..EnvConfig::new(task.clone()) };
+        let (config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
+        let thresholds: Vec<f64> =
+            tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
+        // One layout for every task: the most block slots of any.
+        let slots = tasks.iter().map(Task::object_count).max().unwrap_or(0);
+        let env_configs: Vec<EnvConfig> = tasks
+            .iter()
+            .map(|t| EnvConfig { obs_mode: config.net.obs_mode(), slots, ..EnvConfig::new(t.clone()) })
+            .collect();
+        let max_steps = tasks.iter().map(|t| t.spec.max_episode_steps).max().unwrap_or(0);
         // Sized from the configuration before any environment is built (256 of them take a minute).
-        check_memory(&config, env_config.obs_spec().dim(), crate::env::ACTION_DIM, task.spec.max_episode_steps)?;
-        let mut envs = VectorEnv::new(&env_config, config.workers, config.workers)?;
+        check_memory(&config, env_configs[0].obs_spec().dim(), crate::env::ACTION_DIM, max_steps)?;
+        crate::limits::NUM_ENVS.check_usize(config.workers * tasks.len()).map_err(|e| {
+            anyhow::anyhow!("{e}: {} workers × {} tasks; use fewer workers or tasks", config.workers, tasks.len())
+        })?;
+        // One environment per worker and task, stepped on one thread per worker.
+        let built = (0..config.workers)
+            .flat_map(|_| env_configs.iter())
+            .map(|c| crate::env::BlockEnv::new(c.clone()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut envs = VectorEnv::from_envs(built, config.workers)?;
         // Hindsight colours replay the rules over every substep's contacts: the environments record them.
         envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
         if config.algo.registration().info.imitates {
-            solver_plays(&mut envs, &task, config.seed)?;
+            solver_plays(&mut envs, &tasks, config.seed)?;
         }
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
         let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
-        let max_level = first.max_level();
-        if config.challenge_share > 0.0 && task.distribution("challenge").is_none() {
-            bail!("--challenge-share: the task {} has no challenge distribution", task.id());
+        let max_levels: Vec<usize> = envs.envs()[..tasks.len()].iter().map(|e| e.max_level()).collect();
+        if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
+            match &tasks[..] {
+                [task] => bail!("--challenge-share: the task {} has no challenge distribution", task.id()),
+                _ => bail!("--challenge-share: none of the run's tasks has a challenge distribution"),
+            }
         }
 
         let dims = (arch, act_dim);
+        let run_id = config.task_id();
         let begun = if resume {
-            resumed(comm, &config, &task, &run, &mine, saved_config, dims)?
+            resumed(comm, &config, &run_id, tasks.len(), &run, &mine, saved_config, dims)?
         } else {
-            fresh(comm, &config, &task, &run, &mine, dims)?
+            fresh(comm, &config, &run_id, tasks.len(), &run, &mine, dims)?
         };
         begun.check(&config, &mine)?;
-        let seen = crate::agents::expert::obs_dim_without_grey(&first.config().blocks());
+        let seen = crate::agents::expert::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
             write_json(&run.config(), &config)?;
@@ -468,15 +512,15 @@ impl<'a> Trainer<'a> {
             config,
             run,
             mine,
-            task,
+            tasks,
             envs,
             learner: Learner { agent: begun.agent, expert, reduce_seconds: 0.0 },
             replays: begun.replays,
             replay_log: begun.replay_log,
             state: begun.state,
             rows: begun.rows,
-            threshold,
-            max_level,
+            thresholds,
+            max_levels,
             obs_dim,
             persist_seconds: 0.0,
             created,
@@ -493,10 +537,7 @@ impl<'a> Trainer<'a> {
         let epoch = self.state.epoch;
         let started = Instant::now();
         let cpu_started = cpu_seconds();
-        let level = self.state.level.min(self.max_level);
-        for env in self.envs.envs_mut() {
-            env.set_level(level)?;
-        }
+        self.set_levels(false)?;
         let mut tally = EpochTally::default();
         self.learner.reduce_seconds = 0.0;
         for cycle in 0..self.config.cycles {
@@ -504,18 +545,47 @@ impl<'a> Trainer<'a> {
             self.learn(epoch, cycle, &mut tally);
         }
         let eval_started = Instant::now();
-        let (policy, test, finals) = self.evaluate(epoch)?;
+        let (policy, test, test_tasks, finals) = self.evaluate(epoch)?;
         let eval_seconds = eval_started.elapsed().as_secs_f64();
         tally.env_seconds += eval_seconds;
         tally.forward_seconds +=
             test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / self.config.workers as f64;
-        let row = self.row(epoch, &tally, &test, &finals, eval_seconds, started, cpu_started);
-        if row.test_success >= self.threshold && self.state.level < self.max_level {
-            self.state.level += 1;
-        }
+        let (row, tested) = self.row(epoch, &tally, (&test, &test_tasks), &finals, eval_seconds, started, cpu_started);
+        self.advance_curricula(&tested);
         self.state.epoch += 1;
         self.persist(&row, policy)?;
         Ok(row)
+    }
+
+    /// Sets every environment to its task's level, or (`top`) to its task's maximum level.
+    fn set_levels(&mut self, top: bool) -> Result<()> {
+        let n = self.tasks.len();
+        for (i, env) in self.envs.envs_mut().iter_mut().enumerate() {
+            let t = i % n;
+            let level = if top { self.max_levels[t] } else { self.state.levels[t].min(self.max_levels[t]) };
+            env.set_level(level)?;
+        }
+        Ok(())
+    }
+
+    /// Adds the epoch's test episodes of each task (summed over ranks) to its tally; a task whose
+    /// tally holds `test_episodes` episodes moves up a level if their success reaches its threshold,
+    /// and its tally starts again. One task is tested `workers × ranks × test_episodes` times an
+    /// epoch: the paper's rule, a decision every epoch on that epoch's test success.
+    fn advance_curricula(&mut self, tested: &[[u64; 2]]) {
+        let state = &mut self.state;
+        for (t, got) in tested.iter().enumerate() {
+            let tally = &mut state.tallies[t];
+            (tally[0], tally[1]) = (tally[0] + got[0], tally[1] + got[1]);
+            if tally[1] >= self.config.test_episodes as u64 {
+                let success = if tally[1] == 0 { 0.0 } else { tally[0] as f64 / tally[1] as f64 };
+                if success >= self.thresholds[t] && state.levels[t] < self.max_levels[t] {
+                    state.levels[t] += 1;
+                }
+                *tally = [0, 0];
+            }
+        }
+        state.level = state.levels.iter().sum();
     }
 
     /// Every worker plays `rollouts` exploration episodes; their transitions
@@ -531,29 +601,45 @@ impl<'a> Trainer<'a> {
             None => Behaviour::exploring(&*self.learner.agent, &*explorer, epoch),
         };
         let base = self.state.episodes_per_worker;
-        let draw = Draw {
-            level: self.state.level.min(self.max_level),
-            max_level: self.max_level,
-            level_replay: config.level_replay,
-            challenge_share: config.challenge_share,
-        };
-        let draw = (draw.level_replay > 0.0 || draw.challenge_share > 0.0).then_some(draw);
-        let first = self.shard(0);
-        let eps = play_all(&mut self.envs, &behaviour, config.rollouts, draw.as_ref(), |w, k| {
-            stream_seed(config.seed, &[1, (first + w) as u64, base + k as u64])
-        })?;
+        let draws = (config.level_replay > 0.0 || config.challenge_share > 0.0).then(|| {
+            self.tasks
+                .iter()
+                .enumerate()
+                .map(|(t, task)| Draw {
+                    level: self.state.levels[t].min(self.max_levels[t]),
+                    max_level: self.max_levels[t],
+                    level_replay: config.level_replay,
+                    // A multi-task run's tasks without a challenge distribution play their own.
+                    challenge_share: if task.distribution("challenge").is_some() {
+                        config.challenge_share
+                    } else {
+                        0.0
+                    },
+                })
+                .collect::<Vec<_>>()
+        });
+        let n = self.tasks.len();
+        let plan: Vec<Planned> = (0..config.workers)
+            .flat_map(|w| (0..config.rollouts).map(move |k| (w, k)))
+            .map(|(w, k)| {
+                let seed = stream_seed(config.seed, &[1, self.shard(w) as u64, base + k as u64]);
+                let task = draw_task(seed, n);
+                Planned { worker: w, task, seed, draw: draws.as_ref().map(|d| d[task]) }
+            })
+            .collect();
+        let eps = play_plan(&mut self.envs, n, &behaviour, &plan)?;
         self.state.episodes_per_worker += config.rollouts as u64;
         tally.env_seconds += t.elapsed().as_secs_f64();
         let mut rows = Vec::new();
-        let max_steps = self.task.spec.max_episode_steps;
-        for (i, ep) in eps.iter().enumerate() {
+        for (ep, planned) in eps.iter().zip(&plan) {
+            let max_steps = self.tasks[planned.task].spec.max_episode_steps;
             tally.episodes += 1;
             tally.wins += ep.success as usize;
             tally.steps += ep.len();
             tally.expert_steps += ep.expert_steps;
             tally.forward_seconds += ep.forward_seconds / config.workers as f64;
             let replay = match config.replay_layout() {
-                ReplayLayout::PerWorker => &mut self.replays[i / config.rollouts],
+                ReplayLayout::PerWorker => &mut self.replays[planned.worker],
                 ReplayLayout::Shared => &mut self.replays[0],
             };
             ep.store_transitions(replay, config.shared.gamma, config.shared.n_step);
@@ -607,25 +693,34 @@ impl<'a> Trainer<'a> {
     }
 
     /// The deterministic policy's test episodes at the current level and
-    /// finals at the maximum level.
-    fn evaluate(&mut self, epoch: usize) -> Result<(AnyPolicy, Vec<Episode>, Vec<Episode>)> {
-        let (seed, first, n) = (self.config.seed, self.shard(0), self.config.test_episodes);
+    /// finals at the maximum level (a multi-task run's tasks in turn, each at its
+    /// own levels), and the task of each test episode.
+    #[allow(clippy::type_complexity)]
+    fn evaluate(&mut self, epoch: usize) -> Result<(AnyPolicy, Vec<Episode>, Vec<usize>, Vec<Episode>)> {
+        let (seed, n, tasks) = (self.config.seed, self.config.test_episodes, self.tasks.len());
+        let shards = self.comm.size() * self.config.workers;
+        let plan = |stream: u64| -> Vec<Planned> {
+            (0..self.config.workers)
+                .flat_map(|w| (0..n).map(move |k| (w, k)))
+                .map(|(w, k)| {
+                    let shard = self.shard(w);
+                    let task = test_task(epoch, shards, n, shard, k, tasks);
+                    let seed = stream_seed(seed, &[stream, epoch as u64, shard as u64, k as u64]);
+                    Planned { worker: w, task, seed, draw: None }
+                })
+                .collect()
+        };
+        let (test_plan, finals_plan) = (plan(3), plan(4));
         let policy = self.learner.agent.policy();
         let greedy = Behaviour::Greedy(&policy);
+        self.set_levels(false)?;
         for env in self.envs.envs_mut() {
-            env.set_level(self.state.level.min(self.max_level))?;
             env.set_distribution(None)?;
         }
-        let test = play_all(&mut self.envs, &greedy, n, None, |w, k| {
-            stream_seed(seed, &[3, epoch as u64, (first + w) as u64, k as u64])
-        })?;
-        for env in self.envs.envs_mut() {
-            env.set_level(self.max_level)?;
-        }
-        let finals = play_all(&mut self.envs, &greedy, n, None, |w, k| {
-            stream_seed(seed, &[4, epoch as u64, (first + w) as u64, k as u64])
-        })?;
-        Ok((policy, test, finals))
+        let test = play_plan(&mut self.envs, tasks, &greedy, &test_plan)?;
+        self.set_levels(true)?;
+        let finals = play_plan(&mut self.envs, tasks, &greedy, &finals_plan)?;
+        Ok((policy, test, test_plan.iter().map(|p| p.task).collect(), finals))
     }
 
     /// The epoch's row: counts and success summed over ranks (one exchange),
@@ -635,19 +730,19 @@ impl<'a> Trainer<'a> {
         &mut self,
         epoch: usize,
         tally: &EpochTally,
-        test: &[Episode],
+        (test, test_tasks): (&[Episode], &[usize]),
         finals: &[Episode],
         eval_seconds: f64,
         started: Instant,
         cpu_started: f64,
-    ) -> EpochRow {
+    ) -> (EpochRow, Vec<[u64; 2]>) {
         let wins = |eps: &[Episode]| eps.iter().filter(|e| e.success).count() as f64;
         let sum_of = |f: fn(&UpdateStats) -> f64| {
             let v: Vec<f64> = tally.stats.iter().map(f).filter(|x| !x.is_nan()).collect();
             (v.iter().sum::<f64>(), v.len() as f64)
         };
         let (q, cl, al) = (sum_of(|s| s.mean_q), sum_of(|s| s.critic_loss), sum_of(|s| s.actor_loss));
-        let local = [
+        let mut local = vec![
             tally.episodes as f64,
             tally.wins as f64,
             tally.steps as f64,
@@ -665,6 +760,12 @@ impl<'a> Trainer<'a> {
             tally.relabelled as f64,
             tally.relabelled_wins as f64,
         ];
+        // Each task's test (successes, episodes).
+        const TASKS_AT: usize = 16;
+        for t in 0..self.tasks.len() {
+            let of_t = || test.iter().zip(test_tasks).filter(move |(_, &k)| k == t).map(|(e, _)| e);
+            local.extend([of_t().filter(|e| e.success).count() as f64, of_t().count() as f64]);
+        }
         let per_rank = self.comm.gather_f64(&local);
         let total = |i: usize| -> f64 {
             if per_rank.len() == 1 {
@@ -678,7 +779,9 @@ impl<'a> Trainer<'a> {
         let epoch_wall = started.elapsed().as_secs_f64();
         self.state.wall_seconds += epoch_wall;
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-        EpochRow {
+        let tested =
+            (0..self.tasks.len()).map(|t| [total(TASKS_AT + 2 * t) as u64, total(TASKS_AT + 2 * t + 1) as u64]);
+        let row = EpochRow {
             epoch,
             level: self.state.level,
             train_success: ratio(1, 0),
@@ -701,7 +804,8 @@ impl<'a> Trainer<'a> {
             relabelled: total(14) / total(0).max(1.0),
             relabelled_success: ratio(15, 14),
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
-        }
+        };
+        (row, tested.collect())
     }
 
     /// Rank 0 writes progress, plot and policies; then every rank its
@@ -712,10 +816,17 @@ impl<'a> Trainer<'a> {
             let (run, state) = (&self.run, &self.state);
             self.rows.push(row.clone());
             write_progress(&run.progress(), &self.rows)?;
-            plot::success_curves(&run.plot(), &self.config.title(), &self.rows, self.max_level)?;
+            // A multi-task run's level is the sum of its tasks' levels.
+            let max_level = self.max_levels.iter().sum();
+            plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
+            // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task.
+            let task = match &self.tasks[..] {
+                [task] => Some(task.source.clone()),
+                _ => None,
+            };
             let saved = SavedPolicy {
-                env_id: self.task.id().to_owned(),
-                task: Some(self.task.source.clone()),
+                env_id: self.state.env_id.clone(),
+                task,
                 epoch: state.epoch,
                 env_steps: Some(state.env_steps),
                 finals_success: row.finals_success,
@@ -744,27 +855,29 @@ impl<'a> Trainer<'a> {
     }
 }
 
-/// The run's task on every rank: rank 0 resolves it (see [`run_task`]) and
-/// sends its recorded form to the others, so all ranks build the same task
+/// The run's tasks on every rank: rank 0 resolves them (see [`run_tasks`]) and
+/// sends their recorded form to the others, so all ranks build the same tasks
 /// even when their hosts' task files differ.
-fn shared_task(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Task> {
+fn shared_tasks(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Vec<Task>> {
     if comm.size() == 1 {
-        return run_task(config, run, saved);
+        return run_tasks(config, run, saved);
     }
     let mut bytes = Vec::new();
-    let task = if comm.is_root() {
-        let task = run_task(config, run, saved)?;
-        bytes = serde_json::to_vec(&task.source)?;
-        Some(task)
+    let tasks = if comm.is_root() {
+        let tasks = run_tasks(config, run, saved)?;
+        let sources: Vec<&crate::task::TaskSource> = tasks.iter().map(|t| &t.source).collect();
+        bytes = serde_json::to_vec(&sources)?;
+        Some(tasks)
     } else {
         None
     };
     comm.broadcast_bytes(&mut bytes);
-    match task {
+    match tasks {
         Some(t) => Ok(t),
         None => {
-            let source: crate::task::TaskSource = serde_json::from_slice(&bytes).context("the task sent by rank 0")?;
-            Ok(registry::recorded(&source)?)
+            let sources: Vec<crate::task::TaskSource> =
+                serde_json::from_slice(&bytes).context("the tasks sent by rank 0")?;
+            Ok(sources.iter().map(registry::recorded).collect::<Result<_, _>>()?)
         }
     }
 }

@@ -186,3 +186,57 @@ fn the_solver_names_what_it_cannot_solve() {
     let ep = blockpuzzle::rollout::run_episode(&mut flat, &mut ScriptedPolicy::solver(2), 0).unwrap();
     assert!(ep.success, "the solver solves BlocksTouch-v0 from a flat environment's entities view");
 }
+
+/// `obs` of `spec` with `extra` absent slots after its blocks: zero rows before the fixture rows,
+/// zero mask entries before the fixtures' (what an environment of `slots` more presents).
+fn padded(spec: &ObsSpec, obs: &[f32], extra: usize) -> Vec<f32> {
+    let (robot, row, m) = (spec.robot_dim(), spec.object_dim(), spec.max_objects);
+    let blocks_end = robot + m * row;
+    let rows_end = robot + spec.rows() * row;
+    let mut out = obs[..blocks_end].to_vec();
+    out.extend(std::iter::repeat(0.0).take(extra * row));
+    out.extend_from_slice(&obs[blocks_end..rows_end]);
+    if spec.mode.has_mask() {
+        out.extend_from_slice(&obs[rows_end..rows_end + m]);
+        out.extend(std::iter::repeat(0.0).take(extra));
+        out.extend_from_slice(&obs[rows_end + m..]);
+    }
+    out
+}
+
+#[test]
+fn extra_slots_pad_every_layout_with_absent_rows_and_change_nothing_else() {
+    // Multi-task training presents every task in the layout of the most blocks: a task's own
+    // observation with absent rows (zero, mask 0) before the fixture rows; the solver plays alike.
+    for mode in [ObsMode::Flat, ObsMode::Objects, ObsMode::Entities] {
+        let task = registry::task("BlocksChoose-v0").unwrap();
+        let mut own = env_of(task.clone(), mode);
+        let mut wide =
+            BlockEnv::new(EnvConfig { obs_mode: mode, slots: task.object_count() + 2, ..EnvConfig::new(task.clone()) })
+                .unwrap();
+        let fewer = BlockEnv::new(EnvConfig { obs_mode: mode, slots: 1, ..EnvConfig::new(task.clone()) }).unwrap();
+        assert_eq!(fewer.obs_spec(), own.obs_spec(), "{mode:?}: fewer slots than blocks change nothing");
+        let (spec, wide_spec) = (own.obs_spec(), wide.obs_spec());
+        assert_eq!(wide_spec.max_objects, spec.max_objects + 2);
+        let (mut a, _) = own.reset(Some(11)).unwrap();
+        let (mut b, _) = wide.reset(Some(11)).unwrap();
+        let mut solvers = (ScriptedPolicy::solver(spec.max_objects), ScriptedPolicy::solver(wide_spec.max_objects));
+        for t in 0..30 {
+            assert_eq!(b.len(), wide_spec.dim(), "{mode:?}");
+            assert_eq!(b, padded(&spec, &a, 2), "{mode:?} step {t}");
+            let action = if mode == ObsMode::Entities {
+                let (x, y) = (solvers.0.act(&a), solvers.1.act(&b));
+                assert_eq!(x, y, "the solver reads the padded observation alike, step {t}");
+                x
+            } else {
+                [0.3, -0.2, 0.1, 0.5]
+            };
+            let (sa, sb) = (own.step(&action).unwrap(), wide.step(&action).unwrap());
+            assert_eq!((sa.reward, sa.terminated), (sb.reward, sb.terminated));
+            (a, b) = (sa.obs, sb.obs);
+            if sa.terminated || sa.truncated {
+                break;
+            }
+        }
+    }
+}

@@ -15,6 +15,8 @@ use std::path::Path;
 fn tiny(env: &str, epochs: usize) -> TrainConfig {
     TrainConfig {
         env: env.into(),
+        suite: None,
+        split: "train".into(),
         counts: None,
         workers: 2,
         epochs,
@@ -39,6 +41,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         hindsight_strategy: Default::default(),
         net: Default::default(),
         task: None,
+        tasks: Vec::new(),
         branched_from: None,
     }
 }
@@ -1004,4 +1007,95 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     std::fs::write(&file, text).unwrap();
     let green = TrainConfig { env: file.display().to_string(), ..imitate("bc", 1) };
     refused(green, &["the solver cannot play GreenGripperTouch-v0", "a green gripper", "nothing to imitate"]);
+}
+
+#[test]
+fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
+    // Two tasks of different block counts in one layout (the entities of the most blocks), one
+    // drawn per exploration episode, the solver labelling both; threshold 0: each task moves up a
+    // level whenever it has had `test_episodes` test episodes (2 workers × 2 over 2 tasks: every epoch).
+    let multi = |epochs| {
+        let mut c = tiny("BlocksTouch-v0,BlocksChoose-v0", epochs);
+        c.algo = Algo::named("dagger").unwrap();
+        c.net = NetConfig { net: NetKind::Entity, ..NetConfig::default() };
+        c.success_threshold = Some(0.0);
+        c
+    };
+    assert_eq!(multi(1).task_id(), "BlocksTouch-v0+BlocksChoose-v0");
+    assert!(multi(1)
+        .default_run_dir()
+        .to_string_lossy()
+        .starts_with("runs/BlocksTouch-v0+BlocksChoose-v0-dagger-entity"));
+    let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = train(&multi(3), straight.path(), false, &mut quiet).unwrap();
+    train(&multi(2), split.path(), false, &mut quiet).unwrap();
+    let b = train(&multi(3), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), [0, 2, 4], "both tasks move up every epoch");
+    let state = checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap();
+    assert_eq!((state.levels.clone(), state.level), (vec![3, 3], 6));
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(straight.path().join("config.json")).unwrap()).unwrap();
+    let ids: Vec<&str> = config["tasks"].as_array().unwrap().iter().map(|t| t["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["BlocksTouch-v0", "BlocksChoose-v0"]);
+    assert!(config.get("task").is_none(), "{config}");
+    // The policy reads the widest layout and names the run's tasks, not one of them.
+    let saved = load_policy(&straight.path().join("policy.json")).unwrap();
+    assert_eq!(saved.env_id, "BlocksTouch-v0+BlocksChoose-v0");
+    assert!(saved.task.is_none());
+    let choose = blockpuzzle::env::registry::task("BlocksChoose-v0").unwrap().object_count();
+    let touch = blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().object_count();
+    assert!(choose > touch);
+    let spec = blockpuzzle::env::ObsSpec::new(blockpuzzle::env::ObsMode::Entities, choose);
+    assert_eq!(state.obs_dim, spec.dim());
+    // The exploration episodes play both tasks: their lengths differ from one task's alone.
+    let alone = TrainConfig { env: "BlocksTouch-v0".into(), ..multi(3) };
+    let one = train(&alone, tempfile::tempdir().unwrap().path(), false, &mut quiet).unwrap();
+    let steps = |rows: &[EpochRow]| rows.iter().map(|r| r.env_steps).collect::<Vec<_>>();
+    assert_ne!(steps(&one), steps(&a));
+
+    // A suite's split names the tasks too (a file here; `--suite procgen` in the experiments).
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("two.toml");
+    let row = |task: &str, split: &str| {
+        let seed = if split == "train" { 0 } else { 100 };
+        format!("[[splits.{split}]]\ntask = \"{task}\"\nseed = {seed}\nepisodes = 2\n\n")
+    };
+    let text = format!(
+        "version = 1\nname = \"two\"\nsummary = \"two tasks\"\n\n{}{}{}",
+        row("BlocksTouch-v0", "train"),
+        row("BlocksChoose-v0", "train"),
+        row("BlocksStack-v0", "test")
+    );
+    std::fs::write(&suite, text).unwrap();
+    let from_suite = TrainConfig { env: String::new(), suite: Some(suite.display().to_string()), ..multi(3) };
+    assert_eq!(from_suite.task_id(), "two-train");
+    let c = train(&from_suite, &dir.path().join("run"), false, &mut quiet).unwrap();
+    assert_eq!(
+        comparable(&a).iter().map(|r| r.level).collect::<Vec<_>>(),
+        c.iter().map(|r| r.level).collect::<Vec<_>>()
+    );
+
+    // Refused before anything is written: one-task settings, a split the suite lacks, and a
+    // resume whose tasks are not the run's.
+    let refused = |c: TrainConfig, dir: &Path, resume: bool, words: &[&str]| {
+        let e = format!("{:#}", train(&c, dir, resume, &mut quiet).unwrap_err());
+        assert!(words.iter().all(|w| e.contains(w)), "{e}");
+    };
+    let nowhere = dir.path().join("nowhere");
+    refused(
+        TrainConfig { counts: Some("grey=1".parse().unwrap()), ..multi(1) },
+        &nowhere,
+        false,
+        &["--counts applies to one task"],
+    );
+    refused(
+        TrainConfig { split: "validation".into(), ..from_suite.clone() },
+        &nowhere,
+        false,
+        &["--split validation", "train, test"],
+    );
+    assert!(!nowhere.exists());
+    let other = TrainConfig { env: "BlocksTouch-v0,BlocksStack-v0".into(), ..multi(4) };
+    refused(other, straight.path(), true, &["differ from those recorded", "BlocksChoose-v0", "BlocksStack-v0"]);
 }

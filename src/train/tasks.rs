@@ -1,0 +1,145 @@
+//! The tasks a run trains on: one (`--env ID`), several (`--env A,B,C`), or a suite's split
+//! (`--suite procgen --split train`, generated tasks included). A multi-task run presents every
+//! task in one observation layout (the most block slots of any, the others' padded with absent
+//! rows), draws a task per exploration episode, and keeps a curriculum level per task.
+
+use super::rundir::RunDir;
+use super::{run_task, TrainConfig};
+use crate::env::registry;
+use crate::task::{Task, TaskSource};
+use anyhow::{bail, Result};
+
+/// Whether `config` names more than one task (a list, or a suite split).
+pub(crate) fn is_multi(config: &TrainConfig) -> bool {
+    config.suite.is_some() || config.env.contains(',')
+}
+
+/// The ids or files of a comma-separated `--env` list, trimmed.
+fn env_list(env: &str) -> Vec<&str> {
+    env.split(',').map(str::trim).filter(|s| !s.is_empty()).collect()
+}
+
+/// The tasks `config` names today (a suite's rows of the split, each task once, in row order).
+fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
+    let tasks = match &config.suite {
+        Some(name) => {
+            let suite = crate::suite::load(name)?;
+            let Some(split) = suite.splits.iter().find(|s| s.name == config.split) else {
+                let names: Vec<&str> = suite.splits.iter().map(|s| s.name.as_str()).collect();
+                bail!(
+                    "--split {}: the suite {} has the splits {}; pass one of them",
+                    config.split,
+                    suite.name,
+                    names.join(", ")
+                );
+            };
+            split.rows.iter().map(|r| r.task.clone()).collect::<Vec<_>>()
+        }
+        None => env_list(&config.env).into_iter().map(registry::task).collect::<Result<Vec<_>, _>>()?,
+    };
+    let mut unique: Vec<Task> = Vec::new();
+    for t in tasks {
+        if !unique.iter().any(|u| u.source.hash == t.source.hash) {
+            unique.push(t);
+        }
+    }
+    if unique.is_empty() {
+        bail!("--env {:?} names no task; give an id or task file (several comma-separated)", config.env);
+    }
+    Ok(unique)
+}
+
+/// The run's tasks: `--env` or `--suite` resolved; on resume of a multi-task run, checked against
+/// the copies recorded in its `config.json` (`saved`): the same tasks, by content, in the same order.
+///
+/// # Errors
+/// An unknown id, suite or split, a bad task file, a task that changed since the run started, or
+/// settings that apply to one task only (`--counts`, `--expert`).
+pub(crate) fn run_tasks(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Vec<Task>> {
+    if !is_multi(config) {
+        return Ok(vec![run_task(config, run, saved)?]);
+    }
+    if config.counts.is_some() {
+        bail!("--counts applies to one task; a multi-task run (--suite or an --env list) takes each task's own counts");
+    }
+    if config.aggrevated.expert.is_some() {
+        bail!("--expert: AggreVaTeD's expert plays one task; train it with one --env");
+    }
+    let tasks = resolve(config)?;
+    if let Some(recorded) = saved.map(|s| &s.tasks).filter(|r| !r.is_empty()) {
+        let now: Vec<&TaskSource> = tasks.iter().map(|t| &t.source).collect();
+        if now.len() != recorded.len() || now.iter().zip(recorded).any(|(a, b)| a.hash != b.hash) {
+            let changed: Vec<String> = recorded
+                .iter()
+                .filter(|r| !now.iter().any(|n| n.hash == r.hash))
+                .map(|r| r.id.clone())
+                .chain(now.iter().filter(|n| !recorded.iter().any(|r| r.hash == n.hash)).map(|n| n.id.clone()))
+                .collect();
+            bail!(
+                "--resume: the tasks of {} differ from those recorded in {} ({}); resume with the run's tasks, or \
+                 start a new run with another --run-dir",
+                config.task_id(),
+                run.config().display(),
+                if changed.is_empty() { "their order".to_owned() } else { changed.join(", ") }
+            );
+        }
+    }
+    Ok(tasks)
+}
+
+/// A multi-task run's name for its tasks: `SUITE-SPLIT`, or the ids joined by `+`.
+pub(crate) fn label(config: &TrainConfig) -> String {
+    match &config.suite {
+        Some(s) => {
+            let stem = std::path::Path::new(s).file_stem().map_or(s.clone(), |x| x.to_string_lossy().into_owned());
+            format!("{stem}-{}", config.split)
+        }
+        None if !config.tasks.is_empty() => config.tasks.iter().map(|t| t.id.as_str()).collect::<Vec<_>>().join("+"),
+        None => env_list(&config.env)
+            .iter()
+            .map(|e| {
+                let p = std::path::Path::new(e);
+                if registry::is_path(e) {
+                    p.file_stem().map_or((*e).to_owned(), |x| x.to_string_lossy().into_owned())
+                } else {
+                    (*e).to_owned()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("+"),
+    }
+}
+
+/// The task of exploration episode `seed` among `n` (uniform, from a stream of its own; 0 for one task).
+pub(crate) fn draw_task(seed: u64, n: usize) -> usize {
+    use rand::{Rng, SeedableRng};
+    if n <= 1 {
+        return 0;
+    }
+    rand_chacha::ChaCha8Rng::seed_from_u64(super::stream_seed(seed, &[7])).gen_range(0..n)
+}
+
+/// The task of test (or finals) episode `k` of global worker `shard` in `epoch`: the tasks in turn,
+/// continuing from epoch to epoch, so every task is tested as often as any other.
+pub(crate) fn test_task(epoch: usize, shards: usize, per_worker: usize, shard: usize, k: usize, n: usize) -> usize {
+    (epoch * shards * per_worker + shard * per_worker + k) % n.max(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tasks_are_drawn_uniformly_and_tested_in_turn() {
+        let mut counts = [0usize; 4];
+        for s in 0..4000 {
+            counts[draw_task(s, 4)] += 1;
+        }
+        assert!(counts.iter().all(|&c| (900..1100).contains(&c)), "{counts:?}");
+        assert!((0..100).all(|s| draw_task(s, 1) == 0));
+        // 2 workers × 3 episodes per epoch over 4 tasks: every task once before any twice.
+        let order: Vec<usize> =
+            (0..2).flat_map(|e| (0..2).flat_map(move |w| (0..3).map(move |k| test_task(e, 2, 3, w, k, 4)))).collect();
+        assert_eq!(order, [0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3]);
+    }
+}
