@@ -18,7 +18,8 @@ fi
 
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, query, mean-max with
 # --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too;
-# and with --set-robot-tokens and --set-type-norm, trained by DAgger), exported to a scratch zoo, must
+# and with --set-robot-tokens and --set-type-norm, trained by DAgger; and with two transformer blocks and
+# query pooling, by DAgger), exported to a scratch zoo, must
 # act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
@@ -31,11 +32,13 @@ fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for variant in mean-max attention colour query mean-max-norm entity entity-tokens-dagger; do
+for variant in mean-max attention colour query mean-max-norm entity entity-tokens-dagger entity-transformer; do
     if [ "$variant" = entity ]; then
         flags=(--net entity)
     elif [ "$variant" = entity-tokens-dagger ]; then
         flags=(--net entity --set-robot-tokens --set-type-norm --algo dagger)
+    elif [ "$variant" = entity-transformer ]; then
+        flags=(--net entity --set-transformer 2 --set-pooling query --algo dagger)
     else
         flags=(--net set --set-pooling "${variant%-norm}")
         if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi

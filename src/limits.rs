@@ -149,6 +149,8 @@ pub const HINDSIGHT_COLOURS: Bound =
     bound("--hindsight-colours", 0, 16, "an episode's blocks offer no more colourings");
 /// Layers of a set network's per-object encoder.
 pub const SET_ENCODER_LAYERS: Bound = bound("--set-encoder-layers", 1, 32, "");
+/// Pre-LayerNorm transformer blocks of a set network's encoder.
+pub const SET_TRANSFORMER: Bound = bound("--set-transformer", 0, 8, "");
 /// Steps of an n-step return.
 pub const N_STEP: Bound = bound("--n-step", 1, 50, "an episode's length in the paper's tasks");
 /// TD3's critic updates per actor update.

@@ -96,7 +96,7 @@ class ZooPolicy:
     The network is an MLP (ReLU layers) or, where the metadata gives a ``set`` layout, a set network
     over the ``objects`` or ``entities`` observation (robot | rows | mask): a per-row encoder (of the
     row, or with ``robot_tokens`` of the robot features and the row), optionally a self-attention
-    block, masked mean and max pooling (overall, or per colour), and a head. A set
+    block or pre-LayerNorm transformer blocks (``transformer``), masked mean and max pooling (overall, or per colour), and a head. A set
     network takes any number of object slots: the slot count is read from the observation's length.
     """
 
@@ -235,6 +235,11 @@ class ZooPolicy:
             w = w / w.sum(axis=1, keepdims=True) if len(h) else w
             h = np.maximum(h + self._dense(e + 3, w @ v, relu=False), 0.0)
             first = e + 4
+        for _ in range(self.set.get("transformer", 0)):
+            h = self._transformer_block(h, first)
+            first += 6
+        if self.set.get("transformer", 0):
+            h = np.maximum(h, 0.0)
         width = self.tensors[f"actor.{e - 1}.bias"].shape[0]
         if self.set.get("query", False):
             # Attention pooling with a learned query: a softmax of the rows' scores weighs their values.
@@ -257,6 +262,27 @@ class ZooPolicy:
             # Layer normalisation without gain or bias (biased variance, libtorch's 1e-5 floor).
             pooled = (pooled - pooled.mean()) / np.sqrt(pooled.var() + np.float32(1e-5))
         return np.concatenate([x[:r], pooled.astype(np.float32)]), first
+
+    def _transformer_block(self, h, first):
+        """One pre-LayerNorm transformer block (layers ``first`` .. ``first + 5``: query, key, value,
+        output, feed-forward pair) over the present rows ``h``: 4 heads of masked self-attention,
+        then the feed-forward pair, each added to ``h``; layer normalisation without gain or bias."""
+        def ln(v):
+            return (v - v.mean(axis=1, keepdims=True)) / np.sqrt(v.var(axis=1, keepdims=True) + np.float32(1e-5))
+        if not len(h):
+            return h
+        a = ln(h)
+        q, k, v = (self._dense(first + j, a, relu=False) for j in range(3))
+        d, heads = q.shape[1], 4
+        dh = d // heads
+        z = np.zeros_like(q)
+        for j in range(heads):
+            part = slice(j * dh, (j + 1) * dh)
+            scores = q[:, part] @ k[:, part].T / np.sqrt(dh, dtype=np.float32)
+            w = np.exp(scores - scores.max(axis=1, keepdims=True))
+            z[:, part] = (w / w.sum(axis=1, keepdims=True)) @ v[:, part]
+        h = h + self._dense(first + 3, z, relu=False)
+        return h + self._dense(first + 5, self._dense(first + 4, ln(h), relu=True), relu=False)
 
     def act(self, obs) -> np.ndarray:
         """The action for one flat observation vector (as ``__call__`` computes it)."""

@@ -89,7 +89,20 @@ pub struct SetLayout {
     /// pooled vector is `Σᵢ softmaxᵢ(sᵢ / √d) vᵢ` over the present rows (zeros where none is).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub query: bool,
+    /// Pre-LayerNorm transformer blocks after the encoder (0: none), each the next
+    /// [`TRANSFORMER_LAYERS`] layers: `h += O·MHA(LN(h))` with [`TRANSFORMER_HEADS`] heads over the
+    /// present rows, then `h += W₂ ReLU(W₁ LN(h))`; the last block's output goes through ReLU, as
+    /// the encoder's does, so every pooling reads features ≥ 0. LN has no gain or bias.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub transformer: usize,
 }
+
+/// The layers of one transformer block: query, key, value and output projections, then the
+/// feed-forward pair.
+pub const TRANSFORMER_LAYERS: usize = 6;
+
+/// The attention heads of a transformer block (the hidden width splits evenly between them).
+pub const TRANSFORMER_HEADS: usize = 4;
 
 /// The layers of attention pooling with a learned query: the score and the value projections.
 pub const QUERY_LAYERS: usize = 2;
@@ -150,6 +163,7 @@ impl SetLayout {
             robot_tokens: false,
             fixtures: 0,
             query: false,
+            transformer: 0,
         }
     }
 
@@ -168,9 +182,10 @@ impl SetLayout {
         self.pool_start() + if self.query { QUERY_LAYERS } else { 0 }
     }
 
-    /// The index of the query pooling's first layer: after the encoder and the attention block.
+    /// The index of the query pooling's first layer: after the encoder, the attention block and
+    /// the transformer blocks.
     pub fn pool_start(&self) -> usize {
-        self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 }
+        self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 } + self.transformer * TRANSFORMER_LAYERS
     }
 
     /// The same network on observations with `slots` object slots (its
@@ -247,6 +262,12 @@ impl PlainNet {
                     s.obs_dim()
                 ));
             }
+            let width = self.layers.get(s.encoder_layers - 1).map_or(0, |l| l.b.len());
+            if s.transformer > 0 && width % TRANSFORMER_HEADS != 0 {
+                return Err(format!(
+                    "set network: transformer blocks of {width} features do not split into {TRANSFORMER_HEADS} heads"
+                ));
+            }
             if s.by_colour && s.object < crate::env::COLOUR_FEATURE + COLOURS {
                 return Err(format!(
                     "set network pooled by colour over rows of {} features: the colour one-hot is features {}..{}",
@@ -306,6 +327,8 @@ impl PlainNet {
         let (front, head) = self.layers.split_at(s.head_start().min(self.layers.len()));
         let (front, pool) = front.split_at(s.pool_start().min(front.len()));
         let (encoder, attention) = front.split_at(s.encoder_layers.min(front.len()));
+        let (attention, blocks) =
+            attention.split_at(if s.attention { ATTENTION_LAYERS.min(attention.len()) } else { 0 });
         let width = encoder.last().map_or(0, |l| l.b.len());
         let rows_end = s.robot + s.slots * s.object;
         // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
@@ -318,6 +341,9 @@ impl PlainNet {
         let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, token(row))).collect();
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
+        }
+        if !blocks.is_empty() {
+            rows = transform(rows, blocks);
         }
         let mut input = x[..s.robot].to_vec();
         match pool {
@@ -363,6 +389,61 @@ fn attend(h: &[Vec<f32>], (q, k, v, o): (&Dense, &Dense, &Dense, &Dense)) -> Vec
         out.push(hi.iter().zip(&y).map(|(a, b)| (a + b).max(0.0)).collect());
     }
     out
+}
+
+/// The transformer blocks `layers` ([`TRANSFORMER_LAYERS`] each, see [`SetLayout::transformer`])
+/// over the encoded rows `h` (all present), then ReLU.
+fn transform(mut h: Vec<Vec<f32>>, layers: &[Dense]) -> Vec<Vec<f32>> {
+    let apply = |l: &Dense, x: &[f32]| {
+        let mut y = Vec::new();
+        l.forward(x, &mut y);
+        y
+    };
+    let normed = |h: &[Vec<f32>]| -> Vec<Vec<f32>> {
+        h.iter()
+            .map(|x| {
+                let mut x = x.clone();
+                layer_norm(&mut x);
+                x
+            })
+            .collect()
+    };
+    for block in layers.chunks(TRANSFORMER_LAYERS) {
+        let [q, k, v, o, f1, f2] = block else { break };
+        let a = normed(&h);
+        let project = |l: &Dense| a.iter().map(|x| apply(l, x)).collect::<Vec<_>>();
+        let (qs, ks, vs) = (project(q), project(k), project(v));
+        let d = q.b.len();
+        let dh = d / TRANSFORMER_HEADS;
+        let scale = 1.0 / (dh.max(1) as f32).sqrt();
+        for (hi, qi) in h.iter_mut().zip(&qs) {
+            let mut z = vec![0.0f32; d];
+            for head in 0..TRANSFORMER_HEADS {
+                let part = head * dh..(head + 1) * dh;
+                let scores: Vec<f32> = ks.iter().map(|kj| dot(&qi[part.clone()], &kj[part.clone()]) * scale).collect();
+                let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+                let total: f32 = weights.iter().sum();
+                for (w, vj) in weights.iter().zip(&vs) {
+                    for (zi, x) in z[part.clone()].iter_mut().zip(&vj[part.clone()]) {
+                        *zi += w / total * x;
+                    }
+                }
+            }
+            hi.iter_mut().zip(apply(o, &z)).for_each(|(x, y)| *x += y);
+        }
+        for hi in h.iter_mut() {
+            let mut b = hi.clone();
+            layer_norm(&mut b);
+            let mut inner = apply(f1, &b);
+            inner.iter_mut().for_each(|v| *v = v.max(0.0));
+            hi.iter_mut().zip(apply(f2, &inner)).for_each(|(x, y)| *x += y);
+        }
+    }
+    for hi in h.iter_mut() {
+        hi.iter_mut().for_each(|v| *v = v.max(0.0));
+    }
+    h
 }
 
 /// The masked mean and max of the encoded rows `h` (all present; `present` their rows as

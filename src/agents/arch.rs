@@ -99,6 +99,16 @@ pub struct NetConfig {
     #[arg(long)]
     #[serde(default)]
     pub set_type_norm: bool,
+    /// Set network: pre-LayerNorm transformer blocks after the encoder (0: none; the issue's
+    /// recipe: 2), each masked multi-head self-attention (4 heads; `--hidden` a multiple of 4)
+    /// and a feed-forward pair, with residual connections.
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub set_transformer: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 fn two() -> usize {
@@ -114,6 +124,7 @@ impl Default for NetConfig {
             set_norm: false,
             set_robot_tokens: false,
             set_type_norm: false,
+            set_transformer: 0,
         }
     }
 }
@@ -133,7 +144,14 @@ impl NetConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)
+        crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)?;
+        crate::limits::SET_TRANSFORMER.check_usize(self.set_transformer)?;
+        if self.set_transformer > 0 && self.set_pooling == Pooling::Attention {
+            return Err(
+                "--set-transformer replaces --set-pooling attention's block; pool with mean-max or query".into()
+            );
+        }
+        Ok(())
     }
 
     /// How the run's title names the network (empty: the paper's MLP).
@@ -151,6 +169,10 @@ impl NetConfig {
         };
         let kind = if self.set_robot_tokens { format!("{kind}, robot tokens") } else { kind };
         let kind = if self.set_type_norm { format!("{kind}, statistics per row type") } else { kind };
+        let kind = match self.set_transformer {
+            0 => kind,
+            n => format!("{kind}, {n} transformer block{}", if n == 1 { "" } else { "s" }),
+        };
         if self.set_norm {
             format!("{kind}, layer-normalised")
         } else {
@@ -204,6 +226,7 @@ impl Arch {
                 layout.norm = net.set_norm;
                 layout.robot_tokens = net.set_robot_tokens;
                 layout.fixtures = if net.set_type_norm { obs.mode.fixtures().len() } else { 0 };
+                layout.transformer = net.set_transformer;
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

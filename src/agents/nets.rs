@@ -71,6 +71,7 @@ impl Net {
         if layout.attention {
             shapes.extend(std::iter::repeat((hidden, hidden)).take(super::mlp::ATTENTION_LAYERS));
         }
+        shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.transformer * super::mlp::TRANSFORMER_LAYERS));
         if layout.query {
             // The score (one output per row) and the value projection.
             shapes.extend([(hidden, 1), (hidden, hidden)]);
@@ -179,6 +180,10 @@ impl Net {
         if s.attention {
             h = self.attend(&h, &mask, s.encoder_layers);
         }
+        if s.transformer > 0 {
+            let first = s.pool_start() - s.transformer * super::mlp::TRANSFORMER_LAYERS;
+            h = self.transform(&h, &mask, first, s.transformer);
+        }
         let mut pooled = if s.query {
             self.query_pool(&h, &mask, s.pool_start())
         } else {
@@ -270,6 +275,35 @@ impl Net {
         let z = scores.softmax(-1, tch::Kind::Float).matmul(&v);
         let o = first + 3;
         (h + self.affine(&z, o, true)).relu()
+    }
+
+    /// `blocks` pre-LayerNorm transformer blocks of layers `first..` over encoded rows `h`
+    /// `[n, m, d]` whose keys the mask `[n, m, 1]` leaves out where 0, then ReLU (see
+    /// [`SetLayout::transformer`]); absent rows come out as junk, masked later.
+    fn transform(&self, h: &Tensor, mask: &Tensor, first: usize, blocks: usize) -> Tensor {
+        let (n, m, d) = (h.size()[0], h.size()[1], h.size()[2]);
+        let heads = super::mlp::TRANSFORMER_HEADS as i64;
+        let dh = d / heads;
+        let ln = |t: &Tensor| t.layer_norm([d].as_slice(), None::<Tensor>, None::<Tensor>, NORM_EPS.into(), false);
+        // [n, 1, 1, m]: absent keys get −1e9 in every head and query.
+        let absent = mask.transpose(1, 2).eq(0.0).unsqueeze(1);
+        let mut h = h.shallow_clone();
+        for b in 0..blocks {
+            let l = first + b * super::mlp::TRANSFORMER_LAYERS;
+            let a = ln(&h);
+            let split = |t: Tensor| t.reshape([n, m, heads, dh].as_slice()).transpose(1, 2);
+            let (q, k, v) = (
+                split(self.affine(&a, l, true)),
+                split(self.affine(&a, l + 1, true)),
+                split(self.affine(&a, l + 2, true)),
+            );
+            let scores = (q.matmul(&k.transpose(2, 3)) / (dh as f64).sqrt()).masked_fill(&absent, -1e9);
+            let z = scores.softmax(-1, Kind::Float).matmul(&v).transpose(1, 2).reshape([n, m, d].as_slice());
+            h = &h + self.affine(&z, l + 3, true);
+            let inner = self.affine(&ln(&h), l + 4, true).relu();
+            h = &h + self.affine(&inner, l + 5, true);
+        }
+        h.relu()
     }
 
     /// The layers from `first` on, applied to `h`: ReLU between them, none
@@ -525,25 +559,28 @@ mod tests {
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let cases = [
-            (0, 4, true, false, false, false, false),
-            (4, 1, false, false, false, false, false),
-            (0, 4, true, true, false, false, false),
-            (4, 1, false, true, false, false, false),
-            (0, 4, true, false, true, false, false),
-            (4, 1, false, true, true, false, false),
-            (0, 4, true, false, false, true, false),
-            (4, 1, false, false, false, true, false),
-            (4, 1, false, true, true, true, false),
-            (0, 4, true, false, false, false, true),
-            (4, 1, false, false, true, false, true),
-            (4, 1, false, true, false, true, true),
+            (0, 4, true, false, false, false, false, 0),
+            (4, 1, false, false, false, false, false, 0),
+            (0, 4, true, true, false, false, false, 0),
+            (4, 1, false, true, false, false, false, 0),
+            (0, 4, true, false, true, false, false, 0),
+            (4, 1, false, true, true, false, false, 0),
+            (0, 4, true, false, false, true, false, 0),
+            (4, 1, false, false, false, true, false, 0),
+            (4, 1, false, true, true, true, false, 0),
+            (0, 4, true, false, false, false, true, 0),
+            (4, 1, false, false, true, false, true, 0),
+            (4, 1, false, true, false, true, true, 0),
+            (0, 4, true, false, false, false, false, 2),
+            (4, 1, false, false, true, true, true, 2),
+            (0, 4, true, false, true, false, true, 1),
         ];
-        for (extra, out, tanh, attention, norm, robot_tokens, query) in cases {
+        for (extra, out, tanh, attention, norm, robot_tokens, query, transformer) in cases {
             // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
             // with mean-max pooling or a self-attention block first, the pooled features
             // layer-normalised or not, the encoder reading rows or robot tokens, pooled by the mean
-            // and max or by a learned query.
-            let layout = SetLayout { attention, norm, robot_tokens, query, ..SET };
+            // and max or by a learned query, with pre-LayerNorm transformer blocks or none.
+            let layout = SetLayout { attention, norm, robot_tokens, query, transformer, ..SET };
             let net = Net::new_set(layout, extra, (16, 2, 2), out, tanh, &mut rng);
             let tokens = if robot_tokens { SET.robot + SET.object + extra } else { SET.object };
             assert_eq!(net.to_plain().layers[0].n_in, tokens);

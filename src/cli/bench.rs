@@ -62,6 +62,9 @@ pub(super) struct BenchArgs {
     /// With --train --net entity: statistics per row type (as `train --set-type-norm`).
     #[arg(long, requires = "train")]
     set_type_norm: bool,
+    /// With --train --net set: pre-LayerNorm transformer blocks (as `train --set-transformer`).
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
+    set_transformer: usize,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]
     flat_critic: bool,
@@ -126,6 +129,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
             set_norm: a.set_norm,
             set_robot_tokens: a.set_robot_tokens,
             set_type_norm: a.set_type_norm,
+            set_transformer: a.set_transformer,
             ..Default::default()
         },
         flat_critic: a.flat_critic,

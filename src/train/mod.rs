@@ -402,6 +402,10 @@ impl TrainConfig {
         .filter(|(on, _)| *on)
         .map(|(_, s)| *s)
         .collect::<String>();
+        let norm = match self.net.set_transformer {
+            0 => norm,
+            n => format!("-transformer{n}{norm}"),
+        };
         let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self

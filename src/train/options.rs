@@ -106,6 +106,7 @@ const RULES: &[Rule] = &[
     Rule { flag: "--set-pooling", given: |o, d| o.net.set_pooling != d.net.set_pooling, used: set, by: SET },
     Rule { flag: "--set-norm", given: |o, _| o.net.set_norm, used: set, by: SET },
     Rule { flag: "--set-robot-tokens", given: |o, _| o.net.set_robot_tokens, used: set, by: SET },
+    Rule { flag: "--set-transformer", given: |o, _| o.net.set_transformer > 0, used: set, by: SET },
     Rule {
         flag: "--set-type-norm",
         given: |o, _| o.net.set_type_norm,

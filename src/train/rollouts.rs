@@ -144,7 +144,9 @@ impl Episode {
     ) -> Vec<Episode> {
         let Some(c) = &self.contacts else { return Vec::new() };
         let mut out = Vec::new();
-        for colours in hindsight::alternatives(&c.colours, &c.steps, k, strategy) {
+        // The gripper's and table's colours are relabelled where the observation shows them.
+        let fixtures = spec.mode == crate::env::ObsMode::Entities;
+        for colours in hindsight::alternatives(&c.colours, &c.steps, k, strategy, fixtures) {
             let Ok(replayed) = hindsight::replay(&colours, &c.steps, max_steps) else { continue };
             let n = replayed.len();
             let obs = self.obs[..=n]
@@ -481,6 +483,49 @@ mod tests {
             Episode { contacts: None, ..ep }.relabelled(&spec, 4, hindsight::Strategy::BlueTouched, 50).is_empty(),
             "nothing recorded, nothing relabelled"
         );
+    }
+
+    #[test]
+    fn an_entities_episode_also_relabels_the_gripper_and_recolours_its_row() {
+        use crate::env::{Fixture, ObsMode, COLOUR_FEATURE};
+        use Colour::{Blue, Green, Grey, Red};
+        let colours = vec![Grey, Grey, Blue, Green, Grey, Red];
+        let touch = |pairs: &[(usize, usize)]| vec![Touching::from_pairs(6, pairs)];
+        // Step 0: nothing; step 1: gripper–blue; step 2: blue–grey; step 3: blue–red.
+        let steps = vec![touch(&[]), touch(&[(0, 2)]), touch(&[(2, 4)]), touch(&[(2, 5)])];
+        let episode = |spec: &ObsSpec| {
+            let row = |k: usize| spec.robot_dim() + k * spec.object_dim() + COLOUR_FEATURE;
+            let mut o = vec![0.5; spec.dim()];
+            for (k, c) in colours[2..].iter().enumerate() {
+                o[row(k)..row(k) + 4].copy_from_slice(&c.one_hot());
+            }
+            for (f, c) in [(Fixture::Gripper, colours[0]), (Fixture::Table, colours[1])] {
+                if let Some(k) = spec.fixture_row(f) {
+                    o[row(k)..row(k) + 4].copy_from_slice(&c.one_hot());
+                }
+            }
+            Episode {
+                obs: vec![o; 5],
+                act: vec![vec![0.0; 4]; 4],
+                rew: vec![-1.0, -1.0, -1.0, -47.0],
+                terminated: true,
+                success: false,
+                expert_steps: 0,
+                forward_seconds: 0.0,
+                contacts: Some(Contacts { colours: colours.clone(), steps: steps.clone() }),
+            }
+        };
+        let objects = ObsSpec::new(ObsMode::Objects, 4);
+        assert_eq!(episode(&objects).relabelled(&objects, 4, hindsight::Strategy::BlueTouched, 50).len(), 2);
+        let entities = ObsSpec::new(ObsMode::Entities, 4);
+        let others = episode(&entities).relabelled(&entities, 4, hindsight::Strategy::BlueTouched, 50);
+        // The gripper as the goal first (blue touched it at step 1), then the grey and red blocks.
+        assert_eq!(others.len(), 3);
+        assert_eq!((others[0].rew.clone(), others[0].success), (vec![-1.0, 0.0], true));
+        let gripper = entities.fixture_row(Fixture::Gripper).unwrap();
+        let at = entities.robot_dim() + gripper * entities.object_dim() + COLOUR_FEATURE;
+        assert!(others[0].obs.iter().all(|o| o[at..at + 4] == Green.one_hot()), "the gripper's row reads green");
+        assert!(others[1].obs.iter().all(|o| o[at..at + 4] == Grey.one_hot()), "only where the gripper is relabelled");
     }
 
     #[test]

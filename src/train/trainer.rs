@@ -81,6 +81,14 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
     }
     config.net.validate().map_err(anyhow::Error::msg)?;
+    if config.net.set_transformer > 0 && config.shared.hidden % crate::agents::mlp::TRANSFORMER_HEADS != 0 {
+        bail!(
+            "--set-transformer splits --hidden {} into {} heads; give a multiple of {}",
+            config.shared.hidden,
+            crate::agents::mlp::TRANSFORMER_HEADS,
+            crate::agents::mlp::TRANSFORMER_HEADS
+        );
+    }
     super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {

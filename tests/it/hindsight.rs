@@ -85,7 +85,7 @@ fn blue_pushed_into_grey_succeeds_once_grey_is_green() {
     let (mut episodes, mut relabelled_successes) = (0, 0);
     for seed in 0..20 {
         let (colours, steps, reported) = episode(&mut env, &mut policy, seed);
-        let alt = alternatives(&colours, &steps, 2, Strategy::BlueTouched);
+        let alt = alternatives(&colours, &steps, 2, Strategy::BlueTouched, false);
         if !alt.contains(&believed) {
             continue; // blue never touched grey in this episode
         }
