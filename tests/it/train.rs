@@ -1048,6 +1048,16 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     assert!(choose > touch);
     let spec = blockpuzzle::env::ObsSpec::new(blockpuzzle::env::ObsMode::Entities, choose);
     assert_eq!(state.obs_dim, spec.dim());
+    // Played where it is told: any task's env, not a task of its own.
+    let eval = |extra: &[&str]| {
+        let policy = straight.path().join("policy.json");
+        let args = [&["eval", "--checkpoint", policy.to_str().unwrap(), "--episodes", "1"][..], extra].concat();
+        std::process::Command::new(crate::common::CLI).args(args).current_dir(straight.path()).output().unwrap()
+    };
+    let alone = eval(&[]);
+    let e = String::from_utf8_lossy(&alone.stderr);
+    assert!(!alone.status.success() && e.contains("trained on several tasks") && e.contains("--env"), "{e}");
+    assert!(eval(&["--env", "BlocksTouch-v0"]).status.success());
     // The exploration episodes play both tasks: their lengths differ from one task's alone.
     let alone = TrainConfig { env: "BlocksTouch-v0".into(), ..multi(3) };
     let one = train(&alone, tempfile::tempdir().unwrap().path(), false, &mut quiet).unwrap();
