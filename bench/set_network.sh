@@ -5,6 +5,7 @@
 # machine's load touches every network alike. Prints one JSON line per measurement (bench --json,
 # with the row's label) and a table of the medians and their ratios to the MLP's.
 #   bash bench/set_network.sh [ROUNDS] [UPDATES]
+# ONLY=REGEX keeps the networks whose label matches it (and the MLP, the baseline).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROUNDS="${1:-2}"
@@ -27,12 +28,16 @@ VARIANTS=(
     "entity --set-pooling query|--net entity --set-pooling query"
     "entity, DAgger (actor alone)|--net entity --algo dagger"
     "entity --set-robot-tokens, DAgger (actor alone)|--net entity --set-robot-tokens --algo dagger"
+    "entity --set-transformer 2 --set-pooling query|--net entity --set-transformer 2 --set-pooling query"
+    "entity --set-transformer 2 --set-pooling query, DAgger (actor alone)|--net entity --set-transformer 2 --set-pooling query --algo dagger"
 )
+ONLY="${ONLY:-}"
 OUT="$(mktemp)"
 for _ in $(seq "$ROUNDS"); do
     for precision in "${PRECISIONS[@]}"; do
         for variant in "${VARIANTS[@]}"; do
             label="${variant%%|*}"
+            if [ -n "$ONLY" ] && [ "$label" != mlp ] && ! [[ "$label" =~ $ONLY ]]; then continue; fi
             # shellcheck disable=SC2086
             "$BP" bench --train --json --env BlocksChoose-v0 ${variant#*|} --precision "$precision" \
                 --updates "$UPDATES" --steps 500 --torch-threads 1 |

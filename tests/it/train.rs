@@ -991,6 +991,18 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         &["--set-type-norm is only used with --net entity"],
     );
     refused(TrainConfig { hindsight_colours: 2, ..imitate("dagger", 1) }, &["--hindsight-colours", "--algo dagger"]);
+    let blocks = |n, pooling| NetConfig { set_transformer: n, set_pooling: pooling, ..imitate("dagger", 1).net };
+    refused(
+        TrainConfig { net: NetConfig { set_transformer: 2, ..NetConfig::default() }, ..tiny("BlocksTouch-v0", 1) },
+        &["--set-transformer is only used with --net set"],
+    );
+    refused(
+        TrainConfig { net: blocks(2, Pooling::Attention), ..imitate("dagger", 1) },
+        &["--set-transformer replaces"],
+    );
+    let mut odd = TrainConfig { net: blocks(2, Pooling::Query), ..imitate("dagger", 1) };
+    odd.shared.hidden = 30;
+    refused(odd, &["--hidden 30", "4 heads"]);
     let mut bad = imitate("dagger", 1);
     bad.algos.dagger.beta0 = 1.5;
     refused(bad, &["--dagger-beta0", "[0, 1]"]);
