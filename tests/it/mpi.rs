@@ -104,13 +104,25 @@ fn sac_over_two_ranks_learns_exactly_what_one_process_of_two_workers_learns() {
 #[test]
 fn any_split_of_the_same_shards_into_ranks_learns_the_same_weights() {
     let dir = tempfile::tempdir().unwrap();
-    for (np, workers) in [(2, 2), (3, 1)] {
+    // A multi-task run too: the task drawn per episode, the tasks tested in turn over the shards and
+    // each task's test tally (summed over ranks) moving its own level, whatever the split.
+    let two_tasks = |mut a: Vec<String>| {
+        a.iter_mut().filter(|x| *x == "BlocksTouch-v0").for_each(|x| *x = "BlocksTouch-v0,BlocksChoose-v0".into());
+        a.extend(["--success-threshold", "0"].map(String::from));
+        a
+    };
+    for (np, workers, epochs, multi) in [(2, 2, 2, true), (3, 1, 1, false)] {
         let shards = np * workers;
         let threads = dir.path().join(format!("threads-{shards}"));
         let ranks = dir.path().join(format!("ranks-{np}x{workers}"));
-        ok(Command::new(BP).args(args(&threads, shards, 1)).output().unwrap());
-        ok(mpirun(np).args(args(&ranks, workers, 1)).output().unwrap());
+        let tasks = |a: Vec<String>| if multi { two_tasks(a) } else { a };
+        ok(Command::new(BP).args(tasks(args(&threads, shards, epochs))).output().unwrap());
+        ok(mpirun(np).args(tasks(args(&ranks, workers, epochs))).output().unwrap());
         assert_same_run(&threads, &ranks, &format!("{np} ranks × {workers} workers"));
+        if multi {
+            let levels: Vec<usize> = progress(&ranks).iter().map(|row| row[1].parse().unwrap()).collect();
+            assert_eq!(levels, [0, 2], "each task moved up after the first epoch");
+        }
     }
 }
 
