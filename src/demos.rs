@@ -204,13 +204,20 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                 let mut p = DemoTensors::default();
                 for o in &obs {
                     p.robot.extend_from_slice(spec.robot(o));
+                    // The blocks' rows, the padding, then the gripper's, table's and floor's: the
+                    // layout an environment with more slots shows (`EnvConfig::slots`), which
+                    // multi-task training and its policies read.
                     let present = spec.mask(o).expect("the entities observation has a mask");
-                    for row in spec.all_rows(o) {
+                    let (blocks, padding) = (spec.max_objects, rows - spec.rows());
+                    for (k, row) in spec.all_rows(o).enumerate() {
+                        if k == blocks {
+                            p.entities.resize(p.entities.len() + padding * f_dim, 0.0);
+                        }
                         p.entities.extend_from_slice(row);
                     }
-                    p.entities.resize(p.entities.len() + (rows - spec.rows()) * f_dim, 0.0);
-                    p.mask.extend_from_slice(present);
-                    p.mask.resize(p.mask.len() + rows - spec.rows(), 0.0);
+                    p.mask.extend_from_slice(&present[..blocks]);
+                    p.mask.resize(p.mask.len() + padding, 0.0);
+                    p.mask.extend_from_slice(&present[blocks..]);
                 }
                 for st in &rec.steps {
                     p.actions.extend_from_slice(&st.action);

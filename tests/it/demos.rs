@@ -3,6 +3,7 @@
 //! read back intact; files that are not demos are named.
 
 use blockpuzzle::demos::{self, Demos};
+use blockpuzzle::env::{BlockEnv, EnvConfig};
 use blockpuzzle::evaluate::{evaluate_suite, Baseline, Subject};
 use blockpuzzle::outcome::Outcome;
 use blockpuzzle::provenance::Harness;
@@ -54,11 +55,29 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     );
     let touch = blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().object_count();
     let first_obs_mask = &one.tensors.mask[..rows];
-    // BlocksTouch-v0: its blocks, the gripper and the table present, the floor (no rule object) and
-    // the padding not.
-    let present: Vec<f32> = (0..rows).map(|r| if r < touch + 2 { 1.0 } else { 0.0 }).collect();
+    // BlocksTouch-v0: its blocks, then the padding up to BlocksAvoid-v0's 5 blocks, then the gripper
+    // and the table present, the floor (no rule object) not: the layout of an environment with 5
+    // slots, which multi-task training reads.
+    let present: Vec<f32> = (0..rows).map(|r| if r < touch || r == 5 || r == 6 { 1.0 } else { 0.0 }).collect();
     assert_eq!(first_obs_mask, present.as_slice());
-    assert!(one.tensors.entities[(touch + 3) * f..rows * f].iter().all(|&x| x == 0.0), "padding rows are zero");
+    assert!(one.tensors.entities[touch * f..5 * f].iter().all(|&x| x == 0.0), "padding rows are zero");
+    assert!(one.tensors.entities[7 * f..8 * f].iter().all(|&x| x == 0.0), "the floor's row is zero");
+    let env = BlockEnv::new(EnvConfig {
+        obs_mode: blockpuzzle::env::ObsMode::Entities,
+        slots: 5,
+        ..EnvConfig::new(blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap())
+    })
+    .unwrap();
+    let spec = env.obs_spec();
+    let (mut env, seed) = (env, one.episodes[0].seed);
+    let top = env.max_level();
+    env.set_level(top).unwrap();
+    let (obs, _) = env.reset(Some(seed)).unwrap();
+    assert_eq!(
+        &one.tensors.entities[..rows * f],
+        spec.all_rows(&obs).flatten().copied().collect::<Vec<_>>().as_slice()
+    );
+    assert_eq!(first_obs_mask, spec.mask(&obs).unwrap());
     // Each episode's last step ends it, and its outcome is what the suite evaluator counts.
     let mut start = 0;
     for e in &one.episodes {
