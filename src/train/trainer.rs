@@ -81,6 +81,12 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         bail!("--level-replay and --challenge-share must be in [0, 1]");
     }
     config.net.validate().map_err(anyhow::Error::msg)?;
+    if config.suite.is_none() && config.split != "train" {
+        bail!("--split {} is only used with --suite (the split of a suite to train on)", config.split);
+    }
+    if config.suite.is_none() && config.env.trim().is_empty() {
+        bail!("no task: pass --env ID (several comma-separated) or --suite S");
+    }
     if config.net.set_transformer > 0 && config.shared.hidden % crate::agents::mlp::TRANSFORMER_HEADS != 0 {
         bail!(
             "--set-transformer splits --hidden {} into {} heads; give a multiple of {}",

@@ -1108,6 +1108,13 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
         false,
         &["--split validation", "train, test"],
     );
+    refused(
+        TrainConfig { split: "test".into(), ..multi(1) },
+        &nowhere,
+        false,
+        &["--split test is only used with --suite"],
+    );
+    refused(TrainConfig { env: " ".into(), ..multi(1) }, &nowhere, false, &["no task", "--env ID"]);
     assert!(!nowhere.exists());
     let other = TrainConfig { env: "BlocksTouch-v0,BlocksStack-v0".into(), ..multi(4) };
     refused(other, straight.path(), true, &["differ from those recorded", "BlocksChoose-v0", "BlocksStack-v0"]);
