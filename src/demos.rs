@@ -28,7 +28,7 @@ use std::path::Path;
 
 use crate::env::vector::VectorEnv;
 use crate::env::{ObsMode, ObsSpec};
-use crate::evaluate::{make_env, EvalSpec};
+use crate::evaluate::{make_env_with_slots, EvalSpec};
 use crate::outcome::Outcome;
 use crate::policy::ScriptedPolicy;
 use crate::provenance::{Harness, PolicyId, Provenance};
@@ -132,11 +132,14 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
     if let Some(n) = episodes {
         crate::limits::EVAL_EPISODES.check_usize(n).map_err(anyhow::Error::msg)?;
     }
-    // The layout: every row's robot features are the same; entity rows are padded to the most.
-    let specs: Vec<ObsSpec> = s.rows.iter().map(|r| ObsSpec::new(ObsMode::Entities, r.task.object_count())).collect();
-    let rows = specs.iter().map(ObsSpec::rows).max().unwrap_or(0);
-    let (r_dim, f_dim) = (specs[0].robot_dim(), specs[0].object_dim());
-    let names = specs[0].names();
+    // The layout: every row's environment shows the split's most block slots (`EnvConfig::slots`):
+    // a task's blocks, absent rows, then the gripper's, table's and floor's rows, the layout
+    // multi-task training and its policies read.
+    let slots = s.rows.iter().map(|r| r.task.object_count()).max().unwrap_or(0);
+    let padded = ObsSpec::new(ObsMode::Entities, slots);
+    let rows = padded.rows();
+    let (r_dim, f_dim) = (padded.robot_dim(), padded.object_dim());
+    let names = padded.names();
     let feature = |n: &String| n.split_once('/').map_or(n.clone(), |(_, f)| f.to_owned());
     let layout = DemoLayout {
         robot: names[..r_dim].iter().map(feature).collect(),
@@ -173,22 +176,16 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
             threads,
         };
         let k = threads.clamp(1, n).min(crate::limits::THREADS.max as usize);
-        let envs = (0..k).map(|_| make_env(&spec, ObsMode::Entities)).collect::<Result<Vec<_>>>()?;
+        let envs = (0..k).map(|_| make_env_with_slots(&spec, ObsMode::Entities, slots)).collect::<Result<Vec<_>>>()?;
         let mut envs = VectorEnv::from_envs(envs, k)?;
-        let blocks = row.task.object_count();
-        if envs.envs()[0].obs_spec().rows() != specs[i].rows() {
-            bail!(
-                "{}: the environment shows {} entity rows, not {}",
-                row.task.id(),
-                envs.envs()[0].obs_spec().rows(),
-                specs[i].rows()
-            );
+        if envs.obs_spec() != padded {
+            bail!("{}: the environment shows {} entity rows, not {rows}", row.task.id(), envs.obs_spec().rows());
         }
         let by_thread: Vec<Result<Vec<(usize, (DemoEpisode, DemoTensors))>>> = envs.each(|t, env| {
             let mut out = Vec::new();
             for e in (t..n).step_by(k) {
                 let seed = row.seed + e as u64;
-                let mut solver = ScriptedPolicy::solver(blocks);
+                let mut solver = ScriptedPolicy::solver(slots);
                 let (rec, obs) = crate::rollout::run_episode_observed(env, &mut solver, seed)
                     .with_context(|| format!("{} episode seed {seed}", row.task.id()))?;
                 let spec = env.obs_spec();
@@ -204,20 +201,8 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                 let mut p = DemoTensors::default();
                 for o in &obs {
                     p.robot.extend_from_slice(spec.robot(o));
-                    // The blocks' rows, the padding, then the gripper's, table's and floor's: the
-                    // layout an environment with more slots shows (`EnvConfig::slots`), which
-                    // multi-task training and its policies read.
-                    let present = spec.mask(o).expect("the entities observation has a mask");
-                    let (blocks, padding) = (spec.max_objects, rows - spec.rows());
-                    for (k, row) in spec.all_rows(o).enumerate() {
-                        if k == blocks {
-                            p.entities.resize(p.entities.len() + padding * f_dim, 0.0);
-                        }
-                        p.entities.extend_from_slice(row);
-                    }
-                    p.mask.extend_from_slice(&present[..blocks]);
-                    p.mask.resize(p.mask.len() + padding, 0.0);
-                    p.mask.extend_from_slice(&present[blocks..]);
+                    spec.all_rows(o).for_each(|row| p.entities.extend_from_slice(row));
+                    p.mask.extend_from_slice(spec.mask(o).expect("the entities observation has a mask"));
                 }
                 for st in &rec.steps {
                     p.actions.extend_from_slice(&st.action);

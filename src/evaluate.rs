@@ -259,7 +259,12 @@ pub struct EvalSpec<'a> {
 
 /// The environment of `spec`, its observation presented as `obs_mode` (the policy's).
 pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode) -> Result<BlockEnv> {
-    let mut env = BlockEnv::new(EnvConfig { obs_mode, ..EnvConfig::new(spec.task.clone()) })?;
+    make_env_with_slots(spec, obs_mode, 0)
+}
+
+/// [`make_env`] with at least `slots` block slots in the observation ([`EnvConfig::slots`]).
+pub(crate) fn make_env_with_slots(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Result<BlockEnv> {
+    let mut env = BlockEnv::new(EnvConfig { obs_mode, slots, ..EnvConfig::new(spec.task.clone()) })?;
     if spec.challenge {
         env.set_challenge(true)?;
     }

@@ -30,6 +30,21 @@ impl Dense {
             out.push(dot(row, x) + b);
         }
     }
+
+    /// `W x + b` as a new vector.
+    fn apply(&self, x: &[f32]) -> Vec<f32> {
+        let mut y = Vec::new();
+        self.forward(x, &mut y);
+        y
+    }
+}
+
+/// The softmax of `scores` (shifted by their maximum).
+fn softmax(scores: &[f32]) -> Vec<f32> {
+    let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
+    let total: f32 = weights.iter().sum();
+    weights.iter().map(|w| w / total).collect()
 }
 
 /// Dot product with eight independent accumulators, which the compiler
@@ -107,7 +122,7 @@ pub const TRANSFORMER_HEADS: usize = 4;
 /// The layers of attention pooling with a learned query: the score and the value projections.
 pub const QUERY_LAYERS: usize = 2;
 
-fn is_zero(n: &usize) -> bool {
+pub(crate) fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
@@ -182,10 +197,15 @@ impl SetLayout {
         self.pool_start() + if self.query { QUERY_LAYERS } else { 0 }
     }
 
+    /// The index of the first transformer block's first layer: after the encoder and the attention block.
+    pub fn transformer_start(&self) -> usize {
+        self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 }
+    }
+
     /// The index of the query pooling's first layer: after the encoder, the attention block and
     /// the transformer blocks.
     pub fn pool_start(&self) -> usize {
-        self.encoder_layers + if self.attention { ATTENTION_LAYERS } else { 0 } + self.transformer * TRANSFORMER_LAYERS
+        self.transformer_start() + self.transformer * TRANSFORMER_LAYERS
     }
 
     /// The same network on observations with `slots` object slots (its
@@ -326,9 +346,8 @@ impl PlainNet {
     fn forward_set(&self, s: &SetLayout, x: &[f32]) -> Vec<f32> {
         let (front, head) = self.layers.split_at(s.head_start().min(self.layers.len()));
         let (front, pool) = front.split_at(s.pool_start().min(front.len()));
+        let (front, blocks) = front.split_at(s.transformer_start().min(front.len()));
         let (encoder, attention) = front.split_at(s.encoder_layers.min(front.len()));
-        let (attention, blocks) =
-            attention.split_at(if s.attention { ATTENTION_LAYERS.min(attention.len()) } else { 0 });
         let width = encoder.last().map_or(0, |l| l.b.len());
         let rows_end = s.robot + s.slots * s.object;
         // Every encoder layer ends in ReLU: pooled features are ≥ 0 (an empty set pools to 0).
@@ -361,57 +380,37 @@ impl PlainNet {
 /// One self-attention block over the encoded rows `h` (all present):
 /// `h'ᵢ = ReLU(hᵢ + O Σⱼ softmaxⱼ(qᵢ·kⱼ / √d) vⱼ)` with `q = Q h`, `k = K h`, `v = V h`.
 fn attend(h: &[Vec<f32>], (q, k, v, o): (&Dense, &Dense, &Dense, &Dense)) -> Vec<Vec<f32>> {
-    let project = |l: &Dense| -> Vec<Vec<f32>> {
-        h.iter()
-            .map(|x| {
-                let mut y = Vec::new();
-                l.forward(x, &mut y);
-                y
-            })
-            .collect()
-    };
+    let project = |l: &Dense| -> Vec<Vec<f32>> { h.iter().map(|x| l.apply(x)).collect() };
     let (qs, ks, vs) = (project(q), project(k), project(v));
     let scale = 1.0 / (q.b.len() as f32).sqrt();
     let mut out = Vec::with_capacity(h.len());
     for (hi, qi) in h.iter().zip(&qs) {
         let scores: Vec<f32> = ks.iter().map(|kj| dot(qi, kj) * scale).collect();
-        let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
-        let total: f32 = weights.iter().sum();
         let mut z = vec![0.0f32; vs.first().map_or(0, Vec::len)];
-        for (w, vj) in weights.iter().zip(&vs) {
+        for (p, vj) in softmax(&scores).iter().zip(&vs) {
             for (zi, x) in z.iter_mut().zip(vj) {
-                *zi += w / total * x;
+                *zi += p * x;
             }
         }
-        let mut y = Vec::new();
-        o.forward(&z, &mut y);
-        out.push(hi.iter().zip(&y).map(|(a, b)| (a + b).max(0.0)).collect());
+        out.push(hi.iter().zip(&o.apply(&z)).map(|(a, b)| (a + b).max(0.0)).collect());
     }
     out
+}
+
+/// `x` layer-normalised (see [`layer_norm`]) as a new vector.
+fn normalised(x: &[f32]) -> Vec<f32> {
+    let mut x = x.to_vec();
+    layer_norm(&mut x);
+    x
 }
 
 /// The transformer blocks `layers` ([`TRANSFORMER_LAYERS`] each, see [`SetLayout::transformer`])
 /// over the encoded rows `h` (all present), then ReLU.
 fn transform(mut h: Vec<Vec<f32>>, layers: &[Dense]) -> Vec<Vec<f32>> {
-    let apply = |l: &Dense, x: &[f32]| {
-        let mut y = Vec::new();
-        l.forward(x, &mut y);
-        y
-    };
-    let normed = |h: &[Vec<f32>]| -> Vec<Vec<f32>> {
-        h.iter()
-            .map(|x| {
-                let mut x = x.clone();
-                layer_norm(&mut x);
-                x
-            })
-            .collect()
-    };
     for block in layers.chunks(TRANSFORMER_LAYERS) {
         let [q, k, v, o, f1, f2] = block else { break };
-        let a = normed(&h);
-        let project = |l: &Dense| a.iter().map(|x| apply(l, x)).collect::<Vec<_>>();
+        let a: Vec<Vec<f32>> = h.iter().map(|x| normalised(x)).collect();
+        let project = |l: &Dense| a.iter().map(|x| l.apply(x)).collect::<Vec<_>>();
         let (qs, ks, vs) = (project(q), project(k), project(v));
         let d = q.b.len();
         let dh = d / TRANSFORMER_HEADS;
@@ -421,23 +420,18 @@ fn transform(mut h: Vec<Vec<f32>>, layers: &[Dense]) -> Vec<Vec<f32>> {
             for head in 0..TRANSFORMER_HEADS {
                 let part = head * dh..(head + 1) * dh;
                 let scores: Vec<f32> = ks.iter().map(|kj| dot(&qi[part.clone()], &kj[part.clone()]) * scale).collect();
-                let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
-                let total: f32 = weights.iter().sum();
-                for (w, vj) in weights.iter().zip(&vs) {
+                for (p, vj) in softmax(&scores).iter().zip(&vs) {
                     for (zi, x) in z[part.clone()].iter_mut().zip(&vj[part.clone()]) {
-                        *zi += w / total * x;
+                        *zi += p * x;
                     }
                 }
             }
-            hi.iter_mut().zip(apply(o, &z)).for_each(|(x, y)| *x += y);
+            hi.iter_mut().zip(o.apply(&z)).for_each(|(x, y)| *x += y);
         }
         for hi in h.iter_mut() {
-            let mut b = hi.clone();
-            layer_norm(&mut b);
-            let mut inner = apply(f1, &b);
+            let mut inner = f1.apply(&normalised(hi));
             inner.iter_mut().for_each(|v| *v = v.max(0.0));
-            hi.iter_mut().zip(apply(f2, &inner)).for_each(|(x, y)| *x += y);
+            hi.iter_mut().zip(f2.apply(&inner)).for_each(|(x, y)| *x += y);
         }
     }
     for hi in h.iter_mut() {
@@ -472,21 +466,10 @@ fn query_pool(h: &[Vec<f32>], score: &Dense, value: &Dense, width: usize) -> Vec
         return out;
     }
     let scale = 1.0 / (width.max(1) as f32).sqrt();
-    let mut y = Vec::new();
-    let scores: Vec<f32> = h
-        .iter()
-        .map(|x| {
-            score.forward(x, &mut y);
-            y[0] * scale
-        })
-        .collect();
-    let top = scores.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-    let weights: Vec<f32> = scores.iter().map(|s| (s - top).exp()).collect();
-    let total: f32 = weights.iter().sum();
-    for (w, x) in weights.iter().zip(h) {
-        value.forward(x, &mut y);
-        for (o, v) in out.iter_mut().zip(&y) {
-            *o += w / total * v;
+    let scores: Vec<f32> = h.iter().map(|x| score.apply(x)[0] * scale).collect();
+    for (p, x) in softmax(&scores).iter().zip(h) {
+        for (o, v) in out.iter_mut().zip(&value.apply(x)) {
+            *o += p * v;
         }
     }
     out

@@ -103,12 +103,8 @@ pub struct NetConfig {
     /// recipe: 2), each masked multi-head self-attention (4 heads; `--hidden` a multiple of 4)
     /// and a feed-forward pair, with residual connections.
     #[arg(long, default_value_t = 0, value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(default, skip_serializing_if = "crate::actor::mlp::is_zero")]
     pub set_transformer: usize,
-}
-
-fn is_zero(n: &usize) -> bool {
-    *n == 0
 }
 
 fn two() -> usize {

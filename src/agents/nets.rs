@@ -181,8 +181,7 @@ impl Net {
             h = self.attend(&h, &mask, s.encoder_layers);
         }
         if s.transformer > 0 {
-            let first = s.pool_start() - s.transformer * super::mlp::TRANSFORMER_LAYERS;
-            h = self.transform(&h, &mask, first, s.transformer);
+            h = self.transform(&h, &mask, s.transformer_start(), s.transformer);
         }
         let mut pooled = if s.query {
             self.query_pool(&h, &mask, s.pool_start())

@@ -284,12 +284,15 @@ pub(super) fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) 
     Ok(match (env, &saved.task) {
         (Some(env), _) => registry::task(env)?,
         (None, Some(source)) => registry::recorded(source)?,
-        // A multi-task run's policy names its tasks (`SUITE-SPLIT`, or ids joined by `+`), no one task.
-        (None, None) if !registry::is_path(&saved.env_id) && registry::task(&saved.env_id).is_err() => bail!(
-            "the policy was trained on several tasks ({}) and holds no one task: pass --env ID (or evaluate a \
-             suite with eval --suite S)",
-            saved.env_id
-        ),
-        (None, None) => registry::task(&saved.env_id)?,
+        (None, None) => match registry::task(&saved.env_id) {
+            Ok(task) => task,
+            // A multi-task run's policy names its tasks (`SUITE-SPLIT`, or ids joined by `+`), no one task.
+            Err(_) if !registry::is_path(&saved.env_id) => bail!(
+                "the policy was trained on several tasks ({}) and holds no one task: pass --env ID (or evaluate a \
+                 suite with eval --suite S)",
+                saved.env_id
+            ),
+            Err(e) => return Err(e.into()),
+        },
     })
 }

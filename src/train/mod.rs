@@ -324,10 +324,7 @@ impl TrainConfig {
         }
         match &self.task {
             Some(t) => t.id.clone(),
-            None if registry::is_path(&self.env) => {
-                Path::new(&self.env).file_stem().map_or(self.env.clone(), |s| s.to_string_lossy().into_owned())
-            }
-            None => self.env.clone(),
+            None => tasks::env_name(&self.env),
         }
     }
 

@@ -95,18 +95,16 @@ pub(crate) fn label(config: &TrainConfig) -> String {
             format!("{stem}-{}", config.split)
         }
         None if !config.tasks.is_empty() => config.tasks.iter().map(|t| t.id.as_str()).collect::<Vec<_>>().join("+"),
-        None => env_list(&config.env)
-            .iter()
-            .map(|e| {
-                let p = std::path::Path::new(e);
-                if registry::is_path(e) {
-                    p.file_stem().map_or((*e).to_owned(), |x| x.to_string_lossy().into_owned())
-                } else {
-                    (*e).to_owned()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join("+"),
+        None => env_list(&config.env).into_iter().map(env_name).collect::<Vec<_>>().join("+"),
+    }
+}
+
+/// How a run names an `--env` value before its task is resolved: the id, or a task file's stem.
+pub(crate) fn env_name(env: &str) -> String {
+    if registry::is_path(env) {
+        std::path::Path::new(env).file_stem().map_or(env.to_owned(), |x| x.to_string_lossy().into_owned())
+    } else {
+        env.to_owned()
     }
 }
 
