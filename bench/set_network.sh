@@ -30,6 +30,11 @@ VARIANTS=(
     "entity --set-robot-tokens, DAgger (actor alone)|--net entity --set-robot-tokens --algo dagger"
     "entity --set-transformer 2 --set-pooling query|--net entity --set-transformer 2 --set-pooling query"
     "entity --set-transformer 2 --set-pooling query, DAgger (actor alone)|--net entity --set-transformer 2 --set-pooling query --algo dagger"
+    "entity --set-width 64|--net entity --set-width 64"
+    "entity --set-width 64, DAgger (actor alone)|--net entity --set-width 64 --algo dagger"
+    "entity --set-transformer 2 --set-pooling query --set-width 64|--net entity --set-transformer 2 --set-pooling query --set-width 64"
+    "entity --set-transformer 2 --set-pooling query --set-width 64, DAgger (actor alone)|--net entity --set-transformer 2 --set-pooling query --set-width 64 --algo dagger"
+    "entity --set-transformer 2 --set-pooling query --set-width 128|--net entity --set-transformer 2 --set-pooling query --set-width 128"
 )
 ONLY="${ONLY:-}"
 OUT="$(mktemp)"

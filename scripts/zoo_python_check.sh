@@ -19,7 +19,7 @@ fi
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, query, mean-max with
 # --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too;
 # and with --set-robot-tokens and --set-type-norm, trained by DAgger; and with two transformer blocks and
-# query pooling, by DAgger), exported to a scratch zoo, must
+# query pooling over rows narrower than the head (--set-width), by DAgger), exported to a scratch zoo, must
 # act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
@@ -38,7 +38,7 @@ for variant in mean-max attention colour query mean-max-norm entity entity-token
     elif [ "$variant" = entity-tokens-dagger ]; then
         flags=(--net entity --set-robot-tokens --set-type-norm --algo dagger)
     elif [ "$variant" = entity-transformer ]; then
-        flags=(--net entity --set-transformer 2 --set-pooling query --algo dagger)
+        flags=(--net entity --set-transformer 2 --set-pooling query --set-width 16 --algo dagger)
     else
         flags=(--net set --set-pooling "${variant%-norm}")
         if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi

@@ -151,6 +151,8 @@ pub const HINDSIGHT_COLOURS: Bound =
 pub const SET_ENCODER_LAYERS: Bound = bound("--set-encoder-layers", 1, 32, "");
 /// Pre-LayerNorm transformer blocks of a set network's encoder.
 pub const SET_TRANSFORMER: Bound = bound("--set-transformer", 0, 8, "");
+/// The width of a set network's per-row layers (0: `--hidden`).
+pub const SET_WIDTH: Bound = bound("--set-width", 0, 8_192, "a layer of 8,192 units already holds 67 M weights");
 /// Steps of an n-step return.
 pub const N_STEP: Bound = bound("--n-step", 1, 50, "an episode's length in the paper's tasks");
 /// TD3's critic updates per actor update.

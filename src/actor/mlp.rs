@@ -110,6 +110,13 @@ pub struct SetLayout {
     /// the encoder's does, so every pooling reads features ≥ 0. LN has no gain or bias.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub transformer: usize,
+    /// The width of the rows' features: the encoder's outputs, the attention or transformer
+    /// blocks' and the query pooling's (0: the network's hidden width, as the head's). A narrower
+    /// row width makes the per-row layers, which run once per row, cheaper; the head's first layer
+    /// projects the pooled features out to the hidden width. The weights say it too: the layout
+    /// records it so that a network can be built from the layout alone.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub width: usize,
 }
 
 /// The layers of one transformer block: query, key, value and output projections, then the
@@ -179,6 +186,16 @@ impl SetLayout {
             fixtures: 0,
             query: false,
             transformer: 0,
+            width: 0,
+        }
+    }
+
+    /// The rows' feature width for a network of `hidden` units (see [`SetLayout::width`]).
+    pub fn row_width(&self, hidden: usize) -> usize {
+        if self.width == 0 {
+            hidden
+        } else {
+            self.width
         }
     }
 
@@ -283,6 +300,9 @@ impl PlainNet {
                 ));
             }
             let width = self.layers.get(s.encoder_layers - 1).map_or(0, |l| l.b.len());
+            if s.width != 0 && width != s.width {
+                return Err(format!("set network: the layout's rows are {} wide, the encoder's {width}", s.width));
+            }
             if s.transformer > 0 && width % TRANSFORMER_HEADS != 0 {
                 return Err(format!(
                     "set network: transformer blocks of {width} features do not split into {TRANSFORMER_HEADS} heads"

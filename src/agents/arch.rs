@@ -105,6 +105,12 @@ pub struct NetConfig {
     #[arg(long, default_value_t = 0, value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
     #[serde(default, skip_serializing_if = "crate::actor::mlp::is_zero")]
     pub set_transformer: usize,
+    /// Set network: the width of the per-row layers (encoder, attention or transformer blocks,
+    /// query pooling; 0: `--hidden`). They run once per row, the head once per sample, so a
+    /// narrower row width (the published entity transformers use 64–128) cuts most of the cost.
+    #[arg(long, default_value_t = 0, value_parser = crate::limits::SET_WIDTH.parser::<usize>())]
+    #[serde(default, skip_serializing_if = "crate::actor::mlp::is_zero")]
+    pub set_width: usize,
 }
 
 fn two() -> usize {
@@ -121,6 +127,7 @@ impl Default for NetConfig {
             set_robot_tokens: false,
             set_type_norm: false,
             set_transformer: 0,
+            set_width: 0,
         }
     }
 }
@@ -142,6 +149,7 @@ impl NetConfig {
     pub fn validate(&self) -> Result<(), String> {
         crate::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)?;
         crate::limits::SET_TRANSFORMER.check_usize(self.set_transformer)?;
+        crate::limits::SET_WIDTH.check_usize(self.set_width)?;
         if self.set_transformer > 0 && self.set_pooling == Pooling::Attention {
             return Err(
                 "--set-transformer replaces --set-pooling attention's block; pool with mean-max or query".into()
@@ -168,6 +176,10 @@ impl NetConfig {
         let kind = match self.set_transformer {
             0 => kind,
             n => format!("{kind}, {n} transformer block{}", if n == 1 { "" } else { "s" }),
+        };
+        let kind = match self.set_width {
+            0 => kind,
+            w => format!("{kind}, rows {w} wide"),
         };
         if self.set_norm {
             format!("{kind}, layer-normalised")
@@ -223,6 +235,7 @@ impl Arch {
                 layout.robot_tokens = net.set_robot_tokens;
                 layout.fixtures = if net.set_type_norm { obs.mode.fixtures().len() } else { 0 };
                 layout.transformer = net.set_transformer;
+                layout.width = net.set_width;
                 Ok(Self { obs_dim: obs.dim(), set: Some(layout) })
             }
         }

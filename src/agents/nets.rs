@@ -53,7 +53,8 @@ impl Net {
 
     /// A set network over observations of `layout` followed by `extra`
     /// inputs (a critic's action): an encoder of `encoder_layers` layers of
-    /// `hidden` units applied to each object row, masked mean and max
+    /// the layout's row width ([`SetLayout::row_width`]: `hidden` unless
+    /// set) applied to each object row, masked mean and max
     /// pooling, then a head of `head_layers` hidden layers of `hidden` units
     /// and `out` outputs over the robot features, the pooled features and
     /// the extra inputs. Initialised as [`Net::new`].
@@ -66,17 +67,19 @@ impl Net {
         rng: &mut impl Rng,
     ) -> Self {
         let layout = SetLayout { encoder_layers: encoder_layers.max(1), ..layout };
-        let mut shapes = vec![(layout.token_width(extra), hidden)];
-        shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.encoder_layers - 1));
+        // The per-row layers are `width` wide; the head `hidden`.
+        let width = layout.row_width(hidden);
+        let mut shapes = vec![(layout.token_width(extra), width)];
+        shapes.extend(std::iter::repeat((width, width)).take(layout.encoder_layers - 1));
         if layout.attention {
-            shapes.extend(std::iter::repeat((hidden, hidden)).take(super::mlp::ATTENTION_LAYERS));
+            shapes.extend(std::iter::repeat((width, width)).take(super::mlp::ATTENTION_LAYERS));
         }
-        shapes.extend(std::iter::repeat((hidden, hidden)).take(layout.transformer * super::mlp::TRANSFORMER_LAYERS));
+        shapes.extend(std::iter::repeat((width, width)).take(layout.transformer * super::mlp::TRANSFORMER_LAYERS));
         if layout.query {
             // The score (one output per row) and the value projection.
-            shapes.extend([(hidden, 1), (hidden, hidden)]);
+            shapes.extend([(width, 1), (width, width)]);
         }
-        let head = mlp_sizes(layout.head_input(hidden, extra), hidden, head_layers, out);
+        let head = mlp_sizes(layout.head_input(width, extra), hidden, head_layers, out);
         shapes.extend(head.windows(2).map(|w| (w[0], w[1])));
         let params = init(&shapes, rng);
         Self { params, input: layout.obs_dim() + extra, shapes, tanh_out, bf16: false, set: Some(layout) }
@@ -558,31 +561,47 @@ mod tests {
     fn a_set_network_ignores_row_order_and_absent_rows_and_its_plain_copy_agrees() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let cases = [
-            (0, 4, true, false, false, false, false, 0),
-            (4, 1, false, false, false, false, false, 0),
-            (0, 4, true, true, false, false, false, 0),
-            (4, 1, false, true, false, false, false, 0),
-            (0, 4, true, false, true, false, false, 0),
-            (4, 1, false, true, true, false, false, 0),
-            (0, 4, true, false, false, true, false, 0),
-            (4, 1, false, false, false, true, false, 0),
-            (4, 1, false, true, true, true, false, 0),
-            (0, 4, true, false, false, false, true, 0),
-            (4, 1, false, false, true, false, true, 0),
-            (4, 1, false, true, false, true, true, 0),
-            (0, 4, true, false, false, false, false, 2),
-            (4, 1, false, false, true, true, true, 2),
-            (0, 4, true, false, true, false, true, 1),
+            (0, 4, true, false, false, false, false, 0, 0),
+            (4, 1, false, false, false, false, false, 0, 0),
+            (0, 4, true, true, false, false, false, 0, 0),
+            (4, 1, false, true, false, false, false, 0, 0),
+            (0, 4, true, false, true, false, false, 0, 0),
+            (4, 1, false, true, true, false, false, 0, 0),
+            (0, 4, true, false, false, true, false, 0, 0),
+            (4, 1, false, false, false, true, false, 0, 0),
+            (4, 1, false, true, true, true, false, 0, 0),
+            (0, 4, true, false, false, false, true, 0, 0),
+            (4, 1, false, false, true, false, true, 0, 0),
+            (4, 1, false, true, false, true, true, 0, 0),
+            (0, 4, true, false, false, false, false, 2, 0),
+            (4, 1, false, false, true, true, true, 2, 0),
+            (0, 4, true, false, true, false, true, 1, 0),
+            // Rows narrower than the head (--set-width): Deep Sets, attention, transformer, query.
+            (0, 4, true, false, false, false, false, 0, 8),
+            (4, 1, false, true, true, false, false, 0, 8),
+            (0, 4, true, false, false, true, true, 2, 8),
+            (4, 1, false, false, true, true, true, 1, 8),
         ];
-        for (extra, out, tanh, attention, norm, robot_tokens, query, transformer) in cases {
+        for (extra, out, tanh, attention, norm, robot_tokens, query, transformer, width) in cases {
             // An actor (tanh, 4 outputs) and a critic (the action as 4 extra inputs, 1 output),
             // with mean-max pooling or a self-attention block first, the pooled features
             // layer-normalised or not, the encoder reading rows or robot tokens, pooled by the mean
-            // and max or by a learned query, with pre-LayerNorm transformer blocks or none.
-            let layout = SetLayout { attention, norm, robot_tokens, query, transformer, ..SET };
+            // and max or by a learned query, with pre-LayerNorm transformer blocks or none, the rows
+            // as wide as the head (16) or narrower.
+            let layout = SetLayout { attention, norm, robot_tokens, query, transformer, width, ..SET };
             let net = Net::new_set(layout, extra, (16, 2, 2), out, tanh, &mut rng);
             let tokens = if robot_tokens { SET.robot + SET.object + extra } else { SET.object };
             assert_eq!(net.to_plain().layers[0].n_in, tokens);
+            let rows_wide = if width == 0 { 16 } else { width };
+            assert_eq!(net.to_plain().layers[0].b.len(), rows_wide);
+            assert_eq!(net.to_plain().layers[layout.head_start()].b.len(), 16, "the head keeps the hidden width");
+            if width != 0 {
+                // A layout whose width the weights contradict is refused.
+                let mut wrong = net.to_plain();
+                wrong.set = Some(SetLayout { width: 4, ..layout });
+                let e = wrong.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap_err();
+                assert!(e.contains("rows are 4 wide, the encoder's 8"), "{e}");
+            }
             assert_eq!(net.sizes()[0], SET.obs_dim() + extra);
             let plain = net.to_plain();
             plain.check(SET.obs_dim() + extra, out, f32::INFINITY).unwrap();

@@ -65,6 +65,9 @@ pub(super) struct BenchArgs {
     /// With --train --net set: pre-LayerNorm transformer blocks (as `train --set-transformer`).
     #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
     set_transformer: usize,
+    /// With --train --net set: the width of the per-row layers (as `train --set-width`).
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SET_WIDTH.parser::<usize>())]
+    set_width: usize,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]
     flat_critic: bool,
@@ -130,6 +133,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
             set_robot_tokens: a.set_robot_tokens,
             set_type_norm: a.set_type_norm,
             set_transformer: a.set_transformer,
+            set_width: a.set_width,
             ..Default::default()
         },
         flat_critic: a.flat_critic,

@@ -403,6 +403,10 @@ impl TrainConfig {
             0 => norm,
             n => format!("-transformer{n}{norm}"),
         };
+        let norm = match self.net.set_width {
+            0 => norm,
+            w => format!("-w{w}{norm}"),
+        };
         let critic = if self.shared.flat_critic { "-flatcritic" } else { "" };
         // `--counts grey=0-2,red=1` -> `-grey0-2-red1`.
         let counts = self

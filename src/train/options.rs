@@ -107,6 +107,7 @@ const RULES: &[Rule] = &[
     Rule { flag: "--set-norm", given: |o, _| o.net.set_norm, used: set, by: SET },
     Rule { flag: "--set-robot-tokens", given: |o, _| o.net.set_robot_tokens, used: set, by: SET },
     Rule { flag: "--set-transformer", given: |o, _| o.net.set_transformer > 0, used: set, by: SET },
+    Rule { flag: "--set-width", given: |o, _| o.net.set_width > 0, used: set, by: SET },
     Rule {
         flag: "--set-type-norm",
         given: |o, _| o.net.set_type_norm,

@@ -87,10 +87,13 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if config.suite.is_none() && config.env.trim().is_empty() {
         bail!("no task: pass --env ID (several comma-separated) or --suite S");
     }
-    if config.net.set_transformer > 0 && config.shared.hidden % crate::agents::mlp::TRANSFORMER_HEADS != 0 {
+    let (width, flag) = match config.net.set_width {
+        0 => (config.shared.hidden, "--hidden"),
+        w => (w, "--set-width"),
+    };
+    if config.net.set_transformer > 0 && width % crate::agents::mlp::TRANSFORMER_HEADS != 0 {
         bail!(
-            "--set-transformer splits --hidden {} into {} heads; give a multiple of {}",
-            config.shared.hidden,
+            "--set-transformer splits {flag} {width} into {} heads; give a multiple of {}",
             crate::agents::mlp::TRANSFORMER_HEADS,
             crate::agents::mlp::TRANSFORMER_HEADS
         );

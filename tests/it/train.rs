@@ -938,11 +938,13 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         c.algo = Algo::named(algo).unwrap();
         c.net = NetConfig { net: NetKind::Entity, ..NetConfig::default() };
         if algo == "dagger" {
-            // DAgger's runs also read robot tokens (the robot features beside every row) and keep
-            // statistics per row type.
+            // DAgger's runs also read robot tokens (the robot features beside every row), keep
+            // statistics per row type and have rows narrower than the head (which a resume must
+            // rebuild from the checkpoint).
             c.algos.dagger.t0 = 1.0;
             c.net.set_robot_tokens = true;
             c.net.set_type_norm = true;
+            c.net.set_width = 8;
         }
         c
     };
@@ -972,6 +974,13 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     );
     let tokens = load_policy(&straight.path().join("policy.json")).unwrap();
     assert!(tokens.policy.net().set.is_some_and(|s| s.robot_tokens && s.object == 26 && s.fixtures == 3));
+    let net = tokens.policy.net();
+    assert_eq!((net.set.unwrap().width, net.layers[0].b.len()), (8, 8), "rows 8 wide");
+    assert_eq!(
+        net.layers[net.set.unwrap().head_start()].b.len(),
+        imitate("dagger", 1).shared.hidden,
+        "the head's width"
+    );
     assert!(!saved.policy.net().set.unwrap().robot_tokens);
     assert!(imitate("dagger", 1).title().contains("DAgger"), "{}", imitate("dagger", 1).title());
     // What they cannot use is refused before anything is written.
@@ -1000,9 +1009,16 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
         TrainConfig { net: blocks(2, Pooling::Attention), ..imitate("dagger", 1) },
         &["--set-transformer replaces"],
     );
-    let mut odd = TrainConfig { net: blocks(2, Pooling::Query), ..imitate("dagger", 1) };
+    let mut odd = TrainConfig { net: NetConfig { set_width: 0, ..blocks(2, Pooling::Query) }, ..imitate("dagger", 1) };
     odd.shared.hidden = 30;
     refused(odd, &["--hidden 30", "4 heads"]);
+    let narrow_odd =
+        TrainConfig { net: NetConfig { set_width: 6, ..blocks(2, Pooling::Query) }, ..imitate("dagger", 1) };
+    refused(narrow_odd, &["--set-width 6", "4 heads"]);
+    refused(
+        TrainConfig { net: NetConfig { set_width: 64, ..NetConfig::default() }, ..tiny("BlocksTouch-v0", 1) },
+        &["--set-width is only used with --net set"],
+    );
     let mut bad = imitate("dagger", 1);
     bad.algos.dagger.beta0 = 1.5;
     refused(bad, &["--dagger-beta0", "[0, 1]"]);
