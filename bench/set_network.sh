@@ -34,6 +34,7 @@ VARIANTS=(
     "entity --set-width 64, DAgger (actor alone)|--net entity --set-width 64 --algo dagger"
     "entity --set-transformer 2 --set-pooling query --set-width 64|--net entity --set-transformer 2 --set-pooling query --set-width 64"
     "entity --set-transformer 2 --set-pooling query --set-width 64, DAgger (actor alone)|--net entity --set-transformer 2 --set-pooling query --set-width 64 --algo dagger"
+    "entity --set-transformer 2 --set-pooling query --set-width 64 --flat-critic|--net entity --set-transformer 2 --set-pooling query --set-width 64 --flat-critic"
     "entity --set-transformer 2 --set-pooling query --set-width 128|--net entity --set-transformer 2 --set-pooling query --set-width 128"
 )
 ONLY="${ONLY:-}"

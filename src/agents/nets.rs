@@ -299,8 +299,16 @@ impl Net {
                 split(self.affine(&a, l + 1, true)),
                 split(self.affine(&a, l + 2, true)),
             );
-            let scores = (q.matmul(&k.transpose(2, 3)) / (dh as f64).sqrt()).masked_fill(&absent, -1e9);
-            let z = scores.softmax(-1, Kind::Float).matmul(&v).transpose(1, 2).reshape([n, m, d].as_slice());
+            // Products of a few rows, broadcast and summed rather than batched matrix products: a
+            // batched product of n·heads tiny matrices costs one BLAS call each.
+            let scores = ((q.unsqueeze(3) * k.unsqueeze(2)).sum_dim_intlist([-1i64].as_slice(), false, Kind::Float)
+                / (dh as f64).sqrt())
+            .masked_fill(&absent, -1e9);
+            let w = scores.softmax(-1, Kind::Float).unsqueeze(-1);
+            let z = (w * v.unsqueeze(2))
+                .sum_dim_intlist([3i64].as_slice(), false, Kind::Float)
+                .transpose(1, 2)
+                .reshape([n, m, d].as_slice());
             h = &h + self.affine(&z, l + 3, true);
             let inner = self.affine(&ln(&h), l + 4, true).relu();
             h = &h + self.affine(&inner, l + 5, true);
