@@ -19,7 +19,8 @@ fi
 # Set networks (format 3): a few epochs of `train --net set` (mean-max, attention, colour, query, mean-max with
 # --set-norm) and of `train --net entity` (the entities rows: the gripper's, table's and floor's too;
 # and with --set-robot-tokens and --set-type-norm, trained by DAgger; and with two transformer blocks and
-# query pooling over rows narrower than the head (--set-width), by DAgger), exported to a scratch zoo, must
+# query pooling over rows narrower than the head (--set-width), by DAgger; and on two tasks at once, by
+# DAgger), exported to a scratch zoo, must
 # act in numpy as in Rust too; the shipped entries may hold none of them.
 # The command line: $BLOCKPUZZLE_BIN, else the newer of target/release and target/debug (`cargo test` builds
 # the latter), else a debug build made now.
@@ -32,18 +33,23 @@ fi
 if [ -z "$BP" ]; then (cd "$ROOT" && cargo build --quiet) && BP="$ROOT/target/debug/blockpuzzle"; fi
 SCRATCH="$(mktemp -d)"
 trap 'rm -rf "$SCRATCH"' EXIT
-for variant in mean-max attention colour query mean-max-norm entity entity-tokens-dagger entity-transformer; do
+for variant in mean-max attention colour query mean-max-norm entity entity-tokens-dagger entity-transformer entity-two-tasks; do
+    env=BlocksChooseN-v0
     if [ "$variant" = entity ]; then
         flags=(--net entity)
     elif [ "$variant" = entity-tokens-dagger ]; then
         flags=(--net entity --set-robot-tokens --set-type-norm --algo dagger)
     elif [ "$variant" = entity-transformer ]; then
         flags=(--net entity --set-transformer 2 --set-pooling query --set-width 16 --algo dagger)
+    elif [ "$variant" = entity-two-tasks ]; then
+        # A policy trained on two tasks (zoo format 5's multi_task): its probes in its own layout.
+        env=BlocksTouch-v0,BlocksChooseN-v0
+        flags=(--net entity --algo dagger)
     else
         flags=(--net set --set-pooling "${variant%-norm}")
         if [ "$variant" != "${variant%-norm}" ]; then flags+=(--set-norm); fi
     fi
-    "$BP" train --env BlocksChooseN-v0 "${flags[@]}" --epochs 1 --cycles 2 --batches 3 \
+    "$BP" train --env "$env" "${flags[@]}" --epochs 1 --cycles 2 --batches 3 \
         --batch-size 32 --hidden 32 --layers 2 --test-episodes 1 --torch-threads 1 \
         --run-dir "$SCRATCH/run-$variant" > /dev/null
     "$BP" zoo export --from "$SCRATCH/run-$variant" --name "set-$variant" --description "zoo_python_check" \

@@ -25,6 +25,11 @@ pub struct SavedPolicy {
     /// The task it was trained on, by content (absent in policies saved before tasks were files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub task: Option<crate::task::TaskSource>,
+    /// A policy trained on several tasks (`train --env A,B` or `--suite S`): its training tasks by
+    /// content, in the run's order (`task` is then absent and `env_id` the run's label; empty for
+    /// one task and in policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tasks: Vec<crate::task::TaskSource>,
     /// Epochs of training behind it.
     pub epoch: usize,
     /// Environment steps of training behind it (absent in policies saved before it was recorded).
@@ -61,10 +66,14 @@ impl SavedPolicy {
 impl SavedPolicy {
     /// The policy as results name it: `name` as the user gave it and the
     /// `sha256:` of what acts ([`AnyPolicy::canonical`]) with the task it was
-    /// trained on (its content hash; the environment id for policies saved
-    /// before tasks were files).
+    /// trained on (its content hash; a multi-task policy's tasks' hashes joined by `+`;
+    /// the environment id for policies saved before tasks were files).
     pub fn policy_id(&self, name: &str) -> crate::provenance::PolicyId {
-        let task = self.task.as_ref().map_or(self.env_id.as_str(), |t| t.hash.as_str());
+        let task = match (&self.task, &self.tasks[..]) {
+            (Some(t), _) => t.hash.clone(),
+            (None, []) => self.env_id.clone(),
+            (None, all) => all.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
+        };
         let text = format!("{}\ntask {task}", self.policy.canonical());
         crate::provenance::PolicyId { name: name.to_owned(), sha256: Some(crate::provenance::sha256(text.as_bytes())) }
     }

@@ -37,13 +37,15 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// The format tag this blockpuzzle writes in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/4";
+pub const FORMAT: &str = "blockpuzzle-zoo/5";
 
 /// The formats it reads: version 2 added the outcome counts of evaluations
 /// (version 1 entries load with none); version 3 set networks (a network's
 /// `set` layout and `layers` shapes; entries without them are MLPs as before);
-/// version 4 each evaluation's provenance and task hash (one record per engine).
-pub const READS: [&str; 4] = ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", FORMAT];
+/// version 4 each evaluation's provenance and task hash (one record per engine);
+/// version 5 policies trained on several tasks ([`ZooMeta::multi_task`]).
+pub const READS: [&str; 5] =
+    ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", FORMAT];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -144,8 +146,12 @@ pub struct ZooMeta {
     pub description: String,
     /// `ddpg` or `pggd`.
     pub algo: String,
-    /// The task it was trained on, by content.
+    /// The task it was trained on, by content; for a policy trained on several tasks the first
+    /// of them (its probes are that task's).
     pub task: TaskSource,
+    /// A policy trained on several tasks (format 5): the run's label and every training task.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multi_task: Option<MultiTask>,
     /// Epochs of training behind it.
     pub epoch: usize,
     /// Environment steps of training behind it, where known.
@@ -177,6 +183,23 @@ pub struct ZooMeta {
     pub tensors_sha256: String,
 }
 
+impl ZooMeta {
+    /// What it was trained on, as listings name it: its task's id, or a multi-task run's label.
+    pub fn trained_on(&self) -> &str {
+        self.multi_task.as_ref().map_or(self.task.id.as_str(), |m| m.label.as_str())
+    }
+}
+
+/// What a policy trained on several tasks was trained on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MultiTask {
+    /// The run's label: `SUITE-SPLIT` (`train --suite`) or the ids joined by `+` (`train --env A,B`).
+    pub label: String,
+    /// The training tasks by content, in the run's order.
+    pub tasks: Vec<TaskSource>,
+}
+
 /// An observation and the action the exported policy took on it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -194,11 +217,15 @@ pub struct Probe {
 /// A task that cannot be built.
 pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
     let fail = |reason: String| ZooError::Corrupt { path: PathBuf::from(&saved.env_id), reason };
-    let task = match &saved.task {
+    let task = match saved.task.as_ref().or(saved.tasks.first()) {
         Some(source) => crate::env::registry::recorded(source).map_err(|e| fail(e.to_string()))?,
         None => return Err(fail("the policy does not record its task".into())),
     };
-    let config = crate::env::EnvConfig { obs_mode: saved.policy.obs_mode(), ..crate::env::EnvConfig::new(task) };
+    // In the policy's own layout: a multi-task set policy's rows are those of its tasks' most
+    // blocks (absent rows padded), so that its probes replay as saved.
+    let obs_mode = saved.policy.obs_mode();
+    let slots = saved.policy.net().set.map_or(0, |s| s.slots.saturating_sub(obs_mode.fixtures().len()));
+    let config = crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) };
     let mut env = crate::env::BlockEnv::new(config).map_err(|e| fail(e.to_string()))?;
     let level = env.max_level();
     env.set_level(level).map_err(|e| fail(e.to_string()))?;
@@ -346,7 +373,20 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let task = saved
         .task
         .clone()
+        .or_else(|| saved.tasks.first().cloned())
         .ok_or_else(|| corrupt("the policy does not record its task (saved before tasks were files)".into()))?;
+    let multi_task = if saved.tasks.is_empty() {
+        None
+    } else if saved.policy.net().set.is_none() {
+        // A flat network reads its tasks padded to one layout, which the zoo's readers do not rebuild.
+        return Err(corrupt(format!(
+            "{} is a flat network trained on several tasks: the zoo takes multi-task policies with set networks \
+             (train --net set or entity), which read any number of objects",
+            saved.env_id
+        )));
+    } else {
+        Some(MultiTask { label: saved.env_id.clone(), tasks: saved.tasks.clone() })
+    };
     let (net, norm, sigma_min) = match &saved.policy {
         AnyPolicy::Deterministic(p) => (&p.net, &p.norm, None),
         AnyPolicy::Pggd(p) => (&p.net, &p.norm, Some(p.sigma_min)),
@@ -382,6 +422,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         description: info.description.clone(),
         algo: saved.policy.algo().into(),
         task,
+        multi_task,
         epoch: saved.epoch,
         env_steps: info.env_steps,
         finals_success: saved.finals_success,
@@ -506,7 +547,9 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 /// [`ZooError::Corrupt`] naming what does not fit.
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
-    meta.task.compile().map_err(|e| ZooError::Corrupt { path: path.with_extension("json"), reason: e.to_string() })?;
+    for task in std::iter::once(&meta.task).chain(meta.multi_task.iter().flat_map(|m| &m.tasks)) {
+        task.compile().map_err(|e| ZooError::Corrupt { path: path.with_extension("json"), reason: e.to_string() })?;
+    }
     let tensors_path = path.with_extension("safetensors");
     let bytes = crate::io::read_bytes(&tensors_path, "zoo tensor file", crate::limits::POLICY_FILE_BYTES)
         .map_err(io(&tensors_path))?;
@@ -597,9 +640,15 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             return Err(corrupt(format!("algorithm {algo:?} with sigma_min {s:?} is not a known policy kind")))
         }
     };
+    // A multi-task policy loads as its run saved it: no one task, its label and its tasks.
+    let (env_id, task, tasks) = match &meta.multi_task {
+        None => (meta.task.id.clone(), Some(meta.task.clone()), Vec::new()),
+        Some(m) => (m.label.clone(), None, m.tasks.clone()),
+    };
     let saved = SavedPolicy {
-        env_id: meta.task.id.clone(),
-        task: Some(meta.task.clone()),
+        env_id,
+        task,
+        tasks,
         epoch: meta.epoch,
         env_steps: meta.env_steps,
         finals_success: meta.finals_success,

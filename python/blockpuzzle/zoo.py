@@ -26,7 +26,7 @@ import pathlib
 
 import numpy as np
 
-FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4")
+FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5")
 #: Where an object row's colour one-hot (red, blue, green, grey) begins.
 COLOUR_FEATURE = 15
 #: The zoo the package carries.
@@ -122,8 +122,16 @@ class ZooPolicy:
 
     @property
     def task_id(self) -> str:
-        """The environment id (or task name) the policy was trained on."""
+        """The environment id (or task name) the policy was trained on; for a policy trained on
+        several tasks, the first of them (``training_tasks`` has them all)."""
         return self.meta["task"]["id"]
+
+    @property
+    def training_tasks(self) -> list[str]:
+        """The ids of the tasks it was trained on: one, or a multi-task policy's every task
+        (``train --suite S`` or ``--env A,B``; format 5's ``multi_task``)."""
+        multi = self.meta.get("multi_task")
+        return [t["id"] for t in multi["tasks"]] if multi else [self.task_id]
 
     @property
     def obs_mode(self) -> str:

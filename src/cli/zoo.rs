@@ -92,7 +92,12 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             for name in names {
                 let meta = crate::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
                 let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
-                println!("{name:<36} {:<24} {} epoch {:>3}, {steps} env steps", meta.task.id, meta.algo, meta.epoch);
+                println!(
+                    "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
+                    meta.trained_on(),
+                    meta.algo,
+                    meta.epoch
+                );
                 println!("    {}", meta.description);
                 // Numbers of different engines differ: this build's engine's only, the others counted.
                 let engine = crate::mj::version();
@@ -138,7 +143,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             }
             for name in &names {
                 let (meta, _) = crate::zoo::load(&crate::zoo::find(&zoo, name)?)?;
-                println!("{name}: ok ({} {}, epoch {})", meta.task.id, meta.algo, meta.epoch);
+                println!("{name}: ok ({} {}, epoch {})", meta.trained_on(), meta.algo, meta.epoch);
             }
             Ok(())
         }

@@ -837,13 +837,14 @@ impl<'a> Trainer<'a> {
             let max_level = self.max_levels.iter().sum();
             plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
             // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task.
-            let task = match &self.tasks[..] {
-                [task] => Some(task.source.clone()),
-                _ => None,
+            let (task, tasks) = match &self.tasks[..] {
+                [task] => (Some(task.source.clone()), Vec::new()),
+                all => (None, all.iter().map(|t| t.source.clone()).collect()),
             };
             let saved = SavedPolicy {
                 env_id: self.state.env_id.clone(),
                 task,
+                tasks,
                 epoch: state.epoch,
                 env_steps: Some(state.env_steps),
                 finals_success: row.finals_success,

@@ -86,6 +86,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
         let saved = SavedPolicy {
             env_id: "BlocksChoose-v0".into(),
             task: Some(task.source),
+            tasks: Vec::new(),
             epoch: 3,
             env_steps: Some(1000),
             finals_success: 0.0,

@@ -1086,6 +1086,43 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     let e = String::from_utf8_lossy(&alone.stderr);
     assert!(!alone.status.success() && e.contains("trained on several tasks") && e.contains("--env"), "{e}");
     assert!(eval(&["--env", "BlocksTouch-v0"]).status.success());
+    // It records its tasks by content, and goes into the zoo as it is: its label, its tasks, probes of
+    // its first task in its own layout; loaded back, it names no one task either.
+    let ids: Vec<&str> = saved.tasks.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(ids, ["BlocksTouch-v0", "BlocksChoose-v0"]);
+    let zoo = tempfile::tempdir().unwrap();
+    let info = blockpuzzle::zoo::ExportInfo {
+        name: "two-tasks".into(),
+        description: "a multi-task test entry".into(),
+        trained_with: "tests/it/train.rs".into(),
+        exported_from: "policy.json".into(),
+        env_steps: saved.env_steps,
+        evaluations: Vec::new(),
+        keep_critic: false,
+        overwrite: false,
+    };
+    let entry = blockpuzzle::zoo::export(zoo.path(), &saved, &info).unwrap();
+    let (meta, back) = blockpuzzle::zoo::load(&entry).unwrap();
+    assert_eq!(meta.format, blockpuzzle::zoo::FORMAT);
+    assert_eq!((meta.trained_on(), meta.task.id.as_str()), ("BlocksTouch-v0+BlocksChoose-v0", "BlocksTouch-v0"));
+    assert_eq!(meta.probes[0].obs.len(), state.obs_dim, "the probes are in the policy's layout");
+    assert_eq!((back.env_id.as_str(), back.task.is_none(), &back.tasks), (saved.env_id.as_str(), true, &saved.tasks));
+    assert_eq!(back.policy_id("x").sha256, saved.policy_id("x").sha256);
+    let one = blockpuzzle::saved::SavedPolicy { tasks: vec![saved.tasks[0].clone()], ..saved.clone() };
+    assert_ne!(one.policy_id("x").sha256, saved.policy_id("x").sha256, "the tasks are part of what made it");
+    // A flat network trained on several tasks reads them padded to one layout: the zoo refuses it.
+    let flat_dir = tempfile::tempdir().unwrap();
+    let mut flat = tiny("BlocksTouch-v0,BlocksChoose-v0", 1);
+    flat.algo = Algo::named("ddpg").unwrap();
+    train(&flat, flat_dir.path(), false, &mut quiet).unwrap();
+    let flat_saved = load_policy(&flat_dir.path().join("policy.json")).unwrap();
+    let e = blockpuzzle::zoo::export(
+        zoo.path(),
+        &flat_saved,
+        &blockpuzzle::zoo::ExportInfo { name: "flat".into(), ..info.clone() },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("flat network trained on several tasks"), "{e}");
     // A suite's split names the tasks too (a file here; `--suite procgen` in the experiments).
     let dir = tempfile::tempdir().unwrap();
     let suite = dir.path().join("two.toml");
