@@ -227,8 +227,11 @@ fn shipped_entries_load_and_act_as_their_source() {
         assert!(!meta.probes.is_empty() && !meta.trained_with.is_empty(), "{name}");
         // The probes are reset observations of the recorded task.
         let task = registry::recorded(&meta.task).unwrap();
-        // In the observation the policy reads (a set network's is the `objects` one).
-        let config = blockpuzzle::EnvConfig { obs_mode: saved.policy.obs_mode(), ..blockpuzzle::EnvConfig::new(task) };
+        // In the observation the policy reads (a set network's is the `objects` or `entities` one), in
+        // its own layout (a multi-task entry's rows are those of its tasks' most blocks).
+        let obs_mode = saved.policy.obs_mode();
+        let slots = saved.policy.net().set.map_or(0, |s| s.slots - obs_mode.fixtures().len());
+        let config = blockpuzzle::EnvConfig { obs_mode, slots, ..blockpuzzle::EnvConfig::new(task) };
         let mut env = blockpuzzle::BlockEnv::new(config).unwrap();
         let level = env.max_level();
         env.set_level(level).unwrap();
