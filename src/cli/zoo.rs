@@ -161,6 +161,14 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);
             }
+            if a.evaluate > 0 && a.evaluate_envs.is_empty() && !saved.tasks.is_empty() {
+                bail!(
+                    "{} was trained on several tasks ({}) and holds no one task to evaluate on: name them with \
+                     --evaluate-env ID (repeatable)",
+                    a.from.display(),
+                    saved.env_id
+                );
+            }
             let envs: Vec<Option<&str>> = if a.evaluate_envs.is_empty() {
                 vec![None]
             } else {

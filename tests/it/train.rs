@@ -1110,6 +1110,15 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     assert_eq!(back.policy_id("x").sha256, saved.policy_id("x").sha256);
     let one = blockpuzzle::saved::SavedPolicy { tasks: vec![saved.tasks[0].clone()], ..saved.clone() };
     assert_ne!(one.policy_id("x").sha256, saved.policy_id("x").sha256, "the tasks are part of what made it");
+    // `zoo export --evaluate` of it needs the tasks to evaluate on, and says so before writing anything.
+    let o = std::process::Command::new(crate::common::CLI)
+        .args(["zoo", "export", "--from", straight.path().join("policy.json").to_str().unwrap(), "--name", "two"])
+        .args(["--description", "d", "--trained-with", "t", "--evaluate", "2", "--zoo", zoo.path().to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("several tasks") && e.contains("--evaluate-env"), "{e}");
+    assert!(!zoo.path().join("two.json").exists());
     // A flat network trained on several tasks reads them padded to one layout: the zoo refuses it.
     let flat_dir = tempfile::tempdir().unwrap();
     let mut flat = tiny("BlocksTouch-v0,BlocksChoose-v0", 1);
