@@ -23,6 +23,15 @@ def test_the_package_carries_the_zoo_and_each_entry_reproduces_its_probes():
         assert not zoo.FOLDER.resolve().is_relative_to(os.environ["BLOCKPUZZLE_WHEEL_TEST"])
 
 
+def test_a_multi_task_entry_names_every_training_task_and_a_single_task_entry_its_own():
+    multi = zoo.load("cross-task-v2-dagger-entity")
+    assert multi.training_tasks[0] == multi.task_id == "BlocksTouch-v0"
+    assert len(multi.training_tasks) == 8 and "GripperTouch-v0" in multi.training_tasks
+    assert "ReachAvoid-v0" not in multi.training_tasks, "a held-out task"
+    single = zoo.load("BlocksTouch-v0-ddpg")
+    assert single.training_tasks == [single.task_id] == ["BlocksTouch-v0"]
+
+
 def test_a_zoo_policy_acts_on_single_and_batched_observations():
     policy = zoo.load("BlocksTouch-v0-ddpg")
     env = gym.make(f"BlockPuzzle/{policy.task_id}", obs_mode=policy.obs_mode)
