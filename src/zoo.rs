@@ -223,8 +223,7 @@ pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
     };
     // In the policy's own layout: a multi-task set policy's rows are those of its tasks' most
     // blocks (absent rows padded), so that its probes replay as saved.
-    let obs_mode = saved.policy.obs_mode();
-    let slots = saved.policy.net().set.map_or(0, |s| s.slots.saturating_sub(obs_mode.fixtures().len()));
+    let (obs_mode, slots) = (saved.policy.obs_mode(), saved.policy.block_slots());
     let config = crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) };
     let mut env = crate::env::BlockEnv::new(config).map_err(|e| fail(e.to_string()))?;
     let level = env.max_level();

@@ -60,6 +60,14 @@ impl AnyPolicy {
         }
     }
 
+    /// The block slots of the layout it was saved with ([`crate::env::EnvConfig::slots`]): a set
+    /// network's rows less the fixtures' (a multi-task policy's are its tasks' most blocks); 0 for
+    /// an MLP (its task's own).
+    pub fn block_slots(&self) -> usize {
+        let fixtures = self.obs_mode().fixtures().len();
+        self.net().set.map_or(0, |s| s.slots.saturating_sub(fixtures))
+    }
+
     /// A set network's policy on observations with `slots` object slots: the
     /// same weights, the normaliser's shared row statistics in every slot
     /// (a set network's weights do not depend on the number of objects). An

@@ -229,8 +229,7 @@ fn shipped_entries_load_and_act_as_their_source() {
         let task = registry::recorded(&meta.task).unwrap();
         // In the observation the policy reads (a set network's is the `objects` or `entities` one), in
         // its own layout (a multi-task entry's rows are those of its tasks' most blocks).
-        let obs_mode = saved.policy.obs_mode();
-        let slots = saved.policy.net().set.map_or(0, |s| s.slots - obs_mode.fixtures().len());
+        let (obs_mode, slots) = (saved.policy.obs_mode(), saved.policy.block_slots());
         let config = blockpuzzle::EnvConfig { obs_mode, slots, ..blockpuzzle::EnvConfig::new(task) };
         let mut env = blockpuzzle::BlockEnv::new(config).unwrap();
         let level = env.max_level();
