@@ -82,6 +82,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     let saved = from.read_config()?;
     let mut wanted = config.clone();
     wanted.task = saved.task.clone();
+    wanted.tasks = saved.tasks.clone();
     wanted.replay = Some(config.replay.unwrap_or(saved.replay_layout()));
     let mut base = saved.clone();
     base.replay = Some(saved.replay_layout());

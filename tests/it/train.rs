@@ -1057,8 +1057,22 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let a = train(&multi(3), straight.path(), false, &mut quiet).unwrap();
     train(&multi(2), split.path(), false, &mut quiet).unwrap();
+    // A branch of it continues it exactly, with the parent's tasks by content; a branch that asks for
+    // other tasks is refused.
+    let root = tempfile::tempdir().unwrap();
+    let child = root.path().join("branch");
+    assert_eq!(branch(split.path(), &child, &multi(3)).unwrap().epoch, 2);
+    let elsewhere = TrainConfig { env: "BlocksTouch-v0,BlocksStack-v0".into(), ..multi(3) };
+    let other = branch(split.path(), &root.path().join("other"), &elsewhere);
+    let e = format!("{:#}", other.unwrap_err());
+    assert!(e.contains("BlocksTouch-v0+BlocksChoose-v0") && e.contains("--env"), "{e}");
+    let branched = train(&multi(3), &child, true, &mut quiet).unwrap();
     let b = train(&multi(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
+    assert_eq!(comparable(&a), comparable(&branched));
+    let recorded: TrainConfig = serde_json::from_slice(&std::fs::read(child.join("config.json")).unwrap()).unwrap();
+    let parent: TrainConfig = serde_json::from_slice(&std::fs::read(split.path().join("config.json")).unwrap()).unwrap();
+    assert_eq!(recorded.tasks, parent.tasks);
     assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), [0, 2, 4], "both tasks move up every epoch");
     let state = checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap();
     assert_eq!((state.levels.clone(), state.level), (vec![3, 3], 6));
