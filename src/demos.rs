@@ -84,6 +84,9 @@ pub struct Demos {
     pub tensors: DemoTensors,
 }
 
+/// One recorded episode with its number in the row (the threads record them out of order).
+type Numbered = (usize, (DemoEpisode, DemoTensors));
+
 /// The episodes' observations (O of them) and steps (T), one after another.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DemoTensors {
@@ -181,7 +184,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         if envs.obs_spec() != padded {
             bail!("{}: the environment shows {} entity rows, not {rows}", row.task.id(), envs.obs_spec().rows());
         }
-        let by_thread: Vec<Result<Vec<(usize, (DemoEpisode, DemoTensors))>>> = envs.each(|t, env| {
+        let by_thread: Vec<Result<Vec<Numbered>>> = envs.each(|t, env| {
             let mut out = Vec::new();
             for e in (t..n).step_by(k) {
                 let seed = row.seed + e as u64;

@@ -284,7 +284,7 @@ pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result
     File::create(&tmp).map_err(name)?;
     let result = write(&tmp).and_then(|()| {
         let bytes = std::fs::read(&tmp)?;
-        Ok(write_atomic(path, |f| f.write_all(&bytes)).map_err(name)?)
+        write_atomic(path, |f| f.write_all(&bytes)).map_err(name)
     });
     let _ = std::fs::remove_file(&tmp);
     result.with_context(|| format!("cannot write {}", path.display()))

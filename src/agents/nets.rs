@@ -220,7 +220,7 @@ impl Net {
             let hot = x.narrow(1, r, m * f).reshape(&[n, m, f]).narrow(2, at, COLOURS as i64).gt(0.5);
             let w = hot.to_kind(Kind::Float) * mask;
             let count = w.sum_dim_intlist([1i64].as_slice(), false, Kind::Float).clamp_min(1.0).unsqueeze(2);
-            let mean = (w.transpose(1, 2).matmul(&h) / count).reshape(&[n, -1]);
+            let mean = (w.transpose(1, 2).matmul(h) / count).reshape(&[n, -1]);
             let max: Vec<Tensor> =
                 (0..COLOURS as i64).map(|c| (h * w.narrow(2, c, 1)).amax([1i64].as_slice(), false)).collect();
             (mean, Tensor::cat(&max, 1))
@@ -518,6 +518,15 @@ pub fn grads(params: &[Tensor]) -> Vec<Tensor> {
             }
         })
         .collect()
+}
+
+impl super::normalizer::Normalizer {
+    /// Rows of raw observations, normalised, as a `[n, dim]` tensor.
+    pub fn tensor(&self, rows: &[f32]) -> Tensor {
+        let mut x = rows.to_vec();
+        self.normalize_in_place(&mut x);
+        Tensor::of_slice(&x).view([-1, self.dim() as i64])
+    }
 }
 
 #[cfg(test)]
@@ -822,14 +831,5 @@ mod tests {
             copy.iter().map(tensor_to_vec).collect::<Vec<_>>()
         );
         assert!(again.load_vecs(&adam.to_vecs()[1..], 3).unwrap_err().contains("expected 12 optimiser moments"));
-    }
-}
-
-impl super::normalizer::Normalizer {
-    /// Rows of raw observations, normalised, as a `[n, dim]` tensor.
-    pub fn tensor(&self, rows: &[f32]) -> Tensor {
-        let mut x = rows.to_vec();
-        self.normalize_in_place(&mut x);
-        Tensor::of_slice(&x).view([-1, self.dim() as i64])
     }
 }

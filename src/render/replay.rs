@@ -30,7 +30,8 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
     let mut names: Vec<&str> = env.objects().iter().map(|o| o.name.as_str()).collect();
     let recorded: Vec<&str> = ep.objects.iter().map(|o| o.name.as_str()).collect();
     let mut sorted = recorded.clone();
-    (names.sort_unstable(), sorted.sort_unstable());
+    names.sort_unstable();
+    sorted.sort_unstable();
     if names != sorted {
         bail!(
             "the episode's objects {recorded:?} are not its task's rule objects {names:?}; the dump was edited \
@@ -60,7 +61,7 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
             bail!("step {k} of the episode stores {} positions, {} has {nq}", state.qpos.len(), ep.env_id);
         }
         // A joint position beyond 10 km or 10⁴ rad is no state of the scene.
-        if let Some(i) = state.qpos.iter().position(|v| !(v.abs() <= 1e4)) {
+        if let Some(i) = state.qpos.iter().position(|v| v.is_nan() || v.abs() > 1e4) {
             bail!(
                 "step {k} of the episode stores joint position {i} as {:e}, no state of the scene; the dump was \
                  edited or damaged",

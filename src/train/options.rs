@@ -213,24 +213,24 @@ mod tests {
         let (s, d, n, a) =
             (SharedConfig::default(), DdpgConfig::default(), NetConfig::default(), AggrevatedConfig::default());
         for algo in ["ddpg", "sac", "pggd"] {
-            with(algo, s.clone(), d.clone(), n.clone(), a.clone()).unwrap();
+            with(algo, s.clone(), d.clone(), n, a.clone()).unwrap();
         }
         let noisy = DdpgConfig { noise_eps: 0.1, ..d.clone() };
-        let e = with("sac", s.clone(), noisy.clone(), n.clone(), a.clone()).unwrap_err();
+        let e = with("sac", s.clone(), noisy.clone(), n, a.clone()).unwrap_err();
         assert!(e.contains("--noise-eps is only used with --algo ddpg") && e.contains("(SAC: --algo sac)"), "{e}");
-        with("ddpg", s.clone(), noisy, n.clone(), a.clone()).unwrap();
+        with("ddpg", s.clone(), noisy, n, a.clone()).unwrap();
         let smoothing = DdpgConfig { target_noise: 0.3, policy_delay: 3, ..d.clone() };
-        let e = with("ddpg", s.clone(), smoothing.clone(), n.clone(), a.clone()).unwrap_err();
+        let e = with("ddpg", s.clone(), smoothing.clone(), n, a.clone()).unwrap_err();
         assert!(e.contains("--target-noise") && e.contains("--policy-delay") && e.contains("--td3"), "{e}");
-        with("ddpg", s.clone(), DdpgConfig { td3: true, ..smoothing }, n.clone(), a.clone()).unwrap();
+        with("ddpg", s.clone(), DdpgConfig { td3: true, ..smoothing }, n, a.clone()).unwrap();
         let beta = AggrevatedConfig { beta0: 0.5, ..a.clone() };
-        let e = with("pggd", s.clone(), d.clone(), n.clone(), beta).unwrap_err();
+        let e = with("pggd", s.clone(), d.clone(), n, beta).unwrap_err();
         assert!(e.contains("--beta0 is only used with --expert"), "{e}");
-        let pooling = NetConfig { set_pooling: crate::agents::arch::Pooling::Attention, ..n.clone() };
+        let pooling = NetConfig { set_pooling: crate::agents::arch::Pooling::Attention, ..n };
         let e = with("ddpg", s.clone(), d.clone(), pooling, a.clone()).unwrap_err();
         assert!(e.contains("--set-pooling is only used with --net set"), "{e}");
         let n_step = SharedConfig { n_step: 3, ..s.clone() };
-        let e = with("pggd", n_step, d.clone(), n.clone(), a.clone()).unwrap_err();
+        let e = with("pggd", n_step, d.clone(), n, a.clone()).unwrap_err();
         assert!(e.contains("--n-step is only used with --algo ddpg or --algo sac"), "{e}");
         let flat = SharedConfig { flat_critic: true, ..s };
         let e = with("sac", flat, d, n, a).unwrap_err();
