@@ -884,9 +884,10 @@ fn counts_train_recorded_refuse_to_change_on_resume_and_bad_ones_write_nothing()
     assert!(!dir.path().join("x").exists(), "nothing written");
 }
 
-/// The configurations of the runs recorded in results/ (written by earlier versions, the oldest
-/// before n-step returns and TD3) read as they were written: the shared settings from their `ddpg`
-/// group, each algorithm's own from its group or the defaults.
+/// The configurations of the runs recorded in results/ read as they were written: those of
+/// earlier versions (the oldest before n-step returns and TD3) take the shared settings from their
+/// `ddpg` group, each algorithm's own from its group or the defaults; those of today's layout (a
+/// `shared` group) read back field for field.
 #[test]
 fn the_recorded_runs_configurations_still_read() {
     fn walk(dir: &std::path::Path, out: &mut Vec<std::path::PathBuf>) {
@@ -901,13 +902,20 @@ fn the_recorded_runs_configurations_still_read() {
     }
     let mut files = Vec::new();
     walk(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("results"), &mut files);
-    let mut read = 0;
+    let (mut read, mut current) = (0, 0);
     for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
         let file: serde_json::Value = serde_json::from_str(&text).unwrap();
         let c: TrainConfig = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        // Written again, it is today's layout and reads back the same.
+        let again: TrainConfig = serde_json::from_value(serde_json::to_value(&c).unwrap()).unwrap();
+        assert_eq!(again, c);
+        if file.get("shared").is_some() {
+            assert_eq!(file, serde_json::to_value(&c).unwrap(), "{}", path.display());
+            current += 1;
+            continue;
+        }
         let old = &file["ddpg"];
-        assert!(file.get("shared").is_none(), "{}: already the new layout", path.display());
         let shared = &c.shared;
         assert_eq!(
             (shared.layers, shared.hidden),
@@ -923,12 +931,10 @@ fn the_recorded_runs_configurations_still_read() {
         if let Some(p) = file.get("pggd") {
             assert_eq!(c.algos.pggd.lr, p["lr"].as_f64().unwrap());
         }
-        // Written again, it is the new layout and reads back the same.
-        let again: TrainConfig = serde_json::from_value(serde_json::to_value(&c).unwrap()).unwrap();
-        assert_eq!(again, c);
         read += 1;
     }
-    assert!(read >= 20, "{read} recorded configurations");
+    assert!(read >= 20, "{read} recorded configurations of earlier layouts");
+    assert!(current >= 5, "{current} recorded configurations of today's layout");
 }
 
 #[test]
