@@ -337,9 +337,10 @@ impl Family {
         if let Some((name, text)) = BUILTIN_FAMILIES.iter().find(|(n, _)| *n == name_or_path) {
             return Family::from_toml(text, &format!("families/{name}.toml"));
         }
-        let path = std::path::Path::new(name_or_path);
-        if path.extension().is_some_and(|e| e == "toml") || path.exists() {
-            let path = dir.map_or_else(|| path.to_owned(), |d| d.join(path));
+        // A file is looked for where it is read from: beside the suite that names it, if any.
+        let given = std::path::Path::new(name_or_path);
+        let path = dir.map_or_else(|| given.to_owned(), |d| d.join(given));
+        if given.extension().is_some_and(|e| e == "toml") || path.exists() {
             return Family::read(&path);
         }
         let known: Vec<&str> = BUILTIN_FAMILIES.iter().map(|(n, _)| *n).collect();

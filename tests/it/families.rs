@@ -176,7 +176,20 @@ fn suites_draw_rows_from_families() {
     );
     refused("task = \"BlocksTouch-v0\"\ncandidates = [0]", "not both");
     let ok = suite::parse(&tiny("family = \"push\"\ngenerator_seeds = [3, 5]"), "t.toml", None).unwrap();
-    assert_eq!(ok.splits[0].rows.iter().map(|r| r.task.id()).collect::<Vec<_>>(), ["push-3-v0", "push-4-v0"]);
+    let ids = |s: &suite::Suite| s.splits[0].rows.iter().map(|r| r.task.id().to_owned()).collect::<Vec<_>>();
+    assert_eq!(ids(&ok), ["push-3-v0", "push-4-v0"]);
+    // A family file is found beside the suite that names it, with or without the .toml extension,
+    // wherever the command runs.
+    let dir = tempfile::tempdir().unwrap();
+    let push = blockpuzzle::task::family::BUILTIN_FAMILIES.iter().find(|(n, _)| *n == "push").unwrap().1;
+    std::fs::write(dir.path().join("mine"), push).unwrap();
+    std::fs::write(dir.path().join("mine.toml"), push).unwrap();
+    for name in ["mine", "mine.toml"] {
+        let row = format!("family = \"{name}\"\ngenerator_seeds = [3, 5]");
+        let beside = suite::parse(&tiny(&row), "t.toml", Some(dir.path())).unwrap();
+        assert_eq!(ids(&beside), ids(&ok), "{name}");
+    }
+    refused("family = \"mine\"\ngenerator_seeds = [3, 5]", "no such family");
 }
 
 /// The scripted baseline (the solver) on a suite of generated tasks, through the command line:
