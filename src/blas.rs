@@ -74,13 +74,6 @@ pub fn missing_settings(get: impl Fn(&str) -> Option<std::ffi::OsString>) -> Vec
 /// initialisers). Every other command runs no libtorch product and starts once.
 pub const KERNEL_COMMANDS: &[&str] = &["train", "bench", "info"];
 
-/// Whether the command line `args` (from the program name on) runs one of [`KERNEL_COMMANDS`]: its
-/// first word after the program that is not an option.
-pub fn wants_fast_kernels(args: &[std::ffi::OsString]) -> bool {
-    let first = args.iter().skip(1).filter_map(|a| a.to_str()).find(|a| !a.starts_with('-'));
-    first.is_some_and(|w| KERNEL_COMMANDS.contains(&w))
-}
-
 /// Sets what [`missing_settings`] finds missing (OpenBLAS kernels slower
 /// than the CPU supports) by re-executing the current program once with
 /// those variables set. Variables the user set are left alone. Returns

@@ -9,7 +9,7 @@ fn main() {
     // libtorch's OpenBLAS kernels (only the training build loads them), for the commands that use
     // or report them: a second start costs every other command as much again.
     #[cfg(feature = "train")]
-    if blockpuzzle::blas::wants_fast_kernels(&args) {
+    if blockpuzzle::cli::wants_fast_kernels(&args) {
         blockpuzzle::blas::ensure_fast_kernels();
     }
     std::process::exit(blockpuzzle::cli::run(args));

@@ -38,15 +38,27 @@ use zoo::ZooCommand;
 /// so when given one, rather than clap's "unrecognized subcommand".
 pub const TRAINING_COMMANDS: &[&str] = &["train", "bench", "table", "plot", "report", "align", "zoo export"];
 
+/// The command a command line `args` (from the program name on) runs, before clap parses it: its
+/// first two words after the program that are not options (a command and its subcommand).
+fn command_words(args: &[std::ffi::OsString]) -> Vec<&str> {
+    args.iter().skip(1).filter_map(|a| a.to_str()).filter(|a| !a.starts_with('-')).take(2).collect()
+}
+
 /// The entry of [`TRAINING_COMMANDS`] the command line `args` (from the program name on) runs, if
-/// any: its first words after the program that are not options.
+/// any.
 pub fn training_command(args: &[std::ffi::OsString]) -> Option<&'static str> {
-    let words: Vec<&str> =
-        args.iter().skip(1).filter_map(|a| a.to_str()).filter(|a| !a.starts_with('-')).take(2).collect();
+    let words = command_words(args);
     TRAINING_COMMANDS.iter().copied().find(|c| {
         let c: Vec<&str> = c.split(' ').collect();
         words.len() >= c.len() && words[..c.len()] == c[..]
     })
+}
+
+/// Whether the command line `args` (from the program name on) runs one of
+/// [`crate::blas::KERNEL_COMMANDS`], whose start [`crate::blas::ensure_fast_kernels`] is for.
+#[cfg(feature = "train")]
+pub fn wants_fast_kernels(args: &[std::ffi::OsString]) -> bool {
+    command_words(args).first().is_some_and(|w| crate::blas::KERNEL_COMMANDS.contains(w))
 }
 
 /// BlockPuzzle: coloured-block puzzles for the Fetch robot in MuJoCo.

@@ -437,7 +437,7 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
     // Only the commands that run or report libtorch's products start a second time for them.
     let wants =
-        |line: &str| blockpuzzle::blas::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
+        |line: &str| blockpuzzle::cli::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
     assert!(wants("blockpuzzle train --env BlocksTouch-v0") && wants("blockpuzzle bench --train") && wants("bp info"));
     assert!(!wants("blockpuzzle eval --suite layout") && !wants("blockpuzzle envs") && !wants("blockpuzzle --help"));
 }
