@@ -114,11 +114,14 @@ def observation_space(demos: Demos):
     })
 
 
-def to_minari(path, dataset_id: str, *, author: str | None = None, description: str | None = None):
+def to_minari(path, dataset_id: str, *, author: str | None = None, author_email: str | None = None,
+              code_permalink: str | None = None, description: str | None = None):
     """Exports a demos file as the local Minari dataset ``dataset_id`` (in ``$MINARI_DATASETS_PATH``
     or ``~/.minari/datasets``, HDF5): one Minari episode per recorded episode with its seed, and as
     its options the task id, task hash, row and outcome; the dataset's description says the suite,
-    split, engine and build, its requirements the package. Needs ``pip install "blockpuzzle[minari]"``."""
+    split, engine and build, its requirements the package. ``author``, ``author_email`` and
+    ``code_permalink`` (a link to the code that recorded it, at its version) go into the dataset's
+    metadata as Minari asks of published datasets. Needs ``pip install "blockpuzzle[minari]"``."""
     try:
         import minari
     except ImportError as e:
@@ -142,6 +145,7 @@ def to_minari(path, dataset_id: str, *, author: str | None = None, description: 
             "observations: the entities layout padded to the split's largest row count (mask 0)")
     return minari.create_dataset_from_buffers(
         dataset_id, buffers, env=None, algorithm_name="blockpuzzle-solver", author=author,
+        author_email=author_email, code_permalink=code_permalink,
         observation_space=observation_space(demos), action_space=spaces.Box(-1.0, 1.0, (4,), np.float32),
         description=description or made, data_format="hdf5",
         requirements=[f"blockpuzzle=={p.get('blockpuzzle')}"])

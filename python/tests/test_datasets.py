@@ -59,8 +59,12 @@ def test_demos_export_to_minari_and_load_back(tmp_path, monkeypatch):
     suite.write_text(SUITE)
     blockpuzzle.record_demos(suite, tmp_path / "d.safetensors", split="train", episodes=1, threads=2)
     d = blockpuzzle.load_demos(tmp_path / "d.safetensors")
-    blockpuzzle.to_minari(tmp_path / "d.safetensors", "blockpuzzle/demo-test/solver-v0")
+    link = "https://example.org/blockpuzzle/tree/v0.1.0"
+    blockpuzzle.to_minari(tmp_path / "d.safetensors", "blockpuzzle/demo-test/solver-v0", author="A. Tester",
+                          author_email="a@example.org", code_permalink=link)
     ds = minari.load_dataset("blockpuzzle/demo-test/solver-v0")
+    m = ds.storage.metadata
+    assert (m["author"], m["author_email"], m["code_permalink"]) == ({"A. Tester"}, {"a@example.org"}, link), m
     assert ds.total_episodes == len(d) == 2 and ds.total_steps == len(d.rewards)
     assert "demo-test" in ds.storage.metadata["description"] and "MuJoCo" in ds.storage.metadata["description"]
     for i, got in enumerate(ds.iterate_episodes()):
