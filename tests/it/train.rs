@@ -908,10 +908,11 @@ fn the_recorded_runs_configurations_still_read() {
         let file: serde_json::Value = serde_json::from_str(&text).unwrap();
         let c: TrainConfig = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         // Written again, it is today's layout and reads back the same.
-        let again: TrainConfig = serde_json::from_value(serde_json::to_value(&c).unwrap()).unwrap();
+        let written = serde_json::to_value(&c).unwrap();
+        let again: TrainConfig = serde_json::from_value(written.clone()).unwrap();
         assert_eq!(again, c);
         if file.get("shared").is_some() {
-            assert_eq!(file, serde_json::to_value(&c).unwrap(), "{}", path.display());
+            assert_eq!(file, written, "{}", path.display());
             current += 1;
             continue;
         }
@@ -1076,9 +1077,8 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     let b = train(&multi(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
     assert_eq!(comparable(&a), comparable(&branched));
-    let recorded: TrainConfig = serde_json::from_slice(&std::fs::read(child.join("config.json")).unwrap()).unwrap();
-    let parent: TrainConfig = serde_json::from_slice(&std::fs::read(split.path().join("config.json")).unwrap()).unwrap();
-    assert_eq!(recorded.tasks, parent.tasks);
+    let recorded = |dir: &std::path::Path| blockpuzzle::train::RunDir { dir: dir.to_owned() }.read_config().unwrap();
+    assert_eq!(recorded(&child).tasks, recorded(split.path()).tasks);
     assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), [0, 2, 4], "both tasks move up every epoch");
     let state = checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap();
     assert_eq!((state.levels.clone(), state.level), (vec![3, 3], 6));
