@@ -33,6 +33,7 @@ pub mod rollout;
 pub mod rules;
 pub mod saved;
 pub mod scene;
+pub mod stream;
 pub mod suite;
 pub mod task;
 pub mod zoo;

@@ -124,6 +124,13 @@ pub const WORKERS: Bound = bound(
     256,
     "per process: each is a thread with its own environment and replay buffer; run more as MPI ranks",
 );
+/// A stream run's tasks with environments per epoch (`train --active-tasks`).
+pub const ACTIVE_TASKS: Bound = bound(
+    "--active-tasks",
+    1,
+    1_024,
+    "each active task has an environment per worker, built anew every epoch (about a quarter of a second each)",
+);
 /// Transitions per batch and worker.
 pub const BATCH_SIZE: Bound =
     bound("--batch-size", 1, 65_536, "per worker; a batch's activations take batch × hidden × layers × 16 bytes");

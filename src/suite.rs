@@ -151,6 +151,39 @@ pub enum SuiteError {
     Invalid { origin: String, message: String },
 }
 
+/// Generator seeds that a built-in suite holds out: a family's seeds in a split other than `train`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HeldOut {
+    /// The suite.
+    pub suite: String,
+    /// The split that holds them.
+    pub split: String,
+    /// The family's name (as the suite row names it).
+    pub family: String,
+    /// The seeds `[first, end)`.
+    pub seeds: [u64; 2],
+}
+
+/// Every built-in suite's held-out generator seeds (its rows that draw from a family, in every split
+/// but `train`): a training stream must not draw them (`train --families`).
+pub fn held_out_generator_seeds() -> Vec<HeldOut> {
+    let mut out = Vec::new();
+    for (name, text) in BUILTIN {
+        // The built-in suites parse (a test loads every one); a row's file name is its family's.
+        let Ok(spec) = toml::from_str::<SuiteSpec>(text) else { continue };
+        for (split, rows) in spec.splits.iter().filter(|(s, _)| s.as_str() != "train") {
+            for r in rows {
+                if let (Some(family), Some(seeds)) = (&r.family, r.generator_seeds) {
+                    let family =
+                        Path::new(family).file_stem().map_or(family.clone(), |s| s.to_string_lossy().into_owned());
+                    out.push(HeldOut { suite: (*name).to_owned(), split: split.clone(), family, seeds });
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The built-in suite `name`, or the suite file at that path.
 ///
 /// # Errors

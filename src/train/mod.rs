@@ -68,13 +68,30 @@ pub struct TrainConfig {
     /// Environment id or task file (.toml); several, comma-separated (`BlocksTouch-v0,BlocksChoose-v0`),
     /// train one policy on all of them: a task drawn per exploration episode, each with its own
     /// curriculum level, every observation in one layout (the most block slots of any task).
-    #[arg(long, default_value = "", hide_default_value = true, required_unless_present = "suite")]
+    #[arg(long, default_value = "", hide_default_value = true, required_unless_present_any = ["suite", "families"])]
     pub env: String,
     /// Train on the tasks of a suite's split instead of `--env` (a suite name or file, e.g.
     /// `procgen`; generated tasks included), as for an `--env` list.
     #[arg(long, conflicts_with = "env")]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub suite: Option<String>,
+    /// Train on a stream of generated tasks instead of `--env`: the tasks that these families
+    /// (shipped names or family files, comma-separated, e.g. `push,gripper,stack,gather,topple`) give
+    /// for every seed of `--generator-seeds`. Seeds a built-in suite holds out are refused.
+    #[arg(long, conflicts_with_all = ["env", "suite"], requires = "generator_seeds")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub families: Option<String>,
+    /// The generator seeds of `--families`, `FIRST..END` (END excluded): each family's tasks of
+    /// those seeds form the run's pool.
+    #[arg(long, requires = "families")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generator_seeds: Option<crate::stream::SeedRange>,
+    /// A stream run's tasks with environments in one epoch: so many of the pool, taken in turn from
+    /// a permutation drawn anew every pass over it (building a task's environments costs about a
+    /// quarter of a second each).
+    #[arg(long, default_value_t = DEFAULT_ACTIVE_TASKS, value_parser = crate::limits::ACTIVE_TASKS.parser::<usize>())]
+    #[serde(default = "default_active_tasks")]
+    pub active_tasks: usize,
     /// The split of `--suite` to train on.
     #[arg(long, default_value = "train")]
     #[serde(default = "train_split")]
@@ -185,11 +202,23 @@ pub struct TrainConfig {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tasks: Vec<crate::task::TaskSource>,
+    /// A stream run's pool (`--families`), recorded when the run starts: its families by hash, its
+    /// seeds and each task by hash (a resumed run refuses another pool).
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stream: Option<crate::stream::StreamRecord>,
     /// The run this one branched from (`train --branch-from`), recorded in
     /// its `config.json`.
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub branched_from: Option<BranchedFrom>,
+}
+
+/// A stream run's tasks with environments per epoch, unless `--active-tasks` says otherwise.
+pub const DEFAULT_ACTIVE_TASKS: usize = 32;
+
+fn default_active_tasks() -> usize {
+    DEFAULT_ACTIVE_TASKS
 }
 
 fn train_split() -> String {
@@ -431,7 +460,7 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
 /// snapshots, the task and its id (checked by content in [`run_task`]), and
 /// the record of a branch (kept from the run's `config.json`).
 const RESUMABLE_CHANGES: &[&str] =
-    &["epochs", "torch_threads", "snapshot_every", "task", "tasks", "env", "branched_from"];
+    &["epochs", "torch_threads", "snapshot_every", "task", "tasks", "stream", "env", "branched_from"];
 
 /// The fields of two configurations that differ, as the flags that set them
 /// (`--PREFIXfield-name`), each once: the groups of flags (`net`, `shared`,

@@ -343,18 +343,18 @@ pub(crate) struct Planned {
     pub(crate) draw: Option<Draw>,
 }
 
-/// Plays `plan` on `envs`, which hold one environment per worker and task (worker-major:
-/// environment `worker × tasks + task`), in parallel over environments, each playing its episodes
-/// in plan order. Returns the episodes in plan order: what each one plays depends on its
-/// seed and draw alone, so the result is the same for any split over threads.
+/// Plays `plan` on `envs`, which hold one environment per worker and task of `tasks` (worker-major:
+/// environment `worker × tasks.len() + k` plays the run's task `tasks[k]`), in parallel over
+/// environments, each playing its episodes in plan order. Returns the episodes in plan order: what
+/// each one plays depends on its seed and draw alone, so the result is the same for any split over threads.
 pub(crate) fn play_plan(
     envs: &mut VectorEnv,
-    tasks: usize,
+    tasks: &[usize],
     behaviour: &Behaviour,
     plan: &[Planned],
 ) -> Result<Vec<Episode>> {
     let results: Vec<Result<Vec<(usize, Episode)>, EnvError>> = envs.each(|i, env| {
-        let (worker, task) = (i / tasks, i % tasks);
+        let (worker, task) = (i / tasks.len(), tasks[i % tasks.len()]);
         plan.iter()
             .enumerate()
             .filter(|(_, p)| p.worker == worker && p.task == task)
@@ -384,7 +384,7 @@ pub(crate) fn play_all(
         .flat_map(|w| (0..per_worker).map(move |k| (w, k)))
         .map(|(worker, k)| Planned { worker, task: 0, seed: seed_of(worker, k), draw: None })
         .collect();
-    play_plan(envs, 1, behaviour, &plan)
+    play_plan(envs, &[0], behaviour, &plan)
 }
 
 #[cfg(test)]

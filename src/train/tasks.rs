@@ -11,7 +11,61 @@ use anyhow::{bail, Result};
 
 /// Whether `config` names more than one task (a list, or a suite split).
 pub(crate) fn is_multi(config: &TrainConfig) -> bool {
-    config.suite.is_some() || config.env.contains(',')
+    config.suite.is_some() || config.families.is_some() || config.env.contains(',')
+}
+
+/// The pool of a stream run (`--families`, `--generator-seeds`): generated on `threads` threads or
+/// taken from the stream cache; on resume, checked against the pool recorded in `config.json`.
+///
+/// # Errors
+/// An unknown family, held-out seeds, a stream without tasks, another pool than the recorded one.
+fn stream_tasks(
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(Vec<Task>, crate::stream::StreamRecord)> {
+    let (Some(list), Some(range)) = (&config.families, config.generator_seeds) else {
+        bail!("--families and --generator-seeds go together: give both");
+    };
+    if let Some(saved) = saved.filter(|s| s.families.is_some()) {
+        if saved.families != config.families || saved.generator_seeds != config.generator_seeds {
+            let (f, g) = (saved.families.as_deref().unwrap_or(""), saved.generator_seeds.map(|r| r.to_string()));
+            bail!(
+                "--resume: {} trains on the stream --families {f} --generator-seeds {}; this command asks for \
+                 --families {list} --generator-seeds {range}; resume with the run's stream, or start a new run with \
+                 another --run-dir",
+                run.dir.display(),
+                g.unwrap_or_default()
+            );
+        }
+    }
+    let families = crate::stream::families(list)?;
+    let started = std::time::Instant::now();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let pool = crate::stream::pool(&families, range, threads, crate::stream::cache_dir().as_deref(), true)?;
+    eprintln!(
+        "stream: {} tasks from {} famil{} × seeds {range} ({} seeds from the cache, {} checked by the solver, {} \
+         without a task) in {:.1} s",
+        pool.tasks.len(),
+        families.len(),
+        if families.len() == 1 { "y" } else { "ies" },
+        pool.cached,
+        pool.checked,
+        pool.record.seeds_without_task,
+        started.elapsed().as_secs_f64()
+    );
+    if let Some(recorded) = saved.and_then(|s| s.stream.as_ref()) {
+        let changed = recorded.differences(&pool.record);
+        if !changed.is_empty() {
+            bail!(
+                "--resume: the stream's pool differs from the one recorded in {} ({}); restore the families' files, \
+                 or start a new run with another --run-dir",
+                run.config().display(),
+                changed.join("; ")
+            );
+        }
+    }
+    Ok((pool.tasks, pool.record))
 }
 
 /// The ids or files of a comma-separated `--env` list, trimmed.
@@ -55,15 +109,23 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
 /// # Errors
 /// An unknown id, suite or split, a bad task file, a task that changed since the run started, or
 /// settings that apply to one task only (`--counts`, `--expert`).
-pub(crate) fn run_tasks(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Vec<Task>> {
+pub(crate) fn run_tasks(
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(Vec<Task>, Option<crate::stream::StreamRecord>)> {
     if !is_multi(config) {
-        return Ok(vec![run_task(config, run, saved)?]);
+        return Ok((vec![run_task(config, run, saved)?], None));
     }
     if config.counts.is_some() {
         bail!("--counts applies to one task; a multi-task run (--suite or an --env list) takes each task's own counts");
     }
     if config.aggrevated.expert.is_some() {
         bail!("--expert: AggreVaTeD's expert plays one task; train it with one --env");
+    }
+    if config.families.is_some() {
+        let (tasks, record) = stream_tasks(config, run, saved)?;
+        return Ok((tasks, Some(record)));
     }
     let tasks = resolve(config)?;
     if let Some(recorded) = saved.map(|s| &s.tasks).filter(|r| !r.is_empty()) {
@@ -84,11 +146,16 @@ pub(crate) fn run_tasks(config: &TrainConfig, run: &RunDir, saved: Option<&Train
             );
         }
     }
-    Ok(tasks)
+    Ok((tasks, None))
 }
 
-/// A multi-task run's name for its tasks: `SUITE-SPLIT`, or the ids joined by `+`.
+/// A multi-task run's name for its tasks: `SUITE-SPLIT`, `FAMILIES-FIRST-END` for a stream (the
+/// families joined by `+`), or the ids joined by `+`.
 pub(crate) fn label(config: &TrainConfig) -> String {
+    if let (Some(families), Some(range)) = (&config.families, config.generator_seeds) {
+        let names: Vec<String> = families.split(',').map(str::trim).filter(|s| !s.is_empty()).map(env_name).collect();
+        return format!("{}-{}-{}", names.join("+"), range.0[0], range.0[1]);
+    }
     match &config.suite {
         Some(s) => {
             let stem = std::path::Path::new(s).file_stem().map_or(s.clone(), |x| x.to_string_lossy().into_owned());

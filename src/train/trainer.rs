@@ -84,8 +84,11 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     if config.suite.is_none() && config.split != "train" {
         bail!("--split {} is only used with --suite (the split of a suite to train on)", config.split);
     }
-    if config.suite.is_none() && config.env.trim().is_empty() {
-        bail!("no task: pass --env ID (several comma-separated) or --suite S");
+    if config.suite.is_none() && config.families.is_none() && config.env.trim().is_empty() {
+        bail!("no task: pass --env ID (several comma-separated), --suite S, or --families F --generator-seeds A..B");
+    }
+    if config.families.is_some() != config.generator_seeds.is_some() {
+        bail!("--families and --generator-seeds go together: give both (e.g. --families push,gripper --generator-seeds 0..256)");
     }
     let (width, flag) = match config.net.set_width {
         0 => (config.shared.hidden, "--hidden"),
@@ -113,6 +116,9 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
             bail!("--success-threshold must be in [0, 1]");
         }
     }
+    if config.families.is_none() && config.active_tasks != super::DEFAULT_ACTIVE_TASKS {
+        bail!("--active-tasks applies to a stream of generated tasks (--families); leave it out here");
+    }
     if comm.size() > 1 && config.replay == Some(ReplayLayout::Shared) {
         bail!(
             "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
@@ -121,6 +127,35 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The tasks with environments in `epoch` (indices into the run's `n` tasks): a stream run's active
+/// set ([`crate::stream::active_tasks`]), else every task.
+fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
+    match config.stream {
+        Some(_) => crate::stream::active_tasks(config.seed, epoch, n, config.active_tasks),
+        None => (0..n).collect(),
+    }
+}
+
+/// One environment per worker and task of `active` (worker-major), built on the workers' threads,
+/// stepped on one thread per worker.
+fn build_envs(config: &TrainConfig, env_configs: &[EnvConfig], active: &[usize]) -> Result<VectorEnv> {
+    use rayon::prelude::*;
+    let wanted: Vec<&EnvConfig> = (0..config.workers).flat_map(|_| active.iter().map(|&t| &env_configs[t])).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(config.workers)
+        // The MuJoCo XML compiler needs more stack than rayon's default.
+        .stack_size(8 << 20)
+        .build()
+        .map_err(|e| anyhow::anyhow!("cannot start {} threads: {e}", config.workers))?;
+    let built = pool.install(|| {
+        wanted.par_iter().map(|c| crate::env::BlockEnv::new((*c).clone())).collect::<Result<Vec<_>, _>>()
+    })?;
+    let mut envs = VectorEnv::from_envs(built, config.workers)?;
+    // Hindsight colours replay the rules over every substep's contacts: the environments record them.
+    envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
+    Ok(envs)
 }
 
 /// Refuses a task the solver cannot play (an imitation learner would learn to
@@ -234,12 +269,15 @@ fn run_config(
     run: &RunDir,
     saved: Option<&TrainConfig>,
 ) -> Result<(TrainConfig, Vec<Task>)> {
-    let mut tasks = shared_tasks(comm, config, run, saved)?;
+    let (mut tasks, stream) = shared_tasks(comm, config, run, saved)?;
     if let (Some(counts), [task]) = (&config.counts, &mut tasks[..]) {
         *task = task.with_counts(counts)?;
     }
     let mut config = config.clone();
-    if super::tasks::is_multi(&config) {
+    if stream.is_some() {
+        // A stream's pool is recorded by hashes: its tasks are drawn again from the families.
+        config.stream = stream;
+    } else if super::tasks::is_multi(&config) {
         config.tasks = tasks.iter().map(|t| t.source.clone()).collect();
     } else {
         config.task = Some(tasks[0].source.clone());
@@ -405,7 +443,13 @@ struct Trainer<'a> {
     mine: RunDir,
     /// The tasks (one, or a multi-task run's, in its recorded order).
     tasks: Vec<Task>,
-    /// One environment per worker of this rank and task (worker-major: `worker × tasks + task`).
+    /// Every task's environment configuration (one observation layout for all).
+    env_configs: Vec<EnvConfig>,
+    /// The tasks with environments this epoch (indices into `tasks`): all of them, or a stream's
+    /// active set ([`active_set`]).
+    active: Vec<usize>,
+    /// One environment per worker of this rank and active task (worker-major: `worker × active + k`
+    /// holds task `active[k]`).
     envs: VectorEnv,
     learner: Learner,
     /// One buffer per worker (`per-worker`) or one (`shared`).
@@ -475,24 +519,19 @@ impl<'a> Trainer<'a> {
         let max_steps = tasks.iter().map(|t| t.spec.max_episode_steps).max().unwrap_or(0);
         // Sized from the configuration before any environment is built (256 of them take a minute).
         check_memory(&config, env_configs[0].obs_spec().dim(), crate::env::ACTION_DIM, max_steps)?;
-        crate::limits::NUM_ENVS.check_usize(config.workers * tasks.len()).map_err(|e| {
-            anyhow::anyhow!("{e}: {} workers × {} tasks; use fewer workers or tasks", config.workers, tasks.len())
+        let active = active_set(&config, 0, tasks.len());
+        crate::limits::NUM_ENVS.check_usize(config.workers * active.len()).map_err(|e| {
+            anyhow::anyhow!("{e}: {} workers × {} tasks; use fewer workers or tasks", config.workers, active.len())
         })?;
-        // One environment per worker and task, stepped on one thread per worker.
-        let built = (0..config.workers)
-            .flat_map(|_| env_configs.iter())
-            .map(|c| crate::env::BlockEnv::new(c.clone()))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut envs = VectorEnv::from_envs(built, config.workers)?;
-        // Hindsight colours replay the rules over every substep's contacts: the environments record them.
-        envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
-        if config.algo.registration().info.imitates {
+        let mut envs = build_envs(&config, &env_configs, &active)?;
+        // A stream's tasks passed the solver's check when they were generated.
+        if config.algo.registration().info.imitates && config.stream.is_none() {
             solver_plays(&mut envs, &tasks, config.seed)?;
         }
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
         let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
-        let max_levels: Vec<usize> = envs.envs()[..tasks.len()].iter().map(|e| e.max_level()).collect();
+        let max_levels: Vec<usize> = tasks.iter().map(Task::max_level).collect();
         if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
             match &tasks[..] {
                 [task] => bail!("--challenge-share: the task {} has no challenge distribution", task.id()),
@@ -530,6 +569,8 @@ impl<'a> Trainer<'a> {
             run,
             mine,
             tasks,
+            env_configs,
+            active,
             envs,
             learner: Learner { agent: begun.agent, expert, reduce_seconds: 0.0 },
             replays: begun.replays,
@@ -554,6 +595,7 @@ impl<'a> Trainer<'a> {
         let epoch = self.state.epoch;
         let started = Instant::now();
         let cpu_started = cpu_seconds();
+        self.activate(epoch)?;
         self.set_levels(false)?;
         let mut tally = EpochTally::default();
         self.learner.reduce_seconds = 0.0;
@@ -574,11 +616,22 @@ impl<'a> Trainer<'a> {
         Ok(row)
     }
 
+    /// Builds the environments of `epoch`'s active set where it differs from the current one (a
+    /// stream run's; a run of listed tasks keeps its environments).
+    fn activate(&mut self, epoch: usize) -> Result<()> {
+        let active = active_set(&self.config, epoch, self.tasks.len());
+        if active != self.active {
+            self.envs = build_envs(&self.config, &self.env_configs, &active)?;
+            self.active = active;
+        }
+        Ok(())
+    }
+
     /// Sets every environment to its task's level, or (`top`) to its task's maximum level.
     fn set_levels(&mut self, top: bool) -> Result<()> {
-        let n = self.tasks.len();
+        let n = self.active.len();
         for (i, env) in self.envs.envs_mut().iter_mut().enumerate() {
-            let t = i % n;
+            let t = self.active[i % n];
             let level = if top { self.max_levels[t] } else { self.state.levels[t].min(self.max_levels[t]) };
             env.set_level(level)?;
         }
@@ -635,16 +688,16 @@ impl<'a> Trainer<'a> {
                 })
                 .collect::<Vec<_>>()
         });
-        let n = self.tasks.len();
+        let active = &self.active;
         let plan: Vec<Planned> = (0..config.workers)
             .flat_map(|w| (0..config.rollouts).map(move |k| (w, k)))
             .map(|(w, k)| {
                 let seed = stream_seed(config.seed, &[1, self.shard(w) as u64, base + k as u64]);
-                let task = draw_task(seed, n);
+                let task = active[draw_task(seed, active.len())];
                 Planned { worker: w, task, seed, draw: draws.as_ref().map(|d| d[task]) }
             })
             .collect();
-        let eps = play_plan(&mut self.envs, n, &behaviour, &plan)?;
+        let eps = play_plan(&mut self.envs, active, &behaviour, &plan)?;
         self.state.episodes_per_worker += config.rollouts as u64;
         tally.env_seconds += t.elapsed().as_secs_f64();
         let mut rows = Vec::new();
@@ -714,14 +767,14 @@ impl<'a> Trainer<'a> {
     /// own levels), and the task of each test episode.
     #[allow(clippy::type_complexity)]
     fn evaluate(&mut self, epoch: usize) -> Result<(AnyPolicy, Vec<Episode>, Vec<usize>, Vec<Episode>)> {
-        let (seed, n, tasks) = (self.config.seed, self.config.test_episodes, self.tasks.len());
+        let (seed, n, tasks) = (self.config.seed, self.config.test_episodes, self.active.len());
         let shards = self.comm.size() * self.config.workers;
         let plan = |stream: u64| -> Vec<Planned> {
             (0..self.config.workers)
                 .flat_map(|w| (0..n).map(move |k| (w, k)))
                 .map(|(w, k)| {
                     let shard = self.shard(w);
-                    let task = test_task(epoch, shards, n, shard, k, tasks);
+                    let task = self.active[test_task(epoch, shards, n, shard, k, tasks)];
                     let seed = stream_seed(seed, &[stream, epoch as u64, shard as u64, k as u64]);
                     Planned { worker: w, task, seed, draw: None }
                 })
@@ -734,9 +787,9 @@ impl<'a> Trainer<'a> {
         for env in self.envs.envs_mut() {
             env.set_distribution(None)?;
         }
-        let test = play_plan(&mut self.envs, tasks, &greedy, &test_plan)?;
+        let test = play_plan(&mut self.envs, &self.active, &greedy, &test_plan)?;
         self.set_levels(true)?;
-        let finals = play_plan(&mut self.envs, tasks, &greedy, &finals_plan)?;
+        let finals = play_plan(&mut self.envs, &self.active, &greedy, &finals_plan)?;
         Ok((policy, test, test_plan.iter().map(|p| p.task).collect(), finals))
     }
 
@@ -876,16 +929,21 @@ impl<'a> Trainer<'a> {
 /// The run's tasks on every rank: rank 0 resolves them (see [`run_tasks`]) and
 /// sends their recorded form to the others, so all ranks build the same tasks
 /// even when their hosts' task files differ.
-fn shared_tasks(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> Result<Vec<Task>> {
+fn shared_tasks(
+    comm: &Comm,
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(Vec<Task>, Option<crate::stream::StreamRecord>)> {
     if comm.size() == 1 {
         return run_tasks(config, run, saved);
     }
     let mut bytes = Vec::new();
     let tasks = if comm.is_root() {
-        let tasks = run_tasks(config, run, saved)?;
+        let (tasks, stream) = run_tasks(config, run, saved)?;
         let sources: Vec<&crate::task::TaskSource> = tasks.iter().map(|t| &t.source).collect();
-        bytes = serde_json::to_vec(&sources)?;
-        Some(tasks)
+        bytes = serde_json::to_vec(&(sources, &stream))?;
+        Some((tasks, stream))
     } else {
         None
     };
@@ -893,9 +951,9 @@ fn shared_tasks(comm: &Comm, config: &TrainConfig, run: &RunDir, saved: Option<&
     match tasks {
         Some(t) => Ok(t),
         None => {
-            let sources: Vec<crate::task::TaskSource> =
+            let (sources, stream): (Vec<crate::task::TaskSource>, Option<crate::stream::StreamRecord>) =
                 serde_json::from_slice(&bytes).context("the tasks sent by rank 0")?;
-            Ok(sources.iter().map(registry::recorded).collect::<Result<_, _>>()?)
+            Ok((sources.iter().map(registry::recorded).collect::<Result<_, _>>()?, stream))
         }
     }
 }

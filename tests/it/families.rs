@@ -279,3 +279,108 @@ fn cross_task_v2_shows_the_rules_in_training_and_version_1_is_unchanged() {
         .iter()
         .any(|r| r.generated && r.task.spec.robot.gripper == blockpuzzle::rules::Colour::Red));
 }
+
+/// The built-in tasks stay held out: no shipped family draws a task with a built-in task's content,
+/// neither by hash nor with its id and summary set aside (what the task is, whatever it is called).
+/// Every candidate a generator seed may try is drawn (no solver needed: a draw is a pure function).
+#[test]
+fn no_family_generates_a_built_in_task() {
+    use blockpuzzle::task::family::BUILTIN_FAMILIES;
+    let content = |t: &Task| {
+        let mut v = serde_json::to_value(&t.spec).unwrap();
+        v["id"] = serde_json::Value::Null;
+        v["summary"] = serde_json::Value::Null;
+        v.to_string()
+    };
+    let builtins: Vec<Task> =
+        blockpuzzle::env::registry::ids().into_iter().map(|id| blockpuzzle::env::registry::task(id).unwrap()).collect();
+    let (hashes, contents): (Vec<String>, Vec<String>) =
+        builtins.iter().map(|t| (t.source.hash.clone(), content(t))).unzip();
+    // A built-in task's own content is found: the comparison could fail.
+    assert!(contents.contains(&content(&builtins[0])));
+    let mut drawn = 0;
+    for (name, _) in BUILTIN_FAMILIES {
+        let family = Family::load(name, None).unwrap();
+        for seed in 0..60 {
+            for candidate in 0..family.spec.check.max_candidates.min(4) {
+                let Ok(d) = family.draw(seed, candidate) else { continue };
+                assert!(!hashes.contains(&d.task.source.hash), "{name} seed {seed} draws a built-in task");
+                let c = content(&d.task);
+                assert!(!contents.contains(&c), "{name} seed {seed} candidate {candidate} draws a built-in task");
+                drawn += 1;
+            }
+        }
+    }
+    assert!(drawn > 500, "{drawn}");
+}
+
+/// A stream's pool: the families' tasks of every seed in order, a record of them by hash, the disk
+/// cache used the second time (and a stale entry worked out again), held-out seeds refused.
+#[test]
+fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
+    use blockpuzzle::stream::{check_held_out, families, pool, SeedRange, StreamError};
+    let cache = tempfile::tempdir().unwrap();
+    let list = families("gripper, push").unwrap();
+    let range: SeedRange = "0..3".parse().unwrap();
+    let first = pool(&list, range, 2, Some(cache.path()), false).unwrap();
+    assert_eq!((first.cached, first.checked), (0, 6));
+    assert_eq!(first.tasks.len() + first.record.seeds_without_task, 6);
+    let ids: Vec<&str> = first.record.tasks.iter().map(|t| t.id.as_str()).collect();
+    assert_eq!(ids[0], "gripper-0-v0");
+    assert!(ids.iter().position(|i| i.starts_with("push")) > ids.iter().rposition(|i| i.starts_with("gripper")));
+    for (t, r) in first.tasks.iter().zip(&first.record.tasks) {
+        assert_eq!((t.id(), &t.source.hash), (r.id.as_str(), &r.hash));
+        // The same task as the generator keeps for that seed.
+        let g = generate_seed(&list[r.family].1, r.seed).task.unwrap();
+        assert_eq!((g.candidate, &g.hash), (r.candidate, &r.hash));
+    }
+    let second = pool(&list, range, 2, Some(cache.path()), false).unwrap();
+    assert_eq!((second.cached, second.checked), (6, 0));
+    assert_eq!(second.record, first.record);
+    assert!(second.record.differences(&first.record).is_empty());
+    // A cache entry whose hash no longer matches its draw is worked out again, to the same task.
+    let file = std::fs::read_dir(cache.path().join("generated"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with("gripper"))
+        .unwrap();
+    let text = std::fs::read_to_string(&file).unwrap();
+    let hash = &first.record.tasks[0].hash;
+    assert!(text.contains(hash.as_str()));
+    std::fs::write(&file, text.replace(hash.as_str(), "sha256:0000")).unwrap();
+    let third = pool(&list, range, 2, Some(cache.path()), false).unwrap();
+    assert_eq!((third.cached, third.checked), (5, 1));
+    assert_eq!(third.record, first.record);
+    // Another range is another pool, and says so.
+    let other = pool(&list, "1..3".parse().unwrap(), 1, Some(cache.path()), false).unwrap();
+    assert!(other.record.differences(&first.record)[0].contains("generator seeds 1..3 against 0..3"));
+    // procgen's test split holds out the push and gripper seeds 1000..1008.
+    let e = check_held_out(&list, "995..1001".parse().unwrap()).unwrap_err();
+    assert!(matches!(&e, StreamError::HeldOut { suite, .. } if suite == "procgen"), "{e}");
+    assert!(e.to_string().contains("1000..1008") && e.to_string().contains("995..1000"), "{e}");
+    assert!(check_held_out(&list, "1008..1100".parse().unwrap()).is_ok());
+    assert!(pool(&list, "1007..1009".parse().unwrap(), 1, None, false).is_err());
+    // Unknown and repeated families.
+    let e = families("push,nope").unwrap_err().to_string();
+    assert!(e.contains("nope") && e.contains("no such family"), "{e}");
+    assert!(families("push,push").unwrap_err().to_string().contains("twice"));
+    assert!(families(" , ").unwrap_err().to_string().contains("empty"));
+}
+
+/// A stream whose every candidate is rejected is an error naming the reasons.
+#[test]
+fn a_stream_without_tasks_names_the_rejections() {
+    use blockpuzzle::stream::{pool, StreamError};
+    // No green block: the solver cannot play any draw.
+    let text = shipped("gripper")
+        .replace("max_candidates = 20", "max_candidates = 2")
+        .replace("episodes = 20", "episodes = 2")
+        .replace("colour = \"green\"", "colour = \"grey\"");
+    let family = Family::from_toml(&text, "no-green").unwrap();
+    let e = pool(&[("no-green".into(), family)], "0..2".parse().unwrap(), 1, None, false).unwrap_err();
+    assert!(matches!(e, StreamError::Empty { seeds: 2, .. }), "{e}");
+    assert!(
+        e.to_string().contains("4 does not compile, first: gripper seed 0: task: a task needs at least one green"),
+        "{e}"
+    );
+}

@@ -16,6 +16,9 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
     TrainConfig {
         env: env.into(),
         suite: None,
+        families: None,
+        generator_seeds: None,
+        active_tasks: blockpuzzle::train::DEFAULT_ACTIVE_TASKS,
         split: "train".into(),
         counts: None,
         workers: 2,
@@ -42,6 +45,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         net: Default::default(),
         task: None,
         tasks: Vec::new(),
+        stream: None,
         branched_from: None,
     }
 }
@@ -1200,4 +1204,98 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     assert!(!nowhere.exists());
     let other = TrainConfig { env: "BlocksTouch-v0,BlocksStack-v0".into(), ..multi(4) };
     refused(other, straight.path(), true, &["differ from those recorded", "BlocksChoose-v0", "BlocksStack-v0"]);
+}
+
+/// A stream run: the families' tasks of a seed range as its pool, a few of them with environments
+/// each epoch (a new set every epoch here), the pool recorded by hash; it resumes exactly, refuses
+/// another stream on resume, and its policy names the pool's tasks.
+#[test]
+fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly() {
+    let stream = |epochs| TrainConfig {
+        env: String::new(),
+        families: Some("gripper,push".into()),
+        generator_seeds: Some("0..3".parse().unwrap()),
+        active_tasks: 2,
+        algo: Algo::named("dagger").unwrap(),
+        net: NetConfig { net: NetKind::Entity, ..NetConfig::default() },
+        ..tiny("", epochs)
+    };
+    assert_eq!(stream(1).task_id(), "gripper+push-0-3");
+    assert!(stream(1).default_run_dir().to_string_lossy().starts_with("runs/gripper+push-0-3-dagger-entity"));
+    let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = train(&stream(3), straight.path(), false, &mut quiet).unwrap();
+    train(&stream(2), split.path(), false, &mut quiet).unwrap();
+    // Another stream on resume is refused, naming both; nothing of the run changes.
+    let other = TrainConfig { generator_seeds: Some("0..4".parse().unwrap()), ..stream(3) };
+    let e = format!("{:#}", train(&other, split.path(), true, &mut quiet).unwrap_err());
+    assert!(e.contains("--generator-seeds 0..3") && e.contains("--generator-seeds 0..4"), "{e}");
+    let b = train(&stream(3), split.path(), true, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    assert!(a.iter().all(|r| r.level == 0) && a[2].env_steps > a[0].env_steps);
+    let config = blockpuzzle::train::RunDir { dir: straight.path().to_owned() }.read_config().unwrap();
+    let record = config.stream.clone().unwrap();
+    assert!(config.tasks.is_empty() && config.task.is_none());
+    assert_eq!(record.generator_seeds, [0, 3]);
+    assert_eq!(record.families.iter().map(|f| f.family.as_str()).collect::<Vec<_>>(), ["gripper", "push"]);
+    let pool = record.tasks.len();
+    assert!(pool >= 4, "{record:?}");
+    // The policy names every task of the pool (by content), in the layout of the most blocks.
+    let saved = load_policy(&straight.path().join("policy.json")).unwrap();
+    assert_eq!(saved.env_id, "gripper+push-0-3");
+    let hashes: Vec<&str> = saved.tasks.iter().map(|t| t.hash.as_str()).collect();
+    assert_eq!(hashes, record.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>());
+    // `--active-tasks` belongs to streams.
+    let e = format!(
+        "{:#}",
+        train(
+            &TrainConfig { active_tasks: 3, ..tiny("BlocksTouch-v0", 1) },
+            &straight.path().join("x"),
+            false,
+            &mut quiet
+        )
+        .unwrap_err()
+    );
+    assert!(e.contains("--active-tasks") && e.contains("--families"), "{e}");
+    assert!(!straight.path().join("x").exists());
+}
+
+/// A stream's bad input is refused before anything is written, each error naming the problem and the fix.
+#[test]
+fn bad_streams_are_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let cache = dir.path().join("cache");
+    let refused = |args: &[&str], wanted: &[&str]| {
+        let base =
+            ["train", "--algo", "dagger", "--net", "entity", "--epochs", "1", "--run-dir", run.to_str().unwrap()];
+        let out = std::process::Command::new(crate::common::CLI)
+            .args(base.iter().chain(args))
+            .env("BLOCKPUZZLE_CACHE_DIR", &cache)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} was accepted");
+        for w in wanted {
+            assert!(e.contains(w), "{args:?}: {e}");
+        }
+        assert!(!run.exists(), "{args:?} left {}", run.display());
+    };
+    refused(&["--families", "push,nope", "--generator-seeds", "0..4"], &["nope", "no such family", "push, gripper"]);
+    refused(&["--families", "push", "--generator-seeds", "4..4"], &["4..4 is empty", "FIRST..END"]);
+    refused(&["--families", "push", "--generator-seeds", "4"], &["FIRST..END"]);
+    refused(
+        &["--families", "gripper,push", "--generator-seeds", "990..1010"],
+        &["suite procgen", "1000..1008", "990..1000"],
+    );
+    refused(&["--families", "push"], &["--generator-seeds"]);
+    refused(&["--env", "BlocksTouch-v0", "--generator-seeds", "0..4"], &["--families"]);
+    let family = dir.path().join("no-green.toml");
+    let text = std::fs::read_to_string(format!("{}/families/gripper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let text =
+        text.replace("max_candidates = 20", "max_candidates = 1").replace("colour = \"green\"", "colour = \"grey\"");
+    std::fs::write(&family, text).unwrap();
+    refused(
+        &["--families", family.to_str().unwrap(), "--generator-seeds", "0..2"],
+        &["no task in the stream", "green"],
+    );
 }
