@@ -106,6 +106,10 @@ pub struct StreamRecord {
     pub tasks: Vec<PoolTask>,
     /// Seeds (over all families) whose candidates all failed: they give no task.
     pub seeds_without_task: usize,
+    /// The most blocks any of the families can draw (the sum of its groups' largest counts): a stream
+    /// run's observation layout has so many block slots, whichever seeds its pool holds, so that runs
+    /// over pools of the same families read the same layout.
+    pub max_blocks: usize,
 }
 
 impl StreamRecord {
@@ -182,6 +186,11 @@ pub enum StreamError {
     /// A thread pool that cannot be made.
     #[error("{0}")]
     Threads(String),
+}
+
+/// The most blocks `family` can draw: the sum of its groups' largest counts.
+pub fn max_blocks(family: &Family) -> usize {
+    family.spec.blocks.iter().map(|g| g.get_ref().count[1]).sum()
 }
 
 /// Loads the families of a comma-separated list (shipped names or files).
@@ -267,6 +276,7 @@ pub fn pool(
         generator_seeds: range.0,
         tasks: Vec::new(),
         seeds_without_task: 0,
+        max_blocks: families.iter().map(|(_, f)| max_blocks(f)).max().unwrap_or(0),
     };
     let (mut tasks, mut cached, mut checked) = (Vec::new(), 0, 0);
     let (mut rejected, mut examples) = (BTreeMap::<String, usize>::new(), BTreeMap::<String, String>::new());

@@ -45,6 +45,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("procgen", include_str!("../suites/procgen.toml")),
     ("compose", include_str!("../suites/compose.toml")),
     ("cross-task-v2", include_str!("../suites/cross-task-v2.toml")),
+    ("procgen-v2", include_str!("../suites/procgen-v2.toml")),
 ];
 
 /// A suite file as written.

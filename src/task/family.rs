@@ -29,6 +29,9 @@ pub const BUILTIN_FAMILIES: &[(&str, &str)] = &[
     ("gripper", include_str!("../../families/gripper.toml")),
     ("stack", include_str!("../../families/stack.toml")),
     ("gather", include_str!("../../families/gather.toml")),
+    ("topple", include_str!("../../families/topple.toml")),
+    ("avoid", include_str!("../../families/avoid.toml")),
+    ("clutter", include_str!("../../families/clutter.toml")),
 ];
 
 /// A floor choice: no rule object, or one of the four colours.

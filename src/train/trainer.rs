@@ -510,8 +510,9 @@ impl<'a> Trainer<'a> {
         let (config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
         let thresholds: Vec<f64> =
             tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
-        // One layout for every task: the most block slots of any.
-        let slots = tasks.iter().map(Task::object_count).max().unwrap_or(0);
+        // One layout for every task: the most block slots of any (a stream: of any its families can draw).
+        let most = config.stream.as_ref().map_or(0, |s| s.max_blocks);
+        let slots = tasks.iter().map(Task::object_count).max().unwrap_or(0).max(most);
         let env_configs: Vec<EnvConfig> = tasks
             .iter()
             .map(|t| EnvConfig { obs_mode: config.net.obs_mode(), slots, ..EnvConfig::new(t.clone()) })

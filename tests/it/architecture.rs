@@ -96,6 +96,7 @@ fn the_environment_core_uses_nothing_of_the_training_stack() {
         "rules",
         "saved",
         "scene",
+        "stream",
         "suite",
         "task",
         "zoo",

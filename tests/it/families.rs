@@ -18,7 +18,7 @@ fn quick(name: &str) -> Family {
 
 #[test]
 fn the_shipped_families_read() {
-    for name in ["push", "gripper", "stack", "gather"] {
+    for name in ["push", "gripper", "stack", "gather", "topple", "avoid", "clutter"] {
         let f = Family::from_toml(&shipped(name), name).unwrap();
         assert_eq!(f.spec.family, name);
         assert!(f.hash.starts_with("sha256:"));

@@ -99,6 +99,34 @@ fn sac_over_two_ranks_learns_exactly_what_one_process_of_two_workers_learns() {
     assert_same_run(&threads, &ranks, "SAC, 2 ranks × 1 worker");
 }
 
+/// A stream of generated tasks over two ranks: rank 0 draws the pool and sends it, every rank
+/// builds the same active set each epoch (a new one every epoch here), and the run is bit for bit
+/// the one process's (the documented tolerance is none). The stream cache is a folder of the test's.
+#[test]
+fn a_stream_over_two_ranks_learns_exactly_what_one_process_of_two_workers_learns() {
+    let dir = tempfile::tempdir().unwrap();
+    let (threads, ranks) = (dir.path().join("threads"), dir.path().join("ranks"));
+    let stream = |run: &Path, workers: usize| {
+        let s = format!(
+            "train --algo dagger --net entity --families gripper,push --generator-seeds 0..3 --active-tasks 2 \
+             --epochs 2 --cycles 2 --batches 3 --batch-size 32 --test-episodes 2 --torch-threads 1 --seed 5 \
+             --workers {workers} --run-dir"
+        );
+        s.split_whitespace().map(str::to_owned).chain([run.display().to_string()]).collect::<Vec<_>>()
+    };
+    let cache = dir.path().join("cache");
+    ok(Command::new(BP).args(stream(&threads, 2)).env("BLOCKPUZZLE_CACHE_DIR", &cache).output().unwrap());
+    // An empty cache on the ranks' side: rank 0 works the pool out again, the others receive it.
+    let fresh = dir.path().join("cache-ranks");
+    ok(mpirun(2).args(stream(&ranks, 1)).env("BLOCKPUZZLE_CACHE_DIR", &fresh).output().unwrap());
+    assert_same_run(&threads, &ranks, "a stream, 2 ranks × 1 worker");
+    let config = |run: &Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(run.join("config.json")).unwrap()).unwrap()
+    };
+    assert_eq!(config(&threads)["stream"], config(&ranks)["stream"]);
+    assert!(config(&ranks)["stream"]["tasks"].as_array().unwrap().len() >= 4);
+}
+
 /// With three or four shards the order of the gradient sum matters in
 /// floating point: it is the global shard order for any split into ranks.
 #[test]

@@ -1244,6 +1244,13 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     assert_eq!(saved.env_id, "gripper+push-0-3");
     let hashes: Vec<&str> = saved.tasks.iter().map(|t| t.hash.as_str()).collect();
     assert_eq!(hashes, record.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>());
+    // The layout has a slot for every block the families can draw (push: 1 + 1 + 1 + 2 + 2), whichever
+    // seeds the pool holds, so that pools of the same families train policies of one layout.
+    assert_eq!(record.max_blocks, 7);
+    let most = saved.tasks.iter().map(|t| blockpuzzle::env::registry::recorded(t).unwrap().object_count()).max();
+    assert!(most.unwrap() <= 7);
+    let spec = blockpuzzle::env::ObsSpec::new(blockpuzzle::env::ObsMode::Entities, 7);
+    assert_eq!(checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap().obs_dim, spec.dim());
     // `--active-tasks` belongs to streams.
     let e = format!(
         "{:#}",
