@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The Procgen curve of issue 59 (results/generalist.md): the generalist's recipe
-# (experiments/generalist/stream-dagger.toml: DAgger, entity network, 10 epochs, the same env-step
+# (experiments/generalist/stream-dagger.toml: DAgger, entity network 64 wide, 30 epochs, the same env-step
 # budget at every point) over pools of 21, 70, 259 and 1029 generated tasks (generator seeds 200..203,
 # 200..210, 200..237, 200..347 of the seven families), each evaluated on procgen-v2 after its last
 # epoch -> results/generalist/curve-TASKS-sSEED.procgen-v2.{json,md} (the 1029-task point is the

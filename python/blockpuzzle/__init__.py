@@ -97,8 +97,8 @@ NAMESPACE = "BlockPuzzle"
 
 
 def generate_tasks(family, out, seed: int = 0, count: int = 10, threads: int | None = None) -> dict:
-    """Task files drawn from a task family (a shipped one by name, "push", "gripper", "stack" or
-    "gather", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
+    """Task files drawn from a task family (a shipped one by name, "push", "gripper", "stack",
+    "gather", "topple", "avoid" or "clutter", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
     ``blockpuzzle task generate``'s code.
     Writes ``out/ID.toml`` per task and ``out/generated.json``, and returns that record (the family's
     hash, each task's id, hash and the solver's success, the rejections by reason). Deterministic

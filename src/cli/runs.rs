@@ -32,7 +32,7 @@ pub(super) struct TrainArgs {
 }
 
 #[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay"])))]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay", "scaling"])))]
 pub(super) struct PlotArgs {
     /// Run directory whose success.png to redraw.
     #[arg(long)]
@@ -45,12 +45,24 @@ pub(super) struct PlotArgs {
     /// Legend labels of the --overlay curves, in order (default: from each run's config, or the file name).
     #[arg(long, num_args = 1..)]
     labels: Vec<String>,
-    /// Output PNG of --overlay.
+    /// Suite results (JSON of `eval --suite`) as `X:FILE`, drawn as train and test success against
+    /// X on a logarithmic axis (needs --out), e.g. `--scaling 21:curve-21-s0.json 70:curve-70-s0.json`
+    /// for success against the number of training tasks; a table of the points goes to stdout.
+    #[arg(long, num_args = 1.., requires = "out", conflicts_with = "overlay")]
+    scaling: Vec<String>,
+    /// With --scaling: a suite result (e.g. the solver's) drawn as dashed train and test lines.
+    #[arg(long, requires = "scaling")]
+    reference: Option<PathBuf>,
+    /// With --scaling: what X counts.
+    #[arg(long, default_value = "distinct training tasks", requires = "scaling")]
+    x_label: String,
+    /// Output PNG of --overlay or --scaling.
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Title of the --overlay figure.
-    #[arg(long, default_value = "Finals success (maximum level)")]
-    title: String,
+    /// Title of the --overlay figure (default: "Finals success (maximum level)") or of the --scaling
+    /// one (default: "Success against X on SUITE").
+    #[arg(long)]
+    title: Option<String>,
 }
 
 /// The training settings of a `blockpuzzle train ...` command line (`args`
@@ -181,12 +193,15 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
     if let Some(out) = &a.out {
         crate::train::plot::png_only(out)?;
     }
-    if let Some(dir) = a.run_dir {
+    if let Some(dir) = a.run_dir.clone() {
         let (config, rows) = read_run(&dir)?;
         let max_level = run_max_level(&config)?;
         let run = crate::train::RunDir { dir };
         crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());
+    }
+    if let (Some(out), false) = (&a.out, a.scaling.is_empty()) {
+        return scaling(&a, out);
     }
     if let Some(out) = a.out {
         if !a.labels.is_empty() && a.labels.len() != a.overlay.len() {
@@ -210,9 +225,69 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
             };
             runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
         }
-        crate::train::plot::overlay(&out, &a.title, &runs)?;
+        let title = a.title.as_deref().unwrap_or("Finals success (maximum level)");
+        crate::train::plot::overlay(&out, title, &runs)?;
         println!("wrote {}", out.display());
     }
+    Ok(())
+}
+
+/// `plot --scaling`: the points' figure, and their table (Markdown) on stdout.
+fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
+    use crate::train::plot::ScalingPoint;
+    let means = |path: &Path| -> Result<(f64, f64, String)> {
+        let r = crate::results::read(path)?.result;
+        let mean = |name: &str| {
+            r.splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: no `{name}` split evaluated; --scaling takes suite results of both splits",
+                    path.display()
+                )
+            })
+        };
+        Ok((mean("train")?, mean("test")?, r.suite.name.clone()))
+    };
+    let mut points = Vec::new();
+    let mut table = String::from("| x | train | test | gap | result |\n|---:|---:|---:|---:|---|\n");
+    let mut suites = Vec::new();
+    for arg in &a.scaling {
+        let Some((x, file)) = arg.split_once(':') else {
+            bail!("--scaling {arg}: write each point as X:FILE, e.g. 64:results/curve-64.json");
+        };
+        let x: f64 = x.trim().parse().map_err(|_| anyhow::anyhow!("--scaling {arg}: {x:?} is not a number"))?;
+        let (train, test, suite) = means(Path::new(file))?;
+        suites.push(suite);
+        table.push_str(&format!("| {x} | {train:.3} | {test:.3} | {:.3} | `{file}` |\n", train - test));
+        points.push(ScalingPoint { x, train, test });
+    }
+    let reference = match &a.reference {
+        Some(path) => {
+            let (train, test, suite) = means(path)?;
+            suites.push(suite);
+            table.push_str(&format!(
+                "| reference | {train:.3} | {test:.3} | {:.3} | `{}` |\n",
+                train - test,
+                path.display()
+            ));
+            let name = crate::results::read(path)?.result.policy;
+            Some((name, train, test))
+        }
+        None => None,
+    };
+    suites.dedup();
+    if suites.len() > 1 {
+        bail!("--scaling: the results are of several suites ({}); give results of one suite", suites.join(", "));
+    }
+    let title = a.title.clone().unwrap_or_else(|| format!("Success against {} on {}", a.x_label, suites[0]));
+    crate::train::plot::scaling(
+        out,
+        &title,
+        &a.x_label,
+        &points,
+        reference.as_ref().map(|(n, tr, te)| (n.as_str(), *tr, *te)),
+    )?;
+    print!("{table}");
+    println!("wrote {}", out.display());
     Ok(())
 }
 

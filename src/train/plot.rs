@@ -261,3 +261,94 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
         root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
     })
 }
+
+/// One point of a scaling figure: the x value (e.g. the number of distinct training tasks) and the
+/// train and test splits' mean success of one result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalingPoint {
+    pub x: f64,
+    pub train: f64,
+    pub test: f64,
+}
+
+/// Train and test success against `x_desc` on a base-2 logarithmic axis (the Procgen curve): every
+/// point as a marker, a line through the mean at each x, and `reference` (train, test) drawn as
+/// dashed horizontal lines (e.g. the solver's), written to `path`.
+///
+/// # Errors
+/// No point, an x not above 0, a missing font or an unwritable file.
+pub fn scaling(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    points: &[ScalingPoint],
+    reference: Option<(&str, f64, f64)>,
+) -> Result<()> {
+    png_only(path)?;
+    if points.is_empty() {
+        bail!("no point to draw: give at least one");
+    }
+    if let Some(p) = points.iter().find(|p| !(p.x > 0.0 && p.x.is_finite())) {
+        bail!("x = {} cannot stand on a logarithmic axis: give x above 0", p.x);
+    }
+    register_font()?;
+    crate::io::write_atomic_via(path, |tmp| {
+        let root = BitMapBackend::new(tmp, (900, 560)).into_drawing_area();
+        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
+        root.fill(&WHITE).map_err(draw)?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
+        let (lo, hi) = points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
+        let mut chart = ChartBuilder::on(&root)
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(54)
+            .build_cartesian_2d((lo / 1.5..hi * 1.5).log_scale().base(2.0), 0f64..1.02f64)
+            .map_err(draw)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc("success rate")
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .draw()
+            .map_err(draw)?;
+        let mut xs: Vec<f64> = points.iter().map(|p| p.x).collect();
+        xs.sort_by(f64::total_cmp);
+        xs.dedup();
+        let series: [(&str, RGBColor, fn(&ScalingPoint) -> f64); 2] =
+            [("train split", RGBColor(30, 90, 200), |p| p.train), ("test split", RGBColor(200, 40, 40), |p| p.test)];
+        for (label, colour, of) in series {
+            let means: Vec<(f64, f64)> = xs
+                .iter()
+                .map(|&x| {
+                    let at: Vec<f64> = points.iter().filter(|p| p.x == x).map(of).collect();
+                    (x, at.iter().sum::<f64>() / at.len() as f64)
+                })
+                .collect();
+            chart
+                .draw_series(LineSeries::new(means, colour.stroke_width(2)))
+                .map_err(draw)?
+                .label(format!("{label} (mean over seeds)"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            chart.draw_series(points.iter().map(|p| Circle::new((p.x, of(p)), 4, colour.filled()))).map_err(draw)?;
+        }
+        if let Some((name, train, test)) = reference {
+            for (value, colour, which) in
+                [(train, RGBColor(30, 90, 200), "train"), (test, RGBColor(200, 40, 40), "test")]
+            {
+                let dashes = DashedLineSeries::new(
+                    [(lo / 1.5, value), (hi * 1.5, value)],
+                    8,
+                    6,
+                    colour.mix(0.6).stroke_width(1),
+                );
+                chart
+                    .draw_series(dashes)
+                    .map_err(draw)?
+                    .label(format!("{name}, {which}"))
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.mix(0.6).stroke_width(1)));
+            }
+        }
+        legend(&mut chart).map_err(draw)?;
+        root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
+    })
+}

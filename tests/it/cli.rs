@@ -436,8 +436,7 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     let set = blockpuzzle::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
     assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
     // Only the commands that run or report libtorch's products start a second time for them.
-    let wants =
-        |line: &str| blockpuzzle::cli::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
+    let wants = |line: &str| blockpuzzle::cli::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
     assert!(wants("blockpuzzle train --env BlocksTouch-v0") && wants("blockpuzzle bench --train") && wants("bp info"));
     assert!(!wants("blockpuzzle eval --suite layout") && !wants("blockpuzzle envs") && !wants("blockpuzzle --help"));
 }
@@ -521,4 +520,41 @@ fn training_commands_are_named_once() {
     }
     // The build without them (the Python package's command) says which build has them:
     // python/tests/test_cli.py.
+}
+
+/// `plot --scaling`: suite results against a number (the Procgen curve), with a table of the points;
+/// malformed points, an x the logarithmic axis cannot take, and results of several suites refused.
+#[test]
+fn plot_scaling_draws_results_against_a_count_and_refuses_what_it_cannot_draw() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("curve.png");
+    let shipped = |name: &str| format!("{}/results/generalization/mujoco-2.2.2/{name}", env!("CARGO_MANIFEST_DIR"));
+    let (solver, multi) =
+        (shipped("baseline-scripted.procgen.json"), shipped("cross-task-v2-dagger-entity.procgen.json"));
+    let point = |x: &str, f: &str| format!("{x}:{f}");
+    let args = |points: &[String], extra: &[&str]| {
+        let mut a = vec!["plot".to_owned(), "--scaling".to_owned()];
+        a.extend(points.iter().cloned());
+        a.extend(["--out".to_owned(), png.display().to_string()]);
+        a.extend(extra.iter().map(|s| (*s).to_owned()));
+        a
+    };
+    let run = |a: &[String]| bp(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(&args(&[point("16", &multi), point("64", &solver)], &["--reference", &solver]));
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    let table = text(&o);
+    // The solver's procgen numbers, as its result file holds them.
+    assert!(table.contains("| 64 | 0.947 | 0.963 | -0.015 |") && table.contains("| reference |"), "{table}");
+    std::fs::remove_file(&png).unwrap();
+    for (bad, wanted) in [
+        (args(&[multi.clone()], &[]), "X:FILE"),
+        (args(&[point("0", &multi)], &[]), "logarithmic"),
+        (args(&[point("abc", &multi)], &[]), "not a number"),
+        (args(&[point("4", &multi), point("8", &shipped("baseline-scripted.layout.json"))], &[]), "several suites"),
+    ] {
+        let o = run(&bad);
+        assert!(!o.status.success() && text(&o).contains(wanted), "{bad:?}: {}", text(&o));
+        assert!(!png.exists());
+    }
 }
