@@ -90,7 +90,7 @@ pub struct TrainConfig {
     /// a permutation drawn anew every pass over it (building a task's environments costs about a
     /// quarter of a second each).
     #[arg(long, default_value_t = DEFAULT_ACTIVE_TASKS, value_parser = crate::limits::ACTIVE_TASKS.parser::<usize>())]
-    #[serde(default = "default_active_tasks")]
+    #[serde(default = "default_active_tasks", skip_serializing_if = "is_default_active_tasks")]
     pub active_tasks: usize,
     /// The split of `--suite` to train on.
     #[arg(long, default_value = "train")]
@@ -219,6 +219,11 @@ pub const DEFAULT_ACTIVE_TASKS: usize = 32;
 
 fn default_active_tasks() -> usize {
     DEFAULT_ACTIVE_TASKS
+}
+
+/// Runs of listed tasks (and streams at the default) keep `config.json` as it was before streams.
+fn is_default_active_tasks(n: &usize) -> bool {
+    *n == DEFAULT_ACTIVE_TASKS
 }
 
 fn train_split() -> String {
