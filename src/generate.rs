@@ -146,13 +146,7 @@ fn check_seed(family: &Family, seed: u64) -> SeedResult {
 /// A thread pool that cannot be made.
 pub fn generate(family: &Family, first: u64, count: usize, threads: usize) -> Result<Vec<SeedResult>, String> {
     use rayon::prelude::*;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        // Each thread compiles MuJoCo models (the XML compiler needs more stack than rayon's
-        // default 2 MB): the main thread's 8 MB.
-        .stack_size(8 << 20)
-        .build()
-        .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
+    let pool = crate::env::vector::model_threads(threads)?;
     Ok(pool.install(|| (0..count as u64).into_par_iter().map(|k| generate_seed(family, first + k)).collect()))
 }
 

@@ -153,7 +153,7 @@ pub struct Pool {
     pub tasks: Vec<Task>,
     /// The record.
     pub record: StreamRecord,
-    /// Seeds taken from the disk cache, and seeds worked out by the solver's check.
+    /// Seeds taken from the disk cache.
     pub cached: usize,
     /// Seeds worked out by the solver's check in this call.
     pub checked: usize,
@@ -280,12 +280,7 @@ pub fn pool(
     };
     let (mut tasks, mut cached, mut checked) = (Vec::new(), 0, 0);
     let (mut rejected, mut examples) = (BTreeMap::<String, usize>::new(), BTreeMap::<String, String>::new());
-    let threadpool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        // The MuJoCo XML compiler needs more stack than rayon's default (as in `generate`).
-        .stack_size(8 << 20)
-        .build()
-        .map_err(|e| StreamError::Threads(format!("cannot start {threads} threads: {e}")))?;
+    let threadpool = crate::env::vector::model_threads(threads).map_err(StreamError::Threads)?;
     let total = range.len() * families.len() as u64;
     let bar = if progress { crate::progress::bar(total, "generator seeds") } else { indicatif::ProgressBar::hidden() };
     for (index, (_, family)) in families.iter().enumerate() {

@@ -16,6 +16,20 @@
 use super::{BlockEnv, EnvConfig, EnvError, Info, ObsSpec, ACTION_DIM};
 use rayon::prelude::*;
 
+/// A pool of `threads` threads (at least one) on which MuJoCo models can be compiled: each gets the
+/// main thread's 8 MB of stack, since the XML compiler needs more than rayon's default 2 MB. Building
+/// environments ([`BlockEnv::new`](super::BlockEnv::new)) or generating tasks in parallel runs on one.
+///
+/// # Errors
+/// A pool that cannot be started, in words.
+pub fn model_threads(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .stack_size(8 << 20)
+        .build()
+        .map_err(|e| format!("cannot start {threads} threads: {e}"))
+}
+
 /// N environments and the K threads that step them.
 pub struct VectorEnv {
     envs: Vec<BlockEnv>,

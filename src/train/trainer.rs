@@ -143,12 +143,7 @@ fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
 fn build_envs(config: &TrainConfig, env_configs: &[EnvConfig], active: &[usize]) -> Result<VectorEnv> {
     use rayon::prelude::*;
     let wanted: Vec<&EnvConfig> = (0..config.workers).flat_map(|_| active.iter().map(|&t| &env_configs[t])).collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(config.workers)
-        // The MuJoCo XML compiler needs more stack than rayon's default.
-        .stack_size(8 << 20)
-        .build()
-        .map_err(|e| anyhow::anyhow!("cannot start {} threads: {e}", config.workers))?;
+    let pool = crate::env::vector::model_threads(config.workers).map_err(anyhow::Error::msg)?;
     let built = pool.install(|| {
         wanted.par_iter().map(|c| crate::env::BlockEnv::new((*c).clone())).collect::<Result<Vec<_>, _>>()
     })?;
