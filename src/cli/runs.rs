@@ -235,7 +235,8 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
 /// `plot --scaling`: the points' figure, and their table (Markdown) on stdout.
 fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
     use crate::train::plot::ScalingPoint;
-    let means = |path: &Path| -> Result<(f64, f64, String)> {
+    // A result's train and test means, its suite and its policy's name.
+    let means = |path: &Path| -> Result<(f64, f64, String, String)> {
         let r = crate::results::read(path)?.result;
         let mean = |name: &str| {
             r.splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success).ok_or_else(|| {
@@ -245,7 +246,7 @@ fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
                 )
             })
         };
-        Ok((mean("train")?, mean("test")?, r.suite.name.clone()))
+        Ok((mean("train")?, mean("test")?, r.suite.name.clone(), r.policy.clone()))
     };
     let mut points = Vec::new();
     let mut table = String::from("| x | train | test | gap | result |\n|---:|---:|---:|---:|---|\n");
@@ -255,25 +256,25 @@ fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
             bail!("--scaling {arg}: write each point as X:FILE, e.g. 64:results/curve-64.json");
         };
         let x: f64 = x.trim().parse().map_err(|_| anyhow::anyhow!("--scaling {arg}: {x:?} is not a number"))?;
-        let (train, test, suite) = means(Path::new(file))?;
+        let (train, test, suite, _) = means(Path::new(file))?;
         suites.push(suite);
         table.push_str(&format!("| {x} | {train:.3} | {test:.3} | {:.3} | `{file}` |\n", train - test));
         points.push(ScalingPoint { x, train, test });
     }
     let reference = match &a.reference {
         Some(path) => {
-            let (train, test, suite) = means(path)?;
+            let (train, test, suite, name) = means(path)?;
             suites.push(suite);
             table.push_str(&format!(
                 "| reference | {train:.3} | {test:.3} | {:.3} | `{}` |\n",
                 train - test,
                 path.display()
             ));
-            let name = crate::results::read(path)?.result.policy;
             Some((name, train, test))
         }
         None => None,
     };
+    suites.sort();
     suites.dedup();
     if suites.len() > 1 {
         bail!("--scaling: the results are of several suites ({}); give results of one suite", suites.join(", "));
