@@ -30,6 +30,11 @@ pub struct SavedPolicy {
     /// one task and in policies saved before it was recorded).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tasks: Vec<crate::task::TaskSource>,
+    /// A policy trained on a stream of generated tasks (`train --families F --generator-seeds A..B`): the
+    /// stream's record, from which its tasks are drawn again ([`SavedPolicy::training_tasks`]); `tasks` is
+    /// then empty (a thousand tasks by content would be megabytes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stream: Option<crate::stream::StreamRecord>,
     /// Epochs of training behind it.
     pub epoch: usize,
     /// Environment steps of training behind it (absent in policies saved before it was recorded).
@@ -64,15 +69,35 @@ impl SavedPolicy {
 }
 
 impl SavedPolicy {
+    /// The tasks it was trained on, by content, in the run's order: its one task, a multi-task run's
+    /// tasks, or a stream's drawn again from its record (empty for policies saved before tasks were files).
+    ///
+    /// # Errors
+    /// A stream record whose tasks do not draw as recorded ([`crate::stream::StreamRecord::draw`]).
+    pub fn training_tasks(&self) -> Result<Vec<crate::task::TaskSource>, crate::stream::RecordError> {
+        Ok(match (&self.task, &self.stream) {
+            (Some(t), _) => vec![t.clone()],
+            (None, Some(stream)) => stream.draw()?.into_iter().map(|t| t.source).collect(),
+            (None, None) => self.tasks.clone(),
+        })
+    }
+
+    /// Whether it was trained on more than one task (a list, a suite split or a stream).
+    pub fn is_multi_task(&self) -> bool {
+        !self.tasks.is_empty() || self.stream.is_some()
+    }
+
     /// The policy as results name it: `name` as the user gave it and the
     /// `sha256:` of what acts ([`AnyPolicy::canonical`]) with the task it was
     /// trained on (its content hash; a multi-task policy's tasks' hashes joined by `+`;
     /// the environment id for policies saved before tasks were files).
     pub fn policy_id(&self, name: &str) -> crate::provenance::PolicyId {
-        let task = match (&self.task, &self.tasks[..]) {
-            (Some(t), _) => t.hash.clone(),
-            (None, []) => self.env_id.clone(),
-            (None, all) => all.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
+        let task = match (&self.task, &self.tasks[..], &self.stream) {
+            (Some(t), _, _) => t.hash.clone(),
+            // A stream's tasks are named as a list of the same tasks would be.
+            (None, _, Some(s)) => s.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
+            (None, [], None) => self.env_id.clone(),
+            (None, all, None) => all.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
         };
         let text = format!("{}\ntask {task}", self.policy.canonical());
         crate::provenance::PolicyId { name: name.to_owned(), sha256: Some(crate::provenance::sha256(text.as_bytes())) }

@@ -78,6 +78,10 @@ pub struct FamilyRecord {
     pub family: String,
     /// `sha256:` of the family's content.
     pub hash: String,
+    /// The family file's text, so that the pool can be drawn again anywhere ([`StreamRecord::draw`]):
+    /// with no family file, cache or solver. Empty in records written before it was kept.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub text: String,
 }
 
 /// One task of a stream's pool.
@@ -142,6 +146,78 @@ impl StreamRecord {
     }
 }
 
+impl StreamRecord {
+    /// The pool's tasks drawn again from the families' recorded texts, each checked against its recorded
+    /// id and hash: a stream's tasks anywhere (a policy file, a zoo entry), with no family file, cache or
+    /// solver (each task is its seed's recorded candidate).
+    ///
+    /// # Errors
+    /// [`RecordError`]: a family recorded without its text (by a blockpuzzle before it kept
+    /// them), a text whose hash is not the recorded one, a task of no recorded family, a task that draws
+    /// otherwise than recorded (the record was edited, or another generator drew it).
+    pub fn draw(&self) -> Result<Vec<Task>, RecordError> {
+        let bad = RecordError;
+        let mut families = Vec::with_capacity(self.families.len());
+        for f in &self.families {
+            if f.text.is_empty() {
+                return Err(bad(format!(
+                    "the stream's family {} is recorded by hash alone (written before stream records kept their \
+                     families' texts): its tasks cannot be drawn from the record; train the policy again",
+                    f.name
+                )));
+            }
+            let family = Family::from_toml(&f.text, &f.name).map_err(|e| bad(format!("the stream's family: {e}")))?;
+            if family.hash != f.hash || family.spec.family != f.family {
+                return Err(bad(format!(
+                    "the stream's family {} is recorded as {} ({}), its text is {} ({}): the record was edited; \
+                     restore it",
+                    f.name,
+                    f.family,
+                    short(&f.hash),
+                    family.spec.family,
+                    short(&family.hash)
+                )));
+            }
+            families.push(family);
+        }
+        self.tasks
+            .iter()
+            .map(|t| {
+                let family = families.get(t.family).ok_or_else(|| {
+                    bad(format!(
+                        "the stream's task {} names family {} of {}: the record was edited; restore it",
+                        t.id,
+                        t.family,
+                        families.len()
+                    ))
+                })?;
+                let drawn = family
+                    .draw(t.seed, t.candidate)
+                    .map_err(|e| {
+                        bad(format!(
+                            "the stream's task {} (seed {}, candidate {}) no longer draws: {e}; the record was edited, \
+                             or this blockpuzzle's generator draws otherwise than the one that recorded it",
+                            t.id, t.seed, t.candidate
+                        ))
+                    })?;
+                if drawn.task.id() != t.id || drawn.task.source.hash != t.hash {
+                    return Err(bad(format!(
+                        "the stream's task {} (seed {}, candidate {}) is recorded as {}, but draws as {} {}: the \
+                         record was edited, or this blockpuzzle's generator draws otherwise than the one that recorded it",
+                        t.id,
+                        t.seed,
+                        t.candidate,
+                        short(&t.hash),
+                        drawn.task.id(),
+                        short(&drawn.task.source.hash)
+                    )));
+                }
+                Ok(drawn.task)
+            })
+            .collect()
+    }
+}
+
 fn short(hash: &str) -> &str {
     &hash[..hash.len().min(19)]
 }
@@ -158,6 +234,11 @@ pub struct Pool {
     /// Seeds worked out by the solver's check in this call.
     pub checked: usize,
 }
+
+/// A recorded stream whose tasks do not draw again as recorded ([`StreamRecord::draw`]), named with the fix.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct RecordError(pub String);
 
 /// A stream that cannot be drawn; each names the problem and the fix.
 #[derive(Debug, thiserror::Error)]
@@ -271,7 +352,12 @@ pub fn pool(
     let mut record = StreamRecord {
         families: families
             .iter()
-            .map(|(name, f)| FamilyRecord { name: name.clone(), family: f.spec.family.clone(), hash: f.hash.clone() })
+            .map(|(name, f)| FamilyRecord {
+                name: name.clone(),
+                family: f.spec.family.clone(),
+                hash: f.hash.clone(),
+                text: f.text.clone().unwrap_or_default(),
+            })
             .collect(),
         generator_seeds: range.0,
         tasks: Vec::new(),

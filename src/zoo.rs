@@ -37,15 +37,16 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// The format tag this blockpuzzle writes in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/5";
+pub const FORMAT: &str = "blockpuzzle-zoo/6";
 
 /// The formats it reads: version 2 added the outcome counts of evaluations
 /// (version 1 entries load with none); version 3 set networks (a network's
 /// `set` layout and `layers` shapes; entries without them are MLPs as before);
 /// version 4 each evaluation's provenance and task hash (one record per engine);
-/// version 5 policies trained on several tasks ([`ZooMeta::multi_task`]).
-pub const READS: [&str; 5] =
-    ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", FORMAT];
+/// version 5 policies trained on several tasks ([`ZooMeta::multi_task`]); version 6 policies trained on
+/// a stream of generated tasks ([`MultiTask::stream`]).
+pub const READS: [&str; 6] =
+    ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5", FORMAT];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -196,8 +197,14 @@ impl ZooMeta {
 pub struct MultiTask {
     /// The run's label: `SUITE-SPLIT` (`train --suite`) or the ids joined by `+` (`train --env A,B`).
     pub label: String,
-    /// The training tasks by content, in the run's order.
+    /// The training tasks by content, in the run's order (empty for a stream).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tasks: Vec<TaskSource>,
+    /// A policy trained on a stream of generated tasks (format 6): the stream's record (its families'
+    /// texts, the seed range, each task by id, seed, candidate and hash), from which its tasks are drawn
+    /// again and checked on loading.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stream: Option<crate::stream::StreamRecord>,
 }
 
 /// An observation and the action the exported policy took on it.
@@ -217,8 +224,9 @@ pub struct Probe {
 /// A task that cannot be built.
 pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
     let fail = |reason: String| ZooError::Corrupt { path: PathBuf::from(&saved.env_id), reason };
-    let task = match saved.task.as_ref().or(saved.tasks.first()) {
-        Some(source) => crate::env::registry::recorded(source).map_err(|e| fail(e.to_string()))?,
+    let first = saved.training_tasks().map_err(|e| fail(e.to_string()))?.into_iter().next();
+    let task = match first {
+        Some(source) => crate::env::registry::recorded(&source).map_err(|e| fail(e.to_string()))?,
         None => return Err(fail("the policy does not record its task".into())),
     };
     // In the policy's own layout: a multi-task set policy's rows are those of its tasks' most
@@ -370,11 +378,12 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     entry_free(zoo, &info.name, info.overwrite)?;
     saved.check().map_err(&corrupt)?;
     let task = saved
-        .task
-        .clone()
-        .or_else(|| saved.tasks.first().cloned())
+        .training_tasks()
+        .map_err(|e| corrupt(e.to_string()))?
+        .into_iter()
+        .next()
         .ok_or_else(|| corrupt("the policy does not record its task (saved before tasks were files)".into()))?;
-    let multi_task = if saved.tasks.is_empty() {
+    let multi_task = if !saved.is_multi_task() {
         None
     } else if saved.policy.net().set.is_none() {
         // A flat network reads its tasks padded to one layout, which the zoo's readers do not rebuild.
@@ -384,7 +393,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
             saved.env_id
         )));
     } else {
-        Some(MultiTask { label: saved.env_id.clone(), tasks: saved.tasks.clone() })
+        Some(MultiTask { label: saved.env_id.clone(), tasks: saved.tasks.clone(), stream: saved.stream.clone() })
     };
     let (net, norm, sigma_min) = match &saved.policy {
         AnyPolicy::Deterministic(p) => (&p.net, &p.norm, None),
@@ -546,8 +555,19 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 /// [`ZooError::Corrupt`] naming what does not fit.
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
+    let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
     for task in std::iter::once(&meta.task).chain(meta.multi_task.iter().flat_map(|m| &m.tasks)) {
-        task.compile().map_err(|e| ZooError::Corrupt { path: path.with_extension("json"), reason: e.to_string() })?;
+        task.compile().map_err(|e| bad_meta(e.to_string()))?;
+    }
+    if let Some(stream) = meta.multi_task.as_ref().and_then(|m| m.stream.as_ref()) {
+        // Its tasks draw as recorded, and its first is the entry's task (whose probes these are).
+        let first = stream.draw().map_err(|e| bad_meta(e.to_string()))?.into_iter().next();
+        if first.map(|t| t.source.hash) != Some(meta.task.hash.clone()) {
+            return Err(bad_meta(format!(
+                "task {} is not the first task of its stream; restore the entry",
+                meta.task.id
+            )));
+        }
     }
     let tensors_path = path.with_extension("safetensors");
     let bytes = crate::io::read_bytes(&tensors_path, "zoo tensor file", crate::limits::POLICY_FILE_BYTES)
@@ -648,6 +668,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         env_id,
         task,
         tasks,
+        stream: meta.multi_task.as_ref().and_then(|m| m.stream.clone()),
         epoch: meta.epoch,
         env_steps: meta.env_steps,
         finals_success: meta.finals_success,

@@ -26,7 +26,8 @@ import pathlib
 
 import numpy as np
 
-FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5")
+FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5",
+           "blockpuzzle-zoo/6")
 #: Where an object row's colour one-hot (red, blue, green, grey) begins.
 COLOUR_FEATURE = 15
 #: The zoo the package carries.
@@ -129,9 +130,14 @@ class ZooPolicy:
     @property
     def training_tasks(self) -> list[str]:
         """The ids of the tasks it was trained on: one, or a multi-task policy's every task
-        (``train --suite S`` or ``--env A,B``; format 5's ``multi_task``)."""
+        (``train --suite S`` or ``--env A,B``; format 5's ``multi_task``), or a stream's (``train
+        --families``; format 6's ``multi_task.stream``)."""
         multi = self.meta.get("multi_task")
-        return [t["id"] for t in multi["tasks"]] if multi else [self.task_id]
+        if not multi:
+            return [self.task_id]
+        if multi.get("stream"):
+            return [t["id"] for t in multi["stream"]["tasks"]]
+        return [t["id"] for t in multi["tasks"]]
 
     @property
     def obs_mode(self) -> str:

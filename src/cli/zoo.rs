@@ -161,7 +161,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);
             }
-            if a.evaluate > 0 && a.evaluate_envs.is_empty() && !saved.tasks.is_empty() {
+            if a.evaluate > 0 && a.evaluate_envs.is_empty() && saved.is_multi_task() {
                 bail!(
                     "{} was trained on several tasks ({}) and holds no one task to evaluate on: name them with \
                      --evaluate-env ID (repeatable)",

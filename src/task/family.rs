@@ -203,6 +203,9 @@ pub struct Family {
     pub hash: String,
     /// Where the text came from, for errors.
     pub origin: String,
+    /// The file's text (None for a narrowed family: its text and the narrowing make it), so that a
+    /// stream can carry its families ([`crate::stream::FamilyRecord::text`]).
+    pub text: Option<String>,
 }
 
 /// What [`Family::draw`] chose for one candidate, besides the task.
@@ -318,7 +321,7 @@ impl Family {
             return Err(err(format!("the groups may draw {most} blocks; a family draws at most {MAX_FAMILY_BLOCKS}")));
         }
         let hash = super::compile::sha256_id(text.as_bytes());
-        Ok(Family { spec, hash, origin: origin.to_owned() })
+        Ok(Family { spec, hash, origin: origin.to_owned(), text: Some(text.to_owned()) })
     }
 
     /// Reads and checks a family file.
@@ -402,7 +405,7 @@ impl Family {
         }
         let narrowing = serde_json::to_string(n).unwrap_or_default();
         let hash = super::compile::sha256_id(format!("{}\n{narrowing}", self.hash).as_bytes());
-        Ok(Family { spec, hash, origin: format!("{} (narrowed)", self.origin) })
+        Ok(Family { spec, hash, origin: format!("{} (narrowed)", self.origin), text: None })
     }
 
     /// The id of the task generator seed `seed` gives.

@@ -885,15 +885,18 @@ impl<'a> Trainer<'a> {
             // A multi-task run's level is the sum of its tasks' levels.
             let max_level = self.max_levels.iter().sum();
             plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
-            // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task.
-            let (task, tasks) = match &self.tasks[..] {
-                [task] => (Some(task.source.clone()), Vec::new()),
-                all => (None, all.iter().map(|t| t.source.clone()).collect()),
+            // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task;
+            // a stream run's, its stream's record.
+            let (task, tasks, stream) = match (&self.tasks[..], &self.config.stream) {
+                (_, Some(stream)) => (None, Vec::new(), Some(stream.clone())),
+                ([task], None) => (Some(task.source.clone()), Vec::new(), None),
+                (all, None) => (None, all.iter().map(|t| t.source.clone()).collect(), None),
             };
             let saved = SavedPolicy {
                 env_id: self.state.env_id.clone(),
                 task,
                 tasks,
+                stream,
                 epoch: state.epoch,
                 env_steps: Some(state.env_steps),
                 finals_success: row.finals_success,

@@ -87,6 +87,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             env_id: "BlocksChoose-v0".into(),
             task: Some(task.source),
             tasks: Vec::new(),
+            stream: None,
             epoch: 3,
             env_steps: Some(1000),
             finals_success: 0.0,

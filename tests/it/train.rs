@@ -1239,15 +1239,53 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     assert_eq!(record.families.iter().map(|f| f.family.as_str()).collect::<Vec<_>>(), ["gripper", "push"]);
     let pool = record.tasks.len();
     assert!(pool >= 4, "{record:?}");
-    // The policy names every task of the pool (by content), in the layout of the most blocks.
+    // The policy records the stream (not its tasks by content) and draws every task of the pool again from
+    // it, in the layout of the most blocks.
     let saved = load_policy(&straight.path().join("policy.json")).unwrap();
     assert_eq!(saved.env_id, "gripper+push-0-3");
-    let hashes: Vec<&str> = saved.tasks.iter().map(|t| t.hash.as_str()).collect();
+    assert!(saved.tasks.is_empty() && saved.task.is_none() && saved.is_multi_task());
+    assert_eq!(saved.stream.as_ref(), Some(&record));
+    assert!(record.families.iter().all(|f| f.text.contains(&format!("family = \"{}\"", f.family))), "{record:?}");
+    let tasks = saved.training_tasks().unwrap();
+    let hashes: Vec<&str> = tasks.iter().map(|t| t.hash.as_str()).collect();
     assert_eq!(hashes, record.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>());
+    // Named as the same tasks listed would be.
+    let listed = blockpuzzle::saved::SavedPolicy { tasks: tasks.clone(), stream: None, ..saved.clone() };
+    assert_eq!(listed.policy_id("p"), saved.policy_id("p"));
+    // An edited record is refused by what it draws, naming the task or the family.
+    let mut edited = record.clone();
+    edited.tasks[1].candidate += 1;
+    let e = edited.draw().unwrap_err().to_string();
+    assert!(e.contains(&edited.tasks[1].id) && e.contains("edited"), "{e}");
+    let mut edited = record.clone();
+    edited.families[0].text = edited.families[0].text.replace("max_candidates = 20", "max_candidates = 19");
+    let e = edited.draw().unwrap_err().to_string();
+    assert!(e.contains("gripper") && e.contains("edited"), "{e}");
+    let mut edited = record.clone();
+    edited.families[1].text.clear();
+    let e = edited.draw().unwrap_err().to_string();
+    assert!(e.contains("push") && e.contains("by hash alone"), "{e}");
+    // The zoo keeps the record too (format 6), and loading draws the tasks again and refuses an edited one.
+    let zoo = tempfile::tempdir().unwrap();
+    let info = blockpuzzle::zoo::ExportInfo { name: "streamed".into(), ..Default::default() };
+    let json = blockpuzzle::zoo::export(zoo.path(), &saved, &info).unwrap().with_extension("json");
+    let (meta, loaded) = blockpuzzle::zoo::load(&json).unwrap();
+    assert_eq!(meta.format, blockpuzzle::zoo::FORMAT);
+    let multi = meta.multi_task.as_ref().unwrap();
+    assert!(multi.tasks.is_empty() && multi.stream.as_ref() == Some(&record) && meta.task.hash == hashes[0]);
+    assert_eq!(loaded.policy_id("p"), saved.policy_id("p"));
+    let text = std::fs::read_to_string(&json).unwrap();
+    let candidate = format!("\"candidate\": {}", record.tasks[1].candidate);
+    let at = text.find(&format!("\"id\": \"{}\"", record.tasks[1].id)).unwrap();
+    let edit = at + text[at..].find(&candidate).unwrap();
+    let edited = format!("{}\"candidate\": 7{}", &text[..edit], &text[edit + candidate.len()..]);
+    std::fs::write(&json, edited).unwrap();
+    let e = blockpuzzle::zoo::load(&json).unwrap_err().to_string();
+    assert!(e.contains(&record.tasks[1].id) && e.contains("edited"), "{e}");
     // The layout has a slot for every block the families can draw (push: 1 + 1 + 1 + 2 + 2), whichever
     // seeds the pool holds, so that pools of the same families train policies of one layout.
     assert_eq!(record.max_blocks, 7);
-    let most = saved.tasks.iter().map(|t| blockpuzzle::env::registry::recorded(t).unwrap().object_count()).max();
+    let most = tasks.iter().map(|t| blockpuzzle::env::registry::recorded(t).unwrap().object_count()).max();
     assert!(most.unwrap() <= 7);
     let spec = blockpuzzle::env::ObsSpec::new(blockpuzzle::env::ObsMode::Entities, 7);
     assert_eq!(checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap().obs_dim, spec.dim());

@@ -38,6 +38,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         env_id: ENV.into(),
         task: Some(registry::task(ENV).unwrap().source),
         tasks: Vec::new(),
+        stream: None,
         epoch: 12,
         env_steps: Some(34_000),
         finals_success: 0.5,
