@@ -444,12 +444,10 @@ pub fn evaluate_suite(
             done += 1;
             on_row(&split.name, rows.last().expect("a row was just pushed"), done, total)?;
         }
-        let rates: Vec<f64> = rows.iter().filter_map(|r| r.evaluation.as_ref().map(|e| e.success_rate)).collect();
-        let mean_success = (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64);
+        let mean_success = SplitResult::mean_of(&rows);
         splits.push(SplitResult { name: split.name.clone(), rows, mean_success });
     }
-    let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
-    let (train, test) = (mean("train"), mean("test"));
+    let (score, gap) = SuiteResult::score_and_gap(&splits);
     Ok(SuiteResult {
         provenance: Provenance::new(harness, subject.id(), Some(suite.id())),
         suite: suite.id(),
@@ -467,12 +465,204 @@ pub fn evaluate_suite(
             Subject::Baseline(_) => None,
         },
         splits,
-        score: test,
-        gap: train.zip(test).map(|(a, b)| a - b),
+        score,
+        gap,
     })
 }
 
+impl SplitResult {
+    /// The mean success rate over the rows evaluated (None: all skipped).
+    pub fn mean_of(rows: &[RowResult]) -> Option<f64> {
+        let rates: Vec<f64> = rows.iter().filter_map(|r| r.evaluation.as_ref().map(|e| e.success_rate)).collect();
+        (!rates.is_empty()).then(|| rates.iter().sum::<f64>() / rates.len() as f64)
+    }
+}
+
+/// A suite result whose numbers do not hold together ([`SuiteResult::verify`]): the field and what is
+/// wrong with it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {problem}")]
+pub struct BadResult {
+    /// Where, e.g. `splits[test].rows[2] (ReachAvoid-v0 normal).evaluation.success_rate`.
+    pub field: String,
+    /// What is wrong.
+    pub problem: String,
+}
+
+/// Whether a stored number is the one recomputed (up to rounding in another harness's arithmetic).
+fn same_number(stored: f64, derived: f64) -> bool {
+    stored.is_finite() && (stored - derived).abs() <= 1e-9 * derived.abs().max(1.0)
+}
+
 impl SuiteResult {
+    /// The score and the gap of `splits` (docs/suites.md): the test split's mean success, and the train
+    /// split's mean minus the test split's.
+    pub fn score_and_gap(splits: &[SplitResult]) -> (Option<f64>, Option<f64>) {
+        let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
+        let (train, test) = (mean("train"), mean("test"));
+        (test, train.zip(test).map(|(a, b)| a - b))
+    }
+
+    /// Rows evaluated and rows in all.
+    pub fn coverage(&self) -> (usize, usize) {
+        self.splits
+            .iter()
+            .flat_map(|s| &s.rows)
+            .fold((0, 0), |(d, a), row| (d + usize::from(row.evaluation.is_some()), a + 1))
+    }
+
+    /// Recomputes every derived number from the rows' outcome counts and compares it with the stored one:
+    /// each row's successes, rate, interval and red–blue failure share, each split's mean, the score and
+    /// the gap; the episode counts must agree with the row and lie within `eval`'s bounds, the suite must
+    /// have its train and test splits, and a skipped row must say why. Nothing a reader shows is taken on
+    /// trust (`results leaderboard`, `results compare`).
+    ///
+    /// # Errors
+    /// The first field whose stored value is not the one its counts give, or that no evaluation could
+    /// have written.
+    pub fn verify(&self) -> Result<(), BadResult> {
+        let bad = |field: String, problem: String| Err(BadResult { field, problem });
+        let differs = |field: String, stored: String, derived: String| {
+            bad(field, format!("stored {stored}, but its outcome counts give {derived}"))
+        };
+        for required in ["train", "test"] {
+            if !self.splits.iter().any(|s| s.name == required && !s.rows.is_empty()) {
+                return bad("splits".into(), format!("no {required} split with rows; every suite has one"));
+            }
+        }
+        for (k, split) in self.splits.iter().enumerate() {
+            if self.splits[..k].iter().any(|s| s.name == split.name) {
+                return bad(format!("splits[{}]", split.name), "a split named twice".into());
+            }
+            for (i, row) in split.rows.iter().enumerate() {
+                let at = |field: &str| {
+                    format!("splits[{}].rows[{i}] ({} {}){field}", split.name, row.task, row.distribution)
+                };
+                let most = crate::limits::EVAL_EPISODES.max as usize;
+                if row.episodes == 0 || row.episodes > most {
+                    return bad(at(".episodes"), format!("{} is not an evaluation's (1 to {most})", row.episodes));
+                }
+                let Some(e) = &row.evaluation else {
+                    if row.skipped.as_deref().map_or(true, |r| r.trim().is_empty()) {
+                        return bad(at(".skipped"), "a row without an evaluation must say why it was skipped".into());
+                    }
+                    if row.failure_rate.is_some() {
+                        return bad(at(".failure_rate"), "a skipped row has no failure rate".into());
+                    }
+                    continue;
+                };
+                if row.skipped.is_some() {
+                    return bad(at(".skipped"), "a row with an evaluation was not skipped".into());
+                }
+                for (field, stored, wanted) in [
+                    (".evaluation.episodes", e.episodes.to_string(), row.episodes.to_string()),
+                    (".evaluation.seed", e.seed.to_string(), row.seed.to_string()),
+                    (".evaluation.env", e.env.clone(), row.task.clone()),
+                    (".evaluation.task_sha256", e.task_sha256.clone(), row.task_sha256.clone()),
+                    (".evaluation.outcomes (their sum)", e.outcomes.total().to_string(), row.episodes.to_string()),
+                    (".evaluation.successes", e.successes.to_string(), e.outcomes.success.to_string()),
+                ] {
+                    if stored != wanted {
+                        return bad(at(field), format!("{stored}, but the row says {wanted}"));
+                    }
+                }
+                let n = e.episodes as f64;
+                let rate = e.successes as f64 / n;
+                if !same_number(e.success_rate, rate) {
+                    return differs(at(".evaluation.success_rate"), e.success_rate.to_string(), rate.to_string());
+                }
+                let ci = crate::outcome::wilson95(e.successes, e.episodes);
+                if !same_number(e.ci95.0, ci.0) || !same_number(e.ci95.1, ci.1) {
+                    return differs(at(".evaluation.ci95"), format!("{:?}", e.ci95), format!("{ci:?}"));
+                }
+                let failure = e.outcomes.failure as f64 / n;
+                if !row.failure_rate.is_some_and(|f| same_number(f, failure)) {
+                    return differs(at(".failure_rate"), format!("{:?}", row.failure_rate), failure.to_string());
+                }
+                match e.mean_steps_to_success {
+                    None if e.successes > 0 => {
+                        return bad(at(".evaluation.mean_steps_to_success"), "missing beside successes".into())
+                    }
+                    Some(v) if e.successes == 0 || !(v.is_finite() && v >= 1.0) => {
+                        return bad(
+                            at(".evaluation.mean_steps_to_success"),
+                            format!("{v} is not a mean episode length of {} successes", e.successes),
+                        )
+                    }
+                    _ => {}
+                }
+            }
+            let mean = SplitResult::mean_of(&split.rows);
+            if mean.is_some() != split.mean_success.is_some()
+                || mean.zip(split.mean_success).is_some_and(|(m, s)| !same_number(s, m))
+            {
+                let show = |v: Option<f64>| v.map_or_else(|| "none".to_owned(), |v| v.to_string());
+                return differs(format!("splits[{}].mean_success", split.name), show(split.mean_success), show(mean));
+            }
+        }
+        let (score, gap) = Self::score_and_gap(&self.splits);
+        for (field, stored, derived) in [("score", self.score, score), ("gap", self.gap, gap)] {
+            let agree = match (stored, derived) {
+                (Some(s), Some(d)) => same_number(s, d),
+                (None, None) => true,
+                _ => false,
+            };
+            if !agree {
+                let show = |v: Option<f64>| v.map_or_else(|| "none".to_owned(), |v| v.to_string());
+                return differs(field.into(), show(stored), show(derived));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the rows are the suite's own, split for split and in order (task, distribution, seed and
+    /// episodes), where the suite is at hand with the same text: no row dropped, added or reseeded.
+    ///
+    /// # Errors
+    /// The first row or split that differs.
+    pub fn verify_rows(&self, suite: &crate::suite::Suite) -> Result<(), BadResult> {
+        let bad = |field: String, problem: String| Err(BadResult { field, problem });
+        let names = |v: Vec<&str>| v.join(", ");
+        let (ours, theirs): (Vec<&str>, Vec<&str>) = (
+            self.splits.iter().map(|s| s.name.as_str()).collect(),
+            suite.splits.iter().map(|s| s.name.as_str()).collect(),
+        );
+        if ours != theirs {
+            return bad(
+                "splits".into(),
+                format!("{}, but the suite {} has {}", names(ours), suite.name, names(theirs)),
+            );
+        }
+        for (split, wanted) in self.splits.iter().zip(&suite.splits) {
+            if split.rows.len() != wanted.rows.len() {
+                return bad(
+                    format!("splits[{}].rows", split.name),
+                    format!(
+                        "{} rows, but the suite {}'s split has {}",
+                        split.rows.len(),
+                        suite.name,
+                        wanted.rows.len()
+                    ),
+                );
+            }
+            for (i, (row, w)) in split.rows.iter().zip(&wanted.rows).enumerate() {
+                let (a, b) = (
+                    (row.task.as_str(), row.distribution.as_str(), row.seed, row.episodes),
+                    (w.task.id(), w.distribution_label(), w.seed, w.episodes),
+                );
+                if a != b {
+                    return bad(
+                        format!("splits[{}].rows[{i}]", split.name),
+                        format!(
+                            "{} {} ({} episodes from seed {}), but the suite's row is {} {} ({} episodes from seed {})",
+                            a.0, a.1, a.3, a.2, b.0, b.1, b.3, b.2
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
     /// The result as a Markdown section: a table per split, the score and the gap.
     pub fn to_markdown(&self) -> String {
         let pct = |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{v:.3}"));

@@ -191,8 +191,22 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
     let t = text(&bp(&["results", "compare", a.to_str().unwrap(), b.to_str().unwrap()]));
     assert!(t.contains("records no provenance") && t.contains("eval --suite"), "{t}");
     // The same policy with other numbers on one engine and suite: the leaderboard refuses it.
+    // (One success made a timeout, every derived number made to agree: a file whose numbers hold together.)
     let mut other = v.clone();
-    other["splits"][1]["rows"][0]["evaluation"]["outcomes"]["timeout"] = 99.into();
+    let e = &mut other["splits"][1]["rows"][0]["evaluation"];
+    let (n, s) = (e["episodes"].as_u64().unwrap() as usize, e["successes"].as_u64().unwrap() as usize - 1);
+    e["outcomes"]["success"] = s.into();
+    e["outcomes"]["timeout"] = (e["outcomes"]["timeout"].as_u64().unwrap() + 1).into();
+    e["successes"] = s.into();
+    let rate = s as f64 / n as f64;
+    e["success_rate"] = rate.into();
+    e["ci95"] = serde_json::json!(blockpuzzle::outcome::wilson95(s, n));
+    if s == 0 {
+        e["mean_steps_to_success"] = serde_json::Value::Null;
+    }
+    other["splits"][1]["mean_success"] = rate.into();
+    other["score"] = rate.into();
+    other["gap"] = (other["splits"][0]["mean_success"].as_f64().unwrap() - rate).into();
     let b = dir.path().join("other.json");
     std::fs::write(&b, serde_json::to_vec(&other).unwrap()).unwrap();
     let t = text(&bp(&["results", "leaderboard", a.to_str().unwrap(), b.to_str().unwrap()]));
@@ -281,4 +295,96 @@ fn the_committed_leaderboard_is_what_its_result_files_give() {
     for engine in ["2.2.2", "3.11.0"] {
         assert!(md.contains(&format!("` on MuJoCo {engine}")), "no table for MuJoCo {engine}");
     }
+}
+
+/// Issue 60: the readers recompute every derived number from the outcome counts and refuse a file whose
+/// stored numbers disagree, naming the file and the field; rows must be the suite's own.
+#[test]
+fn results_recompute_every_number_and_refuse_edited_files() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let good = root.join("results/generalization/mujoco-2.2.2/baseline-scripted.cross-task-v2.json");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&good).unwrap()).unwrap();
+    assert!(results::read(&good).is_ok());
+    let dir = tempfile::tempdir().unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 10] = [
+        ("score", |v| v["score"] = 0.123.into(), "score: stored 0.123"),
+        ("gap", |v| v["gap"] = (-5.0).into(), "gap: stored -5"),
+        ("mean", |v| v["splits"][1]["mean_success"] = 1.0.into(), "splits[test].mean_success"),
+        (
+            "rate",
+            |v| v["splits"][1]["rows"][0]["evaluation"]["success_rate"] = (-0.5).into(),
+            "rows[0] (ReachAvoid-v0 normal).evaluation.success_rate",
+        ),
+        (
+            "successes",
+            |v| v["splits"][0]["rows"][1]["evaluation"]["successes"] = 0.into(),
+            "evaluation.successes: 0, but the row says",
+        ),
+        (
+            "episodes",
+            |v| {
+                v["splits"][0]["rows"][0]["episodes"] = 1_000_000_000_000_000u64.into();
+                v["splits"][0]["rows"][0]["evaluation"]["episodes"] = 1_000_000_000_000_000u64.into();
+            },
+            "is not an evaluation's (1 to 1000000)",
+        ),
+        ("no splits", |v| v["splits"] = serde_json::json!([]), "no train split"),
+        (
+            "interval",
+            |v| v["splits"][1]["rows"][2]["evaluation"]["ci95"] = serde_json::json!([0.0, 1.0]),
+            "evaluation.ci95",
+        ),
+        (
+            "outcomes",
+            |v| v["splits"][1]["rows"][1]["evaluation"]["outcomes"]["timeout"] = 1000.into(),
+            "outcomes (their sum)",
+        ),
+        (
+            "a row dropped, the means made to agree",
+            |v| {
+                let rows = v["splits"][1]["rows"].as_array_mut().unwrap();
+                rows.remove(2);
+                let rates: Vec<f64> = rows.iter().map(|r| r["evaluation"]["success_rate"].as_f64().unwrap()).collect();
+                let mean = rates.iter().sum::<f64>() / rates.len() as f64;
+                let train = v["splits"][0]["mean_success"].as_f64().unwrap();
+                v["splits"][1]["mean_success"] = mean.into();
+                v["score"] = mean.into();
+                v["gap"] = (train - mean).into();
+            },
+            "splits[test].rows: 2 rows, but the suite cross-task-v2's split has 3",
+        ),
+    ];
+    for (name, edit, wanted) in cases {
+        let mut w = v.clone();
+        edit(&mut w);
+        let f = dir.path().join(format!("{}.json", name.replace(' ', "-")));
+        std::fs::write(&f, serde_json::to_vec(&w).unwrap()).unwrap();
+        for command in ["leaderboard", "compare"] {
+            let o = bp(&["results", command, f.to_str().unwrap()]);
+            let t = text(&o);
+            assert!(!o.status.success(), "{name} was accepted by results {command}: {t}");
+            assert!(t.contains(wanted) && t.contains(f.to_str().unwrap()) && t.contains("eval --suite"), "{name}: {t}");
+        }
+    }
+}
+
+/// Issue 60: only like with like is ranked. A policy that skips rows is listed after every policy that
+/// plays them all, unranked, whatever its score over the rows it played.
+#[test]
+fn the_leaderboard_ranks_only_policies_that_play_every_row() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/generalization/mujoco-2.2.2");
+    let files: Vec<PathBuf> = ["BlocksChoose-v0-ddpg-ours", "BlocksChoose-v0-dagger-entity", "baseline-obs-hash"]
+        .iter()
+        .map(|p| root.join(format!("{p}.compose.json")))
+        .collect();
+    let read: Vec<ResultFile> = files.iter().map(|f| results::read(f).unwrap()).collect();
+    let (partial, full) = (&read[0].result, &read[1].result);
+    assert!(partial.coverage().0 < partial.coverage().1 && partial.score > full.score, "the case this tests");
+    let md = results::leaderboard(&read).unwrap();
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ") && l.contains("`[^")).collect();
+    assert_eq!(rows.len(), 3, "{md}");
+    assert!(rows[0].starts_with("| 1 | `BlocksChoose-v0-dagger-entity`") && rows[0].contains("| 32/32 |"), "{md}");
+    assert!(rows[1].starts_with("| 2 | `baseline:obs-hash`"), "{md}");
+    assert!(rows[2].starts_with("| – | `BlocksChoose-v0-ddpg-ours`") && rows[2].contains("| 12/32 |"), "{md}");
 }
