@@ -77,6 +77,13 @@ fn env_list(env: &str) -> Vec<&str> {
 fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
     let tasks = match &config.suite {
         Some(name) => {
+            if config.split == "test" {
+                bail!(
+                    "--split test: the test split is what a suite's score is measured on, so no policy trains on it \
+                     (docs/suites.md); train on --split train (the default), or list the tasks you mean with --env \
+                     A,B,... (its numbers on that suite are then no score to report)"
+                );
+            }
             let suite = crate::suite::load(name)?;
             let Some(split) = suite.splits.iter().find(|s| s.name == config.split) else {
                 let names: Vec<&str> = suite.splits.iter().map(|s| s.name.as_str()).collect();

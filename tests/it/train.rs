@@ -1333,6 +1333,8 @@ fn bad_streams_are_refused_before_anything_is_written() {
         &["suite procgen", "1000..1008", "990..1000"],
     );
     refused(&["--families", "push"], &["--generator-seeds"]);
+    // Nor does any run train on a suite's test split (issue 60).
+    refused(&["--suite", "procgen", "--split", "test"], &["--split test", "score", "--split train"]);
     refused(&["--env", "BlocksTouch-v0", "--generator-seeds", "0..4"], &["--families"]);
     let family = dir.path().join("no-green.toml");
     let text = std::fs::read_to_string(format!("{}/families/gripper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
