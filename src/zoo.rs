@@ -128,6 +128,11 @@ impl ZooEvaluation {
         self.provenance.as_ref().map(|p| p.build.mujoco.as_str())
     }
 
+    /// The `sha256:` of the policy that made it, where its provenance names one.
+    pub fn policy_sha256(&self) -> Option<&str> {
+        self.provenance.as_ref().and_then(|p| p.policy.sha256.as_deref())
+    }
+
     /// Whether `other` measures the same thing (task, distribution, view, episodes, seeds) on the same engine.
     pub fn same_measurement(&self, other: &ZooEvaluation) -> bool {
         (&self.env, &self.distribution, self.grey_blind, self.episodes, self.seed, self.mujoco())
@@ -182,9 +187,22 @@ pub struct ZooMeta {
     pub probes: Vec<Probe>,
     /// `sha256:` of `NAME.safetensors`: the tensors belong to this metadata.
     pub tensors_sha256: String,
+    /// `sha256:` of this metadata itself, evaluations and this field set aside ([`ZooMeta::seal`]):
+    /// an entry is checked as a whole, so that an edited field (a dropped `multi_task`, a task list, a
+    /// label, a layout) is refused. Written from format 6 on and required there.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub meta_sha256: Option<String>,
 }
 
 impl ZooMeta {
+    /// `sha256:` of the metadata with its evaluations (which `zoo evaluate` adds to) and `meta_sha256`
+    /// set aside: what [`ZooMeta::meta_sha256`] records.
+    pub fn seal(&self) -> String {
+        let bare = ZooMeta { evaluations: Vec::new(), meta_sha256: None, ..self.clone() };
+        // Serialising a struct of these types cannot fail; the fallback seals nothing and never matches.
+        crate::provenance::sha256(&serde_json::to_vec(&bare).unwrap_or_default())
+    }
+
     /// What it was trained on, as listings name it: its task's id, or a multi-task run's label.
     pub fn trained_on(&self) -> &str {
         self.multi_task.as_ref().map_or(self.task.id.as_str(), |m| m.label.as_str())
@@ -445,7 +463,21 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         evaluations: info.evaluations.clone(),
         probes: probes(saved)?,
         tensors_sha256: crate::provenance::sha256(&bytes),
+        meta_sha256: None,
     };
+    let policy_sha = saved.policy_id(&info.name).sha256;
+    if let Some((k, e)) = meta.evaluations.iter().enumerate().find(|(_, e)| e.policy_sha256() != policy_sha.as_deref())
+    {
+        return Err(corrupt(format!(
+            "evaluation {} ({} {}) was made by {}, not by this policy ({}): record only this policy's evaluations",
+            k + 1,
+            e.env,
+            e.distribution,
+            e.policy_sha256().map_or_else(|| "an unnamed policy (it records no provenance)".to_owned(), str::to_owned),
+            policy_sha.as_deref().unwrap_or("unnamed")
+        )));
+    }
+    let meta = ZooMeta { meta_sha256: Some(meta.seal()), ..meta };
     if zoo.exists() && !zoo.is_dir() {
         return Err(ZooError::NotAFolder { zoo: zoo.to_owned() });
     }
@@ -516,7 +548,10 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
         };
         done.push(what);
     }
+    // Rewritten in this format, and sealed: the entry loads first, so an edited entry is not sealed.
+    load(&json_path)?;
     meta.format = FORMAT.into();
+    meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
     crate::io::write_file(&json_path, &json)
@@ -556,6 +591,41 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
     let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    // The metadata is checked as a whole (format 6 on); older formats, written before it was sealed, as before.
+    let sealed = !READS[..5].contains(&meta.format.as_str());
+    match &meta.meta_sha256 {
+        Some(h) if *h != meta.seal() => {
+            return Err(bad_meta(
+                "its metadata is not what was exported (meta_sha256 does not match: a field was edited); restore \
+                 both files of the entry together, or export the policy again"
+                    .into(),
+            ))
+        }
+        None if sealed => {
+            return Err(bad_meta(format!(
+                "format {} records meta_sha256, and this entry has none (it was edited); restore both files of the \
+                 entry together",
+                meta.format
+            )))
+        }
+        _ => {}
+    }
+    if let Some(m) = &meta.multi_task {
+        let plain = |c: char| c.is_ascii_alphanumeric() || "-_+.".contains(c);
+        if m.label.is_empty() || m.label.len() > 4096 || !m.label.chars().all(plain) || m.label.starts_with('.') {
+            return Err(bad_meta(format!(
+                "multi_task.label {:?}: a run's label is task ids and names joined by '+' (letters, digits, '-', '_', \
+                 '+', '.'); restore the entry",
+                crate::limits::cut_long_lines(&m.label)
+            )));
+        }
+        if m.tasks.is_empty() == m.stream.is_none() {
+            return Err(bad_meta(
+                "multi_task holds either its tasks or its stream, and this one holds neither or both; restore the entry"
+                    .into(),
+            ));
+        }
+    }
     for task in std::iter::once(&meta.task).chain(meta.multi_task.iter().flat_map(|m| &m.tasks)) {
         task.compile().map_err(|e| bad_meta(e.to_string()))?;
     }
@@ -676,6 +746,19 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         critic,
     };
     saved.check().map_err(&corrupt)?;
+    // Every evaluation that names its policy names this one.
+    let policy_sha = saved.policy_id(&meta.name).sha256;
+    for (k, e) in meta.evaluations.iter().enumerate() {
+        if let Some(other) = e.policy_sha256().filter(|h| Some(*h) != policy_sha.as_deref()) {
+            return Err(bad_meta(format!(
+                "evaluations[{k}] ({} {}) was made by the policy {other}, not this one ({}); restore the entry, or \
+                 play it again with `zoo evaluate`",
+                e.env,
+                e.distribution,
+                policy_sha.as_deref().unwrap_or("unnamed")
+            )));
+        }
+    }
     for (k, p) in meta.probes.iter().enumerate() {
         if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {
             return Err(corrupt(format!(

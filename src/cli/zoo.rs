@@ -22,6 +22,15 @@ pub(super) enum ZooCommand {
         #[arg(long)]
         zoo: Option<PathBuf>,
     },
+    /// Rewrite entries of an older format in this one, sealed with their metadata's hash (format 6),
+    /// after checking that they load; the tensors stay as they are.
+    Upgrade {
+        /// Entries to upgrade (default: all).
+        names: Vec<String>,
+        /// The zoo folder.
+        #[arg(long)]
+        zoo: Option<PathBuf>,
+    },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
     #[cfg(feature = "train")]
     Export(ZooExportArgs),
@@ -144,6 +153,18 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             for name in &names {
                 let (meta, _) = crate::zoo::load(&crate::zoo::find(&zoo, name)?)?;
                 println!("{name}: ok ({} {}, epoch {})", meta.trained_on(), meta.algo, meta.epoch);
+            }
+            Ok(())
+        }
+        ZooCommand::Upgrade { names, zoo } => {
+            let zoo = folder(zoo);
+            crate::zoo::existing(&zoo)?;
+            let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
+            for name in &names {
+                let path = crate::zoo::find(&zoo, name)?;
+                let before = crate::zoo::read_meta(&path)?.format;
+                crate::zoo::record_evaluations(&path, Vec::new())?;
+                println!("{name}: {before} -> {}, sealed", crate::zoo::FORMAT);
             }
             Ok(())
         }

@@ -137,7 +137,7 @@ fn damaged_or_mismatched_entries_are_clear_errors() {
     assert!(e.contains("\"c\"") && e.contains("a, b"), "{e}");
 }
 
-/// Rewrites the entry's first weight to `value` and fixes the checksum, so
+/// Rewrites the entry's first weight to `value` and fixes the checksum and the seal, so
 /// that only the value check can refuse it.
 fn poison_first_weight(entry: &Path, value: f32) {
     use sha2::Digest;
@@ -148,8 +148,9 @@ fn poison_first_weight(entry: &Path, value: f32) {
     bytes[start..start + 4].copy_from_slice(&value.to_le_bytes());
     std::fs::write(entry, &bytes).unwrap();
     let json = entry.with_extension("json");
-    let mut meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    meta["tensors_sha256"] = format!("sha256:{:x}", sha2::Sha256::digest(&bytes)).into();
+    let mut meta = zoo::read_meta(&json).unwrap();
+    meta.tensors_sha256 = format!("sha256:{:x}", sha2::Sha256::digest(&bytes));
+    meta.meta_sha256 = Some(meta.seal()); // resealed too
     std::fs::write(&json, serde_json::to_vec(&meta).unwrap()).unwrap();
 }
 
@@ -332,6 +333,7 @@ fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
     // An entry of format 1 (no outcome counts) loads; an unknown format is refused, naming those read.
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
     v["format"] = "blockpuzzle-zoo/1".into();
+    v.as_object_mut().unwrap().remove("meta_sha256"); // written from format 6 on
     for e in v["evaluations"].as_array_mut().unwrap() {
         e.as_object_mut().unwrap().remove("outcomes");
     }
@@ -345,4 +347,78 @@ fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
         e.contains("\"blockpuzzle-zoo/9\"") && e.contains("blockpuzzle-zoo/1, blockpuzzle-zoo/2, blockpuzzle-zoo/3"),
         "{e}"
     );
+}
+
+/// Issue 60: an entry is checked as a whole. Its metadata is sealed by its hash (format 6), so a dropped
+/// `multi_task`, an emptied task list, a label that is a path or an edited layout is refused; every
+/// evaluation it records names this policy; `zoo export` records no other policy's evaluation; `zoo
+/// upgrade` seals an older entry that loads.
+#[test]
+fn entries_are_checked_as_a_whole() {
+    let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let z = dir.path().join("zoo");
+    std::fs::create_dir(&z).unwrap();
+    for ext in ["json", "safetensors"] {
+        let from = zoo::dir().join(format!("cross-task-v2-dagger-entity.{ext}"));
+        std::fs::copy(from, z.join(format!("x.{ext}"))).unwrap();
+    }
+    let entry = z.join("x.json");
+    let original: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    assert_eq!(original["format"], zoo::FORMAT, "the shipped entries are sealed (zoo upgrade)");
+    let check = |v: &serde_json::Value| {
+        std::fs::write(&entry, serde_json::to_vec_pretty(v).unwrap()).unwrap();
+        let o = bp(&["zoo", "check", "x", "--zoo", z.to_str().unwrap()]);
+        (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+    };
+    assert!(check(&original).0);
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 5] = [
+        ("multi_task dropped", |v| {
+            v.as_object_mut().unwrap().remove("multi_task");
+        }),
+        ("tasks emptied", |v| v["multi_task"]["tasks"] = serde_json::json!([])),
+        ("a label that is a path", |v| v["multi_task"]["label"] = "../../x y".into()),
+        ("actor.sizes edited", |v| v["actor"]["sizes"][1] = 128.into()),
+        ("the seal removed", |v| {
+            v.as_object_mut().unwrap().remove("meta_sha256");
+        }),
+    ];
+    for (what, edit) in edits {
+        let mut v = original.clone();
+        edit(&mut v);
+        let (ok, t) = check(&v);
+        assert!(!ok && t.contains("x.json") && t.contains("restore"), "{what}: {t}");
+    }
+    // An unsealed label that is a path is refused by itself (an entry of format 5, before the seal).
+    let mut v = original.clone();
+    v["format"] = "blockpuzzle-zoo/5".into();
+    v.as_object_mut().unwrap().remove("meta_sha256");
+    assert!(check(&v).0, "a format 5 entry as it was loads");
+    v["multi_task"]["label"] = "../../x y".into();
+    let (ok, t) = check(&v);
+    assert!(!ok && t.contains("multi_task.label"), "{t}");
+    // Another policy's evaluation is refused, whether edited into the entry or given to zoo export.
+    let mut v = original.clone();
+    v["evaluations"][0]["provenance"]["policy"]["sha256"] = format!("sha256:{}", "0".repeat(64)).into();
+    let (ok, t) = check(&v);
+    assert!(!ok && t.contains("evaluations[0]") && t.contains("not this one"), "{t}");
+    let eval = dir.path().join("other.json");
+    let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "2", "--out", eval.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut args = vec!["zoo", "export", "--from", "BlocksTouch-v0-ddpg", "--name", "y", "--description", "d"];
+    args.extend(["--trained-with", "t", "--eval", eval.to_str().unwrap(), "--zoo", z.to_str().unwrap()]);
+    let o = bp(&args);
+    let t = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && t.contains("not by this policy"), "{t}");
+    assert!(!z.join("y.json").exists() && !z.join("y.safetensors").exists());
+    // zoo upgrade seals an older entry that loads, and the sealed entry checks.
+    let mut v = original.clone();
+    v["format"] = "blockpuzzle-zoo/5".into();
+    v.as_object_mut().unwrap().remove("meta_sha256");
+    check(&v);
+    let o = bp(&["zoo", "upgrade", "x", "--zoo", z.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (meta, _) = zoo::load(&entry).unwrap();
+    assert_eq!((meta.format.as_str(), meta.meta_sha256.as_deref()), (zoo::FORMAT, original["meta_sha256"].as_str()));
 }
