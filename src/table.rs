@@ -21,6 +21,50 @@ pub struct Row {
     pub policy: Option<PathBuf>,
     /// The paper's success rates, where it gives them.
     pub paper: (Option<f64>, Option<f64>),
+    /// The kind of policy the row stands for: a row takes only that kind.
+    pub takes: Takes,
+}
+
+/// The kind of policy a row of the paper's table stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Takes {
+    /// A deterministic actor (DDPG's rows).
+    Deterministic,
+    /// A Gaussian PGGD policy (PGGD's rows).
+    Pggd,
+}
+
+impl Row {
+    /// Whether `saved` is the kind of policy this row stands for: the row's kind (deterministic or
+    /// PGGD), trained on one task (the table may play it on another: `table --env`). A policy file does not record the algorithm that trained a deterministic actor (DDPG or an
+    /// imitator), so that part rests on the row's policy being named as the row asks.
+    ///
+    /// # Errors
+    /// The mismatch, naming the row, the policy and the fix.
+    pub fn check(&self, saved: &crate::saved::SavedPolicy) -> Result<()> {
+        let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
+        let is_pggd = matches!(saved.policy, crate::actor::AnyPolicy::Pggd(_));
+        let wanted = match self.takes {
+            Takes::Deterministic => "a deterministic (DDPG) actor",
+            Takes::Pggd => "a PGGD policy",
+        };
+        if is_pggd != (self.takes == Takes::Pggd) {
+            anyhow::bail!(
+                "the row \"{}\" takes {wanted}, and {name} is a {} policy; give that row a policy of its kind",
+                self.method,
+                saved.policy.algo()
+            );
+        }
+        if saved.is_multi_task() {
+            anyhow::bail!(
+                "the row \"{}\" takes a single-task agent, and {name} was trained on several tasks ({}); give that \
+                 row a policy trained on one task (the paper's rows are single-task agents)",
+                self.method,
+                saved.env_id
+            );
+        }
+        Ok(())
+    }
 }
 
 /// The policy of each row (a file, run directory or zoo name; None: not given).
@@ -70,21 +114,24 @@ pub const ZOO_EXPERT: &str = "BlocksTouch-v0-ddpg";
 /// project's DDPG after the paper's (where given), and PGGD alone.
 pub fn rows(p: Policies) -> Vec<Row> {
     // This project's row is shown only when it has a policy (it is not the paper's).
+    let (ddpg, pggd) = (Takes::Deterministic, Takes::Pggd);
     let ours = p.ddpg_ours.map(|policy| Row {
         method: "DDPG (3 blocks), ours",
         policy: Some(policy),
         paper: (Some(0.97), Some(0.90)),
+        takes: ddpg,
     });
     let mut rows = vec![
         Row {
             method: "DDPG (2 blocks), grey removed from its view",
             policy: p.expert,
             paper: (Some(0.44), Some(0.24)),
+            takes: ddpg,
         },
-        Row { method: "DDPG (3 blocks)", policy: p.ddpg, paper: (Some(0.97), Some(0.90)) },
-        Row { method: "PGGD + AggreVaTeD", policy: p.pggd, paper: (Some(0.64), Some(0.40)) },
+        Row { method: "DDPG (3 blocks)", policy: p.ddpg, paper: (Some(0.97), Some(0.90)), takes: ddpg },
+        Row { method: "PGGD + AggreVaTeD", policy: p.pggd, paper: (Some(0.64), Some(0.40)), takes: pggd },
         // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
-        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None) },
+        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None), takes: pggd },
     ];
     if let Some(ours) = ours {
         rows.insert(2, ours);
@@ -120,6 +167,7 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
     // The policy file is read once; each evaluation gets its own copy.
     let run = || -> Result<RowResult> {
         let saved = load_policy(path)?;
+        row.check(&saved)?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
         let policy = saved.policy_id(&path.display().to_string());
         let spec = |challenge| EvalSpec { task, challenge, distribution: None, level: None, episodes, seed, threads };

@@ -345,6 +345,16 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     );
     let o = bp(&["table", "--env", "BlocksTouch-v0", "--episodes", "3"]);
     assert!(!o.status.success() && text(&o).contains("does not define"), "{}", text(&o));
+    // A row takes the kind of policy it names (issue 60): a PGGD policy fills no DDPG row, a deterministic
+    // actor no PGGD row, and a multi-task policy no row at all.
+    for (row, policy, wanted) in [
+        ("--ddpg", pggd.to_str().unwrap(), "takes a deterministic (DDPG) actor"),
+        ("--pggd", expert.to_str().unwrap(), "takes a PGGD policy"),
+        ("--ddpg", "cross-task-v2-dagger-entity", "trained on several tasks (cross-task-v2-train)"),
+    ] {
+        let o = bp(&["table", row, policy, "--episodes", "2", "--out", out.to_str().unwrap()]);
+        assert!(!o.status.success() && text(&o).contains(wanted), "{row} {policy}: {}", text(&o));
+    }
 
     // The runs' finals curves in one figure.
     let png = dir.path().join("overlay.png");
