@@ -96,7 +96,29 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
             };
             split.rows.iter().map(|r| r.task.clone()).collect::<Vec<_>>()
         }
-        None => env_list(&config.env).into_iter().map(registry::task).collect::<Result<Vec<_>, _>>()?,
+        None => {
+            // A list means what it says: no empty item, no task twice (by id or by content).
+            let items: Vec<&str> = config.env.split(',').map(str::trim).collect();
+            if let Some(k) = items.iter().position(|s| s.is_empty()) {
+                bail!(
+                    "--env {:?}: item {} of the list is empty; list task ids or files separated by single commas",
+                    config.env,
+                    k + 1
+                );
+            }
+            let tasks = items.iter().map(|e| registry::task(e)).collect::<Result<Vec<_>, _>>()?;
+            for (i, t) in tasks.iter().enumerate() {
+                if let Some(j) = tasks[..i].iter().position(|u| u.source.hash == t.source.hash) {
+                    bail!(
+                        "--env lists one task twice: {} and {} ({}) have the same content; list each task once",
+                        items[j],
+                        items[i],
+                        t.id()
+                    );
+                }
+            }
+            tasks
+        }
     };
     let mut unique: Vec<Task> = Vec::new();
     for t in tasks {

@@ -1335,6 +1335,12 @@ fn bad_streams_are_refused_before_anything_is_written() {
     refused(&["--families", "push"], &["--generator-seeds"]);
     // Nor does any run train on a suite's test split (issue 60).
     refused(&["--suite", "procgen", "--split", "test"], &["--split test", "score", "--split train"]);
+    // An --env list means what it says: no empty item, no task twice by id or by content (issue 60).
+    refused(&["--env", "BlocksTouch-v0,,BlocksChoose-v0"], &["item 2 of the list is empty"]);
+    refused(&["--env", "BlocksTouch-v0,BlocksChoose-v0,BlocksTouch-v0"], &["one task twice", "list each task once"]);
+    let copy = dir.path().join("touch.toml");
+    std::fs::copy(format!("{}/tasks/BlocksTouch-v0.toml", env!("CARGO_MANIFEST_DIR")), &copy).unwrap();
+    refused(&["--env", &format!("BlocksTouch-v0,{}", copy.display())], &["same content", "BlocksTouch-v0"]);
     refused(&["--env", "BlocksTouch-v0", "--generator-seeds", "0..4"], &["--families"]);
     let family = dir.path().join("no-green.toml");
     let text = std::fs::read_to_string(format!("{}/families/gripper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
