@@ -66,10 +66,29 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let results = crate::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
-    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results, &crate::provenance::Build::current())?;
     let kept: Vec<&crate::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
     let missing: Vec<u64> = results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect();
     let rejected = crate::generate::rejections(&results);
+    if kept.is_empty() {
+        // Nothing to write: an error, naming each reason with its first message, and nothing written.
+        let examples = crate::generate::examples(&results);
+        let reasons: Vec<String> = rejected
+            .iter()
+            .map(|(why, n)| match examples.get(why) {
+                Some(e) => format!("{n} {why} (first: {})", crate::limits::cut_long_lines(e)),
+                None => format!("{n} {why}"),
+            })
+            .collect();
+        bail!(
+            "{}: no seed of {}..{} gave a task, and nothing was written: every candidate was rejected ({}). Fix the \
+             family where a candidate does not compile or build; else loosen its ranges or its [check]",
+            a.family,
+            a.seed,
+            a.seed.saturating_add(a.count as u64),
+            reasons.join("; ")
+        );
+    }
+    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results, &crate::provenance::Build::current())?;
     println!(
         "{}: {} of {} seeds gave a task (seeds {}..{}), written to {}",
         family.spec.family,

@@ -105,6 +105,21 @@ fn task_generate_writes_the_tasks_and_their_record() {
         assert_eq!(task.source.hash, t["hash"].as_str().unwrap());
     }
     assert!(text.contains("seeds gave a task"), "{text}");
+    // A family whose every candidate is rejected (here: no green block, so no task compiles) is an error
+    // naming the reason and its first message, and nothing is written (issue 60).
+    let no_green = dir.path().join("no-green.toml");
+    let text =
+        shipped("push").replace("episodes = 20", "episodes = 3").replace("max_candidates = 20", "max_candidates = 2");
+    std::fs::write(&no_green, text.replace("colour = \"green\"", "colour = \"grey\"")).unwrap();
+    let none = dir.path().join("none");
+    let o = crate::common::blockpuzzle(&["task", "generate", no_green.to_str().unwrap(), "--count", "2"])
+        .args(["--out", none.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("no seed of 0..2 gave a task") && e.contains("does not compile"), "{e}");
+    assert!(e.contains("green") && e.contains("nothing was written"), "{e}");
+    assert!(!none.exists(), "{}", none.display());
     // A family that is not a file, and an --out that is a file, are refused by name.
     let o = crate::common::blockpuzzle(&["task", "generate", "/no/such.toml", "--out", out.to_str().unwrap()])
         .output()
