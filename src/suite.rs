@@ -68,7 +68,7 @@ struct RowSpec {
     #[serde(default)]
     family: Option<String>,
     /// The generator seeds `[first, end)` whose tasks the row stands for.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "crate::task::exact::option")]
     generator_seeds: Option<[u64; 2]>,
     /// Narrower choices than the family's (one rule variation alone, or a combination).
     #[serde(default)]

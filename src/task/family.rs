@@ -145,13 +145,13 @@ pub struct BlockGroup {
     /// Their colour.
     pub colour: Colour,
     /// How many, `[min, max]`, drawn per task (0 leaves the group out).
-    #[serde(default = "default_count")]
+    #[serde(default = "default_count", deserialize_with = "super::exact::array")]
     pub count: [usize; 2],
     /// Half side of the (cubic) blocks in metres, `[min, max]`, drawn per task (to the millimetre).
-    #[serde(default = "default_size")]
+    #[serde(default = "default_size", deserialize_with = "super::exact::array")]
     pub size: [f64; 2],
     /// Fixed half extents (x, y, z) instead of drawn cubes (a wall, a pillar).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::exact::option")]
     pub half_extents: Option<[f64; 3]>,
     /// Mass in kg (default: a task file's, 2).
     #[serde(default = "default_mass")]
@@ -190,7 +190,7 @@ pub struct Narrowing {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub floor: Option<Vec<FloorChoice>>,
     /// Count ranges by group name (within the group's range).
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty", deserialize_with = "super::exact::map")]
     pub counts: BTreeMap<String, [usize; 2]>,
 }
 
@@ -241,6 +241,18 @@ impl Family {
                 "family format version {} is not one this build reads (it reads version {FAMILY_VERSION})",
                 spec.version
             )));
+        }
+        // A group's block shape is `size` (cubes) or `half_extents` (boxes): both would drop one silently.
+        if let Ok(raw) = text.parse::<toml::Table>() {
+            let groups = raw.get("blocks").and_then(toml::Value::as_array).map_or(&[][..], Vec::as_slice);
+            for g in groups.iter().filter_map(toml::Value::as_table) {
+                if g.contains_key("size") && g.contains_key("half_extents") {
+                    let name = g.get("name").and_then(toml::Value::as_str).unwrap_or("?");
+                    return Err(err(format!(
+                        "group {name} gives both `size` (a cube's half side) and `half_extents` (a box's); give one"
+                    )));
+                }
+            }
         }
         let plain = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '_';
         if !spec.family.starts_with(|c: char| c.is_ascii_alphabetic())

@@ -9,7 +9,7 @@
 mod compile;
 pub mod counts;
 mod diagnostics;
-mod exact;
+pub(crate) mod exact;
 pub mod expr;
 pub mod family;
 pub mod sampler;

@@ -52,6 +52,13 @@ fn family_errors_name_the_problem_and_the_line() {
         &base.replace("name = \"green2\"", "name = \"gripper\""),
         &["\"gripper\" is empty, reserved or used twice"],
     );
+    // No value silently dropped (issue 60): a range of three numbers, a cube's size beside a box's extents.
+    refused(&base.replace("count = [0, 1]", "count = [0, 1, 2]"), &["a list of exactly 2"]);
+    refused(&base.replace("size = [0.02, 0.03]", "size = [0.02, 0.03, 0.04]"), &["a list of exactly 2"]);
+    refused(
+        &base.replacen("size = [0.02, 0.03]", "size = [0.02, 0.03]\nhalf_extents = [0.02, 0.02, 0.04]", 1),
+        &["group blue gives both `size`", "give one"],
+    );
 }
 
 /// The same seed gives the same task whatever the range it is generated in and the thread count;
@@ -181,6 +188,7 @@ fn suites_draw_rows_from_families() {
         assert!(e.contains(want), "{want:?} missing from: {e}");
     };
     refused("family = \"push\"\ngenerator_seeds = [5, 5]", "must be a range [first, end) of 1 to 200 seeds");
+    refused("family = \"push\"\ngenerator_seeds = [0, 2, 4]", "a list of exactly 2");
     refused("family = \"push\"\ntask = \"BlocksTouch-v0\"\ngenerator_seeds = [0, 1]", "not both");
     refused("family = \"push\"", "not both");
     refused("family = \"nope\"\ngenerator_seeds = [0, 1]", "no such family: the shipped ones are push, gripper");
