@@ -362,6 +362,13 @@ fn read(path: &Path, what: &str, max: u64, text: bool) -> std::io::Result<Vec<u8
             Err(e) => return Err(e),
         }
     }
+    // A pipe or device that gave nothing (a FIFO without a writer, /dev/null) is not an empty file.
+    if !t.is_file() && bytes.is_empty() {
+        let kind = if t.is_fifo() { "a pipe (FIFO)" } else { "a device" };
+        return Err(refuse(&format!(
+            "is {kind} that gave no data (no process wrote to it); give the {what} as a file, or start its writer first"
+        )));
+    }
     Ok(bytes)
 }
 

@@ -802,3 +802,22 @@ fn messages_name_the_setting_and_exports_leave_nothing_half_made() {
     assert!(!text(&o).contains("not usable"), "{}", text(&o));
     assert!(!d.join("z").exists(), "no zoo folder made");
 }
+
+/// Issue 60: an input given as a pipe or device that gives nothing (a FIFO without a writer, /dev/null)
+/// is refused as such, not read as an empty text ("missing field `version`").
+#[test]
+fn empty_pipes_and_devices_are_refused_as_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("task.toml");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    for (args, wanted) in [
+        (vec!["task", "check", fifo.to_str().unwrap()], "is a pipe (FIFO) that gave no data"),
+        (vec!["eval", "--suite", "/dev/null", "--baseline", "scripted"], "is a device that gave no data"),
+        (vec!["task", "generate", "/dev/null", "--out", dir.path().join("o").to_str().unwrap()], "gave no data"),
+    ] {
+        let o = bp_in(dir.path(), &args);
+        refused(&o, &[wanted, "start its writer first"]);
+        assert!(!text(&o).contains("missing field"), "{args:?}: {}", text(&o));
+    }
+    assert!(!dir.path().join("o").exists());
+}
