@@ -64,7 +64,7 @@ pub enum ZooError {
     #[error("--name {name:?}: an entry's name is letters, digits, '-' and '_' (it becomes NAME.safetensors and NAME.json in the zoo folder)")]
     BadName { name: String },
     /// The zoo path is a file.
-    #[error("the zoo {zoo} is a file; give a folder (it is created if missing)")]
+    #[error("the zoo {zoo} is not a folder; set $BLOCKPUZZLE_ZOO or --zoo to a folder of NAME.safetensors + NAME.json entries (zoo export creates it if missing)")]
     NotAFolder { zoo: PathBuf },
     /// The zoo folder does not exist.
     #[error("the zoo folder {zoo} does not exist (set $BLOCKPUZZLE_ZOO or --zoo to a folder of NAME.safetensors + NAME.json entries)")]
@@ -301,6 +301,8 @@ pub fn is_name(arg: &Path) -> bool {
 pub fn existing(zoo: &Path) -> Result<&Path, ZooError> {
     if zoo.is_dir() {
         Ok(zoo)
+    } else if zoo.exists() {
+        Err(ZooError::NotAFolder { zoo: zoo.to_owned() })
     } else {
         Err(ZooError::NoZoo { zoo: zoo.to_owned() })
     }

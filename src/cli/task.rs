@@ -65,6 +65,11 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
         bail!("--out {} is not a folder; give a folder for the task files", a.out.display());
     }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    // The seeds as people read them, first to last (`seed + count` may pass the largest seed).
+    let seeds = match a.count {
+        1 => format!("seed {}", a.seed),
+        n => format!("seeds {} to {}", a.seed, a.seed + (n as u64 - 1)),
+    };
     let results = crate::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
     let kept: Vec<&crate::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
     let missing: Vec<u64> = results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect();
@@ -80,22 +85,18 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
             })
             .collect();
         bail!(
-            "{}: no seed of {}..{} gave a task, and nothing was written: every candidate was rejected ({}). Fix the \
-             family where a candidate does not compile or build; else loosen its ranges or its [check]",
+            "{}: no task from {seeds}, and nothing was written: every candidate was rejected ({}). Fix the family \
+             where a candidate does not compile or build; else loosen its ranges or its [check]",
             a.family,
-            a.seed,
-            a.seed.saturating_add(a.count as u64),
             reasons.join("; ")
         );
     }
     crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results, &crate::provenance::Build::current())?;
     println!(
-        "{}: {} of {} seeds gave a task (seeds {}..{}), written to {}",
+        "{}: {} of {} seeds gave a task ({seeds}), written to {}",
         family.spec.family,
         kept.len(),
         a.count,
-        a.seed,
-        a.seed + a.count as u64,
         a.out.display()
     );
     let tried: usize = rejected.values().sum::<usize>() + kept.len();

@@ -492,6 +492,12 @@ impl<'a> Trainer<'a> {
         if resume {
             check_resume(comm, &run)?;
         }
+        if std::fs::metadata(&run.dir).is_ok_and(|m| !m.is_dir()) {
+            bail!(
+                "--run-dir {} is a file, not a folder; give the path of a new folder (or of a run to --resume)",
+                run.dir.display()
+            );
+        }
         let created = [&run.dir, &mine.dir]
             .into_iter()
             .map(|d| {

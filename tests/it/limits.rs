@@ -821,3 +821,23 @@ fn empty_pipes_and_devices_are_refused_as_inputs() {
     }
     assert!(!dir.path().join("o").exists());
 }
+
+/// Issue 60's misworded errors: each names the problem and the fix.
+#[test]
+fn misworded_errors_of_round_5_name_the_problem_and_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    // --run-dir onto a file (was "File exists").
+    let o = bp_in(dir.path(), &tiny_args(&file, "1", &[]));
+    refused(&o, &["--run-dir", "is a file, not a folder", "new folder"]);
+    // BLOCKPUZZLE_ZOO set to a file (was "does not exist").
+    let o = Command::new(crate::common::CLI).args(["zoo", "list"]).env("BLOCKPUZZLE_ZOO", &file).output().unwrap();
+    refused(&o, &["is not a folder", "$BLOCKPUZZLE_ZOO"]);
+    // The largest seed: the range is printed first to last (was "…615..0").
+    let args = ["task", "generate", "push", "--seed", "18446744073709551615", "--count", "1", "--out", "gen"];
+    let o = bp_in(dir.path(), &args);
+    let t = text(&o);
+    assert!(!t.contains("..0"), "{t}");
+    assert!(t.contains("seed 18446744073709551615"), "{t}");
+}
