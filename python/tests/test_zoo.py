@@ -32,6 +32,15 @@ def test_a_multi_task_entry_names_every_training_task_and_a_single_task_entry_it
     assert single.training_tasks == [single.task_id] == ["BlocksTouch-v0"]
 
 
+def test_a_stream_entry_names_its_stream_s_tasks():
+    generalist = zoo.load("generalist-bc-entity")
+    assert generalist.meta["format"] == "blockpuzzle-zoo/6"
+    tasks = generalist.training_tasks
+    assert len(tasks) == 1029 and tasks[0] == generalist.task_id == "push-200-v0"
+    assert "clutter-346-v0" in tasks and not any(t.endswith("-v0") and "-20000-" in t for t in tasks)
+    assert generalist.obs_mode == "entities"
+
+
 def test_a_zoo_policy_acts_on_single_and_batched_observations():
     policy = zoo.load("BlocksTouch-v0-ddpg")
     env = gym.make(f"BlockPuzzle/{policy.task_id}", obs_mode=policy.obs_mode)
