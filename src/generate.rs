@@ -188,16 +188,17 @@ pub fn write_folder(
     results: &[SeedResult],
     build: &impl Serialize,
 ) -> anyhow::Result<serde_json::Value> {
-    match std::fs::metadata(out) {
+    use std::io::Write as _;
+    // A folder made here goes again if anything fails.
+    let created = match std::fs::metadata(out) {
         Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
-        Ok(_) => {}
-        Err(_) => std::fs::create_dir_all(out)
-            .map_err(|e| anyhow::anyhow!("cannot make the folder {}: {e}", out.display()))?,
-    }
+        Ok(_) => None,
+        Err(_) => Some(
+            crate::io::CreatedDir::create(out)
+                .map_err(|e| anyhow::anyhow!("cannot make the folder {}: {e}", out.display()))?,
+        ),
+    };
     let kept: Vec<&Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
-    for t in &kept {
-        crate::io::write_file(&out.join(format!("{}.toml", t.id)), t.toml.as_bytes())?;
-    }
     let manifest = serde_json::json!({
         "family": family.spec.family,
         "family_file": family_source,
@@ -210,6 +211,39 @@ pub fn write_folder(
         "rejected": rejections(results),
         "rejection_examples": examples(results),
     });
-    crate::io::write_json(&out.join("generated.json"), &manifest)?;
+    let json = serde_json::to_vec_pretty(&manifest)?;
+    // Every output is written in full before any is put in place: a full disk, or an output that is a
+    // folder, leaves nothing behind.
+    let files = kept.iter().map(|t| (out.join(format!("{}.toml", t.id)), t.toml.as_bytes()));
+    let mut outputs = Vec::new();
+    for (path, bytes) in files.chain(std::iter::once((out.join(MANIFEST), &json[..]))) {
+        let cannot = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {e}", path.display());
+        let mut output = crate::io::Output::create(&path).map_err(cannot)?;
+        output.write_all(bytes).and_then(|()| output.flush()).map_err(cannot)?;
+        outputs.push((path, output));
+    }
+    for (path, output) in outputs {
+        output.finish().map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    }
+    created.into_iter().for_each(crate::io::CreatedDir::keep);
     Ok(manifest)
+}
+
+/// The record `task generate` writes beside the task files.
+pub const MANIFEST: &str = "generated.json";
+
+/// Checks, before any candidate is played, that every file `task generate` may write into `out` (each
+/// seed's `FAMILY-SEED-v0.toml` and [`MANIFEST`]) can be written.
+///
+/// # Errors
+/// The first output that cannot be written (a folder in its place, a read-only file), named.
+pub fn check_outputs(out: &std::path::Path, family: &Family, first: u64, count: usize) -> anyhow::Result<()> {
+    if !out.is_dir() {
+        return Ok(());
+    }
+    for seed in (0..count as u64).map(|k| first + k) {
+        crate::io::check_output(&out.join(format!("{}.toml", family.task_id(seed))))?;
+    }
+    crate::io::check_output(&out.join(MANIFEST))?;
+    Ok(())
 }

@@ -64,6 +64,7 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     if std::fs::metadata(&a.out).is_ok_and(|m| !m.is_dir()) {
         bail!("--out {} is not a folder; give a folder for the task files", a.out.display());
     }
+    crate::generate::check_outputs(&a.out, &family, a.seed, a.count)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     // The seeds as people read them, first to last (`seed + count` may pass the largest seed).
     let seeds = match a.count {

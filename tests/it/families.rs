@@ -127,6 +127,18 @@ fn task_generate_writes_the_tasks_and_their_record() {
     assert!(!o.status.success() && e.contains("no task from seeds 0 to 1") && e.contains("does not compile"), "{e}");
     assert!(e.contains("green") && e.contains("nothing was written"), "{e}");
     assert!(!none.exists(), "{}", none.display());
+    // Every output is checked before any candidate is played: a later task file's path that is a folder
+    // is refused by name, and nothing is written (issue 60).
+    let blocked = dir.path().join("blocked");
+    std::fs::create_dir_all(blocked.join("push-6-v0.toml")).unwrap();
+    let o = crate::common::blockpuzzle(&["task", "generate", fam.to_str().unwrap(), "--seed", "5", "--count", "2"])
+        .args(["--out", blocked.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("push-6-v0.toml") && e.contains("is a folder"), "{e}");
+    let left: Vec<_> = std::fs::read_dir(&blocked).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, ["push-6-v0.toml"], "nothing written beside the folder");
     // A family that is not a file, and an --out that is a file, are refused by name.
     let o = crate::common::blockpuzzle(&["task", "generate", "/no/such.toml", "--out", out.to_str().unwrap()])
         .output()
