@@ -208,6 +208,10 @@ pub struct Family {
     pub text: Option<String>,
 }
 
+/// The most simulation steps the solver's check of one seed may take (check.episodes ×
+/// check.max_candidates × max_episode_steps): a few minutes of one core.
+pub const MAX_CHECK_STEPS: u64 = 1_000_000;
+
 /// What [`Family::draw`] chose for one candidate, besides the task.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Drawn {
@@ -292,6 +296,17 @@ impl Family {
             return Err(err(format!(
                 "check.episodes ({}) and check.max_candidates ({}) must be 1 to 1000",
                 c.episodes, c.max_candidates
+            )));
+        }
+        // The solver's check of one seed may play episodes × candidates whole episodes: bounded, so that no
+        // family makes `task generate` work for hours on one seed without a word.
+        let work = (c.episodes * c.max_candidates) as u64 * spec.max_episode_steps as u64;
+        if work > MAX_CHECK_STEPS {
+            return Err(err(format!(
+                "check.episodes × check.max_candidates × max_episode_steps = {} × {} × {} = {work} steps may go \
+                 into one seed's check; at most {MAX_CHECK_STEPS} (the shipped families use 20 × 20 × 50–100): \
+                 lower one of them",
+                c.episodes, c.max_candidates, spec.max_episode_steps
             )));
         }
         let mut most = 0;

@@ -54,6 +54,11 @@ fn family_errors_name_the_problem_and_the_line() {
     );
     // No value silently dropped (issue 60): a range of three numbers, a cube's size beside a box's extents.
     refused(&base.replace("count = [0, 1]", "count = [0, 1, 2]"), &["a list of exactly 2"]);
+    // Runaway work: a check that may cost hundreds of millions of steps a seed is refused up front.
+    refused(
+        &base.replace("episodes = 20", "episodes = 1000").replace("max_candidates = 20", "max_candidates = 1000"),
+        &["1000 × 1000 × 50 = 50000000 steps", "at most 1000000", "lower one of them"],
+    );
     refused(&base.replace("size = [0.02, 0.03]", "size = [0.02, 0.03, 0.04]"), &["a list of exactly 2"]);
     refused(
         &base.replacen("size = [0.02, 0.03]", "size = [0.02, 0.03]\nhalf_extents = [0.02, 0.02, 0.04]", 1),
