@@ -126,8 +126,13 @@ impl Algo {
     pub fn check_expert(self, expert: bool) -> Result<(), String> {
         if expert && !self.0.info.takes_expert {
             let takers: Vec<&str> = ALGORITHMS.iter().filter(|r| r.info.takes_expert).map(|r| r.info.name).collect();
+            let own = if self.0.info.imitates {
+                "imitates the built-in solver, its expert; drop --expert".to_owned()
+            } else {
+                "trains without an expert".to_owned()
+            };
             return Err(format!(
-                "--expert is for AggreVaTeD (--algo {}); {} trains without an expert",
+                "--expert is for AggreVaTeD (--algo {}); {} {own}",
                 takers.join(" or --algo "),
                 self.0.info.title
             ));

@@ -103,10 +103,11 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
     }
     super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
     let expert = config.aggrevated.expert.is_some();
+    // Which algorithm takes an expert first: the network matters only to one that does.
+    config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
         bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
     }
-    config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
     let t0 = config.aggrevated.t0;
     if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
         bail!("--beta0 must be in [0, 1] and --t0 at least 0");

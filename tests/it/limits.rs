@@ -831,6 +831,11 @@ fn misworded_errors_of_round_5_name_the_problem_and_the_fix() {
     // --run-dir onto a file (was "File exists").
     let o = bp_in(dir.path(), &tiny_args(&file, "1", &[]));
     refused(&o, &["--run-dir", "is a file, not a folder", "new folder"]);
+    // DAgger or BC with --expert (was told to "train with --net mlp").
+    let run = dir.path().join("run");
+    let o = bp_in(dir.path(), &tiny_args(&run, "1", &["--algo", "dagger", "--net", "entity", "--expert", "x"]));
+    refused(&o, &["DAgger imitates the built-in solver", "drop --expert"]);
+    assert!(!text(&o).contains("--net mlp"), "{}", text(&o));
     // BLOCKPUZZLE_ZOO set to a file (was "does not exist").
     let o = Command::new(crate::common::CLI).args(["zoo", "list"]).env("BLOCKPUZZLE_ZOO", &file).output().unwrap();
     refused(&o, &["is not a folder", "$BLOCKPUZZLE_ZOO"]);
