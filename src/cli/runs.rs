@@ -184,6 +184,14 @@ fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
 }
 
 fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
+    if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
+        let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        bail!(
+            "{} is a file; give its run directory (the folder with config.json and progress.csv), e.g. {}",
+            dir.display(),
+            parent.display()
+        );
+    }
     let run = crate::train::RunDir { dir: dir.to_owned() };
     Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
 }

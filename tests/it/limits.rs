@@ -836,6 +836,10 @@ fn misworded_errors_of_round_5_name_the_problem_and_the_fix() {
     let o = bp_in(dir.path(), &tiny_args(&run, "1", &["--algo", "dagger", "--net", "entity", "--expert", "x"]));
     refused(&o, &["DAgger imitates the built-in solver", "drop --expert"]);
     assert!(!text(&o).contains("--net mlp"), "{}", text(&o));
+    // report FILE (was "config.json/config.json").
+    let o = bp_in(dir.path(), &["report", file.to_str().unwrap()]);
+    refused(&o, &["is a file; give its run directory"]);
+    assert!(!text(&o).contains("file/config.json"), "{}", text(&o));
     // BLOCKPUZZLE_ZOO set to a file (was "does not exist").
     let o = Command::new(crate::common::CLI).args(["zoo", "list"]).env("BLOCKPUZZLE_ZOO", &file).output().unwrap();
     refused(&o, &["is not a folder", "$BLOCKPUZZLE_ZOO"]);
