@@ -593,25 +593,6 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
     let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    // The metadata is checked as a whole (format 6 on); older formats, written before it was sealed, as before.
-    let sealed = !READS[..5].contains(&meta.format.as_str());
-    match &meta.meta_sha256 {
-        Some(h) if *h != meta.seal() => {
-            return Err(bad_meta(
-                "its metadata is not what was exported (meta_sha256 does not match: a field was edited); restore \
-                 both files of the entry together, or export the policy again"
-                    .into(),
-            ))
-        }
-        None if sealed => {
-            return Err(bad_meta(format!(
-                "format {} records meta_sha256, and this entry has none (it was edited); restore both files of the \
-                 entry together",
-                meta.format
-            )))
-        }
-        _ => {}
-    }
     if let Some(m) = &meta.multi_task {
         let plain = |c: char| c.is_ascii_alphanumeric() || "-_+.".contains(c);
         if m.label.is_empty() || m.label.len() > 4096 || !m.label.chars().all(plain) || m.label.starts_with('.') {
@@ -768,6 +749,26 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                  (actor.tanh_out, actor.set, norm_*) were edited; restore both files of the entry together"
             )));
         }
+    }
+    // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
+    // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
+    let sealed = !READS[..5].contains(&meta.format.as_str());
+    match &meta.meta_sha256 {
+        Some(h) if *h != meta.seal() => {
+            return Err(bad_meta(
+                "its metadata is not what was exported (meta_sha256 does not match: a field was edited); restore \
+                 both files of the entry together, or export the policy again"
+                    .into(),
+            ))
+        }
+        None if sealed => {
+            return Err(bad_meta(format!(
+                "format {} records meta_sha256, and this entry has none (it was edited); restore both files of the \
+                 entry together",
+                meta.format
+            )))
+        }
+        _ => {}
     }
     Ok((meta, saved))
 }

@@ -252,7 +252,7 @@ fn zoo_commands_fail_loudly_and_never_overwrite_silently() {
             "zf",
         ],
     );
-    refused(&o, &["the zoo zf is a file"]);
+    refused(&o, &["the zoo zf is not a folder"]);
 
     // An entry whose task text was edited but whose hash was not is refused on load.
     let json = cwd.join("z/E.json");
@@ -723,7 +723,7 @@ fn odd_logs_suites_and_entries_are_named_not_used() {
     v["actor"]["set"]["pooling"] = "max".into();
     std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
     refused(&bp_in(d, &["zoo", "check", "--zoo", zoo.to_str().unwrap()]), &["s.json", "unknown field `pooling`"]);
-    // A layout edit is reported against the metadata's field.
+    // A layout edit is reported against the metadata's field (before the seal, which catches the rest).
     v["actor"]["set"].as_object_mut().unwrap().remove("pooling");
     v["actor"]["layers"][1][0] = 255.into();
     std::fs::write(zoo.join("s.json"), serde_json::to_string(&v).unwrap()).unwrap();
