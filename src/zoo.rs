@@ -550,8 +550,25 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
         };
         done.push(what);
     }
-    // Rewritten in this format, and sealed: the entry loads first, so an edited entry is not sealed.
-    load(&json_path)?;
+    // Rewritten in this format, and sealed: the entry loads first, so an edited entry is not sealed, and
+    // every evaluation must name this policy as this build names it (a sealed entry requires it).
+    let (_, saved) = load(&json_path)?;
+    let policy_sha = saved.policy_id(&meta.name).sha256;
+    if let Some(e) =
+        meta.evaluations.iter().find(|e| e.policy_sha256().is_some_and(|h| Some(h) != policy_sha.as_deref()))
+    {
+        return Err(ZooError::Corrupt {
+            path: json_path.clone(),
+            reason: format!(
+                "its evaluation of {} {} names the policy {}, which this build names {}: it cannot be sealed so; \
+                 remove that evaluation, or play it again with `zoo evaluate` on its engine",
+                e.env,
+                e.distribution,
+                e.policy_sha256().unwrap_or_default(),
+                policy_sha.as_deref().unwrap_or("unnamed")
+            ),
+        });
+    }
     meta.format = FORMAT.into();
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
@@ -729,9 +746,11 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         critic,
     };
     saved.check().map_err(&corrupt)?;
-    // Every evaluation that names its policy names this one.
+    // Every evaluation that names its policy names this one (in sealed entries: older ones were written
+    // by builds whose policy ids this one need not reproduce).
+    let sealed = !READS[..5].contains(&meta.format.as_str());
     let policy_sha = saved.policy_id(&meta.name).sha256;
-    for (k, e) in meta.evaluations.iter().enumerate() {
+    for (k, e) in meta.evaluations.iter().enumerate().filter(|_| sealed) {
         if let Some(other) = e.policy_sha256().filter(|h| Some(*h) != policy_sha.as_deref()) {
             return Err(bad_meta(format!(
                 "evaluations[{k}] ({} {}) was made by the policy {other}, not this one ({}); restore the entry, or \
@@ -752,7 +771,6 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     }
     // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
     // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
-    let sealed = !READS[..5].contains(&meta.format.as_str());
     match &meta.meta_sha256 {
         Some(h) if *h != meta.seal() => {
             return Err(bad_meta(
