@@ -232,14 +232,17 @@ pub fn write_folder(
 /// The record `task generate` writes beside the task files.
 pub const MANIFEST: &str = "generated.json";
 
-/// Checks, before any candidate is played, that every file `task generate` may write into `out` (each
-/// seed's `FAMILY-SEED-v0.toml` and [`MANIFEST`]) can be written.
+/// Checks, before any candidate is played, that `out` is a folder (or can be made) and that every file
+/// `task generate` may write into it (each seed's `FAMILY-SEED-v0.toml` and [`MANIFEST`]) can be written.
 ///
 /// # Errors
-/// The first output that cannot be written (a folder in its place, a read-only file), named.
+/// `out` is not a folder, or the first output that cannot be written (a folder in its place, a read-only
+/// file), named.
 pub fn check_outputs(out: &std::path::Path, family: &Family, first: u64, count: usize) -> anyhow::Result<()> {
-    if !out.is_dir() {
-        return Ok(());
+    match std::fs::metadata(out) {
+        Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
+        Ok(_) => {}
+        Err(_) => return Ok(()),
     }
     for seed in (0..count as u64).map(|k| first + k) {
         crate::io::check_output(&out.join(format!("{}.toml", family.task_id(seed))))?;

@@ -133,6 +133,11 @@ impl ZooEvaluation {
         self.provenance.as_ref().and_then(|p| p.policy.sha256.as_deref())
     }
 
+    /// Whether its provenance names a policy other than `policy` (a record that names none does not).
+    pub fn names_another_policy(&self, policy: Option<&str>) -> bool {
+        self.policy_sha256().is_some_and(|h| Some(h) != policy)
+    }
+
     /// Whether `other` measures the same thing (task, distribution, view, episodes, seeds) on the same engine.
     pub fn same_measurement(&self, other: &ZooEvaluation) -> bool {
         (&self.env, &self.distribution, self.grey_blind, self.episodes, self.seed, self.mujoco())
@@ -515,13 +520,14 @@ pub enum Recorded {
 
 /// Records `new` evaluations in the entry at `path`, in its metadata only (the
 /// tensors and their checksum stay): see [`Recorded`] for each. The metadata
-/// is rewritten atomically in this blockpuzzle's [`FORMAT`].
+/// is rewritten atomically in this blockpuzzle's [`FORMAT`], sealed.
 ///
 /// # Errors
-/// The entry cannot be read or written.
+/// The entry does not load ([`load`]) or cannot be written; an evaluation names another policy.
 pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Recorded>, ZooError> {
     let json_path = path.with_extension("json");
-    let mut meta = read_meta(&json_path)?;
+    // The entry loads first (read once): an edited entry is not rewritten, nor sealed.
+    let (mut meta, saved) = load(&json_path)?;
     let mut done = Vec::new();
     for e in new {
         let unlabelled = |r: &ZooEvaluation| {
@@ -550,13 +556,10 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
         };
         done.push(what);
     }
-    // Rewritten in this format, and sealed: the entry loads first, so an edited entry is not sealed, and
-    // every evaluation must name this policy as this build names it (a sealed entry requires it).
-    let (_, saved) = load(&json_path)?;
+    // Rewritten in this format, and sealed: every evaluation must name this policy as this build names it
+    // (a sealed entry requires it).
     let policy_sha = saved.policy_id(&meta.name).sha256;
-    if let Some(e) =
-        meta.evaluations.iter().find(|e| e.policy_sha256().is_some_and(|h| Some(h) != policy_sha.as_deref()))
-    {
+    if let Some(e) = meta.evaluations.iter().find(|e| e.names_another_policy(policy_sha.as_deref())) {
         return Err(ZooError::Corrupt {
             path: json_path.clone(),
             reason: format!(
@@ -750,16 +753,16 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     // by builds whose policy ids this one need not reproduce).
     let sealed = !READS[..5].contains(&meta.format.as_str());
     let policy_sha = saved.policy_id(&meta.name).sha256;
-    for (k, e) in meta.evaluations.iter().enumerate().filter(|_| sealed) {
-        if let Some(other) = e.policy_sha256().filter(|h| Some(*h) != policy_sha.as_deref()) {
-            return Err(bad_meta(format!(
-                "evaluations[{k}] ({} {}) was made by the policy {other}, not this one ({}); restore the entry, or \
-                 play it again with `zoo evaluate`",
-                e.env,
-                e.distribution,
-                policy_sha.as_deref().unwrap_or("unnamed")
-            )));
-        }
+    let foreign = meta.evaluations.iter().enumerate().filter(|_| sealed);
+    if let Some((k, e)) = foreign.into_iter().find(|(_, e)| e.names_another_policy(policy_sha.as_deref())) {
+        return Err(bad_meta(format!(
+            "evaluations[{k}] ({} {}) was made by the policy {}, not this one ({}); restore the entry, or play it \
+             again with `zoo evaluate`",
+            e.env,
+            e.distribution,
+            e.policy_sha256().unwrap_or_default(),
+            policy_sha.as_deref().unwrap_or("unnamed")
+        )));
     }
     for (k, p) in meta.probes.iter().enumerate() {
         if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {

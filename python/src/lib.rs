@@ -482,6 +482,8 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     }
     let fam = blockpuzzle::task::family::Family::load(family, None).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let out = std::path::PathBuf::from(out);
+    // Every output checked before any candidate is played, as `task generate` does.
+    blockpuzzle::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(format!("{e:#}")))?;
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
         let results = blockpuzzle::generate::generate(&fam, seed, count, threads)?;
         let build = blockpuzzle::provenance::Build::current();

@@ -4,7 +4,7 @@
 
 use super::episodes::ViewArgs;
 use crate::env::{registry, BlockEnv};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 use std::path::PathBuf;
 
@@ -61,10 +61,7 @@ pub(super) struct TaskCheckArgs {
 pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     crate::limits::seed_range(a.seed, a.count as u64).map_err(anyhow::Error::msg)?;
     let family = crate::task::family::Family::load(&a.family, None)?;
-    if std::fs::metadata(&a.out).is_ok_and(|m| !m.is_dir()) {
-        bail!("--out {} is not a folder; give a folder for the task files", a.out.display());
-    }
-    crate::generate::check_outputs(&a.out, &family, a.seed, a.count)?;
+    crate::generate::check_outputs(&a.out, &family, a.seed, a.count).context("--out")?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     // The seeds as people read them, first to last (`seed + count` may pass the largest seed).
     let seeds = match a.count {
