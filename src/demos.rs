@@ -135,6 +135,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
     if let Some(n) = episodes {
         crate::limits::EVAL_EPISODES.check_usize(n).map_err(anyhow::Error::msg)?;
     }
+    suite.check_pinned(Some(split), threads)?;
     // The layout: every row's environment shows the split's most block slots (`EnvConfig::slots`):
     // a task's blocks, absent rows, then the gripper's, table's and floor's rows, the layout
     // multi-task training and its policies read.

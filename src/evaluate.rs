@@ -410,6 +410,7 @@ pub fn evaluate_suite(
     harness: Harness,
     on_row: &mut dyn FnMut(&str, &RowResult, usize, usize) -> Result<()>,
 ) -> Result<SuiteResult> {
+    suite.check_pinned(None, threads)?;
     let total: usize = suite.splits.iter().map(|s| s.rows.len()).sum();
     let mut done = 0;
     let mut splits = Vec::new();

@@ -60,6 +60,25 @@ fn reason(kind: &str, detail: &str) -> Rejection {
     Rejection { kind: kind.to_owned(), detail: detail.to_owned() }
 }
 
+/// The checks of a candidate that play no episode to its end, and so give the same answer on every
+/// engine and build: its scene builds, its first check episode's layout can be drawn, and the solver
+/// can play it (it chooses its behaviour from that first observation). A pinned candidate
+/// ([`crate::suite`]) must pass them: the generator would not keep one that does not.
+///
+/// # Errors
+/// The reason, in the words the generator counts it under, and the detail.
+pub fn solver_can_play(task: &crate::task::Task) -> Result<(), String> {
+    let mut env = BlockEnv::new(EnvConfig { obs_mode: ObsMode::Entities, ..EnvConfig::new(task.clone()) })
+        .map_err(|e| format!("cannot build its scene: {e}"))?;
+    let (obs, _) = env.reset(Some(0)).map_err(|e| format!("no layout at reset: {e}"))?;
+    let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
+    crate::policy::Policy::act(&mut solver, &obs);
+    match solver.unsolvable() {
+        Some(why) => Err(format!("the solver cannot play it: {why}")),
+        None => Ok(()),
+    }
+}
+
 /// Checks a drawn candidate; `Ok` with what the kept task records, or the reason it is rejected.
 fn check(family: &Family, seed: u64, candidate: usize) -> Result<Generated, Rejection> {
     let drawn = family.draw(seed, candidate).map_err(|e| reason("does not compile", &e.message))?;

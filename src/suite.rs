@@ -77,6 +77,10 @@ struct RowSpec {
     /// whatever the solver and the engine would choose today, and the suite loads without playing.
     #[serde(default)]
     candidates: Option<Vec<usize>>,
+    /// The family file's `sha256:` when its candidates were pinned (`task generate` prints it): a
+    /// family edited since is refused, as its pins may name other tasks now.
+    #[serde(default)]
+    family_sha256: Option<String>,
     distribution: Option<String>,
     level: Option<usize>,
     seed: u64,
@@ -118,6 +122,9 @@ pub struct Row {
     pub source: String,
     /// Whether the task was generated from a family (no file holds it).
     pub generated: bool,
+    /// The candidate the suite pins, for a generated task drawn without the solver's check
+    /// ([`Suite::check_pinned`] plays what does not depend on the engine).
+    pub pinned: Option<usize>,
     /// A named distribution of the task (None: the curriculum's, at `level`).
     pub distribution: Option<String>,
     /// Curriculum level (None: the maximum).
@@ -126,6 +133,42 @@ pub struct Row {
     pub seed: u64,
     /// Episodes.
     pub episodes: usize,
+}
+
+impl Suite {
+    /// Checks each pinned candidate of `split` (every split where None): the suite loads it without
+    /// playing, so that a pin holds on every engine and build, but one the generator would never keep
+    /// (its scene does not build, its layout cannot be drawn, the solver cannot play it) would score 0
+    /// for every policy. The checks that play no episode to its end
+    /// ([`crate::generate::solver_can_play`]) run here, on `threads` threads: whatever evaluates,
+    /// records or trains on a suite's rows calls this first.
+    ///
+    /// # Errors
+    /// [`SuiteError::Invalid`] naming the row and its candidate, and the fix.
+    pub fn check_pinned(&self, split: Option<&str>, threads: usize) -> Result<(), SuiteError> {
+        use rayon::prelude::*;
+        let rows: Vec<(&str, usize, &Row)> = self
+            .splits
+            .iter()
+            .filter(|s| split.map_or(true, |name| s.name == name))
+            .flat_map(|s| s.rows.iter().enumerate().map(move |(k, r)| (s.name.as_str(), k, r)))
+            .filter(|(_, _, r)| r.pinned.is_some())
+            .collect();
+        let invalid = |message: String| SuiteError::Invalid { origin: self.name.clone(), message };
+        let pool = crate::env::vector::model_threads(threads).map_err(invalid)?;
+        pool.install(|| {
+            rows.par_iter().try_for_each(|(split, k, r)| {
+                crate::generate::solver_can_play(&r.task).map_err(|why| {
+                    invalid(format!(
+                        "split {split}, row {k}: {} is a candidate the generator would not keep ({why}); pin the \
+                         candidate `task generate FAMILY --seed SEED --count 1` keeps for that seed, or leave the seed \
+                         out of the row",
+                        r.source
+                    ))
+                })
+            })
+        })
+    }
 }
 
 impl Row {
@@ -244,11 +287,19 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
             let what = r.task.as_deref().or(r.family.as_deref()).unwrap_or("?");
             let at = |m: String| invalid(format!("splits.{name}[{i}] ({what}): {m}"));
             match (&r.task, &r.family, r.generator_seeds) {
-                (Some(_), None, None) if r.choose.is_none() && r.candidates.is_none() => {
+                (Some(_), None, None) if r.choose.is_none() && r.candidates.is_none() && r.family_sha256.is_none() => {
                     out.push(row(r, dir).map_err(at)?)
                 }
                 (None, Some(f), Some(seeds)) => {
                     let mut family = crate::task::family::Family::load(f, dir).map_err(|e| at(e.to_string()))?;
+                    if let Some(pinned) = r.family_sha256.as_deref().filter(|&h| h != family.hash) {
+                        return Err(at(format!(
+                            "the family is not the one its candidates were pinned from (family_sha256 = {pinned:?}, \
+                             the file now {:?}): restore the family, or pin again from `task generate {f}` and set \
+                             family_sha256 to the hash it prints",
+                            family.hash
+                        )));
+                    }
                     if let Some(n) = &r.choose {
                         family = family.narrowed(n).map_err(|e| at(e.message))?;
                     }
@@ -257,7 +308,7 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
                 }
                 _ => {
                     return Err(at(
-                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`, `candidates`), not both"
+                        "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`, `candidates`, `family_sha256`), not both"
                             .into(),
                     ))
                 }
@@ -306,7 +357,7 @@ fn generated_rows(
             ));
         }
         let most = family.spec.check.max_candidates;
-        return (first..end)
+        let drawn = (first..end)
             .zip(pins)
             .map(|(seed, &c)| {
                 if c >= most {
@@ -316,7 +367,15 @@ fn generated_rows(
                     ));
                 }
                 let drawn = family.draw(seed, c).map_err(|e| format!("seed {seed}, candidate {c}: {}", e.message))?;
-                as_row(drawn.task, &family.task_id(seed), seed, c)
+                Ok((seed, c, drawn.task))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        return drawn
+            .into_iter()
+            .map(|(seed, c, task)| {
+                let mut row = as_row(task, &family.task_id(seed), seed, c)?;
+                row.pinned = Some(c);
+                Ok(row)
             })
             .collect();
     }
@@ -372,7 +431,16 @@ fn row_of(task: Task, id: String, r: &RowSpec) -> Result<Row, String> {
     }
     crate::limits::Bound { name: "episodes", ..crate::limits::EVAL_EPISODES }.check_usize(r.episodes)?;
     crate::limits::seed_range(r.seed, r.episodes as u64)?;
-    Ok(Row { task, source: id, generated: false, distribution, level: r.level, seed: r.seed, episodes: r.episodes })
+    Ok(Row {
+        task,
+        source: id,
+        generated: false,
+        pinned: None,
+        distribution,
+        level: r.level,
+        seed: r.seed,
+        episodes: r.episodes,
+    })
 }
 
 /// The seeds of every train row and every test row must not overlap.

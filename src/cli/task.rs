@@ -111,6 +111,18 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
             "no task within {} candidates for seeds {:?}: loosen the family's ranges or its check",
             family.spec.check.max_candidates, missing
         );
+    } else if let Some(end) = a.seed.checked_add(a.count as u64) {
+        // The suite row that holds these tasks on every engine and build (docs/suites.md).
+        let pins: Vec<String> = kept.iter().map(|t| t.candidate.to_string()).collect();
+        let quoted = |s: &str| toml::Value::String(s.to_owned()).to_string();
+        println!(
+            "a suite row holding these tasks on every engine and build (docs/suites.md):\n  family = {}\n  \
+             generator_seeds = [{}, {end}]\n  candidates = [{}]\n  family_sha256 = {}",
+            quoted(&a.family),
+            a.seed,
+            pins.join(", "),
+            quoted(&family.hash)
+        );
     }
     Ok(())
 }

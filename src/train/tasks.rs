@@ -94,6 +94,8 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
                     names.join(", ")
                 );
             };
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            suite.check_pinned(Some(&split.name), threads)?;
             split.rows.iter().map(|r| r.task.clone()).collect::<Vec<_>>()
         }
         None => {

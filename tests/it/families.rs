@@ -117,6 +117,26 @@ fn task_generate_writes_the_tasks_and_their_record() {
         assert_eq!(task.source.hash, t["hash"].as_str().unwrap());
     }
     assert!(text.contains("seeds gave a task"), "{text}");
+    // It prints the suite row that pins them, the family's hash included; pasted into a suite, the
+    // row holds those very tasks (issue 60).
+    let row: String = text
+        .split("docs/suites.md):\n")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no suite row in: {text}"))
+        .lines()
+        .take(4)
+        .map(|l| format!("{}\n", l.trim()))
+        .collect();
+    assert!(row.contains(record["family_hash"].as_str().unwrap()), "{row}");
+    let suite_text = format!(
+        "version = 1\nname = \"t\"\nsummary = \"s\"\n[[splits.train]]\n{row}seed = 0\nepisodes = 1\n\
+         [[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 10\nepisodes = 1\n"
+    );
+    let pinned = blockpuzzle::suite::parse(&suite_text, "t.toml", None).unwrap();
+    let hashes: Vec<&str> = pinned.splits[0].rows.iter().map(|r| r.task.source.hash.as_str()).collect();
+    let kept: Vec<&str> = record["tasks"].as_array().unwrap().iter().map(|t| t["hash"].as_str().unwrap()).collect();
+    assert_eq!(hashes, kept);
+    pinned.check_pinned(None, 2).unwrap();
     // A family whose every candidate is rejected (here: no green block, so no task compiles) is an error
     // naming the reason and its first message, and nothing is written (issue 60).
     let no_green = dir.path().join("no-green.toml");
@@ -168,6 +188,58 @@ fn task_generate_writes_the_tasks_and_their_record() {
     let file = out.join("stack-2-v0.toml");
     let task = Task::from_toml(&std::fs::read_to_string(&file).unwrap(), Some(&file)).unwrap();
     assert_eq!(task.spec.table.colour, blockpuzzle::rules::Colour::Red);
+}
+
+/// A pinned candidate is one the generator would keep (issue 60): a family edited since its pins
+/// were made is refused when the row records the family's hash, and a candidate the solver cannot play
+/// is refused, naming the row and the candidate, before anything is evaluated, recorded or trained.
+#[test]
+fn pinned_candidates_are_ones_the_generator_would_keep() {
+    use blockpuzzle::suite;
+    let dir = tempfile::tempdir().unwrap();
+    let fam = dir.path().join("green-gripper.toml");
+    // Every candidate compiles, but the solver does not play a green gripper.
+    std::fs::write(&fam, shipped("push").replace("gripper = [\"grey\"]", "gripper = [\"green\"]")).unwrap();
+    let hash = Family::load(fam.to_str().unwrap(), None).unwrap().hash;
+    let suite_text = |extra: &str| {
+        format!(
+            "version = 1\nname = \"t\"\nsummary = \"s\"\n[[splits.train]]\nfamily = \"green-gripper.toml\"\n\
+             generator_seeds = [3, 5]\ncandidates = [0, 1]\n{extra}seed = 0\nepisodes = 1\n\
+             [[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 10\nepisodes = 1\n"
+        )
+    };
+    let s = suite::parse(&suite_text(""), "t.toml", Some(dir.path())).unwrap();
+    assert_eq!(s.splits[0].rows[1].pinned, Some(1));
+    let e = s.check_pinned(None, 2).unwrap_err().to_string();
+    for want in ["split train, row 0", "seed 3, candidate 0", "would not keep", "green gripper", "task generate"] {
+        assert!(e.contains(want), "{want:?} missing from: {e}");
+    }
+    // The test split has no pin: checking it alone passes.
+    s.check_pinned(Some("test"), 1).unwrap();
+    // The recorded family hash: the same passes, another is refused, naming both and the fix.
+    suite::parse(&suite_text(&format!("family_sha256 = \"{hash}\"\n")), "t.toml", Some(dir.path())).unwrap();
+    let other = format!("family_sha256 = \"sha256:{}\"\n", "0".repeat(64));
+    let e = suite::parse(&suite_text(&other), "t.toml", Some(dir.path())).unwrap_err().to_string();
+    for want in ["splits.train[0]", "not the one its candidates were pinned from", &hash, "task generate"] {
+        assert!(e.contains(want), "{want:?} missing from: {e}");
+    }
+    // The commands that play a suite refuse it, and write nothing.
+    let file = dir.path().join("t.toml");
+    std::fs::write(&file, suite_text("")).unwrap();
+    let out = dir.path().join("out");
+    for args in [
+        vec!["eval", "--suite", file.to_str().unwrap(), "--baseline", "scripted", "--out", out.to_str().unwrap()],
+        vec!["demos", "--suite", file.to_str().unwrap(), "--split", "train", "--out", out.to_str().unwrap()],
+    ] {
+        let o = crate::common::blockpuzzle(&args).output().unwrap();
+        let text = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && text.contains("seed 3, candidate 0"), "{args:?}: {text}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+    // Every shipped suite's pins are candidates the generator keeps.
+    for name in ["procgen", "procgen-v2", "compose", "cross-task-v2"] {
+        suite::load(name).unwrap().check_pinned(None, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
 }
 
 /// Suite rows drawn from a family: one row per generator seed, each the seed's task; the suite's
