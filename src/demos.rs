@@ -28,7 +28,7 @@ use std::path::Path;
 
 use crate::env::vector::VectorEnv;
 use crate::env::{ObsMode, ObsSpec};
-use crate::evaluate::{make_env_with_slots, EvalSpec};
+use crate::evaluate::{make_env, EvalSpec};
 use crate::outcome::Outcome;
 use crate::policy::ScriptedPolicy;
 use crate::provenance::{Harness, PolicyId, Provenance};
@@ -180,7 +180,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
             threads,
         };
         let k = threads.clamp(1, n).min(crate::limits::THREADS.max as usize);
-        let envs = (0..k).map(|_| make_env_with_slots(&spec, ObsMode::Entities, slots)).collect::<Result<Vec<_>>>()?;
+        let envs = (0..k).map(|_| make_env(&spec, ObsMode::Entities, slots)).collect::<Result<Vec<_>>>()?;
         let mut envs = VectorEnv::from_envs(envs, k)?;
         if envs.obs_spec() != padded {
             bail!("{}: the environment shows {} entity rows, not {rows}", row.task.id(), envs.obs_spec().rows());

@@ -106,6 +106,18 @@ impl Subject<'_> {
             Subject::Baseline(Baseline::ObsHash) => ObsMode::Flat,
         }
     }
+
+    /// The block slots the environment shows: a multi-task flat policy's training layout
+    /// ([`SavedPolicy::slots`]), else 0 (each task's own).
+    ///
+    /// # Errors
+    /// A recorded training task that no longer compiles.
+    pub fn slots(&self) -> Result<usize> {
+        Ok(match self {
+            Subject::Saved(_, saved) => saved.slots()?,
+            Subject::Baseline(_) => 0,
+        })
+    }
 }
 
 /// What acts in the episodes of one evaluation.
@@ -193,6 +205,19 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     if wanted == dim {
         return Ok(Trained { policy: saved.policy, grey_blind: false });
     }
+    if saved.is_multi_task() {
+        // It reads its training tasks' layout (the environment shows it: `SavedPolicy::slots`).
+        let slots = saved.slots()?;
+        bail!(
+            "policy {} was trained on several tasks and reads their layout, {slots} block slots \
+             ({wanted}-dimensional `{}` observations); {} has {} blocks ({dim}): a flat network plays no task \
+             with more blocks than its training tasks had (a set network, `--net set`, plays any number)",
+            path.display(),
+            saved.policy.obs_mode(),
+            env.id(),
+            env.config().task.object_count()
+        );
+    }
     let blind = obs_dim_without_grey(&env.config().blocks());
     // Without grey blocks the view keeps every other block, so its size is fixed only where
     // no object of another colour comes in a varying number.
@@ -257,13 +282,9 @@ pub struct EvalSpec<'a> {
     pub threads: usize,
 }
 
-/// The environment of `spec`, its observation presented as `obs_mode` (the policy's).
-pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode) -> Result<BlockEnv> {
-    make_env_with_slots(spec, obs_mode, 0)
-}
-
-/// [`make_env`] with at least `slots` block slots in the observation ([`EnvConfig::slots`]).
-pub(crate) fn make_env_with_slots(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Result<BlockEnv> {
+/// The environment of `spec`, its observation presented as `obs_mode` (the policy's) with at least
+/// `slots` block slots ([`EnvConfig::slots`]).
+pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Result<BlockEnv> {
     let mut env = BlockEnv::new(EnvConfig { obs_mode, slots, ..EnvConfig::new(spec.task.clone()) })?;
     if spec.challenge {
         env.set_challenge(true)?;
@@ -281,7 +302,7 @@ pub(crate) fn make_env_with_slots(spec: &EvalSpec, obs_mode: ObsMode, slots: usi
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    let env = make_env(spec, saved.policy.obs_mode())?;
+    let env = make_env(spec, saved.policy.obs_mode(), saved.slots()?)?;
     let policy = Actor::Trained(trained_policy(path, saved, &env)?);
     play(spec, env, policy)
 }
@@ -294,8 +315,8 @@ fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
     // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
     // core count, the CLI's default, may pass the vector engine's thread bound: use the bound.)
     let threads = spec.threads.clamp(1, spec.episodes).min(crate::limits::THREADS.max as usize);
-    let mode = env.obs_spec().mode;
-    let more = (1..threads).map(|_| make_env(spec, mode));
+    let (mode, slots) = (env.obs_spec().mode, env.config().slots);
+    let more = (1..threads).map(|_| make_env(spec, mode, slots));
     let mut envs = VectorEnv::from_envs(std::iter::once(Ok(env)).chain(more).collect::<Result<_>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::progress::bar(spec.episodes as u64, "episode");
@@ -427,7 +448,7 @@ pub fn evaluate_suite(
                 threads,
             };
             // An environment error fails the suite; only a policy that does not fit skips the row.
-            let env = make_env(&spec, subject.obs_mode())?;
+            let env = make_env(&spec, subject.obs_mode(), subject.slots()?)?;
             let (evaluation, skipped) = match Actor::fit(subject, &env) {
                 Err(e) => (None, Some(format!("{e:#}"))),
                 Ok(policy) => (Some(play(&spec, env, policy)?), None),

@@ -21,6 +21,13 @@ pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
     if crate::zoo::is_zoo_file(path) {
         return Ok(crate::zoo::load(path)?.1);
     }
+    if crate::zoo::is_lone_metadata(path) {
+        return Err(crate::zoo::ZooError::NoTensors {
+            json: path.to_owned(),
+            tensors: path.with_extension("safetensors"),
+        }
+        .into());
+    }
     if path.is_dir() {
         let best = path.join(BEST_POLICY_FILE);
         return crate::saved::read(&if best.exists() { best } else { path.join(POLICY_FILE) });

@@ -82,6 +82,22 @@ impl SavedPolicy {
         })
     }
 
+    /// The block slots of the observation it reads: a multi-task run shows every task in the layout
+    /// of its most blocks (a stream: of the most its families can draw), so a flat or `objects`
+    /// policy of several tasks reads that layout on any task; 0 for a one-task policy and a set
+    /// network (each reads a task's own layout).
+    ///
+    /// # Errors
+    /// A recorded task that no longer compiles to its hash.
+    pub fn slots(&self) -> Result<usize, crate::task::TaskError> {
+        if self.policy.net().set.is_some() || !self.is_multi_task() {
+            return Ok(0);
+        }
+        let most = self.stream.as_ref().map_or(0, |s| s.max_blocks);
+        let tasks = self.tasks.iter().map(|t| t.compile().map(|t| t.object_count())).collect::<Result<Vec<_>, _>>()?;
+        Ok(tasks.into_iter().max().unwrap_or(0).max(most))
+    }
+
     /// Whether it was trained on more than one task (a list, a suite split or a stream).
     pub fn is_multi_task(&self) -> bool {
         !self.tasks.is_empty() || self.stream.is_some()

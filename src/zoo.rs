@@ -61,8 +61,11 @@ pub enum ZooError {
     #[error("the zoo already has an entry {path}; pass --force to replace it, or choose another --name")]
     Exists { path: PathBuf },
     /// A name that cannot be an entry's.
-    #[error("--name {name:?}: an entry's name is letters, digits, '-' and '_' (it becomes NAME.safetensors and NAME.json in the zoo folder)")]
+    #[error("--name {name:?}: an entry's name is 1 to {MAX_NAME} letters, digits, '-' and '_' (it becomes NAME.safetensors and NAME.json in the zoo folder); for example \"BlocksTouch-v0-ddpg-mine\"")]
     BadName { name: String },
+    /// An entry's metadata without its tensors.
+    #[error("zoo entry {json}: its tensors, {tensors}, are missing; an entry is two files, NAME.json and NAME.safetensors: copy both, or export it again (zoo export)")]
+    NoTensors { json: PathBuf, tensors: PathBuf },
     /// The zoo path is a file.
     #[error("the zoo {zoo} is not a folder; set $BLOCKPUZZLE_ZOO or --zoo to a folder of NAME.safetensors + NAME.json entries (zoo export creates it if missing)")]
     NotAFolder { zoo: PathBuf },
@@ -252,9 +255,10 @@ pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
         Some(source) => crate::env::registry::recorded(&source).map_err(|e| fail(e.to_string()))?,
         None => return Err(fail("the policy does not record its task".into())),
     };
-    // In the policy's own layout: a multi-task set policy's rows are those of its tasks' most
-    // blocks (absent rows padded), so that its probes replay as saved.
-    let (obs_mode, slots) = (saved.policy.obs_mode(), saved.policy.block_slots());
+    // In the policy's own layout: a multi-task policy's rows are those of its tasks' most blocks
+    // (absent rows padded), so that its probes replay as saved.
+    let slots = saved.slots().map_err(|e| fail(e.to_string()))?.max(saved.policy.block_slots());
+    let obs_mode = saved.policy.obs_mode();
     let config = crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) };
     let mut env = crate::env::BlockEnv::new(config).map_err(|e| fail(e.to_string()))?;
     let level = env.max_level();
@@ -313,16 +317,24 @@ pub fn existing(zoo: &Path) -> Result<&Path, ZooError> {
     }
 }
 
+/// The longest entry name (with `.safetensors` it stays within file systems' 255-byte names).
+pub const MAX_NAME: usize = 100;
+
 /// The tensors file of the entry `name` in `zoo`, if it exists.
 ///
 /// # Errors
-/// [`ZooError::Unknown`] listing the entries there are.
+/// [`ZooError::Unknown`] listing the entries there are; [`ZooError::NoTensors`] for an entry's
+/// metadata alone.
 pub fn find(zoo: &Path, name: &str) -> Result<PathBuf, ZooError> {
     let path = zoo.join(format!("{name}.safetensors"));
     if path.exists() {
         return Ok(path);
     }
     existing(zoo)?;
+    let json = path.with_extension("json");
+    if json.is_file() {
+        return Err(ZooError::NoTensors { json, tensors: path });
+    }
     let known = names(zoo);
     Err(ZooError::Unknown {
         name: name.to_owned(),
@@ -338,6 +350,21 @@ pub fn is_zoo_file(path: &Path) -> bool {
         Some("json") => path.with_extension("safetensors").exists(),
         _ => false,
     }
+}
+
+/// Whether `path` is a zoo entry's `X.json` without the `X.safetensors` beside it (its `format`
+/// names the zoo's): a policy file it is not.
+pub fn is_lone_metadata(path: &Path) -> bool {
+    // A regular file only (opening a FIFO would wait for a writer).
+    if path.extension().map_or(true, |e| e != "json") || !path.is_file() || path.with_extension("safetensors").exists()
+    {
+        return false;
+    }
+    // The start of the file is enough: an entry's `format` comes first.
+    let Ok(mut f) = std::fs::File::open(path) else { return false };
+    let mut head = vec![0u8; 256];
+    let n = std::io::Read::read(&mut f, &mut head).unwrap_or(0);
+    String::from_utf8_lossy(&head[..n]).contains("\"blockpuzzle-zoo/")
 }
 
 /// A network's layout, `n_in` its whole input (observation, and a critic's action).
@@ -397,8 +424,16 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let tensors_path = zoo.join(format!("{}.safetensors", info.name));
     let corrupt = |reason: String| ZooError::Corrupt { path: tensors_path.clone(), reason };
     // No dots: a bare name without an extension is what `load_policy` looks up in the zoo.
-    if info.name.is_empty() || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c)) {
-        return Err(ZooError::BadName { name: crate::limits::cut_long_lines(&info.name) });
+    if info.name.is_empty()
+        || info.name.len() > MAX_NAME
+        || !info.name.chars().all(|c| c.is_ascii_alphanumeric() || "-_".contains(c))
+    {
+        // A long name is shown by its start and length.
+        let name = match info.name.char_indices().nth(40) {
+            Some((at, _)) => format!("{}… ({} characters)", &info.name[..at], info.name.chars().count()),
+            None => info.name.clone(),
+        };
+        return Err(ZooError::BadName { name });
     }
     entry_free(zoo, &info.name, info.overwrite)?;
     saved.check().map_err(&corrupt)?;

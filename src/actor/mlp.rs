@@ -290,13 +290,28 @@ impl PlainNet {
             return Err("the network has no layers".into());
         }
         if let Some(s) = &self.set {
-            if s.encoder_layers == 0 || s.head_start() >= self.layers.len() || n_in < s.obs_dim() {
+            if n_in < s.obs_dim() {
                 return Err(format!(
-                    "set network: {} encoder{} layers of {} and an observation of {} values for {n_in} inputs",
+                    "set network: its layout `set` (robot {}, slots {}, object {}) reads {} + {} × ({} + 1 mask) = {} \
+                     observation values, but the normaliser has {n_in}; the layout or the normaliser was edited: \
+                     restore the file (or export it again from its run's policy.json)",
+                    s.robot,
+                    s.slots,
+                    s.object,
+                    s.robot,
+                    s.slots,
+                    s.object,
+                    s.obs_dim()
+                ));
+            }
+            if s.encoder_layers == 0 || s.head_start() >= self.layers.len() {
+                return Err(format!(
+                    "set network: its layout `set` names {} encoder{} layers, but the network has {} layers in all; \
+                     the layout or the layers were edited: restore the file (or export it again from its run's \
+                     policy.json)",
                     s.encoder_layers,
                     if s.attention { " and 4 attention" } else { "" },
-                    self.layers.len(),
-                    s.obs_dim()
+                    self.layers.len()
                 ));
             }
             let width = self.layers.get(s.encoder_layers - 1).map_or(0, |l| l.b.len());

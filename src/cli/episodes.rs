@@ -176,8 +176,23 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     if a.render.is_some() {
         a.view.view()?;
     }
-    let mut env: BlockEnv = registry::make(&a.env)?;
-    env.set_obs_mode(a.obs_mode.unwrap_or_default());
+    // A trained policy is loaded first: the environment shows its layout (its observation mode and,
+    // for one of several tasks, its training tasks' block slots).
+    let saved = match (a.policy.as_str(), crate::evaluate::Baseline::named(&a.policy)) {
+        ("random", _) | (_, Some(_)) => None,
+        (path, None) => Some(crate::load::load_policy(Path::new(path))?),
+    };
+    let mut config = registry::config(&a.env)?;
+    config.obs_mode = a.obs_mode.unwrap_or_default();
+    if let Some(saved) = &saved {
+        let reads = saved.policy.obs_mode();
+        if let Some(mode) = a.obs_mode.filter(|&m| m != reads) {
+            bail!("policy {} reads the `{reads}` observation, not the `{mode}` one: leave --obs-mode out", a.policy);
+        }
+        config.obs_mode = reads;
+        config.slots = saved.slots()?;
+    }
+    let mut env = BlockEnv::new(config)?;
     if a.challenge {
         env.set_challenge(true)?;
     }
@@ -190,12 +205,7 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
         ("random", _) => Box::new(RandomPolicy::new(a.seed)),
         (_, Some(baseline)) => baseline.policy(&env),
         (path, None) => {
-            let saved = crate::load::load_policy(Path::new(path))?;
-            let reads = saved.policy.obs_mode();
-            if let Some(mode) = a.obs_mode.filter(|&m| m != reads) {
-                bail!("policy {path} reads the `{reads}` observation, not the `{mode}` one: leave --obs-mode out");
-            }
-            env.set_obs_mode(reads);
+            let saved = saved.expect("a trained policy was loaded above");
             Box::new(crate::evaluate::trained_policy(Path::new(path), saved, &env)?)
         }
     };
@@ -249,8 +259,8 @@ pub(super) fn render(a: RenderArgs) -> Result<()> {
         (None, Some(path)) => {
             let saved = crate::load::load_policy(path)?;
             let task = policy_task(a.env.as_deref(), &saved)?;
-            let mode = saved.policy.obs_mode();
-            let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode: mode, ..crate::env::EnvConfig::new(task) })?;
+            let (obs_mode, slots) = (saved.policy.obs_mode(), saved.slots()?);
+            let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) })?;
             env.set_distribution(a.challenge.then_some("challenge"))?;
             let level = env.max_level();
             env.set_level(level)?;

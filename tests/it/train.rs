@@ -1352,3 +1352,50 @@ fn bad_streams_are_refused_before_anything_is_written() {
         &["no task in the stream", "green"],
     );
 }
+
+/// A flat multi-task policy reads its training tasks' layout (the most blocks of any, the others'
+/// rows absent): evaluation, suites and rollouts show it that layout, so it plays every one of its
+/// own tasks, and a task with more blocks than it was trained with is refused, saying why (issue 60).
+#[test]
+fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
+    let run = tempfile::tempdir().unwrap();
+    train(&tiny("GripperTouch-v0,BlocksChoose-v0", 1), run.path(), false, &mut quiet).unwrap();
+    let policy = run.path().join("policy.json");
+    let saved = load_policy(&policy).unwrap();
+    let choose = blockpuzzle::env::registry::task("BlocksChoose-v0").unwrap().object_count();
+    assert_eq!(saved.slots().unwrap(), choose);
+    let cli = |args: &[&str]| {
+        let o = std::process::Command::new(crate::common::CLI).args(args).current_dir(run.path()).output().unwrap();
+        (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+    };
+    let p = policy.to_str().unwrap();
+    for env in ["GripperTouch-v0", "BlocksChoose-v0"] {
+        let (ok, text) = cli(&["eval", "--checkpoint", p, "--env", env, "--episodes", "1"]);
+        assert!(ok, "{env}: {text}");
+        let (ok, text) = cli(&["rollout", "--policy", p, "--env", env, "--episodes", "1", "--out", "r.jsonl"]);
+        assert!(ok, "{env}: {text}");
+    }
+    // A suite of its tasks: no row skipped.
+    let suite = run.path().join("own.toml");
+    std::fs::write(
+        &suite,
+        "version = 1\nname = \"own\"\nsummary = \"s\"\n[[splits.train]]\ntask = \"GripperTouch-v0\"\nseed = 0\n\
+         episodes = 1\n[[splits.test]]\ntask = \"BlocksChoose-v0\"\nseed = 10\nepisodes = 1\n",
+    )
+    .unwrap();
+    let (ok, text) = cli(&["eval", "--checkpoint", p, "--suite", suite.to_str().unwrap(), "--out", "own.json"]);
+    assert!(ok, "{text}");
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.path().join("own.json")).unwrap()).unwrap();
+    for split in result["splits"].as_array().unwrap() {
+        for row in split["rows"].as_array().unwrap() {
+            assert!(row["skipped"].is_null() && row["evaluation"].is_object(), "{row}");
+        }
+    }
+    // More blocks than its layout holds: refused, with the reason and the way out.
+    let (ok, text) = cli(&["eval", "--checkpoint", p, "--env", "BlocksChooseN-v0", "--episodes", "1"]);
+    assert!(!ok, "{text}");
+    for want in ["trained on several tasks", &format!("{choose} block slots"), "more blocks", "--net set"] {
+        assert!(text.contains(want), "{want:?} missing from: {text}");
+    }
+}

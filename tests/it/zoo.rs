@@ -373,7 +373,9 @@ fn entries_are_checked_as_a_whole() {
     };
     assert!(check(&original).0);
     type Edit = fn(&mut serde_json::Value);
-    let edits: [(&str, Edit); 5] = [
+    let edits: [(&str, Edit); 7] = [
+        ("the set layout's slots edited", |v| v["actor"]["set"]["slots"] = 11.into()),
+        ("the set layout's encoder edited", |v| v["actor"]["set"]["encoder_layers"] = 9.into()),
         ("multi_task dropped", |v| {
             v.as_object_mut().unwrap().remove("multi_task");
         }),
@@ -388,6 +390,11 @@ fn entries_are_checked_as_a_whole() {
         let mut v = original.clone();
         edit(&mut v);
         let (ok, t) = check(&v);
+        if what.contains("set layout") {
+            // Checked with the tensors, which the error names.
+            assert!(!ok && t.contains("x.safetensors") && t.contains("layout `set`") && t.contains("restore"), "{t}");
+            continue;
+        }
         assert!(!ok && t.contains("x.json") && t.contains("restore"), "{what}: {t}");
     }
     // An unsealed label that is a path is refused by itself (an entry of format 5, before the seal).
@@ -421,4 +428,36 @@ fn entries_are_checked_as_a_whole() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (meta, _) = zoo::load(&entry).unwrap();
     assert_eq!((meta.format.as_str(), meta.meta_sha256.as_deref()), (zoo::FORMAT, original["meta_sha256"].as_str()));
+}
+
+/// An entry's metadata without its tensors, and a name too long for a file, are named as such (issue 60).
+#[test]
+fn a_lone_metadata_file_and_a_long_name_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let z = dir.path().join("zoo");
+    std::fs::create_dir(&z).unwrap();
+    std::fs::copy(zoo::dir().join("BlocksTouch-v0-ddpg.json"), z.join("x.json")).unwrap();
+    let run = |args: &[&str]| {
+        let o = crate::common::blockpuzzle(args).env("BLOCKPUZZLE_ZOO", &z).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let json = z.join("x.json");
+    for args in [
+        vec!["zoo", "check", "x"],
+        vec!["eval", "--checkpoint", "x", "--episodes", "1"],
+        vec!["eval", "--checkpoint", json.to_str().unwrap(), "--episodes", "1"],
+    ] {
+        let (ok, e) = run(&args);
+        assert!(
+            !ok && e.contains("x.safetensors") && e.contains("are missing") && e.contains("copy both"),
+            "{args:?}: {e}"
+        );
+    }
+    let long = "a".repeat(300);
+    let from = zoo::dir().join("BlocksTouch-v0-ddpg.safetensors");
+    let mut args = vec!["zoo", "export", "--from", from.to_str().unwrap(), "--name", &long, "--description", "d"];
+    args.extend(["--trained-with", "t", "--zoo", z.to_str().unwrap()]);
+    let (ok, e) = run(&args);
+    assert!(!ok && e.contains("1 to 100 letters") && !e.contains(&long), "{e}");
+    assert_eq!(std::fs::read_dir(&z).unwrap().count(), 1, "nothing written");
 }
