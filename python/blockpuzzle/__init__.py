@@ -27,6 +27,7 @@ import importlib.metadata as _metadata
 import importlib.util as _util
 import os as _os
 import pathlib as _pathlib
+from typing import Any as _Any
 
 #: The MuJoCo the extension is built against and links (``libmujoco.so.3.11.0``).
 MUJOCO_PIN = "3.11.0"
@@ -75,7 +76,7 @@ if _assets is not None:
 __version__ = _native.build_info()["blockpuzzle"]
 
 from . import datasets, policies, zoo  # noqa: E402
-from ._native import env_ids, mujoco_version  # noqa: E402
+from ._native import mujoco_version  # noqa: E402
 from .env import BlockPuzzleEnv  # noqa: E402
 from .datasets import load_demos, record_demos, to_minari  # noqa: E402
 from .evaluation import evaluate  # noqa: E402
@@ -96,7 +97,13 @@ __all__ = ["__version__", "BlockPuzzleEnv", "BlockPuzzleVectorEnv", "GYMNASIUM_R
 NAMESPACE = "BlockPuzzle"
 
 
-def generate_tasks(family, out, seed: int = 0, count: int = 10, threads: int | None = None) -> dict:
+def env_ids() -> list[str]:
+    """The built-in environment ids ("BlocksTouch-v0", …), each registered as ``BlockPuzzle/<id>``."""
+    return list(_native.env_ids())
+
+
+def generate_tasks(family: str | _os.PathLike[str], out: str | _os.PathLike[str], seed: int = 0, count: int = 10,
+                   threads: int | None = None) -> dict[str, _Any]:
     """Task files drawn from a task family (a shipped one by name, "push", "gripper", "stack",
     "gather", "topple", "avoid" or "clutter", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
     ``blockpuzzle task generate``'s code.
@@ -104,12 +111,17 @@ def generate_tasks(family, out, seed: int = 0, count: int = 10, threads: int | N
     hash, each task's id, hash and the solver's success, the rejections by reason). Deterministic
     in the seeds, whatever ``threads``."""
     import json
-    return json.loads(_native.generate_tasks(str(family), str(out), seed, count, threads))
+    return json.loads(_native.generate_tasks(_os.fspath(family), _os.fspath(out), seed, count, threads))
 
 
-def make_task(path: str, **kwargs) -> gymnasium.Env:
-    """A Gymnasium environment from a task file: ``gymnasium.make("BlockPuzzle/Task-v0", task=path)``."""
-    return gymnasium.make(f"{NAMESPACE}/Task-v0", task=str(path), **kwargs)
+def make_task(path: str | _os.PathLike[str], **kwargs: _Any) -> gymnasium.Env:
+    """A Gymnasium environment from a task file: ``gymnasium.make("BlockPuzzle/Task-v0", task=path)``,
+    with the task file's step limit as its spec's ``max_episode_steps`` (as the built-in ids have
+    theirs); ``max_episode_steps=`` given here wins, as in ``gymnasium.make``."""
+    path = _os.fspath(path)
+    if kwargs.get("max_episode_steps") is None:
+        kwargs["max_episode_steps"] = _native.max_episode_steps(path)
+    return gymnasium.make(f"{NAMESPACE}/Task-v0", task=path, **kwargs)
 
 
 def _register() -> None:

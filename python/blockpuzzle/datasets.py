@@ -7,17 +7,23 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
+import warnings
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from blockpuzzle.zoo import read_safetensors
+from blockpuzzle.zoo import _read_input, parse_safetensors
+
+if TYPE_CHECKING:
+    import gymnasium
 
 FORMAT = "blockpuzzle-demos"
 VERSION = 1
 
 
-def record_demos(suite: str, out, split: str = "train", episodes: int | None = None,
-                 threads: int | None = None) -> dict:
+def record_demos(suite: str | os.PathLike[str], out: str | os.PathLike[str], split: str = "train",
+                 episodes: int | None = None, threads: int | None = None) -> dict[str, int]:
     """Plays the solver (which reads only the ``entities`` observation) on every row of ``split``
     of ``suite`` (a built-in name or a suite file), ``episodes`` per row from the row's seed on
     (default: the row's own count), and writes the demos file ``out``. Returns the counts
@@ -39,15 +45,15 @@ class Demos:
     rewards: np.ndarray
     terminations: np.ndarray
     truncations: np.ndarray
-    episodes: list
-    layout: dict
-    provenance: dict
+    episodes: list[dict[str, Any]]
+    layout: dict[str, Any]
+    provenance: dict[str, Any]
     split: str
 
     def __len__(self) -> int:
         return len(self.episodes)
 
-    def episode(self, i: int) -> dict:
+    def episode(self, i: int) -> dict[str, Any]:
         """Episode ``i``: its ``observations`` (a Dict of ``steps + 1`` rows: the reset's, then each
         step's), ``actions``, ``rewards``, ``terminations``, ``truncations`` and its facts."""
         steps = [e["steps"] for e in self.episodes]
@@ -65,64 +71,203 @@ class Demos:
         }
 
 
-def _header(path) -> dict:
-    """The demos file's one metadata entry (version, split, provenance, layout, episodes)."""
-    # The header alone (the tensors, perhaps gigabytes, are read once, by read_safetensors).
-    fix = "record one with `blockpuzzle demos`"
-    with open(path, "rb") as f:
-        size = f.seek(0, 2)
-        f.seek(0)
-        n = int.from_bytes(f.read(8), "little")
-        if size < 8 or 8 + n > size:
-            raise ValueError(f"{path} is not a usable demos file: cut short; {fix}")
-        meta = json.loads(f.read(n)).get("__metadata__") or {}
+#: What every error about a demos file ends with.
+FIX = "record it again with `blockpuzzle demos` (or blockpuzzle.record_demos)"
+#: The tensors of a demos file.
+TENSORS = ("robot", "entities", "mask", "actions", "rewards", "terminations", "truncations")
+#: Those with a row per observation (an episode's steps + 1); the others have one per step.
+OBS = ("robot", "entities", "mask")
+
+
+def _bad(path: str | os.PathLike[str], what: str) -> ValueError:
+    return ValueError(f"{path} is not a usable demos file: {what}; {FIX}")
+
+
+def _int(v, least: int) -> bool:
+    return type(v) is int and v >= least
+
+
+def _header(path, raw: bytes) -> dict:
+    """The demos file's one metadata entry (version, split, provenance, layout, episodes), each
+    field checked; the file's safetensors layout is checked before (``parse_safetensors``)."""
+    n = int.from_bytes(raw[:8], "little")
+    meta = json.loads(raw[8:8 + n]).get("__metadata__") or {}
     if FORMAT not in meta:
         other = f" (it is a {meta['format']} file)" if "format" in meta else ""
-        raise ValueError(f"{path} is not a usable demos file: its metadata has no {FORMAT!r} entry{other}; {fix}")
-    header = json.loads(meta[FORMAT])
+        raise _bad(path, f"its metadata has no {FORMAT!r} entry{other}")
+    try:
+        header = json.loads(meta[FORMAT])
+    except ValueError as e:
+        raise _bad(path, f"its {FORMAT!r} metadata entry is not JSON ({e})") from None
+    if not isinstance(header, dict):
+        raise _bad(path, f"its {FORMAT!r} metadata entry is a JSON {type(header).__name__}, not an object")
     if header.get("version") != VERSION:
-        raise ValueError(f"{path} is not a usable demos file: version {header.get('version')} (this package reads "
-                         f"version {VERSION}); {fix}")
+        raise _bad(path, f"version {header.get('version')!r} (this package reads version {VERSION})")
+    for key, kind in (("split", str), ("provenance", dict), ("layout", dict), ("episodes", list)):
+        if not isinstance(header.get(key), kind):
+            found = "missing" if key not in header else f"a {type(header[key]).__name__}"
+            raise _bad(path, f"field {key!r} of its header is {found}, not a {kind.__name__}")
+    layout = header["layout"]
+    for key in ("robot", "entity"):
+        names = layout.get(key)
+        if not isinstance(names, list) or not names or not all(isinstance(x, str) for x in names):
+            raise _bad(path, f"field layout.{key} is {names!r}, not a list of feature names")
+    if not _int(layout.get("rows"), 1):
+        raise _bad(path, f"field layout.rows is {layout.get('rows')!r}, not a row count >= 1")
+    fields = {"task": (str, "a task id"), "task_sha256": (str, "a sha256"), "row": (0, "a suite row >= 0"),
+              "seed": (0, "a seed >= 0"), "steps": (1, "a step count >= 1"), "outcome": (str, "an outcome name"),
+              "episode_return": (float, "a finite number")}
+    for i, e in enumerate(header["episodes"]):
+        if not isinstance(e, dict):
+            raise _bad(path, f"episode {i} is a {type(e).__name__}, not an object")
+        for key, (kind, what) in fields.items():
+            v = e.get(key)
+            if kind is str:
+                ok = isinstance(v, str) and v != ""
+            elif kind is float:
+                ok = type(v) in (int, float) and np.isfinite(v)
+            else:
+                ok = _int(v, kind)
+            if not ok:
+                raise _bad(path, f"field episodes[{i}].{key} is {'missing' if key not in e else repr(v)}, not {what}")
     return header
 
 
-def load_demos(path) -> Demos:
-    """Reads a demos file (numpy only). A file that is not one raises ValueError naming what is wrong."""
-    header = _header(path)
-    t = read_safetensors(path, fix="record it again with `blockpuzzle demos`")
+def _where(index: int, starts: np.ndarray, noun: str) -> str:
+    """Episode and ``noun`` ("observation" or "step") within it of row ``index`` of tensors whose
+    episodes start at ``starts``."""
+    i = int(np.searchsorted(starts, index, side="right")) - 1
+    return f"episode {i}, {noun} {index - int(starts[i])} (row {index})"
+
+
+def _check_tensors(path, t: dict[str, np.ndarray], header: dict) -> None:
+    """Every tensor there, of the shape the episodes call for, finite; masks and flags 0 or 1; each
+    episode ended by its last step and by no other; each episode's rewards summing to its return."""
     layout, episodes = header["layout"], header["episodes"]
-    steps = sum(e["steps"] for e in episodes)
-    want = {"robot": (steps + len(episodes), len(layout["robot"])), "actions": (steps, 4), "rewards": (steps,),
-            "entities": (steps + len(episodes), layout["rows"], len(layout["entity"]))}
+    steps = np.array([e["steps"] for e in episodes], dtype=np.int64)
+    total, count = int(steps.sum()), len(episodes)
+    rows, robot, entity = layout["rows"], len(layout["robot"]), len(layout["entity"])
+    want = {"robot": (total + count, robot), "entities": (total + count, rows, entity), "mask": (total + count, rows),
+            "actions": (total, 4), "rewards": (total,), "terminations": (total,), "truncations": (total,)}
     for k, shape in want.items():
+        if k not in t:
+            raise _bad(path, f"it has no tensor {k!r}")
         if t[k].shape != shape:
-            raise ValueError(f"{path} is not a usable demos file: tensor {k} is {t[k].shape}, its episodes call for {shape}")
+            raise _bad(path, f"tensor {k!r} is {t[k].shape}, its {count} episodes of {total} steps call for {shape}")
+    step_starts = np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64)
+    obs_starts = step_starts + np.arange(count, dtype=np.int64)
+    for k in TENSORS:
+        a = t[k].reshape(len(t[k]), -1)
+        bad_rows = np.flatnonzero(~np.isfinite(a).all(axis=1))
+        if len(bad_rows):
+            r = int(bad_rows[0])
+            value = a[r][~np.isfinite(a[r])][0]
+            where = _where(r, obs_starts, "observation") if k in OBS else _where(r, step_starts, "step")
+            raise _bad(path, f"tensor {k!r} holds {value} at {where}; demos hold finite numbers only")
+    for k in ("mask", "terminations", "truncations"):
+        a = t[k].reshape(len(t[k]), -1)
+        bad_rows = np.flatnonzero(~((a == 0) | (a == 1)).all(axis=1))
+        if len(bad_rows):
+            r = int(bad_rows[0])
+            value = a[r][(a[r] != 0) & (a[r] != 1)][0]
+            where = _where(r, obs_starts, "observation") if k in OBS else _where(r, step_starts, "step")
+            raise _bad(path, f"tensor {k!r} holds {value} at {where}; its values are 0 or 1")
+    ends = np.flatnonzero((t["terminations"] == 1) | (t["truncations"] == 1))
+    last = step_starts + steps - 1
+    if not np.array_equal(ends, last):
+        extra = np.setdiff1d(ends, last)
+        if len(extra):
+            where = _where(int(extra[0]), step_starts, "step")
+            raise _bad(path, f"tensors 'terminations'/'truncations' end an episode at {where}, before its last step")
+        i = int(np.flatnonzero(~np.isin(last, ends))[0])
+        raise _bad(path, f"episode {i} ({int(steps[i])} steps) is not ended at its last step by 'terminations' or "
+                         "'truncations'")
+    if count:
+        sums = np.add.reduceat(t["rewards"].astype(np.float64), step_starts)
+        returns = np.array([e["episode_return"] for e in episodes], dtype=np.float64)
+        off = np.flatnonzero(~np.isclose(sums, returns, rtol=0, atol=1e-3))
+        if len(off):
+            i = int(off[0])
+            raise _bad(path, f"episode {i}'s rewards sum to {sums[i]:g}, its header's episode_return is {returns[i]:g}")
+
+
+def load_demos(path: str | os.PathLike[str]) -> Demos:
+    """Reads a demos file (numpy only). A missing file is FileNotFoundError; one that is not a
+    usable demos file (not safetensors, a field missing or of the wrong kind, overlapping or
+    out-of-range ``data_offsets``, a NaN or infinite value, a mask or flag other than 0 and 1, an
+    episode not ended at its last step) is ValueError naming the file, the field and the fix."""
+    raw = _read_input(path)
+    t = parse_safetensors(raw, path, FIX)
+    header = _header(path, raw)
+    _check_tensors(path, t, header)
     return Demos(robot=t["robot"], entities=t["entities"], mask=t["mask"], actions=t["actions"],
                  rewards=t["rewards"], terminations=t["terminations"], truncations=t["truncations"],
-                 episodes=episodes, layout=layout, provenance=header["provenance"], split=header["split"])
+                 episodes=header["episodes"], layout=header["layout"], provenance=header["provenance"],
+                 split=header["split"])
 
 
-def observation_space(demos: Demos):
+def observation_space(demos: Demos) -> gymnasium.spaces.Dict:
     """The ``entities`` Dict space of the demos' padded rows (what ``gym.make(..., obs_mode="entities")``
-    presents, with the split's largest row count)."""
+    presents, with the split's largest row count), its keys in the documented order: robot,
+    entities, mask."""
     from gymnasium import spaces
     r, e, f = len(demos.layout["robot"]), demos.layout["rows"], len(demos.layout["entity"])
     return spaces.Dict({
         "robot": spaces.Box(-np.inf, np.inf, (r,), np.float32),
         "entities": spaces.Box(-np.inf, np.inf, (e, f), np.float32),
         "mask": spaces.Box(0.0, 1.0, (e,), np.float32),
-    })
+    }, sort_keys=False)
 
 
-def to_minari(path, dataset_id: str, *, author: str | None = None, author_email: str | None = None,
-              code_permalink: str | None = None, description: str | None = None):
+def env_spec(demos: Demos) -> gymnasium.envs.registration.EnvSpec | None:
+    """The Gymnasium spec of the environment that plays the demos' episodes, what Minari's
+    ``recover_environment()`` makes: ``BlockPuzzle/<id>`` with ``obs_mode="entities"`` (and the
+    task's step limit) where every episode is of one built-in task whose content this package has
+    (the same ``task_sha256``), else None: a multi-task file (no one environment plays its
+    episodes, each episode's options name its task), or a task the package does not register (a
+    task file, a generated task), or a built-in task that has changed since the recording. Each
+    None but the multi-task one comes with a warning saying why."""
+    import gymnasium
+
+    from blockpuzzle import NAMESPACE, _native
+
+    tasks = {(e["task"], e["task_sha256"]) for e in demos.episodes}
+    if len(tasks) != 1:
+        return None
+    ((task, sha),) = tasks
+    if task not in _native.env_ids():
+        warnings.warn(f"to_minari: the demos' task {task!r} is not a built-in id, so the dataset gets no environment "
+                      "spec (recover_environment() will fail); make its environment with "
+                      "blockpuzzle.make_task(path, obs_mode='entities')", stacklevel=3)
+        return None
+    if _native.task_sha256(task) != sha:
+        warnings.warn(f"to_minari: the demos' {task} ({sha}) is not this package's {task} "
+                      f"({_native.task_sha256(task)}), so the dataset gets no environment spec; record the demos "
+                      "again with this package to have one", stacklevel=3)
+        return None
+    spec = gymnasium.spec(f"{NAMESPACE}/{task}")
+    spec = dataclasses.replace(spec, kwargs={**spec.kwargs, "obs_mode": "entities"})
+    shape = gymnasium.make(spec).observation_space["entities"].shape
+    if shape != demos.entities.shape[1:]:
+        # Not expected: one task's demos have that task's rows.
+        raise ValueError(f"the demos' entities rows {demos.entities.shape[1:]} are not {task}'s {shape}")
+    return spec
+
+
+def to_minari(path: str | os.PathLike[str], dataset_id: str, *, author: str | None = None,
+              author_email: str | None = None, code_permalink: str | None = None,
+              description: str | None = None) -> Any:
     """Exports a demos file as the local Minari dataset ``dataset_id`` (in ``$MINARI_DATASETS_PATH``
-    or ``~/.minari/datasets``, HDF5): one Minari episode per recorded episode with its seed, and as
-    its options the task id, task hash, row and outcome; the dataset's description says the suite,
-    split, engine and build, its requirements the package. ``author``, ``author_email`` and
-    ``code_permalink`` (a link to the code that recorded it, at its version) go into the dataset's
-    metadata as Minari asks of published datasets. Needs ``pip install "blockpuzzle[minari]"``."""
+    or ``~/.minari/datasets``, HDF5) and returns it (a ``minari.MinariDataset``): one Minari episode
+    per recorded episode with its seed, and as its options the task id, task hash, row and outcome;
+    observations keep the documented key order (robot, entities, mask); the dataset's description
+    says the suite, split, engine and build, its requirements the package. A file of one built-in
+    task gets that task's environment spec (``env_spec``: ``dataset.recover_environment()`` makes
+    it); a multi-task file gets none. ``author``, ``author_email`` and ``code_permalink`` (a link to
+    the code that recorded it, at its version) go into the dataset's metadata as Minari asks of
+    published datasets. Needs ``pip install "blockpuzzle[minari]"``."""
     try:
+        import h5py
         import minari
     except ImportError as e:
         raise ImportError('to_minari needs Minari: pip install "blockpuzzle[minari]"') from e
@@ -143,9 +288,18 @@ def to_minari(path, dataset_id: str, *, author: str | None = None, author_email:
     made = (f"the BlockPuzzle solver's episodes on suite {suite.get('name')} (sha256 {suite.get('sha256')}), "
             f"split {demos.split}; blockpuzzle {p.get('blockpuzzle')} ({p.get('commit')}), MuJoCo {p.get('mujoco')}; "
             "observations: the entities layout padded to the split's largest row count (mask 0)")
-    return minari.create_dataset_from_buffers(
-        dataset_id, buffers, env=None, algorithm_name="blockpuzzle-solver", author=author,
-        author_email=author_email, code_permalink=code_permalink,
-        observation_space=observation_space(demos), action_space=spaces.Box(-1.0, 1.0, (4,), np.float32),
-        description=description or made, data_format="hdf5",
-        requirements=[f"blockpuzzle=={p.get('blockpuzzle')}"])
+    # HDF5 lists a group's members by name unless the group tracks their creation order: with it,
+    # an episode's observations come back robot, entities, mask, as written (the documented order).
+    config = h5py.get_config()
+    tracked = config.track_order
+    config.track_order = True
+    spec = env_spec(demos)
+    try:
+        return minari.create_dataset_from_buffers(
+            dataset_id, buffers, env=spec, eval_env=spec, algorithm_name="blockpuzzle-solver", author=author,
+            author_email=author_email, code_permalink=code_permalink,
+            observation_space=observation_space(demos), action_space=spaces.Box(-1.0, 1.0, (4,), np.float32),
+            description=description or made, data_format="hdf5",
+            requirements=[f"blockpuzzle=={p.get('blockpuzzle')}"])
+    finally:
+        config.track_order = tracked

@@ -16,6 +16,8 @@ import json
 import os
 import sys
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -24,8 +26,9 @@ from ._native import wilson95  # the CLI's interval, computed in Rust
 from .vector import make_vec
 
 
-def evaluate(policy, suite: str, num_envs: int = 8, threads: int | None = None, obs_mode: str | None = None,
-             name: str | None = None, episodes: int | None = None, progress: bool = True) -> dict:
+def evaluate(policy: Callable[[Any], Any], suite: str, num_envs: int = 8, threads: int | None = None,
+             obs_mode: str | None = None, name: str | None = None, episodes: int | None = None,
+             progress: bool = True) -> dict[str, Any]:
     """Evaluates ``policy`` on ``suite`` (a built-in name such as "layout", or a suite file).
 
     ``policy`` is a zoo policy (``blockpuzzle.zoo.load(...)``), evaluated exactly as

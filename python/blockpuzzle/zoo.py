@@ -21,6 +21,8 @@ file imports nothing of blockpuzzle but that extension, and runs on its own with
 
 from __future__ import annotations
 
+import difflib
+import hashlib
 import json
 import pathlib
 
@@ -39,15 +41,61 @@ def names(folder: str | pathlib.Path = FOLDER) -> list[str]:
     return sorted(p.stem for p in pathlib.Path(folder).glob("*.json"))
 
 
+class ZooEntryNotFoundError(FileNotFoundError, KeyError):
+    """No zoo entry of that name: a ``FileNotFoundError``, as every missing input of the package is
+    (and a ``KeyError``, what ``load`` raised before, so that older ``except KeyError`` still works)."""
+
+    def __str__(self) -> str:  # KeyError's would quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+def _missing_entry(name: str, folder: str | pathlib.Path) -> ZooEntryNotFoundError:
+    """The error for a name that is not in ``folder``: the closest entry, and how to list them all."""
+    folder = pathlib.Path(folder)
+    if not folder.is_dir():
+        return ZooEntryNotFoundError(f"no zoo entry {name!r}: the zoo folder {folder} does not exist; pass "
+                                     "folder= a folder of NAME.json and NAME.safetensors entries, or leave it out "
+                                     "for the package's zoo")
+    known = names(folder)
+    lower = {n.lower(): n for n in known}
+    close = [lower[m] for m in difflib.get_close_matches(str(name).lower(), list(lower), n=1, cutoff=0.6)]
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    return ZooEntryNotFoundError(
+        f"no zoo entry {name!r} in {folder}; {hint}blockpuzzle.zoo.names() (or `blockpuzzle zoo list`) lists its "
+        f"{len(known)} entries")
+
+
 def load(name: str | pathlib.Path, folder: str | pathlib.Path = FOLDER, native: bool | None = None) -> ZooPolicy:
     """The policy of a zoo entry: a name in ``folder`` or the path of an entry's .json/.safetensors.
-    ``native``: act through the extension (the CLI's arithmetic; None: where it can be imported)."""
+    ``native``: act through the extension (the CLI's arithmetic; None: where it can be imported).
+    A name that is not there raises ``ZooEntryNotFoundError`` (a ``FileNotFoundError``) naming the
+    closest entry."""
     path = pathlib.Path(name)
     if path.suffix not in (".json", ".safetensors"):
         path = pathlib.Path(folder) / f"{name}.json"
         if not path.is_file():
-            raise KeyError(f"no zoo entry {name!r} in {folder}; entries: {', '.join(names(folder))}")
+            raise _missing_entry(str(name), folder)
     return ZooPolicy(path, native=native)
+
+
+def _unpickle(ref: tuple[str, str], files_sha256: str, native: bool) -> ZooPolicy:
+    """A pickled ``ZooPolicy`` loaded again (``ZooPolicy.__reduce__``): from the unpickling
+    process's package zoo (``("zoo", name)``) or from a path (``("path", json)``), refused where the
+    files are not those it was pickled from."""
+    kind, where = ref
+    what = f"the zoo policy {pathlib.Path(where).stem!r}"
+    try:
+        policy = load(where, native=native) if kind == "zoo" else ZooPolicy(where, native=native)
+    except FileNotFoundError as e:
+        raise type(e)(f"cannot unpickle {what}: {e}; unpickle it where the package (or that file) has the "
+                      "entry, or pickle it by loading the entry there") from None
+    if policy.files_sha256 != files_sha256:
+        raise ValueError(
+            f"cannot unpickle {what}: its files ({policy.path}, {policy.path.with_suffix('.safetensors').name}) "
+            f"changed since it was pickled (sha256 {files_sha256[7:19]}… then, {policy.files_sha256[7:19]}… now), "
+            "so it would not act as the pickled policy did; load the entry as it is now and pickle that, or restore "
+            "the files it was pickled from")
+    return policy
 
 
 def _native_actor(path: pathlib.Path, required: bool):
@@ -68,26 +116,75 @@ ENTITY_FEATURES = 26
 
 def read_safetensors(path: str | pathlib.Path, fix: str = "restore the zoo entry") -> dict[str, np.ndarray]:
     """The float32 tensors of a safetensors file: an 8-byte header length, a JSON header, the data.
-    A damaged file raises ValueError naming it and ``fix``."""
-    raw = pathlib.Path(path).read_bytes()
+    A damaged file raises ValueError naming it, the tensor or field, and ``fix``: a header that is
+    not JSON, a tensor that is not F32, ``data_offsets`` out of the data, overlapping another
+    tensor's, leaving bytes no tensor covers, or not the size the shape calls for."""
+    return parse_safetensors(_read_input(path), path, fix)
+
+
+def _read_input(path: str | pathlib.Path) -> bytes:
+    """A file's bytes; a folder is ValueError naming it (FileNotFoundError and PermissionError as open gives them)."""
+    path = pathlib.Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path} is a folder, not a file")
+    return path.read_bytes()
+
+
+def parse_safetensors(raw: bytes, path: str | pathlib.Path, fix: str) -> dict[str, np.ndarray]:
+    """``read_safetensors`` of bytes already read from ``path`` (named in the errors)."""
+    def bad(what: str) -> ValueError:
+        return ValueError(f"{path} is not a usable safetensors file: {what}; {fix}")
+
+    if len(raw) < 8:
+        raise bad(f"it has {len(raw)} bytes, fewer than the 8 of the header length (cut short?)")
+    n = int.from_bytes(raw[:8], "little")
+    if 8 + n > len(raw):
+        raise bad(f"its header claims {n} bytes, the file has {len(raw)} (cut short?)")
     try:
-        n = int.from_bytes(raw[:8], "little")
-        if len(raw) < 8 or 8 + n > len(raw):
-            raise ValueError(f"its header claims {n} bytes, the file has {len(raw)}")
         header = json.loads(raw[8:8 + n])
-        data = memoryview(raw)[8 + n:]
-        out = {}
-        for key, t in header.items():
-            if key == "__metadata__":
-                continue
-            if t["dtype"] != "F32":
-                raise ValueError(f"tensor {key} is {t['dtype']}, the zoo stores F32")
-            start, end = t["data_offsets"]
-            if not 0 <= start <= end <= len(data):
-                raise ValueError(f"tensor {key} lies beyond the end of the file (cut short?)")
-            out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(t["shape"]).astype(np.float32)
-    except (ValueError, KeyError, TypeError, AttributeError) as e:
-        raise ValueError(f"{path} is not a usable safetensors file: {e}; {fix}") from e
+    except (ValueError, UnicodeDecodeError) as e:
+        raise bad(f"its header is not JSON ({e})") from None
+    if not isinstance(header, dict):
+        raise bad(f"its header is a JSON {type(header).__name__}, not an object of tensors")
+    data = memoryview(raw)[8 + n:]
+    spans, out = [], {}
+    for key, t in header.items():
+        if key == "__metadata__":
+            if not isinstance(t, dict) or not all(isinstance(v, str) for v in t.values()):
+                raise bad("its __metadata__ is not an object of strings")
+            continue
+        if not isinstance(t, dict):
+            raise bad(f"tensor {key!r} is described by a JSON {type(t).__name__}, not an object")
+        dtype, shape, offsets = t.get("dtype"), t.get("shape"), t.get("data_offsets")
+        if dtype != "F32":
+            raise bad(f"tensor {key!r} has dtype {dtype!r}; these files store F32 (float32) tensors only")
+        if not isinstance(shape, list) or not all(type(d) is int and d >= 0 for d in shape):
+            raise bad(f"tensor {key!r} has shape {shape!r}, not a list of sizes >= 0")
+        if (not isinstance(offsets, list) or len(offsets) != 2 or not all(type(o) is int for o in offsets)
+                or not 0 <= offsets[0] <= offsets[1]):
+            raise bad(f"tensor {key!r} has data_offsets {offsets!r}, not [start, end] with 0 <= start <= end")
+        start, end = offsets
+        if end > len(data):
+            raise bad(f"tensor {key!r} has data_offsets [{start}, {end}], beyond the {len(data)} bytes of data "
+                      "(cut short?)")
+        want = 4 * int(np.prod(shape, dtype=np.int64))
+        if end - start != want:
+            raise bad(f"tensor {key!r} has data_offsets [{start}, {end}] ({end - start} bytes), its F32 shape "
+                      f"{shape} calls for {want}")
+        if end > start:
+            spans.append((start, end, key))
+        out[key] = np.frombuffer(data[start:end], dtype="<f4").reshape(shape).astype(np.float32)
+    # Every byte of the data belongs to exactly one tensor (the format's rule): no overlaps, no holes.
+    covered = 0
+    for (start, end, key), before in zip(sorted(spans), [None, *sorted(spans)]):
+        if start < covered:
+            raise bad(f"tensor {key!r} has data_offsets [{start}, {end}], overlapping tensor {before[2]!r}'s "
+                      f"[{before[0]}, {before[1]}]")
+        if start > covered:
+            raise bad(f"bytes {covered}..{start} of the data belong to no tensor (before tensor {key!r})")
+        covered = end
+    if covered != len(data):
+        raise bad(f"bytes {covered}..{len(data)} of the data (the end) belong to no tensor")
     return out
 
 
@@ -107,15 +204,34 @@ class ZooPolicy:
         #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts. Loaded first:
         #: it checks the whole entry (checksums, layout, values) and names what is wrong.
         self.native = None if native is False else _native_actor(json_path, required=bool(native))
+        meta_bytes = _read_input(json_path)
+        tensor_path = json_path.with_suffix(".safetensors")
+        tensor_bytes = _read_input(tensor_path)
         try:
-            self.meta = json.loads(json_path.read_text())
+            self.meta = json.loads(meta_bytes)
             if self.meta["format"] not in FORMATS:
                 raise ValueError(f"unknown format {self.meta['format']!r}")
             self.layers = len(self.meta["actor"]["sizes"]) - 1
             self.set = self.meta["actor"].get("set")
         except (ValueError, KeyError, TypeError, AttributeError) as e:
             raise ValueError(f"zoo entry {json_path} is not usable: {e}; restore it") from e
-        self.tensors = read_safetensors(json_path.with_suffix(".safetensors"))
+        self.tensors = parse_safetensors(tensor_bytes, tensor_path, "restore the zoo entry")
+        #: ``sha256:`` of the entry's two files as loaded (the .json's bytes, then the .safetensors'):
+        #: what a pickled policy is checked against when it is unpickled.
+        self.files_sha256 = "sha256:" + hashlib.sha256(
+            len(meta_bytes).to_bytes(8, "little") + meta_bytes + tensor_bytes).hexdigest()
+
+    def __reduce__(self):
+        """Pickled by reference: the entry's name (an entry of the package's zoo, loaded from the
+        unpickling process's own package) or its path (any other entry), the files' sha256 and
+        whether it acts through the extension. Unpickling loads the entry again, with the same
+        checks as ``load``, and refuses, naming the entry, files that changed since: the policy then
+        acts exactly as the pickled one did."""
+        if self.path.parent.resolve() == FOLDER.resolve():
+            ref = ("zoo", self.path.stem)
+        else:
+            ref = ("path", str(self.path.resolve()))
+        return _unpickle, (ref, self.files_sha256, self.native is not None)
 
     @property
     def name(self) -> str:

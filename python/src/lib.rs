@@ -14,6 +14,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use std::sync::{Mutex, PoisonError};
 
 mod policy;
+mod render_error;
 mod vector;
 
 /// A Rust error as the Python exception a Gymnasium user expects, with the same message.
@@ -270,7 +271,7 @@ impl Env {
         let slot = self.renderer.get_mut().unwrap_or_else(PoisonError::into_inner);
         if slot.is_none() {
             let model = env.data().model().clone();
-            let r = Renderer::new(&model, &view).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+            let r = Renderer::new(&model, &view).map_err(render_error::render_err)?;
             *slot = Some(OnThread::new(r));
         }
         let Some(renderer) = slot.as_mut() else {
@@ -354,6 +355,13 @@ fn _golden_digest(env: &str, scripted: bool, level: usize, challenge: bool, seed
 #[pyfunction]
 fn max_episode_steps(task: &str) -> PyResult<usize> {
     Ok(crate::task(task)?.spec.max_episode_steps)
+}
+
+/// The content hash (`sha256:…`) of a registered id's or task file's task: what suites, results
+/// and demos record as its `task_sha256`.
+#[pyfunction]
+fn task_sha256(task: &str) -> PyResult<String> {
+    Ok(crate::task(task)?.source.hash)
 }
 
 /// The registered environment ids.
@@ -596,6 +604,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(policy::build_info, m)?)?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     m.add_function(wrap_pyfunction!(max_episode_steps, m)?)?;
+    m.add_function(wrap_pyfunction!(task_sha256, m)?)?;
     m.add_function(wrap_pyfunction!(mujoco_version, m)?)?;
     m.add_function(wrap_pyfunction!(suite, m)?)?;
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
@@ -608,5 +617,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;
     m.add_function(wrap_pyfunction!(assets_dir, m)?)?;
     m.add_function(wrap_pyfunction!(_golden_digest, m)?)?;
+    m.add_function(wrap_pyfunction!(render_error::_render_error_message, m)?)?;
     Ok(())
 }

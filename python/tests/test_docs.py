@@ -1,7 +1,8 @@
 """Every Python code block of the README and the docs runs as written, with the installed package.
 
-A block is run in a fresh namespace in an empty folder (``my-task.toml`` there: a copy of
-``tasks/BlocksTouch-v0.toml``, the task file the docs ask the reader to bring). A block that is not
+A block is run in a fresh namespace in an empty folder, so it must create every file it reads: a
+block that refers to a file it never creates fails (a ``FileNotFoundError`` while it runs, or a
+relative file name in one of its strings that does not exist once it has run). A block that is not
 meant to run alone says so on the line above its fence: ``<!-- fragment: why -->``; the test checks
 that every such mark gives a reason. The Rust test ``tests/it/docs.rs`` checks the shell blocks (each
 command line parses; make targets and scripts exist) and the TOML blocks (valid task and suite
@@ -10,10 +11,9 @@ files); ``cargo test`` runs the README's Rust block (a doctest).
 
 from __future__ import annotations
 
-import os
+import ast
 import pathlib
 import re
-import shutil
 
 import pytest
 
@@ -56,13 +56,51 @@ def test_the_docs_have_python_blocks_and_every_fragment_says_why():
             assert mark is None or mark, f"{p.relative_to(ROOT)}:{n}: say why the block is a fragment"
 
 
+#: A string that names a file relative to the block's folder: what a block must create if it names it.
+FILE_NAME = re.compile(r"^[\w.-]+(/[\w.-]+)*\.(toml|json|jsonl|safetensors|csv|png|gif|npz|npy|txt|h5|hdf5|zip|pkl)$")
+
+
+def file_names(code: str) -> list[str]:
+    """The relative file names in the block's string literals (not its comments)."""
+    return sorted({n.value for n in ast.walk(ast.parse(code))
+                   if isinstance(n, ast.Constant) and isinstance(n.value, str) and FILE_NAME.match(n.value)})
+
+
+def run_block(code: str, where: str, folder: pathlib.Path) -> None:
+    """Runs a block as a script would run, in ``folder`` (empty), and checks that every file it names
+    exists there once it has run."""
+    fix = "create the file in the block, or mark the block <!-- fragment: why --> on the line above its fence"
+    # Run as a script would be: its own globals, its name __main__, its file named in tracebacks.
+    compiled = compile(code, where, "exec")
+    namespace = {"__name__": "__main__"}
+    try:
+        exec(compiled, namespace)  # noqa: S102 (the repository's own documentation)
+    except FileNotFoundError as e:
+        pytest.fail(f"{where}: the block reads a file it never creates ({e}); {fix}")
+    finally:
+        for env in [v for v in namespace.values() if hasattr(v, "close") and hasattr(v, "reset")]:
+            env.close()
+    missing = [name for name in file_names(code) if not (folder / name).exists()]
+    if missing:
+        pytest.fail(f"{where}: the block names {', '.join(missing)} but never creates it; {fix}")
+
+
 @pytest.mark.parametrize(("path", "line", "code"), PYTHON)
 def test_python_block_runs_as_written(path, line, code, tmp_path, monkeypatch):
-    shutil.copy(ROOT / "tasks" / "BlocksTouch-v0.toml", tmp_path / "my-task.toml")
     monkeypatch.chdir(tmp_path)
-    # Run as a script would be: its own globals, its name __main__, its file named in tracebacks.
-    compiled = compile(code, f"{path.relative_to(ROOT)}:{line}", "exec")
-    namespace = {"__name__": "__main__"}
-    exec(compiled, namespace)  # noqa: S102 (the repository's own documentation)
-    for env in [v for v in namespace.values() if hasattr(v, "close") and hasattr(v, "reset")]:
-        env.close()
+    assert not list(tmp_path.iterdir())
+    run_block(code, f"{path.relative_to(ROOT)}:{line}", tmp_path)
+
+
+@pytest.mark.parametrize("code", [
+    # docs/python.md's third block before issue 60: a task file the reader was to bring.
+    'import blockpuzzle\nenv = blockpuzzle.make_task("my-task.toml")\n',
+    # A name the block never reads: still a file the reader does not have.
+    'import blockpuzzle\nsuite = "my-suite.toml"\n',
+])
+def test_a_block_that_refers_to_a_file_it_never_creates_fails(code, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(pytest.fail.Exception, match=r"my-(task|suite).toml.*create the file in the block, or mark"):
+        run_block(code, "example.md:1", tmp_path)
+    (tmp_path / "ok.toml").write_text("")
+    run_block('open("ok.toml").read()  # "mentioned.toml" in a comment is not a file name\n', "example.md:1", tmp_path)

@@ -6,6 +6,7 @@ import os
 import pathlib
 import shutil
 import subprocess
+import re
 import sys
 
 import gymnasium as gym
@@ -250,3 +251,28 @@ def test_the_registry_records_each_tasks_step_limit():
         if terminated or truncated:
             break
     assert truncated and t == 49 and info["episode"]["l"] == 50
+
+
+def test_make_task_gives_its_spec_the_task_file_s_step_limit(tmp_path):
+    files = sorted((ROOT / "tasks").glob("*.toml"))
+    assert len(files) >= 10
+    for path in files:
+        env = blockpuzzle.make_task(path)
+        (written,) = [int(x) for x in re.findall(r"(?m)^max_episode_steps = (\d+)$", path.read_text())]  # 50, or 100
+        assert env.spec.max_episode_steps == written == gym.spec(f"BlockPuzzle/{path.stem}").max_episode_steps
+        env.close()
+    text = (ROOT / "tasks" / "BlocksTouch-v0.toml").read_text()
+    assert "max_episode_steps = 50" in text
+    short = tmp_path / "short.toml"
+    short.write_text(text.replace("max_episode_steps = 50", "max_episode_steps = 30"))
+    env = gym.wrappers.RecordEpisodeStatistics(blockpuzzle.make_task(short))
+    assert env.spec.max_episode_steps == 30
+    env.reset(seed=0)
+    for t in range(50):
+        _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        if terminated or truncated:
+            break
+    assert truncated and t == 29 and info["episode"]["l"] == 30
+    assert blockpuzzle.make_task(short, max_episode_steps=10).spec.max_episode_steps == 10
+    with pytest.raises(FileNotFoundError, match="nothere.toml"):
+        blockpuzzle.make_task(tmp_path / "nothere.toml")

@@ -28,3 +28,16 @@ def test_the_sdist_holds_the_sources_and_no_results():
                  "models/scene.xml", "blockpuzzle/__init__.py", "blockpuzzle/zoo_files/BlocksTouch-v0-ddpg.json"):
         assert need in names, need
     assert not [n for n in names if n.startswith(("results/", "tests/", "docs/", "models/gymnasium_robotics"))]
+
+
+def test_the_metadata_names_the_author_and_no_address_that_does_not_exist():
+    tomllib = pytest.importorskip("tomllib")
+    meta = importlib.metadata.metadata("blockpuzzle")
+    project = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]
+    assert meta["Author"] == project["authors"][0]["name"] != "", meta["Author"]
+    assert meta["Summary"] and meta["License"] == "MIT"
+    # No public address exists yet (no remote, none in Cargo.toml or the docs): none is invented, and
+    # any one added must be an https URL.
+    urls = meta.get_all("Project-URL") or []
+    assert all(u.split(", ", 1)[1].startswith("https://") for u in urls), urls
+    assert bool(urls) == bool(project.get("urls")), urls

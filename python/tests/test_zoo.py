@@ -49,5 +49,62 @@ def test_a_zoo_policy_acts_on_single_and_batched_observations():
     assert a.shape == (4,) and np.all(np.abs(a) <= 1)
     batch = policy(np.stack([obs, obs]))
     assert batch.shape == (2, 4) and np.array_equal(batch[0], a)
-    with pytest.raises(KeyError, match="no zoo entry 'NoSuch'"):
+
+
+def test_a_missing_name_is_filenotfounderror_naming_the_closest_entry_and_how_to_list_them(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"no zoo entry 'BlocksTouch-v0-dpg' in .*; did you mean "
+                       r"'BlocksTouch-v0-ddpg'\? blockpuzzle.zoo.names\(\) \(or `blockpuzzle zoo list`\) lists its "
+                       rf"{len(zoo.names())} entries$") as e:
+        zoo.load("BlocksTouch-v0-dpg")
+    assert isinstance(e.value, zoo.ZooEntryNotFoundError) and isinstance(e.value, KeyError)
+    assert "BlocksChoose-v0-ddpg-ours" not in str(e.value), "not every name"
+    with pytest.raises(FileNotFoundError, match="did you mean 'BlocksTouch-v0-ddpg'"):
+        zoo.load("blockstouch-v0-ddpg")
+    with pytest.raises(FileNotFoundError, match=r"no zoo entry 'NoSuch' in .*zoo_files; blockpuzzle.zoo.names"):
         zoo.load("NoSuch")
+    with pytest.raises(FileNotFoundError, match="the zoo folder .*nowhere does not exist"):
+        zoo.load("BlocksTouch-v0-ddpg", folder=tmp_path / "nowhere")
+
+
+@pytest.mark.parametrize("native", [None, False])
+def test_a_zoo_policy_pickles_by_name_and_hash_and_acts_the_same_after(native):
+    import pickle
+
+    policy = zoo.load("BlocksTouch-v0-ddpg", native=native)
+    data = pickle.dumps(policy)
+    assert len(data) < 1000, "by reference, not by weights"
+    again = pickle.loads(data)
+    assert again is not policy and again.name == policy.name and again.files_sha256 == policy.files_sha256
+    assert (again.native is None) == (policy.native is None)
+    env = gym.make("BlockPuzzle/BlocksTouch-v0")
+    obs = np.stack([env.reset(seed=s)[0] for s in range(16)])
+    assert np.array_equal(again(obs), policy(obs))
+    # A set network, and a process of its own (as multiprocessing's workers are).
+    import concurrent.futures
+    import multiprocessing
+
+    set_policy = zoo.load("cross-task-v2-dagger-entity")
+    env = gym.make(f"BlockPuzzle/{set_policy.task_id}", obs_mode=set_policy.obs_mode)
+    obs, _ = env.reset(seed=3)
+    context = multiprocessing.get_context("spawn")
+    with concurrent.futures.ProcessPoolExecutor(1, mp_context=context) as pool:
+        assert np.array_equal(pool.submit(set_policy, obs).result(), set_policy(obs))
+
+
+def test_unpickling_an_entry_whose_files_changed_is_refused_naming_it(tmp_path):
+    import pickle
+    import shutil
+
+    for suffix in (".json", ".safetensors"):
+        shutil.copy((zoo.FOLDER / "BlocksTouch-v0-ddpg").with_suffix(suffix), tmp_path / f"mine{suffix}")
+    policy = zoo.load(tmp_path / "mine.json")
+    data = pickle.dumps(policy)
+    assert np.array_equal(pickle.loads(data)(np.zeros(48, np.float32)), policy(np.zeros(48, np.float32)))
+    text = (tmp_path / "mine.json").read_text()
+    (tmp_path / "mine.json").write_text(text + "\n")  # still a valid entry, but not the bytes pickled
+    with pytest.raises(ValueError, match=r"cannot unpickle the zoo policy 'mine': its files \(.*mine.json, "
+                       r"mine.safetensors\) changed since it was pickled .*load the entry as it is now"):
+        pickle.loads(data)
+    (tmp_path / "mine.json").unlink()
+    with pytest.raises(FileNotFoundError, match="cannot unpickle the zoo policy 'mine'"):
+        pickle.loads(data)

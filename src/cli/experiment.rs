@@ -14,9 +14,9 @@ use std::path::Path;
 /// # Errors
 /// An unreadable file, malformed TOML, a key that is not a flag of `train`
 /// (the error lists them), or a value that is not a number, string or boolean.
-pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<Vec<OsString>> {
+pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<(Vec<OsString>, Vec<Origin>)> {
     if args.get(1).map_or(true, |a| a != "train") {
-        return Ok(args);
+        return Ok((args, Vec::new()));
     }
     let (head, rest) = args.split_at(2);
     let mut own = Vec::new();
@@ -34,21 +34,54 @@ pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<Vec<OsString
             own.push(a.clone());
         }
     }
-    let mut out = head.to_vec();
+    let (mut out, mut origins) = (head.to_vec(), Vec::new());
     for file in &files {
-        out.extend(flags(Path::new(file), train)?);
+        let (f, o) = flags(Path::new(file), train)?;
+        out.extend(f);
+        origins.extend(o);
     }
     out.extend(own);
-    Ok(out)
+    Ok((out, origins))
 }
 
-/// The flags of one recipe file (keys in sorted order; each flag once).
-fn flags(path: &Path, train: &clap::Command) -> Result<Vec<OsString>> {
+/// Where a flag of the expanded command line came from: a recipe's file, key and value.
+#[derive(Debug, Clone)]
+pub struct Origin {
+    flag: String,
+    file: std::path::PathBuf,
+    line: String,
+}
+
+/// `e`, clap's error for the expanded command line, naming the recipe file and key where the
+/// flag it is about came from one with the value it refuses.
+pub fn name_recipe(e: clap::Error, origins: &[Origin]) -> anyhow::Error {
+    use clap::error::{ContextKind, ContextValue};
+    let (Some(ContextValue::String(arg)), Some(ContextValue::String(value))) =
+        (e.get(ContextKind::InvalidArg), e.get(ContextKind::InvalidValue))
+    else {
+        return e.into();
+    };
+    let from = origins.iter().rev().find(|o| {
+        arg.split(' ').next() == Some(o.flag.as_str())
+            && (o.line.ends_with(&format!("= {value}")) || o.line.ends_with(&format!("= \"{value}\"")))
+    });
+    match from {
+        Some(o) => {
+            let said = e.to_string();
+            let first = said.lines().next().unwrap_or_default().trim_start_matches("error: ");
+            anyhow::anyhow!("{}: `{}`: {first}; fix the value in the file", o.file.display(), o.line)
+        }
+        None => e.into(),
+    }
+}
+
+/// The flags of one recipe file (keys in sorted order; each flag once), and where each came from.
+fn flags(path: &Path, train: &clap::Command) -> Result<(Vec<OsString>, Vec<Origin>)> {
     let text = crate::io::read_text(path, "recipe", crate::limits::TEXT_FILE_BYTES)
         .with_context(|| format!("cannot read the recipe {}", path.display()))?;
     let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
     let known: Vec<&str> = train.get_arguments().filter_map(|a| a.get_long()).filter(|l| *l != "config").collect();
-    let mut out = Vec::new();
+    let (mut out, mut origins) = (Vec::new(), Vec::new());
     for (key, value) in table {
         let flag = key.replace('_', "-");
         let Some(arg) = train.get_arguments().find(|a| a.get_long() == Some(flag.as_str()) && flag != "config") else {
@@ -66,6 +99,7 @@ fn flags(path: &Path, train: &clap::Command) -> Result<Vec<OsString>> {
                 path.display()
             ),
         }
+        origins.push(Origin { flag: format!("--{flag}"), file: path.to_owned(), line: format!("{key} = {value}") });
         match value {
             toml::Value::Boolean(true) => out.push(format!("--{flag}").into()),
             toml::Value::Boolean(false) => {}
@@ -75,5 +109,5 @@ fn flags(path: &Path, train: &clap::Command) -> Result<Vec<OsString>> {
             other => bail!("{}: `{key}` = {other}: give a number, a string or true/false", path.display()),
         }
     }
-    Ok(out)
+    Ok((out, origins))
 }

@@ -200,10 +200,13 @@ fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
     }
     let cmd = command();
     #[cfg(feature = "train")]
-    let args = {
+    let (args, origins) = {
         let train = cmd.find_subcommand("train").cloned().unwrap_or_default();
         experiment::expand(args, &train)?
     };
+    #[cfg(feature = "train")]
+    let matches = cmd.try_get_matches_from(args).map_err(|e| experiment::name_recipe(e, &origins))?;
+    #[cfg(not(feature = "train"))]
     let matches = cmd.try_get_matches_from(args)?;
     Ok(<Cli as clap::FromArgMatches>::from_arg_matches(&matches)?)
 }

@@ -39,7 +39,7 @@ pub(super) struct PlotArgs {
     run_dir: Option<PathBuf>,
     /// Run directories whose finals success to draw in one figure (needs --out);
     /// a CSV file instead of a directory is another trainer's log with the
-    /// columns epoch, time/env_steps and finals/success (examples/python/sb3_td3.py).
+    /// columns epoch, time/env_steps and finals/success (python -m blockpuzzle.examples.sb3_td3).
     #[arg(long, num_args = 1.., requires = "out")]
     overlay: Vec<PathBuf>,
     /// Legend labels of the --overlay curves, in order (default: from each run's config, or the file name).

@@ -13,20 +13,61 @@ use image::RgbImage;
 use std::ffi::CString;
 use thiserror::Error;
 
+/// Every package headless rendering uses, on Debian and Ubuntu.
+const APT_ALL: &str = "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri";
+/// The same on Fedora and RHEL.
+const DNF_ALL: &str = "dnf install libglvnd-egl mesa-libEGL mesa-dri-drivers";
+
+/// The message of a failed EGL step, as a user of the command line or the Python package can act
+/// on it: what failed (EGL's own words kept), the system package that most likely lacks, the
+/// install lines for apt and dnf, and that no pip package provides them. `call` is the EGL call
+/// that failed (None: libEGL itself could not be loaded, or rendering is switched off).
+pub fn egl_message(call: Option<&str>, reason: &str) -> String {
+    use egl::DISABLE_VAR;
+    if call.is_none() && reason.contains(DISABLE_VAR) {
+        return format!(
+            "headless rendering is switched off by the environment variable {DISABLE_VAR}; unset it (`unset \
+             {DISABLE_VAR}` in the shell, `del os.environ[\"{DISABLE_VAR}\"]` in Python before the first render)"
+        );
+    }
+    // What failed, and the package that most likely lacks, for each step EGL takes.
+    let (what, missing) = match call {
+        None => ("the EGL library libEGL.so.1 could not be loaded", "libegl1 (libEGL.so.1, the EGL loader)"),
+        Some(c) if c.starts_with("eglGetPlatformDisplay") => (
+            "libEGL.so.1 loaded, but no EGL vendor offers Mesa's surfaceless platform",
+            "libegl-mesa0 (Mesa's EGL vendor, libEGL_mesa.so.0)",
+        ),
+        Some(c) if c.starts_with("eglInitialize") => (
+            "Mesa's EGL could not start a renderer",
+            "libgl1-mesa-dri (Mesa's DRI drivers, with the software rasteriser)",
+        ),
+        Some(_) => (
+            "Mesa's EGL could not make an OpenGL context",
+            "libgl1-mesa-dri or libegl-mesa0 (a Mesa with EGL_KHR_no_config_context)",
+        ),
+    };
+    let failed = match call {
+        None => reason.to_owned(),
+        Some(c) => format!("{c} failed: {reason}"),
+    };
+    format!(
+        "headless rendering needs EGL with Mesa, and {what} ({failed}); the missing package is most likely {missing}. \
+         Install the three (as root): `{APT_ALL}` on Debian or Ubuntu, `{DNF_ALL}` on Fedora or RHEL; they are system \
+         libraries, which no pip package provides. Everything but rendering works without them"
+    )
+}
+
 /// Rendering errors.
 #[derive(Debug, Error)]
 pub enum RenderError {
     /// No usable libEGL (or rendering switched off).
-    #[error(
-        "headless rendering needs EGL, which is not available ({reason}); install libegl1, libegl-mesa0 and \
-         libgl1-mesa-dri (make setup). Everything else works without it"
-    )]
+    #[error("{}", egl_message(None, reason))]
     EglUnavailable {
         /// What went wrong.
         reason: String,
     },
     /// An EGL call failed.
-    #[error("{call} failed: {reason}")]
+    #[error("{}", egl_message(Some(call), reason))]
     Egl {
         /// The call.
         call: &'static str,

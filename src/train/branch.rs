@@ -75,8 +75,12 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     // The parent's checkpoints must load before anything is created.
     for path in checkpoints(&from)? {
         if path.exists() {
-            checkpoint::verify(&path)
-                .with_context(|| format!("--branch-from {}: nothing was created", parent.display()))?;
+            checkpoint::verify(&path).map_err(|e| {
+                anyhow::anyhow!(
+                    "--branch-from {}: nothing was created: the parent's {e}, or branch from another run",
+                    parent.display()
+                )
+            })?;
         }
     }
     let saved = from.read_config()?;

@@ -33,7 +33,7 @@ pub enum CheckpointError {
     #[error("checkpoint {path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
     /// Not a checkpoint, truncated, or its checksum does not match.
-    #[error("checkpoint {path} is corrupt ({reason}); delete it or restore it from a backup, and start a new run without --resume")]
+    #[error("checkpoint {path} is corrupt ({reason}); restore it from a backup, or start a new run")]
     Corrupt { path: PathBuf, reason: String },
     /// A valid checkpoint of another environment or shape.
     #[error("checkpoint {path} does not fit this run: {reason}")]

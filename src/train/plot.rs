@@ -150,7 +150,7 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
 }
 
 /// One evaluation of a run for [`overlay`]: the columns of `progress.csv`
-/// that other trainers' logs (e.g. `examples/python/sb3_td3.py`) have too.
+/// that other trainers' logs (e.g. `python -m blockpuzzle.examples.sb3_td3`) have too.
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 pub struct FinalsPoint {
     pub epoch: usize,

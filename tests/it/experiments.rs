@@ -83,9 +83,12 @@ fn a_bad_recipe_is_named_with_the_key_and_the_fix() {
     std::fs::write(&p, "env = \"BlocksTouch-v0\"\nepoch = 3\n").unwrap();
     let e = format!("{:#}", recipe(&p, &[]).unwrap_err());
     assert!(e.contains("r.toml: `epoch` is not a flag of `blockpuzzle train`") && e.contains("epochs"), "{e}");
-    std::fs::write(&p, "env = \"BlocksTouch-v0\"\nepochs = 0\n").unwrap();
-    let e = format!("{:#}", recipe(&p, &[]).unwrap_err());
-    assert!(e.contains("'0' for '--epochs"), "{e}");
+    // A bad value names the file, the key and the range (issue 60).
+    for (line, want) in [("epochs = 0", "allowed are 1 to 100,000"), ("epochs = \"ten\"", "whole number")] {
+        std::fs::write(&p, format!("env = \"BlocksTouch-v0\"\n{line}\n")).unwrap();
+        let e = format!("{:#}", recipe(&p, &[]).unwrap_err());
+        assert!(e.contains(&format!("r.toml: `{line}`")) && e.contains(want) && e.contains("fix the value"), "{e}");
+    }
     let e = format!("{:#}", recipe(&dir.path().join("none.toml"), &[]).unwrap_err());
     assert!(e.contains("cannot read the recipe"), "{e}");
 }

@@ -164,9 +164,39 @@ mod cli {
         let o = bp(&["render", "--traj", traj, "--out", gif.to_str().unwrap()], true);
         assert!(!o.status.success());
         let t = text(&o);
-        assert!(t.contains("needs EGL") && t.contains("libegl1") && t.contains("make setup"), "{t}");
+        assert!(t.contains("switched off by the environment variable BLOCKPUZZLE_NO_EGL; unset it"), "{t}");
         assert!(!gif.exists(), "nothing written");
         assert!(bp(&["envs"], true).status.success());
+    }
+
+    /// Each EGL step's failure names the system package that most likely lacks, the apt and dnf lines,
+    /// and that pip has none (issue 60); EGL's own words are kept.
+    #[test]
+    fn each_egl_failure_names_the_package_to_install() {
+        use blockpuzzle::render::RenderError;
+        let cases = [
+            (None, "libEGL.so.1: cannot open shared object file", "libegl1"),
+            (
+                Some("eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA)"),
+                "One or more argument values",
+                "libegl-mesa0",
+            ),
+            (Some("eglInitialize"), "EGL is not initialized", "libgl1-mesa-dri"),
+            (Some("eglCreateContext"), "Bad match", "libgl1-mesa-dri"),
+        ];
+        for (call, reason, missing) in cases {
+            let e = match call {
+                None => RenderError::EglUnavailable { reason: reason.into() },
+                Some(call) => RenderError::Egl { call, reason: reason.into() },
+            };
+            let t = e.to_string();
+            assert!(t.contains(&format!("the missing package is most likely {missing}")), "{t}");
+            assert!(
+                t.contains("apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri") && t.contains("dnf install"),
+                "{t}"
+            );
+            assert!(t.contains("no pip package provides") && t.contains(reason) && !t.contains("make setup"), "{t}");
+        }
     }
 
     #[test]
