@@ -48,6 +48,11 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("procgen-v2", include_str!("../suites/procgen-v2.toml")),
 ];
 
+/// The built-in suites' names, comma-separated (what help texts list).
+pub fn builtin_names() -> String {
+    BUILTIN.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+}
+
 /// A suite file as written.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

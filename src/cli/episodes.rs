@@ -11,8 +11,11 @@ use std::path::{Path, PathBuf};
 /// `blockpuzzle demos`.
 #[derive(Debug, clap::Args)]
 pub(super) struct DemosArgs {
-    /// Built-in suite name or suite file (.toml) whose rows are played.
-    #[arg(long)]
+    /// Built-in suite name or suite file (.toml) whose rows are played. The help lists the built-in names.
+    #[arg(long, help = format!(
+        "Built-in suite name ({}) or suite file (.toml) whose rows are played",
+        crate::suite::builtin_names()
+    ))]
     suite: String,
     /// The split whose rows are played (train, test, ...).
     #[arg(long, default_value = "train")]

@@ -17,9 +17,17 @@ pub(super) struct EvalArgs {
     /// observation, the same as Python's `blockpuzzle.policies.obs_hash`).
     #[arg(long, value_enum, requires = "suite", conflicts_with = "checkpoint")]
     baseline: Option<crate::evaluate::Baseline>,
-    /// Evaluate on an evaluation suite instead: a built-in name (colour, layout, cross-task, count,
-    /// obstacles) or a suite file; writes eval-POLICY-suite-NAME.json and .md (docs/suites.md).
-    #[arg(long, conflicts_with_all = ["env", "challenge", "level", "episodes", "seed"])]
+    /// Evaluate on an evaluation suite instead: a built-in name or a suite file; writes
+    /// eval-POLICY-suite-NAME.json and .md (docs/suites.md). The help lists the built-in names.
+    #[arg(
+        long,
+        conflicts_with_all = ["env", "challenge", "level", "episodes", "seed"],
+        help = format!(
+            "Evaluate on an evaluation suite instead: a built-in name ({}) or a suite file; writes \
+             eval-POLICY-suite-NAME.json and .md (docs/suites.md)",
+            crate::suite::builtin_names()
+        )
+    )]
     suite: Option<String>,
     /// With --suite: play at most N episodes of each row, a quick look. The result records it and
     /// is not the suite's score (`results` refuses it).

@@ -38,6 +38,25 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
              (record it again with `blockpuzzle rollout`)"
         );
     }
+    // Its colours and absent objects are dealt at reset from its seed (and distribution and level):
+    // a record that differs (blue marked absent beside a "success") is not this episode.
+    env.set_distribution(ep.distribution.as_deref().or(ep.challenge.then_some("challenge")))?;
+    env.set_level(ep.level)?;
+    env.reset(Some(ep.seed))?;
+    let dealt = env.objects().iter().zip(env.absent_objects());
+    for (o, (d, absent)) in ep.objects.iter().zip(dealt) {
+        if (o.name.as_str(), o.colour, o.absent) != (d.name.as_str(), d.colour, absent) {
+            let state = |c: Colour, absent: bool| if absent { "absent".to_owned() } else { c.name().to_owned() };
+            bail!(
+                "the episode records object {} as {}, but its task deals it {} at seed {}; the dump was edited \
+                 (record it again with `blockpuzzle rollout`)",
+                o.name,
+                state(o.colour, o.absent),
+                state(d.colour, absent),
+                ep.seed
+            );
+        }
+    }
     let nq = env.data().qpos().len();
     let model = env.data().model().clone();
     let mut renderer = Renderer::new(&model, view)?;

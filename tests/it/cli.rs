@@ -568,3 +568,17 @@ fn plot_scaling_draws_results_against_a_count_and_refuses_what_it_cannot_draw() 
         assert!(!png.exists());
     }
 }
+
+/// The help of every command that takes `--suite` lists every built-in suite (issue 60: `eval --help`
+/// listed 5 of 8), from the one list the suites are loaded from.
+#[test]
+fn suite_help_lists_every_built_in_suite() {
+    for cmd in ["eval", "demos"] {
+        let o = crate::common::blockpuzzle(&[cmd, "--help"]).output().unwrap();
+        let help = String::from_utf8_lossy(&o.stdout);
+        for (name, _) in blockpuzzle::suite::BUILTIN {
+            let listed = [" ", "("].iter().any(|b| [",", ")"].iter().any(|a| help.contains(&format!("{b}{name}{a}"))));
+            assert!(listed, "{cmd}: {name}: {help}");
+        }
+    }
+}

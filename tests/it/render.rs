@@ -169,6 +169,43 @@ mod cli {
         assert!(bp(&["envs"], true).status.success());
     }
 
+    /// A dump whose objects are not what its task deals at its seed (blue marked absent beside a
+    /// "success") is refused as edited, before anything is drawn (issue 60); the dump as recorded
+    /// renders, a shuffled task's colours and a count task's absent blocks included.
+    #[test]
+    fn a_dump_with_edited_objects_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        for env in ["BlocksTouch-v0", "BlocksChooseShuffled-v0", "BlocksChooseN-v0"] {
+            let traj = dir.path().join(format!("{env}.jsonl"));
+            let traj = traj.to_str().unwrap();
+            let args =
+                ["rollout", "--env", env, "--policy", "scripted", "--episodes", "3", "--seed", "4", "--out", traj];
+            let o = bp(&args, false);
+            assert!(o.status.success(), "{}", text(&o));
+            let strip = dir.path().join(format!("{env}.png"));
+            let args =
+                ["render", "--traj", traj, "--episode", "2", "--filmstrip", "2", "--width", "32", "--height", "24"];
+            let o = bp(&[&args[..], &["--out", strip.to_str().unwrap()]].concat(), false);
+            assert!(o.status.success(), "{env}: {}", text(&o));
+        }
+        let traj = dir.path().join("BlocksTouch-v0.jsonl");
+        let mut ep: serde_json::Value =
+            serde_json::from_str(std::fs::read_to_string(&traj).unwrap().lines().next().unwrap()).unwrap();
+        let blue = ep["objects"].as_array().unwrap().iter().position(|o| o["colour"] == "blue").unwrap();
+        ep["objects"][blue]["absent"] = true.into();
+        ep["success"] = true.into();
+        let edited = dir.path().join("edited.jsonl");
+        std::fs::write(&edited, format!("{ep}\n")).unwrap();
+        let gif = dir.path().join("e.gif");
+        let o = bp(&["render", "--traj", edited.to_str().unwrap(), "--out", gif.to_str().unwrap()], false);
+        let t = text(&o);
+        assert!(
+            !o.status.success() && t.contains("as absent") && t.contains("deals it blue") && t.contains("edited"),
+            "{t}"
+        );
+        assert!(!gif.exists());
+    }
+
     /// Each EGL step's failure names the system package that most likely lacks, the apt and dnf lines,
     /// and that pip has none (issue 60); EGL's own words are kept.
     #[test]
