@@ -784,21 +784,6 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         critic,
     };
     saved.check().map_err(&corrupt)?;
-    // Every evaluation that names its policy names this one (in sealed entries: older ones were written
-    // by builds whose policy ids this one need not reproduce).
-    let sealed = !READS[..5].contains(&meta.format.as_str());
-    let policy_sha = saved.policy_id(&meta.name).sha256;
-    let foreign = meta.evaluations.iter().enumerate().filter(|_| sealed);
-    if let Some((k, e)) = foreign.into_iter().find(|(_, e)| e.names_another_policy(policy_sha.as_deref())) {
-        return Err(bad_meta(format!(
-            "evaluations[{k}] ({} {}) was made by the policy {}, not this one ({}); restore the entry, or play it \
-             again with `zoo evaluate`",
-            e.env,
-            e.distribution,
-            e.policy_sha256().unwrap_or_default(),
-            policy_sha.as_deref().unwrap_or("unnamed")
-        )));
-    }
     for (k, p) in meta.probes.iter().enumerate() {
         if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {
             return Err(corrupt(format!(
@@ -807,6 +792,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )));
         }
     }
+    let sealed = !READS[..5].contains(&meta.format.as_str());
     // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
     // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
     match &meta.meta_sha256 {
@@ -825,6 +811,21 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )))
         }
         _ => {}
+    }
+    // Every evaluation that names its policy names this one (in sealed entries: older ones were written
+    // by builds whose policy ids this one need not reproduce). After the seal: an edited field changes
+    // the policy's id too, and the seal names that edit for what it is.
+    let policy_sha = saved.policy_id(&meta.name).sha256;
+    let foreign = meta.evaluations.iter().enumerate().filter(|_| sealed);
+    if let Some((k, e)) = foreign.into_iter().find(|(_, e)| e.names_another_policy(policy_sha.as_deref())) {
+        return Err(bad_meta(format!(
+            "evaluations[{k}] ({} {}) was made by the policy {}, not this one ({}); restore the entry, or play it \
+             again with `zoo evaluate`",
+            e.env,
+            e.distribution,
+            e.policy_sha256().unwrap_or_default(),
+            policy_sha.as_deref().unwrap_or("unnamed")
+        )));
     }
     Ok((meta, saved))
 }

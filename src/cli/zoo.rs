@@ -259,8 +259,16 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
     }
     let text = crate::io::read_text(path, "evaluation file", crate::limits::RESULT_FILE_BYTES)
         .with_context(|| format!("cannot read evaluation {}", path.display()))?;
-    let w: Written = serde_json::from_str(&text)
-        .with_context(|| format!("{} is not an evaluation written by `blockpuzzle eval`", path.display()))?;
+    let w: Written = serde_json::from_str(&text).with_context(|| {
+        // A suite's result is the likeliest other file: say what --eval takes instead.
+        let suite = serde_json::from_str::<serde_json::Value>(&text).is_ok_and(|v| v.get("suite").is_some());
+        let what = if suite { " (it is a suite's result, `eval --suite`)" } else { "" };
+        format!(
+            "{} is not the result of one task's evaluation{what}; --eval takes the file `blockpuzzle eval \
+             --checkpoint POLICY --env TASK --episodes N` writes",
+            path.display()
+        )
+    })?;
     Ok(crate::zoo::ZooEvaluation {
         env: w.env,
         distribution: if w.challenge { "challenge" } else { "normal" }.into(),

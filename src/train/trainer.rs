@@ -101,10 +101,11 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
             crate::agents::mlp::TRANSFORMER_HEADS
         );
     }
-    super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
+    // Which algorithm takes an expert first: the network matters only to one that does, and an
+    // imitator given one is told to drop it before anything about its network.
     let expert = config.aggrevated.expert.is_some();
-    // Which algorithm takes an expert first: the network matters only to one that does.
     config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
+    super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
     if expert && config.net.net != crate::agents::arch::NetKind::Mlp {
         bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
     }
