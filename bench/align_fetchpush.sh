@@ -29,7 +29,7 @@ OUT="$ROOT/results/align.md"
     echo "Made by \`bash bench/align_fetchpush.sh\` on $(date -u +%Y-%m-%d) ($(lscpu | sed -n 's/^Model name: *//p' | head -1))."
     echo "FetchPush-v4 episodes (gymnasium-robotics 1.4.2 on MuJoCo 3.11.0; 4 of random actions, 4 of a scripted"
     echo "push; 50 steps) replayed from the same state with the same actions in the FetchPush-like BlockPuzzle"
-    echo "environment (src/align/fetchpush.toml: one 5 cm block of 2 kg, the gripper blocked and not raised, no"
+    echo "environment (src/episode/align/fetchpush.toml: one 5 cm block of 2 kg, the gripper blocked and not raised, no"
     echo "collision filter). Largest distance over the episode between the two gripper positions and the two"
     echo "block positions."
     echo

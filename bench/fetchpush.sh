@@ -8,7 +8,7 @@
 #   (c) BlocksTouch-v0, `cargo run --release -- bench ... --threads 1` and `--threads 2`,
 #       on Debian's MuJoCo 2.2.2 and, after `make setup-mujoco3`, on MuJoCo 3.11.0 (the
 #       engine FetchPush-v4 runs on here: the comparison on equal engines)
-#   (d) the FetchPush-like scene (src/align/fetchpush.toml: FetchPush-v4's own scene, one block, the
+#   (d) the FetchPush-like scene (src/episode/align/fetchpush.toml: FetchPush-v4's own scene, one block, the
 #       gripper on the table) in Rust, `blockpuzzle align --bench-steps`, every episode starting
 #       from a state FetchPush-v4 reset to: the like-for-like row (same engine, same scene)
 # and prints a markdown table with the BlocksTouch/FetchPush ratios.

@@ -6,7 +6,7 @@
 # For each torch thread count, blockpuzzle runs first, SB3 right after, so that both see the
 # same machine load:
 #   blockpuzzle bench --train --workers 1 --torch-threads T --steps STEPS --updates UPDATES
-#     (src/bench/ddpg.rs: the training loop's collection path -- plain-Rust actor + noise,
+#     (src/learn/bench/ddpg.rs: the training loop's collection path -- plain-Rust actor + noise,
 #     env step, replay insert, normaliser update -- then DDPG updates at batch 256);
 # on CPUs with AMX or AVX512-BF16 also with --precision bf16 (hidden-layer products in
 # bfloat16, an opt-in departure from the paper's float32); and once more with --workers 2 (two

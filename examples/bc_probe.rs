@@ -20,15 +20,15 @@
 //! --expert BlocksChoose-v0-ddpg-ours)
 
 use anyhow::{bail, ensure, Context, Result};
-use blockpuzzle::agents::arch::{Arch, NetConfig, NetKind};
-use blockpuzzle::agents::ddpg::DeterministicPolicy;
-use blockpuzzle::agents::nets::{append_grads, Adam, Net};
-use blockpuzzle::agents::shared::SharedConfig;
+use blockpuzzle::benchmark::evaluate::Trained;
 use blockpuzzle::env::{ObsMode, ObsSpec, ACTION_DIM, BLOCK_OBS};
-use blockpuzzle::evaluate::Trained;
-use blockpuzzle::outcome::{wilson95, Outcome, Outcomes};
+use blockpuzzle::episode::outcome::{wilson95, Outcome, Outcomes};
+use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
+use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind};
+use blockpuzzle::learn::agents::ddpg::DeterministicPolicy;
+use blockpuzzle::learn::agents::nets::{append_grads, Adam, Net};
+use blockpuzzle::learn::agents::shared::SharedConfig;
 use blockpuzzle::policy::Policy;
-use blockpuzzle::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::BlockEnv;
 use clap::Parser;
 use rand::{Rng, SeedableRng};
@@ -95,10 +95,10 @@ impl Args {
 }
 
 fn main() -> Result<()> {
-    blockpuzzle::blas::ensure_fast_kernels();
+    blockpuzzle::learn::blas::ensure_fast_kernels();
     let args = Args::parse();
     args.check()?;
-    tch::set_num_threads(blockpuzzle::blas::torch_threads(args.torch_threads).map_err(anyhow::Error::msg)?);
+    tch::set_num_threads(blockpuzzle::learn::blas::torch_threads(args.torch_threads).map_err(anyhow::Error::msg)?);
     let started = Instant::now();
 
     // The same task twice: the `objects` observation the data and the students use, and the
@@ -158,15 +158,15 @@ fn make_env(mode: ObsMode) -> Result<BlockEnv> {
 
 /// Loads the expert as `blockpuzzle eval --checkpoint NAME` does, fitted to the flat environment.
 fn load_expert(name: &Path, flat_env: &BlockEnv) -> Result<Trained> {
-    let saved =
-        blockpuzzle::load::load_policy(name).with_context(|| format!("cannot load --expert {}", name.display()))?;
+    let saved = blockpuzzle::benchmark::load::load_policy(name)
+        .with_context(|| format!("cannot load --expert {}", name.display()))?;
     if saved.policy.obs_mode() != ObsMode::Flat {
         bail!("--expert {} is a set network; the probe imitates a flat (MLP) policy", name.display());
     }
     if saved.env_id != ENV_ID {
         eprintln!("note: --expert {} was trained on {}, not {ENV_ID}", name.display(), saved.env_id);
     }
-    blockpuzzle::evaluate::trained_policy(name, saved, flat_env)
+    blockpuzzle::benchmark::evaluate::trained_policy(name, saved, flat_env)
 }
 
 /// The flat view of an `objects` observation laid out as `spec`: the robot features, then the
@@ -346,7 +346,7 @@ fn collect(expert: &Trained, env: &mut BlockEnv, episodes: u64, challenge: bool)
 struct Student {
     name: &'static str,
     net: Net,
-    norm: blockpuzzle::agents::normalizer::Normalizer,
+    norm: blockpuzzle::learn::agents::normalizer::Normalizer,
     opt: Adam,
     /// It reads the flat view (else the `objects` observation as it is).
     flat: bool,

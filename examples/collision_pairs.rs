@@ -1,8 +1,8 @@
 //! Which body pairs touch, and which only have overlapping bounding spheres
 //! (so MuJoCo runs a narrow-phase test on them for nothing), over random
-//! rollouts. The collision filter in src/scene/filter.rs was chosen from this.
+//! rollouts. The collision filter in src/sim/scene/filter.rs was chosen from this.
 //! Usage: cargo run --release --example collision_pairs [ENV_ID]
-use blockpuzzle::mj::ObjType;
+use blockpuzzle::sim::mj::ObjType;
 use rand::{Rng, SeedableRng};
 use std::collections::BTreeMap;
 fn main() {

@@ -2,7 +2,7 @@
 //! (push.xml), driven like FetchPush-v4 with random actions. Compares the
 //! physics engine on the same model as the Python benchmark.
 //! Usage: cargo run --release --example push_xml_rate -- PATH/TO/push.xml
-use blockpuzzle::mj::{Data, Model, ObjType, EQ_WELD};
+use blockpuzzle::sim::mj::{Data, Model, ObjType, EQ_WELD};
 use rand::{Rng, SeedableRng};
 use std::sync::Arc;
 fn main() -> anyhow::Result<()> {
@@ -58,7 +58,7 @@ fn main() -> anyhow::Result<()> {
     }
     println!(
         "MuJoCo {} on {}: mj_step/s {:.0} (loop {:.2}s)",
-        blockpuzzle::mj::version(),
+        blockpuzzle::sim::mj::version(),
         path,
         n as f64 / phys,
         t0.elapsed().as_secs_f64()

@@ -1,11 +1,11 @@
 //! DDPG updates per second on random data (3×256 nets, BlocksTouch sizes).
 //! Usage: cargo run --release --example update_rate [BATCH] [THREADS] [f32|bf16]
-use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
-use blockpuzzle::agents::replay::ReplayBuffer;
-use blockpuzzle::agents::shared::{Precision, SharedConfig};
+use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::learn::agents::replay::ReplayBuffer;
+use blockpuzzle::learn::agents::shared::{Precision, SharedConfig};
 use rand::{Rng, SeedableRng};
 fn main() {
-    blockpuzzle::blas::ensure_fast_kernels();
+    blockpuzzle::learn::blas::ensure_fast_kernels();
     let batch: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(256);
     let threads: i32 = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(2);
     let bf16 = std::env::args().nth(3).is_some_and(|s| s == "bf16");
@@ -29,7 +29,7 @@ fn main() {
     for _ in 0..n {
         agent.update(&buf.sample(batch, &mut rng));
     }
-    let core = blockpuzzle::blas::openblas_core().unwrap_or_else(|| "?".into());
+    let core = blockpuzzle::learn::blas::openblas_core().unwrap_or_else(|| "?".into());
     println!(
         "batch {batch}, {threads} threads, {precision:?}, OpenBLAS {core}: {:.1} updates/s",
         n as f64 / t.elapsed().as_secs_f64()

@@ -10,7 +10,7 @@ fn main() {
     // or report them: a second start costs every other command as much again.
     #[cfg(feature = "train")]
     if blockpuzzle::cli::wants_fast_kernels(&args) {
-        blockpuzzle::blas::ensure_fast_kernels();
+        blockpuzzle::learn::blas::ensure_fast_kernels();
     }
     std::process::exit(blockpuzzle::cli::run(args));
 }

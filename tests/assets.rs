@@ -4,7 +4,7 @@
 //! scenes built from it are the checkout's, a changed or missing file is
 //! refused naming it, and a refusal leaves the registration as it was.
 
-use blockpuzzle::scene::{self, SceneError, FETCH_FILES};
+use blockpuzzle::sim::scene::{self, SceneError, FETCH_FILES};
 use std::path::Path;
 
 fn copy_fetch_files(from: &Path, to: &Path) {

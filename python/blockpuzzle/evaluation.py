@@ -102,7 +102,7 @@ class _Progress:
               f"({time.monotonic() - self.start:.0f} s)", file=sys.stderr, flush=True)
 
 
-#: The outcomes in the order they are tested (src/outcome.rs; docs/suites.md).
+#: The outcomes in the order they are tested (src/episode/outcome.rs; docs/suites.md).
 OUTCOMES = ("success", "failure", "unstable", "no_contact", "off_table", "blue_met_grey", "timeout")
 _RED, _BLUE, _GREEN, _GREY = range(4)
 
@@ -207,7 +207,7 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
                 if mask[i]:
                     z0[i] = z[i]
     envs.close()
-    # The CLI's row (src/evaluate.rs RowResult), field for field.
+    # The CLI's row (src/benchmark/evaluate.rs RowResult), field for field.
     return {
         "task": row["task_id"],
         "task_sha256": row["task_sha256"],

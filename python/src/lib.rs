@@ -5,8 +5,8 @@
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError, Info, ObsMode};
 use blockpuzzle::render::{Renderer, View};
-use blockpuzzle::rules::ContactState;
-use blockpuzzle::scene::SceneError;
+use blockpuzzle::sim::rules::ContactState;
+use blockpuzzle::sim::scene::SceneError;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -326,12 +326,12 @@ impl Env {
 /// RuntimeError with MuJoCo's message (MuJoCo alone would end the process).
 #[pyfunction]
 fn _mujoco_fatal_error_selftest() -> PyResult<()> {
-    use blockpuzzle::mj::{Data, Model};
+    use blockpuzzle::sim::mj::{Data, Model};
     // A stack too small for the first contact (MuJoCo 3 counts it in bytes).
     let xml = r#"<mujoco><option timestep="0.002"/><size memory="4K"/><worldbody>
         <geom type="plane" size="1 1 0.1"/><body pos="0 0 0.5"><joint type="free"/>
         <geom type="sphere" size="0.05" mass="1"/></body></worldbody></mujoco>"#;
-    let err = |e: blockpuzzle::mj::MjError| PyRuntimeError::new_err(e.to_string());
+    let err = |e: blockpuzzle::sim::mj::MjError| PyRuntimeError::new_err(e.to_string());
     let model = Model::from_xml_string(xml, std::path::Path::new("selftest.xml")).map_err(err)?;
     let mut data = Data::new(std::sync::Arc::new(model)).map_err(err)?;
     for _ in 0..1000 {
@@ -341,11 +341,11 @@ fn _mujoco_fatal_error_selftest() -> PyResult<()> {
 }
 
 /// The digest of three seeded episodes that pins the dynamics (tests/golden.json;
-/// `blockpuzzle::rollout::episode_digest`), computed by this build.
+/// `blockpuzzle::episode::rollout::episode_digest`), computed by this build.
 #[pyfunction]
 fn _golden_digest(env: &str, scripted: bool, level: usize, challenge: bool, seed: u64) -> PyResult<String> {
-    blockpuzzle::rollout::episode_digest(env, scripted, level, challenge, seed).map_err(|e| match e {
-        blockpuzzle::rollout::RolloutError::Env(e) => to_py(e),
+    blockpuzzle::episode::rollout::episode_digest(env, scripted, level, challenge, seed).map_err(|e| match e {
+        blockpuzzle::episode::rollout::RolloutError::Env(e) => to_py(e),
         e => PyRuntimeError::new_err(e.to_string()),
     })
 }
@@ -373,7 +373,7 @@ fn env_ids() -> Vec<&'static str> {
 /// The MuJoCo version the environments run on (the `mujoco` package's, 3.11.0).
 #[pyfunction]
 fn mujoco_version() -> String {
-    blockpuzzle::mj::version()
+    blockpuzzle::sim::mj::version()
 }
 
 /// Reads the Fetch assets from `root` (gymnasium-robotics' `envs/assets`)
@@ -381,7 +381,7 @@ fn mujoco_version() -> String {
 /// sha256 first (FileNotFoundError / ValueError naming the file).
 #[pyfunction]
 fn _use_fetch_assets(root: std::path::PathBuf) -> PyResult<()> {
-    blockpuzzle::scene::use_fetch_assets(&root).map_err(|e| match e {
+    blockpuzzle::sim::scene::use_fetch_assets(&root).map_err(|e| match e {
         SceneError::MissingAssets { .. } => PyFileNotFoundError::new_err(e.to_string()),
         _ => PyValueError::new_err(e.to_string()),
     })
@@ -391,7 +391,7 @@ fn _use_fetch_assets(root: std::path::PathBuf) -> PyResult<()> {
 /// import, or `$BLOCKPUZZLE_MODELS_DIR`.
 #[pyfunction]
 fn assets_dir() -> PyResult<std::path::PathBuf> {
-    blockpuzzle::scene::assets().map(|a| a.base).map_err(|e| to_py(EnvError::Scene(e)))
+    blockpuzzle::sim::scene::assets().map(|a| a.base).map_err(|e| to_py(EnvError::Scene(e)))
 }
 
 /// An input file that cannot be read, as Python names it: a path that does
@@ -407,9 +407,9 @@ pub(crate) fn read_err(source: &std::io::Error, msg: String) -> PyErr {
 }
 
 /// A suite that cannot be read ([`read_err`]) or checked (ValueError).
-pub(crate) fn suite_err(e: blockpuzzle::suite::SuiteError) -> PyErr {
+pub(crate) fn suite_err(e: blockpuzzle::benchmark::suite::SuiteError) -> PyErr {
     match &e {
-        blockpuzzle::suite::SuiteError::Read { source, .. } => {
+        blockpuzzle::benchmark::suite::SuiteError::Read { source, .. } => {
             let msg = format!("{e}: {source}");
             read_err(source, msg)
         }
@@ -437,7 +437,7 @@ pub(crate) fn task(id: &str) -> PyResult<blockpuzzle::task::Task> {
 #[pyfunction]
 #[pyo3(signature = (name, episodes=None))]
 fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<Bound<'py, PyDict>> {
-    let mut s = blockpuzzle::suite::load(name).map_err(suite_err)?;
+    let mut s = blockpuzzle::benchmark::suite::load(name).map_err(suite_err)?;
     if let Some(n) = episodes {
         s = s.first_episodes(n).map_err(suite_err)?;
     }
@@ -477,9 +477,9 @@ fn suite<'py>(py: Python<'py>, name: &str, episodes: Option<usize>) -> PyResult<
 #[pyfunction]
 #[pyo3(signature = (family, out, seed=0, count=10, threads=None))]
 fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usize, threads: Option<usize>) -> PyResult<String> {
-    use blockpuzzle::limits::{GENERATE_COUNT, THREADS};
+    use blockpuzzle::support::limits::{GENERATE_COUNT, THREADS};
     GENERATE_COUNT.check_usize(count).map_err(PyValueError::new_err)?;
-    blockpuzzle::limits::seed_range(seed, count as u64).map_err(PyValueError::new_err)?;
+    blockpuzzle::support::limits::seed_range(seed, count as u64).map_err(PyValueError::new_err)?;
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
     let shipped = blockpuzzle::task::family::BUILTIN_FAMILIES.iter().any(|(n, _)| *n == family);
@@ -491,11 +491,11 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     let fam = blockpuzzle::task::family::Family::load(family, None).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let out = std::path::PathBuf::from(out);
     // Every output checked before any candidate is played, as `task generate` does.
-    blockpuzzle::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(format!("{e:#}")))?;
+    blockpuzzle::episode::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(format!("{e:#}")))?;
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
-        let results = blockpuzzle::generate::generate(&fam, seed, count, threads)?;
-        let build = blockpuzzle::provenance::Build::current();
-        blockpuzzle::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| format!("{e:#}"))
+        let results = blockpuzzle::episode::generate::generate(&fam, seed, count, threads)?;
+        let build = blockpuzzle::benchmark::provenance::Build::current();
+        blockpuzzle::episode::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| format!("{e:#}"))
     });
     manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
 }
@@ -512,17 +512,17 @@ fn record_demos(
     episodes: Option<usize>,
     threads: Option<usize>,
 ) -> PyResult<String> {
-    use blockpuzzle::limits::{EVAL_EPISODES, THREADS};
+    use blockpuzzle::support::limits::{EVAL_EPISODES, THREADS};
     if let Some(n) = episodes {
         EVAL_EPISODES.check_usize(n).map_err(PyValueError::new_err)?;
     }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
-    let s = blockpuzzle::suite::load(suite).map_err(suite_err)?;
+    let s = blockpuzzle::benchmark::suite::load(suite).map_err(suite_err)?;
     let out = std::path::PathBuf::from(out);
     let done = py.allow_threads(|| -> anyhow::Result<serde_json::Value> {
-        let harness = blockpuzzle::provenance::Harness::Python;
-        let d = blockpuzzle::demos::record_to(&out, &s, split, episodes, threads, harness)?;
+        let harness = blockpuzzle::benchmark::provenance::Harness::Python;
+        let d = blockpuzzle::benchmark::demos::record_to(&out, &s, split, episodes, threads, harness)?;
         Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps(), "successes": d.successes(), "rows": d.layout.rows}))
     });
     done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(format!("{e:#}")))
@@ -550,10 +550,10 @@ fn cli(py: Python<'_>, args: Vec<String>) -> i32 {
 /// The Wilson score interval at 95% of `successes` out of `n` (the CLI's, for `evaluate`).
 #[pyfunction]
 fn wilson95(successes: usize, n: usize) -> (f64, f64) {
-    blockpuzzle::outcome::wilson95(successes, n)
+    blockpuzzle::episode::outcome::wilson95(successes, n)
 }
 
-/// The CLI's outcome of one episode (src/outcome.rs `Outcome::classify`): the rules' flags, the
+/// The CLI's outcome of one episode (src/episode/outcome.rs `Outcome::classify`): the rules' flags, the
 /// episode's contact matrix over the rule objects (gripper, table, the block slots, then the floor if
 /// it is one), each rule object's colour index (0-3 red, blue, green, grey; -1 for an absent slot),
 /// and each block slot's height at the start and the end.
@@ -568,8 +568,8 @@ fn outcome(
     z_start: Vec<f64>,
     z_end: Vec<f64>,
 ) -> PyResult<&'static str> {
-    use blockpuzzle::outcome::{Outcome, Summary};
-    use blockpuzzle::rules::Colour;
+    use blockpuzzle::episode::outcome::{Outcome, Summary};
+    use blockpuzzle::sim::rules::Colour;
     let n = colours.len();
     if touched.len() != n || touched.iter().any(|r| r.len() != n) || z_start.len() != z_end.len() {
         return Err(PyValueError::new_err(format!(

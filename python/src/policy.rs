@@ -3,17 +3,17 @@
 //! CLI's), and `evaluate_saved` runs the CLI's suite evaluator, so the same
 //! policy on the same engine gives the same numbers from Python and the CLI.
 
-use blockpuzzle::actor::AnyPolicy;
-use blockpuzzle::provenance::{Build, Harness};
+use blockpuzzle::policy::actor::AnyPolicy;
+use blockpuzzle::benchmark::provenance::{Build, Harness};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::Path;
 
-fn zoo_err(e: blockpuzzle::zoo::ZooError) -> PyErr {
+fn zoo_err(e: blockpuzzle::benchmark::zoo::ZooError) -> PyErr {
     match &e {
-        blockpuzzle::zoo::ZooError::Io { source, .. } => crate::read_err(source, e.to_string()),
+        blockpuzzle::benchmark::zoo::ZooError::Io { source, .. } => crate::read_err(source, e.to_string()),
         _ => PyValueError::new_err(e.to_string()),
     }
 }
@@ -29,7 +29,7 @@ pub(crate) struct ZooActor {
 impl ZooActor {
     #[new]
     fn new(path: std::path::PathBuf) -> PyResult<Self> {
-        let (meta, saved) = blockpuzzle::zoo::load(&path).map_err(zoo_err)?;
+        let (meta, saved) = blockpuzzle::benchmark::zoo::load(&path).map_err(zoo_err)?;
         let sha256 = saved.policy_id(&meta.name).sha256.unwrap_or_default();
         Ok(Self { policy: saved.policy, sha256 })
     }
@@ -87,17 +87,17 @@ pub(crate) fn evaluate_saved(
     episodes: Option<usize>,
     on_row: Option<PyObject>,
 ) -> PyResult<String> {
-    let (_, saved) = blockpuzzle::zoo::load(&path).map_err(zoo_err)?;
-    let mut suite = blockpuzzle::suite::load(suite).map_err(crate::suite_err)?;
+    let (_, saved) = blockpuzzle::benchmark::zoo::load(&path).map_err(zoo_err)?;
+    let mut suite = blockpuzzle::benchmark::suite::load(suite).map_err(crate::suite_err)?;
     if let Some(n) = episodes {
         suite = suite.first_episodes(n).map_err(crate::suite_err)?;
     }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let subject = blockpuzzle::evaluate::Subject::Saved(Path::new(name), &saved);
+    let subject = blockpuzzle::benchmark::evaluate::Subject::Saved(Path::new(name), &saved);
     // Ctrl-C (a KeyboardInterrupt) or the callback's own error stops the evaluation after the row
     // and is raised as it is.
     let mut failed: Option<PyErr> = None;
-    let mut report = |split: &str, row: &blockpuzzle::evaluate::RowResult, done: usize, total: usize| {
+    let mut report = |split: &str, row: &blockpuzzle::benchmark::evaluate::RowResult, done: usize, total: usize| {
         Python::with_gil(|py| {
             let called = py.check_signals().and_then(|()| {
                 let Some(f) = on_row.as_ref() else { return Ok(()) };
@@ -112,7 +112,7 @@ pub(crate) fn evaluate_saved(
         })
     };
     let result = py.allow_threads(|| {
-        blockpuzzle::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python, &mut report)
+        blockpuzzle::benchmark::evaluate::evaluate_suite(subject, &suite, threads, Harness::Python, &mut report)
     });
     if let Some(e) = failed {
         return Err(e);

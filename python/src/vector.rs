@@ -5,7 +5,7 @@
 
 use crate::to_py;
 use blockpuzzle::env::{EnvConfig, Info, ObsMode, ResetOptions, VecError, VectorEnv};
-use blockpuzzle::rules::ContactState;
+use blockpuzzle::sim::rules::ContactState;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray1, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -131,8 +131,8 @@ impl VecEnv {
     #[new]
     #[pyo3(signature = (task, num_envs, threads = 1, obs_mode = "flat"))]
     fn new(task: &str, num_envs: usize, threads: usize, obs_mode: &str) -> PyResult<Self> {
-        let threads_bound = blockpuzzle::limits::Bound { name: "threads", ..blockpuzzle::limits::THREADS };
-        let bounds = [(blockpuzzle::limits::NUM_ENVS, num_envs), (threads_bound, threads)];
+        let threads_bound = blockpuzzle::support::limits::Bound { name: "threads", ..blockpuzzle::support::limits::THREADS };
+        let bounds = [(blockpuzzle::support::limits::NUM_ENVS, num_envs), (threads_bound, threads)];
         for (bound, v) in bounds {
             bound.check_usize(v).map_err(PyValueError::new_err)?;
         }

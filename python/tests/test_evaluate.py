@@ -85,7 +85,7 @@ def test_built_in_suites_and_bad_suites():
 
 
 def test_obs_hash_is_pinned_to_the_rust_bits():
-    # The same bits src/policy.rs pins for ObsHashPolicy.
+    # The same bits src/policy/mod.rs pins for ObsHashPolicy.
     a = blockpuzzle.policies.obs_hash(np.array([[0.5, 1.0, -2.0], [0.0, 0.0, 0.0]], np.float32))
     assert [int(x) for x in a.view(np.uint32).ravel()] == [
         0x3E9CC9BC, 0xBD467480, 0x3EB28CC8, 0xBF50D8E4, 0xBF2D9F90, 0x3F5AFB30, 0x3F49A61C, 0x3ECBABCC]

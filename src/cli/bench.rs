@@ -10,10 +10,10 @@ pub(super) struct BenchArgs {
     #[arg(long, default_value = "BlocksTouch-v0")]
     env: String,
     /// Steps per thread.
-    #[arg(long, default_value_t = 20_000, value_parser = crate::limits::BENCH_STEPS.parser::<usize>())]
+    #[arg(long, default_value_t = 20_000, value_parser = crate::support::limits::BENCH_STEPS.parser::<usize>())]
     steps: usize,
     /// Threads, each stepping its own environment.
-    #[arg(long, default_value_t = 1, value_parser = crate::limits::THREADS.parser::<usize>())]
+    #[arg(long, default_value_t = 1, value_parser = crate::support::limits::THREADS.parser::<usize>())]
     threads: usize,
     /// Print one JSON line instead of text.
     #[arg(long)]
@@ -27,32 +27,32 @@ pub(super) struct BenchArgs {
     #[arg(long = "train", alias = "ddpg", conflicts_with_all = ["threads", "no_collision_filter"])]
     pub(super) train: bool,
     /// With --train: collection workers, each stepping its own environment.
-    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::limits::WORKERS.parser::<usize>())]
+    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::support::limits::WORKERS.parser::<usize>())]
     workers: usize,
     /// With --train: gradient updates to time.
-    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::limits::BENCH_UPDATES.parser::<usize>())]
+    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::support::limits::BENCH_UPDATES.parser::<usize>())]
     updates: usize,
     /// With --train: transitions per update batch.
-    #[arg(long, default_value_t = 256, requires = "train", value_parser = crate::limits::BATCH_SIZE.parser::<usize>())]
+    #[arg(long, default_value_t = 256, requires = "train", value_parser = crate::support::limits::BATCH_SIZE.parser::<usize>())]
     batch_size: usize,
     /// With --train: threads libtorch may use for the updates (at most the number of cores).
-    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::limits::COUNT.parser::<usize>())]
+    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::support::limits::COUNT.parser::<usize>())]
     torch_threads: usize,
     /// With --train: seed of networks, layouts and noise.
-    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// With --train: arithmetic of the updates' hidden-layer products.
     #[arg(long, value_enum, default_value = "f32", requires = "train")]
-    precision: crate::agents::shared::Precision,
+    precision: crate::learn::agents::shared::Precision,
     /// With --train: the algorithm whose collection and updates to time (any of `train --algo`).
-    #[arg(long, default_value = "ddpg", requires = "train", value_parser = crate::agents::registry::Algo::parser())]
-    algo: crate::agents::registry::Algo,
+    #[arg(long, default_value = "ddpg", requires = "train", value_parser = crate::learn::agents::registry::Algo::parser())]
+    algo: crate::learn::agents::registry::Algo,
     /// With --train: the networks, `mlp` on the flat observation or `set` on the `objects` one (as `train --net`).
     #[arg(long, value_enum, default_value = "mlp", requires = "train")]
-    net: crate::agents::arch::NetKind,
+    net: crate::learn::agents::arch::NetKind,
     /// With --train --net set: `mean-max` or `attention` (as `train --set-pooling`).
     #[arg(long, value_enum, default_value = "mean-max", requires = "train")]
-    set_pooling: crate::agents::arch::Pooling,
+    set_pooling: crate::learn::agents::arch::Pooling,
     /// With --train --net set: layer-normalise the pooled features (as `train --set-norm`).
     #[arg(long, requires = "train")]
     set_norm: bool,
@@ -63,10 +63,10 @@ pub(super) struct BenchArgs {
     #[arg(long, requires = "train")]
     set_type_norm: bool,
     /// With --train --net set: pre-LayerNorm transformer blocks (as `train --set-transformer`).
-    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SET_TRANSFORMER.parser::<usize>())]
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::support::limits::SET_TRANSFORMER.parser::<usize>())]
     set_transformer: usize,
     /// With --train --net set: the width of the per-row layers (as `train --set-width`).
-    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::limits::SET_WIDTH.parser::<usize>())]
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::support::limits::SET_WIDTH.parser::<usize>())]
     set_width: usize,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]
@@ -75,30 +75,36 @@ pub(super) struct BenchArgs {
 
 /// `align --bench-steps`: env steps/s of the FetchPush-like scene from the reference's first state.
 pub(super) fn align_bench(reference: &Path, steps: usize, threads: usize) -> Result<()> {
-    let r = crate::align::Reference::load(reference)?;
+    let r = crate::episode::align::Reference::load(reference)?;
     let Some(ep) = r.episodes.first() else { bail!("{} holds no episodes", reference.display()) };
     let start = |env: &mut crate::env::BlockEnv, _: Option<u64>| {
-        let (q, v) =
-            crate::align::start_state(env, ep).map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
+        let (q, v) = crate::episode::align::start_state(env, ep)
+            .map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
         env.set_state(&q, &v)
     };
-    let report = crate::bench::run_with("FetchPush-like", &crate::align::fetchpush_like, &start, steps, threads)?;
+    let report = crate::learn::bench::run_with(
+        "FetchPush-like",
+        &crate::episode::align::fetchpush_like,
+        &start,
+        steps,
+        threads,
+    )?;
     println!("{}", serde_json::to_string(&report)?);
     Ok(())
 }
 
 /// `blockpuzzle align`: the replay's per-episode deviations, and their plot.
 pub(super) fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
-    let r = crate::align::Reference::load(reference)?;
+    let r = crate::episode::align::Reference::load(reference)?;
     let title = format!(
         "FetchPush-v4 (gymnasium-robotics {}, MuJoCo {}) against FetchPush-like on MuJoCo {}",
         r.gymnasium_robotics,
         r.mujoco,
-        crate::mj::version()
+        crate::sim::mj::version()
     );
     println!("{title}");
     println!("| episode | steps | gripper max (m) | block max (m) | worst step |\n|---|---|---|---|---|");
-    let all = crate::align::replay_all(&r)?;
+    let all = crate::episode::align::replay_all(&r)?;
     for d in &all {
         println!(
             "| {} {} | {} | {:.2e} | {:.2e} | {} |",
@@ -108,7 +114,7 @@ pub(super) fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
     if let Some(png) = plot {
         let episodes: Vec<(String, Vec<[f64; 2]>)> =
             all.iter().map(|d| (format!("{} {}", d.kind, d.seed), d.per_step.clone())).collect();
-        crate::train::plot::deviations(png, &title, &episodes, crate::align::TOLERANCE)?;
+        crate::learn::train::plot::deviations(png, &title, &episodes, crate::episode::align::TOLERANCE)?;
         println!("wrote {}", png.display());
     }
     Ok(())
@@ -116,7 +122,7 @@ pub(super) fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
 
 /// `bench --train`: collection env steps/s and update rate.
 pub(super) fn train(a: BenchArgs) -> Result<()> {
-    let r = crate::bench::train::run(&crate::bench::train::TrainBenchConfig {
+    let r = crate::learn::bench::train::run(&crate::learn::bench::train::TrainBenchConfig {
         env: a.env,
         workers: a.workers,
         steps: a.steps,
@@ -126,7 +132,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
         seed: a.seed,
         precision: a.precision,
         algo: a.algo,
-        net: crate::agents::arch::NetConfig {
+        net: crate::learn::agents::arch::NetConfig {
             net: a.net,
             set_pooling: a.set_pooling,
             set_norm: a.set_norm,
@@ -151,7 +157,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
 
 /// `blockpuzzle bench`: env steps/s and mj_step/s.
 pub(super) fn run(a: &BenchArgs) -> Result<()> {
-    let r = crate::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
+    let r = crate::learn::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
     } else {

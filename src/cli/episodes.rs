@@ -2,9 +2,9 @@
 //! and `render` (a dump's episode, or a policy's), with the camera and movie flags they share.
 
 use crate::env::{registry, BlockEnv};
-use crate::outcome::{Outcome, Outcomes};
+use crate::episode::outcome::{Outcome, Outcomes};
+use crate::episode::rollout::{run_episode, DumpWriter};
 use crate::policy::{Policy, RandomPolicy};
-use crate::rollout::{run_episode, DumpWriter};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
@@ -14,17 +14,17 @@ pub(super) struct DemosArgs {
     /// Built-in suite name or suite file (.toml) whose rows are played. The help lists the built-in names.
     #[arg(long, help = format!(
         "Built-in suite name ({}) or suite file (.toml) whose rows are played",
-        crate::suite::builtin_names()
+        crate::benchmark::suite::builtin_names()
     ))]
     suite: String,
     /// The split whose rows are played (train, test, ...).
     #[arg(long, default_value = "train")]
     split: String,
     /// Episodes per row, from the row's seed on (default: the row's own count).
-    #[arg(long, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::EVAL_EPISODES.parser::<usize>())]
     episodes: Option<usize>,
     /// Threads, each with its own environment (default: the machine's cores); the same episodes whatever the count.
-    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
     /// Output file (safetensors); written atomically.
     #[arg(long)]
@@ -33,9 +33,16 @@ pub(super) struct DemosArgs {
 
 /// `blockpuzzle demos`: the solver's episodes on a suite split, for imitation and offline RL.
 pub(super) fn demos(a: DemosArgs) -> Result<()> {
-    let suite = crate::suite::load(&a.suite)?;
+    let suite = crate::benchmark::suite::load(&a.suite)?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let d = crate::demos::record_to(&a.out, &suite, &a.split, a.episodes, threads, crate::provenance::Harness::Cli)?;
+    let d = crate::benchmark::demos::record_to(
+        &a.out,
+        &suite,
+        &a.split,
+        a.episodes,
+        threads,
+        crate::benchmark::provenance::Harness::Cli,
+    )?;
     println!(
         "{} episodes ({} steps, {} rows of {} entities) of suite {} split {}, the solver's success {:.3} -> {}",
         d.episodes.len(),
@@ -60,13 +67,13 @@ pub(super) struct RolloutArgs {
     #[arg(long, default_value = "scripted")]
     policy: String,
     /// Number of episodes.
-    #[arg(long, default_value_t = 10, value_parser = crate::limits::ROLLOUT_EPISODES.parser::<usize>())]
+    #[arg(long, default_value_t = 10, value_parser = crate::support::limits::ROLLOUT_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Curriculum level (default: the maximum, i.e. the evaluation distribution).
-    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = crate::limits::COUNT.parser::<usize>())]
+    #[arg(long, conflicts_with_all = ["challenge", "distribution"], value_parser = crate::support::limits::COUNT.parser::<usize>())]
     level: Option<usize>,
     /// Use the challenge distribution (the same as --distribution challenge).
     #[arg(long, conflicts_with = "distribution")]
@@ -95,10 +102,10 @@ pub(super) struct RolloutArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub(super) struct ViewArgs {
     /// Frame width in pixels.
-    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
+    #[arg(long, default_value_t = 480, value_parser = crate::support::limits::FRAME_PIXELS.parser::<usize>())]
     width: usize,
     /// Frame height in pixels.
-    #[arg(long, default_value_t = 480, value_parser = crate::limits::FRAME_PIXELS.parser::<usize>())]
+    #[arg(long, default_value_t = 480, value_parser = crate::support::limits::FRAME_PIXELS.parser::<usize>())]
     height: usize,
     /// Camera distance from the point it looks at (m).
     #[arg(long, default_value_t = 2.5)]
@@ -115,10 +122,10 @@ pub(super) struct ViewArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub(super) struct MovieArgs {
     /// Frames per second of a GIF.
-    #[arg(long, default_value_t = 10, value_parser = crate::limits::FPS.parser::<u32>())]
+    #[arg(long, default_value_t = 10, value_parser = crate::support::limits::FPS.parser::<u32>())]
     fps: u32,
     /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
-    #[arg(long, value_parser = crate::limits::FILMSTRIP.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::FILMSTRIP.parser::<usize>())]
     filmstrip: Option<usize>,
 }
 
@@ -145,7 +152,7 @@ pub(super) struct RenderArgs {
     #[arg(long)]
     traj: Option<PathBuf>,
     /// Which episode of the dump (0-based).
-    #[arg(long, default_value_t = 0, requires = "traj", value_parser = crate::limits::COUNT.parser::<usize>())]
+    #[arg(long, default_value_t = 0, requires = "traj", value_parser = crate::support::limits::COUNT.parser::<usize>())]
     episode: usize,
     /// Or play one episode of a trained policy (file, run directory or zoo name) and render it.
     #[arg(long)]
@@ -154,7 +161,7 @@ pub(super) struct RenderArgs {
     #[arg(long, requires = "policy")]
     env: Option<String>,
     /// With --policy: the episode's seed.
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, requires = "policy", value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = crate::benchmark::evaluate::TEST_SEED, requires = "policy", value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// With --policy: the challenge distribution.
     #[arg(long, requires = "policy")]
@@ -181,9 +188,9 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     }
     // A trained policy is loaded first: the environment shows its layout (its observation mode and,
     // for one of several tasks, its training tasks' block slots).
-    let saved = match (a.policy.as_str(), crate::evaluate::Baseline::named(&a.policy)) {
+    let saved = match (a.policy.as_str(), crate::benchmark::evaluate::Baseline::named(&a.policy)) {
         ("random", _) | (_, Some(_)) => None,
-        (path, None) => Some(crate::load::load_policy(Path::new(path))?),
+        (path, None) => Some(crate::benchmark::load::load_policy(Path::new(path))?),
     };
     let mut config = registry::config(&a.env)?;
     config.obs_mode = a.obs_mode.unwrap_or_default();
@@ -202,14 +209,15 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     env.set_distribution(a.distribution.as_deref().or(a.challenge.then_some("challenge")))?;
     let level = a.level.unwrap_or(env.max_level());
     env.set_level(level)?;
-    crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
+    crate::support::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     let mut writer = DumpWriter::create(&a.out)?;
-    let mut policy: Box<dyn Policy> = match (a.policy.as_str(), crate::evaluate::Baseline::named(&a.policy)) {
+    let mut policy: Box<dyn Policy> = match (a.policy.as_str(), crate::benchmark::evaluate::Baseline::named(&a.policy))
+    {
         ("random", _) => Box::new(RandomPolicy::new(a.seed)),
         (_, Some(baseline)) => baseline.policy(&env),
         (path, None) => {
             let saved = saved.expect("a trained policy was loaded above");
-            Box::new(crate::evaluate::trained_policy(Path::new(path), saved, &env)?)
+            Box::new(crate::benchmark::evaluate::trained_policy(Path::new(path), saved, &env)?)
         }
     };
     let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
@@ -260,14 +268,14 @@ pub(super) fn render(a: RenderArgs) -> Result<()> {
             (frames, fps, format!("episode {}", a.episode))
         }
         (None, Some(path)) => {
-            let saved = crate::load::load_policy(path)?;
+            let saved = crate::benchmark::load::load_policy(path)?;
             let task = policy_task(a.env.as_deref(), &saved)?;
             let (obs_mode, slots) = (saved.policy.obs_mode(), saved.slots()?);
             let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) })?;
             env.set_distribution(a.challenge.then_some("challenge"))?;
             let level = env.max_level();
             env.set_level(level)?;
-            let mut policy = crate::evaluate::trained_policy(path, saved, &env)?;
+            let mut policy = crate::benchmark::evaluate::trained_policy(path, saved, &env)?;
             let ep = run_episode(&mut env, &mut policy, a.seed)?;
             let (frames, seconds) = crate::render::replay::episode_frames(&ep, &view)?;
             kind.write(&a.out, &frames)?;
@@ -293,7 +301,10 @@ pub(super) fn render(a: RenderArgs) -> Result<()> {
 
 /// The task to run a policy on: the one named, else the one it was trained
 /// on (its recorded copy if the file moved or changed).
-pub(super) fn policy_task(env: Option<&str>, saved: &crate::saved::SavedPolicy) -> Result<crate::task::Task> {
+pub(super) fn policy_task(
+    env: Option<&str>,
+    saved: &crate::benchmark::saved::SavedPolicy,
+) -> Result<crate::task::Task> {
     Ok(match (env, &saved.task) {
         (Some(env), _) => registry::task(env)?,
         (None, Some(source)) => registry::recorded(source)?,

@@ -16,7 +16,7 @@ pub(super) struct EvalArgs {
     /// (each task's scripted controller) or `obs-hash` (pseudo-random actions from a hash of the
     /// observation, the same as Python's `blockpuzzle.policies.obs_hash`).
     #[arg(long, value_enum, requires = "suite", conflicts_with = "checkpoint")]
-    baseline: Option<crate::evaluate::Baseline>,
+    baseline: Option<crate::benchmark::evaluate::Baseline>,
     /// Evaluate on an evaluation suite instead: a built-in name or a suite file; writes
     /// eval-POLICY-suite-NAME.json and .md (docs/suites.md). The help lists the built-in names.
     #[arg(
@@ -25,13 +25,13 @@ pub(super) struct EvalArgs {
         help = format!(
             "Evaluate on an evaluation suite instead: a built-in name ({}) or a suite file; writes \
              eval-POLICY-suite-NAME.json and .md (docs/suites.md)",
-            crate::suite::builtin_names()
+            crate::benchmark::suite::builtin_names()
         )
     )]
     suite: Option<String>,
     /// With --suite: play at most N episodes of each row, a quick look. The result records it and
     /// is not the suite's score (`results` refuses it).
-    #[arg(long, requires = "suite", value_name = "N", value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    #[arg(long, requires = "suite", value_name = "N", value_parser = crate::support::limits::EVAL_EPISODES.parser::<usize>())]
     episodes_per_row: Option<usize>,
     /// Environment id or task file (default: the one the policy was trained on).
     #[arg(long)]
@@ -40,20 +40,20 @@ pub(super) struct EvalArgs {
     #[arg(long)]
     challenge: bool,
     /// Curriculum level (default: the maximum).
-    #[arg(long, value_parser = crate::limits::COUNT.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::COUNT.parser::<usize>())]
     level: Option<usize>,
     /// Episodes.
-    #[arg(long, default_value_t = 100, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    #[arg(long, default_value_t = 100, value_parser = crate::support::limits::EVAL_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = crate::benchmark::evaluate::TEST_SEED, value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Where to write the JSON result (default: the run directory for a policy of a run,
     /// else the current folder, as eval-POLICY-TASK-DISTRIBUTION.json).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
-    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
 }
 
@@ -62,7 +62,7 @@ pub(super) struct EvalArgs {
 pub(super) struct TableArgs {
     /// The task: the paper's BlocksChoose-v0, or another id or task file with a challenge
     /// distribution (e.g. BlocksChooseShuffled-v0, to test generalisation).
-    #[arg(long, default_value = crate::table::ENV)]
+    #[arg(long, default_value = crate::learn::table::ENV)]
     env: String,
     /// The 2-block DDPG expert (run directory, policy file or zoo name); evaluated with grey blocks removed from its view.
     #[arg(long)]
@@ -83,10 +83,10 @@ pub(super) struct TableArgs {
     #[arg(long)]
     zoo: bool,
     /// Episodes per cell.
-    #[arg(long, default_value_t = 1000, value_parser = crate::limits::EVAL_EPISODES.parser::<usize>())]
+    #[arg(long, default_value_t = 1000, value_parser = crate::support::limits::EVAL_EPISODES.parser::<usize>())]
     episodes: usize,
     /// Seed of the first episode (episode k uses seed + k).
-    #[arg(long, default_value_t = crate::evaluate::TEST_SEED, value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = crate::benchmark::evaluate::TEST_SEED, value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Write the Markdown table here too (atomically).
     #[arg(long)]
@@ -96,40 +96,40 @@ pub(super) struct TableArgs {
     #[arg(long)]
     allow_missing: bool,
     /// Threads playing episodes (default: all cores); the result does not depend on it.
-    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
 }
 
 #[cfg(feature = "train")]
 /// `blockpuzzle table`.
 pub(super) fn table(a: TableArgs) -> Result<()> {
-    crate::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
+    crate::support::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     if let Some(out) = &a.out {
-        crate::io::check_output(out)?;
+        crate::support::io::check_output(out)?;
     }
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let task = registry::task(&a.env)?;
     if task.distribution("challenge").is_none() {
         bail!("the table's second column is the challenge distribution, which {} does not define", a.env);
     }
-    let given = crate::table::Policies {
+    let given = crate::learn::table::Policies {
         expert: a.expert,
         ddpg: a.ddpg,
         ddpg_ours: a.ddpg_ours,
         pggd: a.pggd,
         pggd_alone: a.pggd_alone,
     };
-    let rows = crate::table::rows(if a.zoo { given.or(crate::table::Policies::zoo()) } else { given });
+    let rows = crate::learn::table::rows(if a.zoo { given.or(crate::learn::table::Policies::zoo()) } else { given });
     let mut done = Vec::new();
     for row in rows {
         eprintln!("evaluating {} ...", row.method);
-        let outcome = crate::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
+        let outcome = crate::learn::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
         done.push((row, outcome));
     }
     let missing: Vec<String> = done
         .iter()
         .filter_map(|(row, r)| match r {
-            crate::table::RowResult::Missing(why) => Some(format!(
+            crate::learn::table::RowResult::Missing(why) => Some(format!(
                 "{} ({}): {why}",
                 row.method,
                 row.policy.as_deref().map_or(String::new(), |p| p.display().to_string())
@@ -147,10 +147,10 @@ pub(super) fn table(a: TableArgs) -> Result<()> {
             missing.len()
         );
     }
-    let md = crate::table::markdown(&done, task.id(), a.episodes, a.seed);
+    let md = crate::learn::table::markdown(&done, task.id(), a.episodes, a.seed);
     print!("{md}");
     if let Some(out) = &a.out {
-        crate::io::write_file(out, md.as_bytes())?;
+        crate::support::io::write_file(out, md.as_bytes())?;
     }
     Ok(())
 }
@@ -160,7 +160,7 @@ pub(super) fn table(a: TableArgs) -> Result<()> {
 /// one), else in the current folder; POLICY is the file's stem or zoo name
 /// (`best_policy` for a run directory, whose best policy is evaluated).
 fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
-    use crate::saved::{BEST_POLICY_FILE, CONFIG_FILE, POLICY_FILE};
+    use crate::benchmark::saved::{BEST_POLICY_FILE, CONFIG_FILE, POLICY_FILE};
     let is_run = |d: &Path| d.join(CONFIG_FILE).is_file();
     let stem = |file: &str| file.trim_end_matches(".json").to_owned();
     let (run, policy) = if checkpoint.is_dir() {
@@ -178,9 +178,9 @@ fn eval_out(checkpoint: &Path, label: &str) -> PathBuf {
 
 /// `eval --suite`: every row of the suite, the JSON result and its Markdown beside it.
 fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
-    use crate::evaluate::Subject;
-    use crate::provenance::Harness;
-    let mut suite = crate::suite::load(name)?;
+    use crate::benchmark::evaluate::Subject;
+    use crate::benchmark::provenance::Harness;
+    let mut suite = crate::benchmark::suite::load(name)?;
     if let Some(n) = a.episodes_per_row {
         suite = suite.first_episodes(n)?;
     }
@@ -199,26 +199,27 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
         );
     }
     // Checked before any episode is played; the Markdown goes beside a file, a device or pipe gets the JSON alone.
-    let md = match crate::io::check_output(&out)? {
-        crate::io::Target::File { .. } => Some(out.with_extension("md")),
-        crate::io::Target::Stream => None,
+    let md = match crate::support::io::check_output(&out)? {
+        crate::support::io::Target::File { .. } => Some(out.with_extension("md")),
+        crate::support::io::Target::Stream => None,
     };
     if let Some(md) = &md {
-        crate::io::check_output(md)?;
+        crate::support::io::check_output(md)?;
     }
     let saved;
     let subject = match (&a.checkpoint, a.baseline) {
         (_, Some(b)) => Subject::Baseline(b),
         (checkpoint, None) => {
             let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
-            saved = crate::load::load_policy(checkpoint)?;
+            saved = crate::benchmark::load::load_policy(checkpoint)?;
             Subject::Saved(checkpoint, &saved)
         }
     };
-    let r = crate::evaluate::evaluate_suite(subject, &suite, threads, Harness::Cli, &mut |_, _, _, _| Ok(()))?;
-    crate::io::write_json(&out, &r)?;
+    let r =
+        crate::benchmark::evaluate::evaluate_suite(subject, &suite, threads, Harness::Cli, &mut |_, _, _, _| Ok(()))?;
+    crate::support::io::write_json(&out, &r)?;
     if let Some(md) = &md {
-        crate::io::write_file(md, r.to_markdown().as_bytes())?;
+        crate::support::io::write_file(md, r.to_markdown().as_bytes())?;
     }
     for split in &r.splits {
         for row in &split.rows {
@@ -257,16 +258,16 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     let Some(checkpoint) = &a.checkpoint else {
         bail!("give --checkpoint POLICY (a policy file, run directory or zoo name; --baseline needs --suite)")
     };
-    let saved = crate::load::load_policy(checkpoint)?;
+    let saved = crate::benchmark::load::load_policy(checkpoint)?;
     let task = policy_task(a.env.as_deref(), &saved)?;
     let id = task.id().to_owned();
     let policy_epoch = saved.epoch;
-    let provenance = crate::provenance::Provenance::new(
-        crate::provenance::Harness::Cli,
+    let provenance = crate::benchmark::provenance::Provenance::new(
+        crate::benchmark::provenance::Harness::Cli,
         saved.policy_id(&checkpoint.display().to_string()),
         None,
     );
-    let spec = crate::evaluate::EvalSpec {
+    let spec = crate::benchmark::evaluate::EvalSpec {
         task: &task,
         distribution: None,
         challenge: a.challenge,
@@ -281,15 +282,15 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         _ => "normal".to_owned(),
     };
     let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
-    crate::io::check_output(&out)?;
-    let r = crate::evaluate::evaluate(checkpoint, saved, &spec)?;
+    crate::support::io::check_output(&out)?;
+    let r = crate::benchmark::evaluate::evaluate(checkpoint, saved, &spec)?;
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
         "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": checkpoint, "policy_epoch": policy_epoch,
         "task_sha256": task.source.hash, "provenance": provenance,
     });
-    crate::io::write_json(&out, &result)?;
+    crate::support::io::write_json(&out, &result)?;
     println!(
         "{id}{}{}: success {:.3} (95% CI {:.3}-{:.3}, {}/{}); not successful: {} -> {}",
         if a.challenge { " challenge" } else { "" },

@@ -77,7 +77,7 @@ pub fn name_recipe(e: clap::Error, origins: &[Origin]) -> anyhow::Error {
 
 /// The flags of one recipe file (keys in sorted order; each flag once), and where each came from.
 fn flags(path: &Path, train: &clap::Command) -> Result<(Vec<OsString>, Vec<Origin>)> {
-    let text = crate::io::read_text(path, "recipe", crate::limits::TEXT_FILE_BYTES)
+    let text = crate::support::io::read_text(path, "recipe", crate::support::limits::TEXT_FILE_BYTES)
         .with_context(|| format!("cannot read the recipe {}", path.display()))?;
     let table: toml::Table = toml::from_str(&text).with_context(|| format!("{} is not TOML", path.display()))?;
     let known: Vec<&str> = train.get_arguments().filter_map(|a| a.get_long()).filter(|l| *l != "config").collect();

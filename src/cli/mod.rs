@@ -55,10 +55,10 @@ pub fn training_command(args: &[std::ffi::OsString]) -> Option<&'static str> {
 }
 
 /// Whether the command line `args` (from the program name on) runs one of
-/// [`crate::blas::KERNEL_COMMANDS`], whose start [`crate::blas::ensure_fast_kernels`] is for.
+/// [`crate::learn::blas::KERNEL_COMMANDS`], whose start [`crate::learn::blas::ensure_fast_kernels`] is for.
 #[cfg(feature = "train")]
 pub fn wants_fast_kernels(args: &[std::ffi::OsString]) -> bool {
-    command_words(args).first().is_some_and(|w| crate::blas::KERNEL_COMMANDS.contains(w))
+    command_words(args).first().is_some_and(|w| crate::learn::blas::KERNEL_COMMANDS.contains(w))
 }
 
 /// BlockPuzzle: coloured-block puzzles for the Fetch robot in MuJoCo.
@@ -107,7 +107,7 @@ enum Command {
         #[arg(required = true)]
         run_dirs: Vec<PathBuf>,
         /// Success to report the first epoch of (0 to 1).
-        #[arg(long, default_value_t = 0.95, value_parser = crate::limits::parse_fraction)]
+        #[arg(long, default_value_t = 0.95, value_parser = crate::support::limits::parse_fraction)]
         target: f64,
     },
     /// Task files: `task check FILE` validates a task and samples its layouts; `task generate
@@ -143,10 +143,10 @@ enum Command {
         /// Instead, measure env steps/s of the FetchPush-like scene with random
         /// actions, every episode starting from the reference's first state
         /// (the same scene as FetchPush-v4; its JSON as `bench --json` prints it).
-        #[arg(long, value_parser = crate::limits::BENCH_STEPS.parser::<usize>())]
+        #[arg(long, value_parser = crate::support::limits::BENCH_STEPS.parser::<usize>())]
         bench_steps: Option<usize>,
         /// Threads of --bench-steps, each stepping its own environment.
-        #[arg(long, default_value_t = 1, value_parser = crate::limits::THREADS.parser::<usize>())]
+        #[arg(long, default_value_t = 1, value_parser = crate::support::limits::THREADS.parser::<usize>())]
         threads: usize,
     },
 }
@@ -181,7 +181,7 @@ pub fn error_text(e: &anyhow::Error) -> String {
         }
         text.push_str(&part);
     }
-    crate::limits::cut_long_lines(&text)
+    crate::support::limits::cut_long_lines(&text)
 }
 
 /// The command line `args` (from the program name on), `train --config`
@@ -278,7 +278,7 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             // Its includes are relative to the assets folder: save it there to load it elsewhere.
-            print!("{}", crate::scene::mjcf(&c.scene_spec())?.0);
+            print!("{}", crate::sim::scene::mjcf(&c.scene_spec())?.0);
             Ok(())
         }
         #[cfg(feature = "train")]
@@ -306,20 +306,20 @@ fn envs() -> Result<()> {
 /// `blockpuzzle info`: the engine and numeric libraries of this process.
 fn info() -> Result<()> {
     println!("blockpuzzle {}", env!("CARGO_PKG_VERSION"));
-    if let Some(commit) = crate::provenance::commit() {
+    if let Some(commit) = crate::benchmark::provenance::commit() {
         println!("commit {commit}");
     }
-    println!("MuJoCo {} (the engine every number this build writes is made on)", crate::mj::version());
+    println!("MuJoCo {} (the engine every number this build writes is made on)", crate::sim::mj::version());
     // What libtorch's updates run with (the training build's concern).
     #[cfg(feature = "train")]
     {
         let var = |k: &str| std::env::var(k).unwrap_or_else(|_| "(unset)".into());
-        println!("OpenBLAS kernels {}", crate::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
+        println!("OpenBLAS kernels {}", crate::learn::blas::openblas_core().unwrap_or_else(|| "(not loaded)".into()));
         println!("OPENBLAS_CORETYPE={}", var("OPENBLAS_CORETYPE"));
         println!("OMP_WAIT_POLICY={}", var("OMP_WAIT_POLICY"));
     }
     println!("cores {}", std::thread::available_parallelism().map_or(1, |n| n.get()));
     #[cfg(feature = "train")]
-    println!("bf16 updates {}", if crate::agents::shared::Precision::bf16_supported() { "yes" } else { "no" });
+    println!("bf16 updates {}", if crate::learn::agents::shared::Precision::bf16_supported() { "yes" } else { "no" });
     Ok(())
 }

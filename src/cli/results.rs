@@ -32,22 +32,23 @@ pub(super) enum ResultsCommand {
 pub(super) fn run(c: ResultsCommand) -> Result<()> {
     match c {
         ResultsCommand::Compare { files } => {
-            let files = files.iter().map(|f| crate::results::read(f)).collect::<Result<Vec<_>>>()?;
-            print!("{}", crate::results::compare(&files)?);
+            let files = files.iter().map(|f| crate::benchmark::results::read(f)).collect::<Result<Vec<_>>>()?;
+            print!("{}", crate::benchmark::results::compare(&files)?);
         }
         ResultsCommand::Leaderboard { paths, out, check } => {
-            let md = crate::results::leaderboard(&crate::results::read_all(&paths)?)?;
+            let md = crate::benchmark::results::leaderboard(&crate::benchmark::results::read_all(&paths)?)?;
             match (out, check) {
                 (Some(out), true) => {
-                    let now = crate::io::read_text(&out, "leaderboard", crate::limits::RESULT_FILE_BYTES)
-                        .with_context(|| format!("cannot read {}", out.display()))?;
+                    let now =
+                        crate::support::io::read_text(&out, "leaderboard", crate::support::limits::RESULT_FILE_BYTES)
+                            .with_context(|| format!("cannot read {}", out.display()))?;
                     if now != md {
                         bail!("{} is stale: regenerate it with the same command without --check", out.display());
                     }
                     println!("{} is up to date", out.display());
                 }
                 (Some(out), false) => {
-                    crate::io::write_file(&out, md.as_bytes())?;
+                    crate::support::io::write_file(&out, md.as_bytes())?;
                     println!("wrote {}", out.display());
                 }
                 (None, _) => print!("{md}"),

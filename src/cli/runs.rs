@@ -28,7 +28,7 @@ pub(super) struct TrainArgs {
     #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
     branch_from: Option<PathBuf>,
     #[command(flatten)]
-    config: crate::train::TrainConfig,
+    config: crate::learn::train::TrainConfig,
 }
 
 #[derive(Debug, clap::Args)]
@@ -70,7 +70,7 @@ pub(super) struct PlotArgs {
 ///
 /// # Errors
 /// A recipe that cannot be read, or flags clap refuses (its message).
-pub fn train_config(args: Vec<std::ffi::OsString>) -> Result<crate::train::TrainConfig> {
+pub fn train_config(args: Vec<std::ffi::OsString>) -> Result<crate::learn::train::TrainConfig> {
     match super::parse(args)?.command {
         super::Command::Train(a) => Ok(a.config),
         _ => bail!("not a `train` command line"),
@@ -79,8 +79,8 @@ pub fn train_config(args: Vec<std::ffi::OsString>) -> Result<crate::train::Train
 
 /// `blockpuzzle train`: one process, or one rank of an MPI job.
 pub(super) fn train(a: TrainArgs) -> Result<()> {
-    if !crate::train::comm::Comm::launched_by_mpirun() {
-        return train_in(&crate::train::comm::Comm::local(), a);
+    if !crate::learn::train::comm::Comm::launched_by_mpirun() {
+        return train_in(&crate::learn::train::comm::Comm::local(), a);
     }
     #[cfg(feature = "mpi")]
     {
@@ -88,7 +88,7 @@ pub(super) fn train(a: TrainArgs) -> Result<()> {
         let Some((universe, _)) = mpi::initialize_with_threading(mpi::Threading::Funneled) else {
             bail!("MPI was initialised twice");
         };
-        let comm = crate::train::comm::Comm::mpi(universe.world());
+        let comm = crate::learn::train::comm::Comm::mpi(universe.world());
         if let Err(e) = train_in(&comm, a) {
             // Other ranks may wait in a collective: stop the whole job.
             eprintln!("error (rank {} of {}): {e:#}", comm.rank(), comm.size());
@@ -100,7 +100,7 @@ pub(super) fn train(a: TrainArgs) -> Result<()> {
     bail!("started by mpirun, but this blockpuzzle was built without the `mpi` feature; rebuild with --features mpi")
 }
 
-fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
+fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> {
     let c = &a.config;
     let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
     let bar =
@@ -109,8 +109,8 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
         indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let mut last: Option<crate::train::EpochRow> = None;
-    let mut on_epoch = |row: &crate::train::EpochRow, cfg: &crate::train::TrainConfig| {
+    let mut last: Option<crate::learn::train::EpochRow> = None;
+    let mut on_epoch = |row: &crate::learn::train::EpochRow, cfg: &crate::learn::train::TrainConfig| {
         let (steps, updates, secs) = match &last {
             Some(p) => (row.env_steps - p.env_steps, row.updates - p.updates, row.wall_seconds - p.wall_seconds),
             None => (row.env_steps, row.updates, row.wall_seconds),
@@ -132,7 +132,7 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
         branch_run(comm, parent, &run_dir, c)?;
     }
     let resume = a.resume || a.branch_from.is_some();
-    let rows = crate::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
+    let rows = crate::learn::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
     bar.finish();
     if let Some(r) = rows.last() {
         println!(
@@ -151,13 +151,13 @@ fn train_in(comm: &crate::train::comm::Comm, a: TrainArgs) -> Result<()> {
 
 /// `train --branch-from`: rank 0 makes the branch, every rank learns whether it worked.
 fn branch_run(
-    comm: &crate::train::comm::Comm,
+    comm: &crate::learn::train::comm::Comm,
     parent: &Path,
     child: &Path,
-    c: &crate::train::TrainConfig,
+    c: &crate::learn::train::TrainConfig,
 ) -> Result<()> {
     comm.root_check(|| {
-        let b = crate::train::branch(parent, child, c)?;
+        let b = crate::learn::train::branch(parent, child, c)?;
         eprintln!(
             "{}: branched from {} at epoch {} ({} env steps){}",
             child.display(),
@@ -172,7 +172,7 @@ fn branch_run(
 
 /// A run directory's config and progress rows.
 /// The maximum curriculum level of a run's task (its recorded copy, else its id).
-fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
+fn run_max_level(config: &crate::learn::train::TrainConfig) -> Result<usize> {
     // A multi-task run's level is the sum of its tasks' levels.
     if !config.tasks.is_empty() {
         return config.tasks.iter().map(|s| Ok(registry::recorded(s)?.max_level())).sum();
@@ -183,7 +183,7 @@ fn run_max_level(config: &crate::train::TrainConfig) -> Result<usize> {
     })
 }
 
-fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::EpochRow>)> {
+fn read_run(dir: &Path) -> Result<(crate::learn::train::TrainConfig, Vec<crate::learn::train::EpochRow>)> {
     if std::fs::metadata(dir).is_ok_and(|m| !m.is_dir()) {
         let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
         bail!(
@@ -192,20 +192,20 @@ fn read_run(dir: &Path) -> Result<(crate::train::TrainConfig, Vec<crate::train::
             parent.display()
         );
     }
-    let run = crate::train::RunDir { dir: dir.to_owned() };
-    Ok((run.read_config()?, crate::train::read_progress(&run.progress())?))
+    let run = crate::learn::train::RunDir { dir: dir.to_owned() };
+    Ok((run.read_config()?, crate::learn::train::read_progress(&run.progress())?))
 }
 
 /// `blockpuzzle plot`: a run's success.png, or an overlay of several runs.
 pub(super) fn plot(a: PlotArgs) -> Result<()> {
     if let Some(out) = &a.out {
-        crate::train::plot::png_only(out)?;
+        crate::learn::train::plot::png_only(out)?;
     }
     if let Some(dir) = a.run_dir.clone() {
         let (config, rows) = read_run(&dir)?;
         let max_level = run_max_level(&config)?;
-        let run = crate::train::RunDir { dir };
-        crate::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
+        let run = crate::learn::train::RunDir { dir };
+        crate::learn::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());
     }
     if let (Some(out), false) = (&a.out, a.scaling.is_empty()) {
@@ -224,7 +224,7 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
             let (label, points) = if path.is_file() {
                 let name =
                     path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-                (name, crate::train::plot::read_finals(path)?)
+                (name, crate::learn::train::plot::read_finals(path)?)
             } else {
                 let (config, rows) = read_run(path)?;
                 let workers =
@@ -234,7 +234,7 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
             runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
         }
         let title = a.title.as_deref().unwrap_or("Finals success (maximum level)");
-        crate::train::plot::overlay(&out, title, &runs)?;
+        crate::learn::train::plot::overlay(&out, title, &runs)?;
         println!("wrote {}", out.display());
     }
     Ok(())
@@ -242,10 +242,10 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
 
 /// `plot --scaling`: the points' figure, and their table (Markdown) on stdout.
 fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
-    use crate::train::plot::ScalingPoint;
+    use crate::learn::train::plot::ScalingPoint;
     // A result's train and test means, its suite and its policy's name.
     let means = |path: &Path| -> Result<(f64, f64, String, String)> {
-        let r = crate::results::read(path)?.result;
+        let r = crate::benchmark::results::read(path)?.result;
         let mean = |name: &str| {
             r.splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success).ok_or_else(|| {
                 anyhow::anyhow!(
@@ -288,7 +288,7 @@ fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
         bail!("--scaling: the results are of several suites ({}); give results of one suite", suites.join(", "));
     }
     let title = a.title.clone().unwrap_or_else(|| format!("Success against {} on {}", a.x_label, suites[0]));
-    crate::train::plot::scaling(
+    crate::learn::train::plot::scaling(
         out,
         &title,
         &a.x_label,
@@ -305,9 +305,9 @@ pub(super) fn report(run_dirs: &[PathBuf], target: f64) -> Result<()> {
     for dir in run_dirs {
         let (config, rows) = read_run(dir)?;
         let title = format!("{} ({} workers, {})", config.title(), config.workers, dir.display());
-        print!("{}", crate::train::report::text(&title, &rows, run_max_level(&config)?, target));
+        print!("{}", crate::learn::train::report::text(&title, &rows, run_max_level(&config)?, target));
         // What made the numbers: the builds and engines that ran the epochs.
-        let spans = crate::train::RunDir { dir: dir.clone() }.read_provenance()?;
+        let spans = crate::learn::train::RunDir { dir: dir.clone() }.read_provenance()?;
         if spans.is_empty() {
             println!("  made by: not recorded (the run started before runs recorded their engine)");
         }

@@ -27,16 +27,16 @@ pub(super) struct TaskGenerateArgs {
     /// A shipped family by name (push, gripper, stack, gather, topple, avoid, clutter: `families/`) or a family file (.toml).
     family: String,
     /// The first generator seed (task k comes from seed + k, the same whatever --count).
-    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// How many tasks (generator seeds).
-    #[arg(long, default_value_t = 10, value_parser = crate::limits::GENERATE_COUNT.parser::<usize>())]
+    #[arg(long, default_value_t = 10, value_parser = crate::support::limits::GENERATE_COUNT.parser::<usize>())]
     count: usize,
     /// Output folder (made if missing).
     #[arg(long)]
     out: PathBuf,
     /// Threads checking candidates (default: one per core); the tasks do not depend on it.
-    #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+    #[arg(long, value_parser = crate::support::limits::THREADS.parser::<usize>())]
     threads: Option<usize>,
 }
 
@@ -45,10 +45,10 @@ pub(super) struct TaskCheckArgs {
     /// Task file (.toml) or registered id.
     file: String,
     /// Resets per level and distribution.
-    #[arg(long, default_value_t = 100, value_parser = crate::limits::CHECK_SAMPLES.parser::<u64>())]
+    #[arg(long, default_value_t = 100, value_parser = crate::support::limits::CHECK_SAMPLES.parser::<u64>())]
     samples: u64,
     /// Seed of the first reset (reset k uses seed + k).
-    #[arg(long, default_value_t = 0, value_parser = crate::limits::SEED.parser::<u64>())]
+    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SEED.parser::<u64>())]
     seed: u64,
     /// Filmstrip PNG of one reset state per level and distribution.
     #[arg(long)]
@@ -59,26 +59,26 @@ pub(super) struct TaskCheckArgs {
 
 /// `blockpuzzle task generate`.
 pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
-    crate::limits::seed_range(a.seed, a.count as u64).map_err(anyhow::Error::msg)?;
+    crate::support::limits::seed_range(a.seed, a.count as u64).map_err(anyhow::Error::msg)?;
     let family = crate::task::family::Family::load(&a.family, None)?;
-    crate::generate::check_outputs(&a.out, &family, a.seed, a.count).context("--out")?;
+    crate::episode::generate::check_outputs(&a.out, &family, a.seed, a.count).context("--out")?;
     let threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     // The seeds as people read them, first to last (`seed + count` may pass the largest seed).
     let seeds = match a.count {
         1 => format!("seed {}", a.seed),
         n => format!("seeds {} to {}", a.seed, a.seed + (n as u64 - 1)),
     };
-    let results = crate::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
-    let kept: Vec<&crate::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
+    let results = crate::episode::generate::generate(&family, a.seed, a.count, threads).map_err(anyhow::Error::msg)?;
+    let kept: Vec<&crate::episode::generate::Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
     let missing: Vec<u64> = results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect();
-    let rejected = crate::generate::rejections(&results);
+    let rejected = crate::episode::generate::rejections(&results);
     if kept.is_empty() {
         // Nothing to write: an error, naming each reason with its first message, and nothing written.
-        let examples = crate::generate::examples(&results);
+        let examples = crate::episode::generate::examples(&results);
         let reasons: Vec<String> = rejected
             .iter()
             .map(|(why, n)| match examples.get(why) {
-                Some(e) => format!("{n} {why} (first: {})", crate::limits::cut_long_lines(e)),
+                Some(e) => format!("{n} {why} (first: {})", crate::support::limits::cut_long_lines(e)),
                 None => format!("{n} {why}"),
             })
             .collect();
@@ -89,7 +89,14 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
             reasons.join("; ")
         );
     }
-    crate::generate::write_folder(&a.out, &family, &a.family, a.seed, &results, &crate::provenance::Build::current())?;
+    crate::episode::generate::write_folder(
+        &a.out,
+        &family,
+        &a.family,
+        a.seed,
+        &results,
+        &crate::benchmark::provenance::Build::current(),
+    )?;
     println!(
         "{}: {} of {} seeds gave a task ({seeds}), written to {}",
         family.spec.family,
@@ -99,11 +106,11 @@ pub(super) fn generate(a: TaskGenerateArgs) -> Result<()> {
     );
     let tried: usize = rejected.values().sum::<usize>() + kept.len();
     println!("candidates tried {tried}, rejected {}:", tried - kept.len());
-    let examples = crate::generate::examples(&results);
+    let examples = crate::episode::generate::examples(&results);
     for (why, n) in &rejected {
         println!("  {n:>5}  {why}");
         if let Some(e) = examples.get(why) {
-            println!("         e.g. {}", crate::limits::cut_long_lines(e));
+            println!("         e.g. {}", crate::support::limits::cut_long_lines(e));
         }
     }
     if !missing.is_empty() {
@@ -133,12 +140,12 @@ pub(super) fn check(a: TaskCheckArgs) -> Result<()> {
         if out.extension().map_or(true, |e| !e.eq_ignore_ascii_case("png")) {
             bail!("--render writes a filmstrip PNG: give a FILE.png");
         }
-        crate::io::check_output(out)?;
+        crate::support::io::check_output(out)?;
         a.view.view()?;
     }
     let task = registry::task(&a.file)?;
-    let bar = crate::progress::bar(crate::check::settings(&task).len() as u64 * a.samples, "reset");
-    let report = crate::check::check(task, a.samples, a.seed, &mut || bar.inc(1))?;
+    let bar = crate::support::progress::bar(crate::episode::check::settings(&task).len() as u64 * a.samples, "reset");
+    let report = crate::episode::check::check(task, a.samples, a.seed, &mut || bar.inc(1))?;
     bar.finish_and_clear();
     let task = &report.task;
     println!(
@@ -156,7 +163,7 @@ pub(super) fn check(a: TaskCheckArgs) -> Result<()> {
         let mut frames = Vec::new();
         let mut env = BlockEnv::new(crate::env::EnvConfig::new(task.clone()))?;
         let mut renderer = crate::render::Renderer::new(env.scene().model.as_ref(), &a.view.view()?)?;
-        for (label, level, distribution) in crate::check::settings(task) {
+        for (label, level, distribution) in crate::episode::check::settings(task) {
             env.set_level(level)?;
             env.set_distribution(distribution.as_deref())?;
             if env.reset(Some(a.seed)).is_err() {

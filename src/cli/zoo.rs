@@ -1,4 +1,4 @@
-//! `blockpuzzle zoo`: list, check and export the shipped policies (src/zoo.rs has the format).
+//! `blockpuzzle zoo`: list, check and export the shipped policies (src/benchmark/zoo.rs has the format).
 
 #[cfg(feature = "train")]
 use anyhow::Context;
@@ -44,7 +44,7 @@ pub(super) enum ZooCommand {
         #[arg(long)]
         zoo: Option<PathBuf>,
         /// Threads playing episodes (default: all cores); the result does not depend on it.
-        #[arg(long, value_parser = crate::limits::THREADS.parser::<usize>())]
+        #[arg(long, value_parser = crate::support::limits::THREADS.parser::<usize>())]
         threads: Option<usize>,
     },
 }
@@ -70,7 +70,7 @@ pub(super) struct ZooExportArgs {
     /// Evaluate it first on this many episodes (seeds 1,000,000 on) at the
     /// maximum level and, where the task has one, in the challenge distribution,
     /// and record the results (0: no evaluation).
-    #[arg(long, default_value_t = 0, value_parser = crate::limits::EXPORT_EPISODES.parser::<usize>())]
+    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::EXPORT_EPISODES.parser::<usize>())]
     evaluate: usize,
     /// The tasks to evaluate on, repeatable (default: the one it was trained on;
     /// e.g. BlocksChoose-v0 for the 2-block expert, which then sees no grey block).
@@ -89,17 +89,17 @@ pub(super) struct ZooExportArgs {
 
 /// Runs a `blockpuzzle zoo` subcommand.
 pub(super) fn run(c: ZooCommand) -> Result<()> {
-    let folder = |z: Option<PathBuf>| z.unwrap_or_else(crate::zoo::dir);
+    let folder = |z: Option<PathBuf>| z.unwrap_or_else(crate::benchmark::zoo::dir);
     match c {
         ZooCommand::List { zoo } => {
             let zoo = folder(zoo);
-            crate::zoo::existing(&zoo)?;
-            let names = crate::zoo::names(&zoo);
+            crate::benchmark::zoo::existing(&zoo)?;
+            let names = crate::benchmark::zoo::names(&zoo);
             if names.is_empty() {
                 println!("the zoo in {} has no entries", zoo.display());
             }
             for name in names {
-                let meta = crate::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
+                let meta = crate::benchmark::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
                 let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
                 println!(
                     "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
@@ -109,7 +109,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 );
                 println!("    {}", meta.description);
                 // Numbers of different engines differ: this build's engine's only, the others counted.
-                let engine = crate::mj::version();
+                let engine = crate::sim::mj::version();
                 let others: std::collections::BTreeSet<String> = meta
                     .evaluations
                     .iter()
@@ -145,26 +145,26 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
         }
         ZooCommand::Check { names, zoo } => {
             let zoo = folder(zoo);
-            crate::zoo::existing(&zoo)?;
-            let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
+            crate::benchmark::zoo::existing(&zoo)?;
+            let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
             if names.is_empty() {
                 bail!("no zoo entries in {}", zoo.display());
             }
             for name in &names {
-                let (meta, _) = crate::zoo::load(&crate::zoo::find(&zoo, name)?)?;
+                let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find(&zoo, name)?)?;
                 println!("{name}: ok ({} {}, epoch {})", meta.trained_on(), meta.algo, meta.epoch);
             }
             Ok(())
         }
         ZooCommand::Upgrade { names, zoo } => {
             let zoo = folder(zoo);
-            crate::zoo::existing(&zoo)?;
-            let names = if names.is_empty() { crate::zoo::names(&zoo) } else { names };
+            crate::benchmark::zoo::existing(&zoo)?;
+            let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
             for name in &names {
-                let path = crate::zoo::find(&zoo, name)?;
-                let before = crate::zoo::read_meta(&path)?.format;
-                crate::zoo::record_evaluations(&path, Vec::new())?;
-                println!("{name}: {before} -> {}, sealed", crate::zoo::FORMAT);
+                let path = crate::benchmark::zoo::find(&zoo, name)?;
+                let before = crate::benchmark::zoo::read_meta(&path)?.format;
+                crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
+                println!("{name}: {before} -> {}, sealed", crate::benchmark::zoo::FORMAT);
             }
             Ok(())
         }
@@ -176,8 +176,8 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             }
             let zoo = folder(a.zoo);
             // Before the evaluations, which may take long.
-            crate::zoo::entry_free(&zoo, &a.name, a.force)?;
-            let saved = crate::load::load_policy(&a.from)?;
+            crate::benchmark::zoo::entry_free(&zoo, &a.name, a.force)?;
+            let saved = crate::benchmark::load::load_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);
@@ -200,27 +200,27 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
                 let has_challenge = task.distribution("challenge").is_some();
                 for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
-                    let spec = crate::evaluate::EvalSpec {
+                    let spec = crate::benchmark::evaluate::EvalSpec {
                         distribution: None,
                         task: &task,
                         challenge,
                         level: None,
                         episodes: a.evaluate,
-                        seed: crate::evaluate::TEST_SEED,
+                        seed: crate::benchmark::evaluate::TEST_SEED,
                         threads,
                     };
-                    let provenance = crate::provenance::Provenance::new(
-                        crate::provenance::Harness::Cli,
+                    let provenance = crate::benchmark::provenance::Provenance::new(
+                        crate::benchmark::provenance::Harness::Cli,
                         saved.policy_id(&a.name),
                         None,
                     );
-                    let e = crate::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
-                    let r = crate::zoo::ZooEvaluation::new(e, provenance);
+                    let e = crate::benchmark::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
+                    let r = crate::benchmark::zoo::ZooEvaluation::new(e, provenance);
                     eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
                     evaluations.push(r);
                 }
             }
-            let info = crate::zoo::ExportInfo {
+            let info = crate::benchmark::zoo::ExportInfo {
                 name: a.name.clone(),
                 description: a.description,
                 trained_with: a.trained_with,
@@ -230,7 +230,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 keep_critic: a.critic,
                 overwrite: a.force,
             };
-            let out = crate::zoo::export(&zoo, &saved, &info)?;
+            let out = crate::benchmark::zoo::export(&zoo, &saved, &info)?;
             let size = std::fs::metadata(&out).map_or(0, |m| m.len());
             println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
             Ok(())
@@ -240,7 +240,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
 
 #[cfg(feature = "train")]
 /// An evaluation written by `blockpuzzle eval`, as a zoo record.
-fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
+fn read_eval(path: &Path) -> Result<crate::benchmark::zoo::ZooEvaluation> {
     #[derive(serde::Deserialize)]
     struct Written {
         env: String,
@@ -251,13 +251,13 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
         ci95: (f64, f64),
         grey_blind: bool,
         #[serde(default)]
-        outcomes: Option<crate::outcome::Outcomes>,
+        outcomes: Option<crate::episode::outcome::Outcomes>,
         #[serde(default)]
         task_sha256: Option<String>,
         #[serde(default)]
-        provenance: Option<crate::provenance::Provenance>,
+        provenance: Option<crate::benchmark::provenance::Provenance>,
     }
-    let text = crate::io::read_text(path, "evaluation file", crate::limits::RESULT_FILE_BYTES)
+    let text = crate::support::io::read_text(path, "evaluation file", crate::support::limits::RESULT_FILE_BYTES)
         .with_context(|| format!("cannot read evaluation {}", path.display()))?;
     let w: Written = serde_json::from_str(&text).with_context(|| {
         // A suite's result is the likeliest other file: say what --eval takes instead.
@@ -269,7 +269,7 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
             path.display()
         )
     })?;
-    Ok(crate::zoo::ZooEvaluation {
+    Ok(crate::benchmark::zoo::ZooEvaluation {
         env: w.env,
         distribution: if w.challenge { "challenge" } else { "normal" }.into(),
         grey_blind: w.grey_blind,
@@ -285,18 +285,19 @@ fn read_eval(path: &Path) -> Result<crate::zoo::ZooEvaluation> {
 
 /// `zoo evaluate`: every recorded measurement of the entries, played on this build's engine.
 fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> Result<()> {
-    crate::zoo::existing(zoo)?;
-    let names = if names.is_empty() { crate::zoo::names(zoo) } else { names };
+    crate::benchmark::zoo::existing(zoo)?;
+    let names = if names.is_empty() { crate::benchmark::zoo::names(zoo) } else { names };
     if names.is_empty() {
         bail!("no zoo entries in {}", zoo.display());
     }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     for name in &names {
-        let path = crate::zoo::find(zoo, name)?;
-        let (meta, saved) = crate::zoo::load(&path)?;
+        let path = crate::benchmark::zoo::find(zoo, name)?;
+        let (meta, saved) = crate::benchmark::zoo::load(&path)?;
         // Each measurement once (an entry may hold it for several engines).
-        let mut wanted: Vec<&crate::zoo::ZooEvaluation> = Vec::new();
-        let key = |r: &crate::zoo::ZooEvaluation| (r.env.clone(), r.distribution.clone(), r.episodes, r.seed);
+        let mut wanted: Vec<&crate::benchmark::zoo::ZooEvaluation> = Vec::new();
+        let key =
+            |r: &crate::benchmark::zoo::ZooEvaluation| (r.env.clone(), r.distribution.clone(), r.episodes, r.seed);
         for e in &meta.evaluations {
             if !wanted.iter().any(|w| key(w) == key(e)) {
                 wanted.push(e);
@@ -312,7 +313,7 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
                     w.distribution
                 );
             }
-            let spec = crate::evaluate::EvalSpec {
+            let spec = crate::benchmark::evaluate::EvalSpec {
                 task: &task,
                 challenge: w.distribution == "challenge",
                 distribution: None,
@@ -321,23 +322,26 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
                 seed: w.seed,
                 threads,
             };
-            let provenance =
-                crate::provenance::Provenance::new(crate::provenance::Harness::Cli, saved.policy_id(name), None);
-            let e = crate::evaluate::evaluate(Path::new(name), saved.clone(), &spec)?;
-            let r = crate::zoo::ZooEvaluation::new(e, provenance);
+            let provenance = crate::benchmark::provenance::Provenance::new(
+                crate::benchmark::provenance::Harness::Cli,
+                saved.policy_id(name),
+                None,
+            );
+            let e = crate::benchmark::evaluate::evaluate(Path::new(name), saved.clone(), &spec)?;
+            let r = crate::benchmark::zoo::ZooEvaluation::new(e, provenance);
             println!(
                 "{name} {} {} on MuJoCo {}: {:.3} ({}/{})",
                 r.env,
                 r.distribution,
-                crate::mj::version(),
+                crate::sim::mj::version(),
                 r.success_rate,
                 r.outcomes.map_or(0, |o| o.success),
                 r.episodes
             );
             fresh.push(r);
         }
-        let what = crate::zoo::record_evaluations(&path, fresh)?;
-        for w in what.iter().filter(|w| **w == crate::zoo::Recorded::Disagrees) {
+        let what = crate::benchmark::zoo::record_evaluations(&path, fresh)?;
+        for w in what.iter().filter(|w| **w == crate::benchmark::zoo::Recorded::Disagrees) {
             println!("    {w:?}: a record naming no engine has other numbers; it is kept beside this engine's");
         }
     }
@@ -350,7 +354,7 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
 fn env_steps_of(policy: &Path, epoch: usize) -> Option<u64> {
     let dir = if policy.is_dir() { policy.to_path_buf() } else { policy.parent()?.to_path_buf() };
     [dir.clone(), dir.parent()?.to_path_buf()].into_iter().find_map(|d| {
-        let rows = crate::train::read_progress(&d.join("progress.csv")).ok()?;
+        let rows = crate::learn::train::read_progress(&d.join("progress.csv")).ok()?;
         rows.iter().find(|r| r.epoch + 1 == epoch).map(|r| r.env_steps)
     })
 }

@@ -1,8 +1,8 @@
 //! Environment configuration and the errors of the environment API.
 
-use crate::mj::MjError;
-use crate::rules::Colour;
-use crate::scene::{BlockSpec, SceneError, SceneSpec};
+use crate::sim::mj::MjError;
+use crate::sim::rules::Colour;
+use crate::sim::scene::{BlockSpec, SceneError, SceneSpec};
 use crate::task::{PlacementError, Task, TaskError, TaskSpec};
 use thiserror::Error;
 

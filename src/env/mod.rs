@@ -9,6 +9,7 @@
 //! substep, so a brief red–blue touch is never missed.
 
 mod config;
+pub mod hindsight;
 mod obs;
 pub mod registry;
 mod reset;
@@ -22,9 +23,9 @@ pub use obs::{
 pub use registry::{ids, make, REGISTRY};
 pub use vector::{ResetOptions, VecError, VecStep, VectorEnv};
 
-use crate::mj::{Data, ObjType, Warning};
-use crate::rules::{Colour, ContactMatrix, Rules, Touching, Verdict};
-use crate::scene::{Scene, SceneObject};
+use crate::sim::mj::{Data, ObjType, Warning};
+use crate::sim::rules::{Colour, ContactMatrix, Rules, Touching, Verdict};
+use crate::sim::scene::{Scene, SceneObject};
 use crate::task::{Placed, Tally};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -177,7 +178,7 @@ impl BlockEnv {
         }
         let task = &config.task.spec;
         let scene = Scene::build(&config.scene_spec())?;
-        let rules = Rules::new(scene.colours()).map_err(crate::scene::SceneError::from)?;
+        let rules = Rules::new(scene.colours()).map_err(crate::sim::scene::SceneError::from)?;
         let mut data = Data::new(scene.model.clone())?;
 
         // Fetch set-up: base joints, weld at identity (done in Scene::build),
@@ -277,8 +278,8 @@ impl BlockEnv {
         let (spec, dt) = (ObsSpec { mode, ..self.config.obs_spec() }, self.dt());
         let colour = |o: usize| self.objects[o].colour;
         let fixtures = obs::FixtureColours {
-            gripper: colour(crate::scene::GRIPPER_OBJECT),
-            table: colour(crate::scene::TABLE_OBJECT),
+            gripper: colour(crate::sim::scene::GRIPPER_OBJECT),
+            table: colour(crate::sim::scene::TABLE_OBJECT),
             floor: self.scene.floor_object.map(colour),
         };
         let ctx = obs::ObsContext {
@@ -316,7 +317,7 @@ impl BlockEnv {
     }
     /// Whether rule object `o` is a block left out of this episode.
     fn is_absent(&self, o: usize) -> bool {
-        o.checked_sub(crate::scene::FIRST_BLOCK_OBJECT).and_then(|k| self.present.get(k)).is_some_and(|&p| !p)
+        o.checked_sub(crate::sim::scene::FIRST_BLOCK_OBJECT).and_then(|k| self.present.get(k)).is_some_and(|&p| !p)
     }
     /// Block colours of the current episode, in observation order (they
     /// differ from the task's between episodes only when it shuffles roles).
@@ -618,7 +619,7 @@ impl BlockEnv {
 
     /// Records, from the next step on, the contacts the rules saw at every
     /// substep of a step (`on = false` stops): what
-    /// [`crate::hindsight::replay`] needs to judge the step under other colours.
+    /// [`crate::env::hindsight::replay`] needs to judge the step under other colours.
     pub fn record_substeps(&mut self, on: bool) {
         self.substeps = on.then(Vec::new);
     }

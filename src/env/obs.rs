@@ -12,10 +12,10 @@
 //! each row, and after the blocks' rows one row for each of the other rule
 //! objects: the gripper, the table and the floor (see [`ObsMode::Entities`]).
 
-use crate::math::mat2euler;
-use crate::mj::{Data, ObjType};
-use crate::rules::Colour;
-use crate::scene::Scene;
+use crate::sim::mj::{Data, ObjType};
+use crate::sim::rules::Colour;
+use crate::sim::scene::Scene;
+use crate::support::math::mat2euler;
 use serde::{Deserialize, Serialize};
 
 /// Robot features.

@@ -146,7 +146,7 @@ impl BlockEnv {
         let specs: Vec<&crate::task::ObjectSpec> = self.config.task.objects().collect();
         for (slot, &role) in roles.iter().enumerate() {
             self.colours[slot] = specs[role].colour;
-            let o = &mut self.objects[crate::scene::FIRST_BLOCK_OBJECT + slot];
+            let o = &mut self.objects[crate::sim::scene::FIRST_BLOCK_OBJECT + slot];
             o.colour = specs[role].colour;
             o.name.clone_from(&specs[role].name);
         }
@@ -159,13 +159,13 @@ impl BlockEnv {
         let colours = (0..self.objects.len())
             .map(|o| if self.is_absent(o) { Colour::Grey } else { self.objects[o].colour })
             .collect();
-        self.rules = Rules::new(colours).map_err(crate::scene::SceneError::from)?;
+        self.rules = Rules::new(colours).map_err(crate::sim::scene::SceneError::from)?;
         Ok(())
     }
 
     /// Runs the task's settling time with the gripper held still; the first
     /// block that moved more than the tolerance from `targets`, in words.
-    fn settle(&mut self, targets: &[[f64; 3]]) -> Result<Option<String>, crate::mj::MjError> {
+    fn settle(&mut self, targets: &[[f64; 3]]) -> Result<Option<String>, crate::sim::mj::MjError> {
         let p = &self.config.task.spec.placement;
         if p.settle_seconds <= 0.0 {
             return Ok(None);
@@ -182,7 +182,7 @@ impl BlockEnv {
             (moved > tol || !moved.is_finite()).then(|| {
                 format!(
                     "{:?} moved {moved:.3} m while settling (more than placement.settle_tolerance = {tol}): a stack that falls over?",
-                    self.objects[crate::scene::FIRST_BLOCK_OBJECT + i].name
+                    self.objects[crate::sim::scene::FIRST_BLOCK_OBJECT + i].name
                 )
             })
         }))

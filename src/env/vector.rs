@@ -81,10 +81,10 @@ impl VectorEnv {
     /// `num_envs` environments of `config` on `threads` threads (at most one per environment).
     ///
     /// # Errors
-    /// A count out of [`crate::limits::NUM_ENVS`] or [`crate::limits::THREADS`],
+    /// A count out of [`crate::support::limits::NUM_ENVS`] or [`crate::support::limits::THREADS`],
     /// or the environment's own errors.
     pub fn new(config: &EnvConfig, num_envs: usize, threads: usize) -> Result<Self, EnvError> {
-        crate::limits::NUM_ENVS.check_usize(num_envs).map_err(EnvError::Config)?;
+        crate::support::limits::NUM_ENVS.check_usize(num_envs).map_err(EnvError::Config)?;
         let envs = (0..num_envs).map(|_| BlockEnv::new(config.clone())).collect::<Result<_, _>>()?;
         Self::from_envs(envs, threads)
     }
@@ -94,9 +94,9 @@ impl VectorEnv {
     ///
     /// # Errors
     /// No environments, environments of different observation layouts, or a
-    /// thread count out of [`crate::limits::THREADS`] or that cannot start.
+    /// thread count out of [`crate::support::limits::THREADS`] or that cannot start.
     pub fn from_envs(envs: Vec<BlockEnv>, threads: usize) -> Result<Self, EnvError> {
-        crate::limits::THREADS.check_usize(threads).map_err(EnvError::Config)?;
+        crate::support::limits::THREADS.check_usize(threads).map_err(EnvError::Config)?;
         let spec = envs.first().ok_or_else(|| EnvError::Config("a vector of no environments".into()))?.obs_spec();
         if let Some(i) = envs.iter().position(|e| e.obs_spec() != spec) {
             return Err(EnvError::Config(format!("environment {i}'s observation differs from environment 0's")));

@@ -12,13 +12,14 @@
 //! (flat or `objects`, which show no gripper or table colour): the reference
 //! the solver is tested against.
 
+pub mod actor;
 mod pick;
 mod push;
 mod reach;
 mod topple;
 
 use crate::env::{EnvConfig, Fixture, ObsMode, ObsSpec, ACTION_DIM, ROBOT_OBS};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -29,7 +30,7 @@ pub trait Policy {
     /// The action for `obs`.
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM];
     /// The observation mode it reads, where it needs one whatever the environment presents: the
-    /// episode loop ([`crate::rollout::play_episode`]) then gives it that view of each state.
+    /// episode loop ([`crate::episode::rollout::play_episode`]) then gives it that view of each state.
     fn reads(&self) -> Option<ObsMode> {
         None
     }

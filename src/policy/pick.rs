@@ -2,7 +2,7 @@
 //! blue blocks, put each on green side by side.
 
 use super::{toward, xy_dist, Behaviour, Seen, SeenBlock, ACTION_DIM};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 
 /// A grasp in progress: whether the block is held, and the steps spent closing the fingers.
 #[derive(Debug, Clone, Default)]

@@ -3,7 +3,7 @@
 //! waypoint planned at the episode's first step; with a red gripper, always green onto blue.
 
 use super::{seg_dist, toward, xy_dist, Behaviour, Seen, ACTION_DIM, PUSH_Z, SAFE_Z, STANDOFF};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 
 /// Push blue against green (grey gripper, blocked fingers); around red blocks through a waypoint
 /// planned at the episode's first step.
@@ -96,7 +96,7 @@ const ROUTE_MARGIN: f64 = 0.06;
 /// gripper comes down behind blue for each, keep their distance from every
 /// red block (the clearest such route if none does).
 fn plan_route(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64; 3]> {
-    use crate::scene::xml::{TABLE_CENTER, TABLE_HALF};
+    use crate::sim::scene::xml::{TABLE_CENTER, TABLE_HALF};
     let unit = |a: [f64; 3], b: [f64; 3]| {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let n = dx.hypot(dy).max(1e-9);

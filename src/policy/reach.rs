@@ -1,7 +1,7 @@
 //! The reaching behaviour: a blue gripper onto the green block, over any red block in the way.
 
 use super::{toward, xy_dist, Behaviour, Seen, ACTION_DIM};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 
 /// Height of the table top.
 const TABLE_TOP: f64 = 0.4;

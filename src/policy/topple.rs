@@ -1,7 +1,7 @@
 //! The toppling behaviour: a red gripper swipes the tower's base out from under the blue block.
 
 use super::{toward, xy_dist, Behaviour, Seen, ACTION_DIM, GAIN};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 
 /// The y of the table's centre line.
 const TABLE_CENTRE_Y: f64 = 0.75;

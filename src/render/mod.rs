@@ -7,8 +7,8 @@ pub mod egl;
 pub mod output;
 pub mod replay;
 
-use crate::mj::render::{FreeCamera, Visual};
-use crate::mj::{Data, Model};
+use crate::sim::mj::render::{FreeCamera, Visual};
+use crate::sim::mj::{Data, Model};
 use image::RgbImage;
 use std::ffi::CString;
 use thiserror::Error;
@@ -125,15 +125,15 @@ impl View {
     /// # Errors
     /// The first value out of range, naming the flag and the range.
     pub fn check(&self) -> Result<(), String> {
-        let (d, e) = (crate::limits::CAMERA_DISTANCE_M, crate::limits::CAMERA_ELEVATION_DEG);
-        if !crate::limits::within(self.distance, d) {
+        let (d, e) = (crate::support::limits::CAMERA_DISTANCE_M, crate::support::limits::CAMERA_ELEVATION_DEG);
+        if !crate::support::limits::within(self.distance, d) {
             return Err(format!(
                 "--distance {}: the camera's distance is {} to {} m (closer puts it inside the objects, farther \
                  shrinks the scene to a few pixels)",
                 self.distance, d.0, d.1
             ));
         }
-        if !crate::limits::within(self.elevation, e) {
+        if !crate::support::limits::within(self.elevation, e) {
             return Err(format!(
                 "--elevation {}: the camera's elevation is {}° to {}° (negative looks down)",
                 self.elevation, e.0, e.1
@@ -209,10 +209,10 @@ impl Renderer {
     /// A scene without the BlockPuzzle materials.
     pub fn colour_objects(
         &mut self,
-        scene: &crate::scene::Scene,
-        colours: &[crate::rules::Colour],
+        scene: &crate::sim::scene::Scene,
+        colours: &[crate::sim::rules::Colour],
         absent: &[bool],
-    ) -> Result<(), crate::mj::MjError> {
+    ) -> Result<(), crate::sim::mj::MjError> {
         self.recolour.clear();
         for (g, &o) in scene.geom_object.iter().enumerate() {
             let Some(&c) = usize::try_from(o).ok().and_then(|o| colours.get(o)) else { continue };
@@ -220,8 +220,8 @@ impl Renderer {
                 self.recolour.push((g, [0.0; 4]));
                 continue;
             }
-            let block = o as usize >= crate::scene::FIRST_BLOCK_OBJECT && Some(o as usize) != scene.floor_object;
-            if block || c != crate::rules::Colour::Grey {
+            let block = o as usize >= crate::sim::scene::FIRST_BLOCK_OBJECT && Some(o as usize) != scene.floor_object;
+            if block || c != crate::sim::rules::Colour::Grey {
                 self.recolour.push((g, scene.rgba(c)?));
             }
         }

@@ -35,8 +35,9 @@ pub fn gif(path: &Path, frames: &[RgbImage], fps: u32) -> Result<()> {
 /// # Errors
 /// I/O or encoding errors, naming the folder.
 pub fn png_folder(dir: &Path, frames: &[RgbImage]) -> Result<()> {
-    let tmp = crate::io::temp_path(dir);
-    let staged = crate::io::CreatedDir::create(&tmp).with_context(|| format!("cannot write {}", dir.display()))?;
+    let tmp = crate::support::io::temp_path(dir);
+    let staged =
+        crate::support::io::CreatedDir::create(&tmp).with_context(|| format!("cannot write {}", dir.display()))?;
     let names: Vec<String> = (0..frames.len()).map(|k| format!("frame_{k:05}.png")).collect();
     for (f, name) in frames.iter().zip(&names) {
         f.save_with_format(tmp.join(name), image::ImageFormat::Png)
@@ -88,7 +89,7 @@ pub fn filmstrip(path: &Path, frames: &[RgbImage], n: usize) -> Result<()> {
 }
 
 fn atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    crate::io::write_atomic_via(path, write)
+    crate::support::io::write_atomic_via(path, write)
 }
 
 #[cfg(test)]

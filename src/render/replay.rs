@@ -4,8 +4,8 @@
 
 use super::{output, Renderer, View};
 use crate::env::{registry, BlockEnv, EnvConfig};
-use crate::rollout::EpisodeRecord;
-use crate::rules::Colour;
+use crate::episode::rollout::EpisodeRecord;
+use crate::sim::rules::Colour;
 use anyhow::{bail, Result};
 use image::RgbImage;
 use std::path::Path;
@@ -118,10 +118,10 @@ impl Output {
     pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self> {
         let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
         match (ext.as_deref(), filmstrip) {
-            (Some("png"), Some(n)) if n > 0 => crate::io::check_output(out).map(|_| Self::Filmstrip(n)),
+            (Some("png"), Some(n)) if n > 0 => crate::support::io::check_output(out).map(|_| Self::Filmstrip(n)),
             (_, Some(_)) => bail!("--filmstrip N writes a PNG: give --out FILE.png with N ≥ 1"),
             (Some("gif"), None) if fps == 0 => bail!("--fps must be at least 1 (frames per second of the GIF)"),
-            (Some("gif"), None) => crate::io::check_output(out).map(|_| Self::Gif { fps }),
+            (Some("gif"), None) => crate::support::io::check_output(out).map(|_| Self::Gif { fps }),
             (Some("png"), None) => {
                 bail!("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", out.display())
             }
@@ -157,7 +157,7 @@ impl Output {
 /// # Errors
 /// Unreadable dump, missing episode, rendering or writing errors.
 pub fn render_dump(traj: &Path, index: usize, view: &View, out: &Path, kind: &Output) -> Result<(usize, f64)> {
-    let episodes = crate::rollout::read_dump(traj)?;
+    let episodes = crate::episode::rollout::read_dump(traj)?;
     let Some(ep) = episodes.get(index) else {
         bail!("{} holds {} episodes; --episode {index} does not exist", traj.display(), episodes.len());
     };

@@ -10,7 +10,7 @@ use super::spec::*;
 use super::{
     is_safe_id, CountGroup, Distribution, Task, TaskError, TaskSource, MAX_LEVEL, MAX_TASK_OBJECTS, RESERVED_NAMES,
 };
-use crate::rules::Rules;
+use crate::sim::rules::Rules;
 use std::collections::BTreeMap;
 use std::path::Path;
 use toml::Spanned;
@@ -49,7 +49,7 @@ impl Task {
     pub fn from_file(path: &Path) -> Result<Task, TaskError> {
         let origin = path.display().to_string();
         let err = |line, message| TaskError { origin: origin.clone(), line, message };
-        let text = crate::io::read_text(path, "task file", crate::limits::TEXT_FILE_BYTES)
+        let text = crate::support::io::read_text(path, "task file", crate::support::limits::TEXT_FILE_BYTES)
             .map_err(|e| err(None, format!("cannot read the task file: {e}")))?;
         if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
             return Task::from_toml(&text, Some(path));
@@ -204,7 +204,7 @@ fn check_settings(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
             ),
         ));
     }
-    crate::limits::EPISODE_STEPS
+    crate::support::limits::EPISODE_STEPS
         .check_usize(spec.max_episode_steps)
         .map_err(|e| c.err(field_span(text, "max_episode_steps"), e))?;
     if !spec.robot.extra_height.is_finite() {
@@ -229,14 +229,14 @@ fn check_settings(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
             c.err(None, "placement: min_separation and settle_seconds must be ≥ 0, settle_tolerance > 0, all finite")
         );
     }
-    if !crate::limits::within(p.settle_seconds, crate::limits::SETTLE_SECONDS) {
+    if !crate::support::limits::within(p.settle_seconds, crate::support::limits::SETTLE_SECONDS) {
         return Err(c.err(
             field_span(text, "settle_seconds"),
             format!("placement.settle_seconds = {}: allowed are 0 to 10 s of simulated time", p.settle_seconds),
         ));
     }
     for (name, v) in [("max_attempts", p.max_attempts), ("max_reset_attempts", p.max_reset_attempts)] {
-        crate::limits::PLACEMENT_ATTEMPTS
+        crate::support::limits::PLACEMENT_ATTEMPTS
             .check_usize(v)
             .map_err(|e| c.err(field_span(text, name), format!("placement.{name}: {e}")))?;
     }
@@ -362,7 +362,7 @@ fn check_objects(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
         if names[..i].contains(&o.name.as_str()) {
             return Err(c.err(span, format!("two objects are named {:?}: names must be unique", o.name)));
         }
-        use crate::limits::{within, FRICTION, HALF_EXTENT_M, MASS_KG};
+        use crate::support::limits::{within, FRICTION, HALF_EXTENT_M, MASS_KG};
         if !o.half_extents.iter().all(|&h| within(h, HALF_EXTENT_M)) {
             return Err(c.err(
                 span,

@@ -58,7 +58,7 @@ impl Task {
         let (Ok(a), Ok(b)) = (serde_json::to_value(&self.spec), serde_json::to_value(&other.spec)) else {
             return Vec::new();
         };
-        crate::diff::differences(&a, &b)
+        crate::support::diff::differences(&a, &b)
             .into_iter()
             .map(|p| if p.0.is_empty() { "(the whole task)".to_owned() } else { p.to_string() })
             .collect()

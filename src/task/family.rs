@@ -3,13 +3,13 @@
 //! a colour, a count range, a size range and a placement rule — and [`Family::draw`] turns a
 //! (generator seed, candidate) pair into one task, deterministically. Which candidates are kept
 //! (the solver can play them, they are not decided at the first step) is decided above the
-//! environment (`crate::generate`); this module is data, like the rest of `task`.
+//! environment (`crate::episode::generate`); this module is data, like the rest of `task`.
 
 use super::spec::{
     CurriculumSpec, Kind, ObjectSpec, PlacementSpec, RobotSpec, StartSpec, SurfaceSpec, TaskSpec, FORMAT_VERSION,
 };
 use super::{Task, TaskError, RESERVED_NAMES};
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -204,7 +204,7 @@ pub struct Family {
     /// Where the text came from, for errors.
     pub origin: String,
     /// The file's text (None for a narrowed family: its text and the narrowing make it), so that a
-    /// stream can carry its families ([`crate::stream::FamilyRecord::text`]).
+    /// stream can carry its families ([`crate::benchmark::stream::FamilyRecord::text`]).
     pub text: Option<String>,
 }
 
@@ -357,7 +357,7 @@ impl Family {
     /// An unreadable file, or what [`Family::from_toml`] refuses.
     pub fn read(path: &std::path::Path) -> Result<Family, TaskError> {
         let origin = path.display().to_string();
-        let text = crate::io::read_text(path, "family file", crate::limits::TEXT_FILE_BYTES)
+        let text = crate::support::io::read_text(path, "family file", crate::support::limits::TEXT_FILE_BYTES)
             .map_err(|e| TaskError { origin: origin.clone(), line: None, message: e.to_string() })?;
         Family::from_toml(&text, &origin)
     }

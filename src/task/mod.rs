@@ -22,7 +22,7 @@ pub use spec::{
     SurfaceSpec, TaskSpec, Value, Yaw, FORMAT_VERSION,
 };
 
-use crate::rules::{Colour, MAX_OBJECTS};
+use crate::sim::rules::{Colour, MAX_OBJECTS};
 pub(crate) use compile::{draws_nothing, least_count, parse_value, Checker, Scope};
 pub use diagnostics::TaskError;
 use serde::{Deserialize, Serialize};

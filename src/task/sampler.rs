@@ -11,7 +11,7 @@
 use super::expr::Expr;
 use super::spec::{Anchor, Density, ObjectSpec, StartSpec, TaskSpec, Value, Yaw};
 use super::{parse_value, Checker, Scope, Task, TaskError};
-use crate::scene::xml::{TABLE_CENTER, TABLE_HALF, TABLE_TOP_Z};
+use crate::sim::scene::xml::{TABLE_CENTER, TABLE_HALF, TABLE_TOP_Z};
 use rand::Rng;
 use std::f64::consts::TAU;
 use thiserror::Error;

@@ -2,7 +2,7 @@
 //! every default written once. `tasks/*.toml` are the built-in tasks, and
 //! `docs/task-format.md` walks through the format.
 
-use crate::rules::Colour;
+use crate::sim::rules::Colour;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use toml::Spanned;

@@ -5,7 +5,7 @@
 //! 1e-4 m, gripper and block, at every step of every episode.
 #![cfg(feature = "mujoco3")]
 
-use blockpuzzle::align::{replay_all, Reference, TOLERANCE};
+use blockpuzzle::episode::align::{replay_all, Reference, TOLERANCE};
 use std::path::PathBuf;
 
 #[test]
@@ -14,7 +14,7 @@ fn fetchpush_like_follows_fetchpush_v4_on_mujoco_3() {
         panic!("set BLOCKPUZZLE_ALIGN_REFERENCE to a file of bench/align_fetchpush.py (make test-mujoco3 does)");
     };
     let reference = Reference::load(&path).unwrap();
-    assert_eq!(reference.mujoco, blockpuzzle::mj::version(), "the reference ran on another MuJoCo");
+    assert_eq!(reference.mujoco, blockpuzzle::sim::mj::version(), "the reference ran on another MuJoCo");
     assert!(
         reference.episodes.iter().any(|e| e.kind == "random")
             && reference.episodes.iter().any(|e| e.kind == "scripted")

@@ -1,12 +1,28 @@
-//! The layout shows the architecture: no two top-level modules of src/ use
-//! each other, directly or through others (`crate::X` paths in the code,
-//! comments left out), and the environment core uses nothing of the
-//! training stack.
+//! The layout shows the architecture: `src/` is one folder per layer, bottom to top as `lib.rs`
+//! lists them, and a module uses only its own layer and the layers below (`crate::X` paths in the
+//! code, comments left out); within a layer, no two modules use each other, directly or through
+//! others.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Top-level module -> the top-level modules its code names as `crate::X`.
+/// The layers, bottom to top.
+const LAYERS: [&str; 10] =
+    ["support", "sim", "task", "env", "policy", "episode", "benchmark", "render", "learn", "cli"];
+/// The layers that are folders of modules (the others are one module each).
+const GROUPS: [&str; 5] = ["support", "sim", "episode", "benchmark", "learn"];
+
+/// The unit a path `X::Y::...` under `crate::` (or a file's path under src/) names: `X::Y` in a
+/// layer of modules, else `X`.
+fn unit(parts: &[String]) -> String {
+    match parts {
+        [layer, module, ..] if GROUPS.contains(&layer.as_str()) => format!("{layer}::{module}"),
+        [first, ..] => first.clone(),
+        [] => String::new(),
+    }
+}
+
+/// Each file's unit -> the units its code names as `crate::X::Y`.
 fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
     fn walk(dir: &Path, files: &mut Vec<std::path::PathBuf>) {
         for e in std::fs::read_dir(dir).unwrap() {
@@ -23,29 +39,38 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
     walk(&src, &mut files);
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for f in files {
-        let rel = f.strip_prefix(&src).unwrap();
-        let top = rel.iter().next().unwrap().to_string_lossy().trim_end_matches(".rs").to_owned();
-        if top == "lib" || top == "main" {
+        let rel: Vec<String> = f
+            .strip_prefix(&src)
+            .unwrap()
+            .iter()
+            .map(|c| c.to_string_lossy().trim_end_matches(".rs").to_owned())
+            .filter(|c| c != "mod")
+            .collect();
+        if rel[0] == "lib" || rel[0] == "main" {
             continue;
         }
+        let me = unit(&rel);
         let code: String = std::fs::read_to_string(&f)
             .unwrap()
             .lines()
             .map(|l| l.split("//").next().unwrap_or(""))
             .collect::<Vec<_>>()
             .join("\n");
-        let deps = graph.entry(top.clone()).or_default();
+        let deps = graph.entry(me.clone()).or_default();
         for (i, _) in code.match_indices("crate::") {
-            let name: String = code[i + 7..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
-            if !name.is_empty() && name != top {
-                deps.insert(name);
+            let path: String =
+                code[i + 7..].chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':').collect();
+            let parts: Vec<String> = path.split("::").filter(|p| !p.is_empty()).map(str::to_owned).collect();
+            let to = unit(&parts);
+            if !to.is_empty() && to != me {
+                deps.insert(to);
             }
         }
     }
     graph
 }
 
-/// Every module `from` reaches.
+/// Every unit `from` reaches.
 fn reach(graph: &BTreeMap<String, BTreeSet<String>>, from: &str) -> BTreeSet<String> {
     let (mut seen, mut todo) = (BTreeSet::new(), vec![from.to_owned()]);
     while let Some(m) = todo.pop() {
@@ -58,10 +83,49 @@ fn reach(graph: &BTreeMap<String, BTreeSet<String>>, from: &str) -> BTreeSet<Str
     seen
 }
 
+/// The layer of a unit (`benchmark::zoo` -> benchmark).
+fn layer(unit: &str) -> usize {
+    let top = unit.split("::").next().unwrap();
+    LAYERS.iter().position(|l| *l == top).unwrap_or_else(|| panic!("{unit} is in no layer of {LAYERS:?}"))
+}
+
+#[test]
+fn lib_lists_the_layers_bottom_to_top_and_src_holds_nothing_else() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let listed: Vec<&str> =
+        lib.lines().filter_map(|l| l.strip_prefix("pub mod ").and_then(|m| m.strip_suffix(';'))).collect();
+    assert_eq!(listed, LAYERS, "lib.rs lists the layers in order");
+    let mut top: Vec<String> =
+        std::fs::read_dir(&src).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    top.sort();
+    let mut want: Vec<String> =
+        LAYERS.iter().map(|l| l.to_string()).chain(["lib.rs".into(), "main.rs".into()]).collect();
+    want.sort();
+    assert_eq!(top, want, "src/ holds the layers' folders, lib.rs and main.rs");
+    // Each layer's mod.rs opens with its part of the map.
+    for l in LAYERS {
+        let text = std::fs::read_to_string(src.join(l).join("mod.rs")).unwrap();
+        assert!(text.starts_with("//!"), "src/{l}/mod.rs opens with its doc");
+    }
+}
+
+#[test]
+fn a_module_uses_only_its_own_layer_and_the_ones_below() {
+    let graph = module_graph();
+    assert!(graph.contains_key("benchmark::saved") && graph.contains_key("benchmark::zoo"), "{graph:?}");
+    let upward: Vec<String> = graph
+        .iter()
+        .flat_map(|(a, deps)| deps.iter().map(move |b| (a, b)))
+        .filter(|(a, b)| layer(b) > layer(a))
+        .map(|(a, b)| format!("{a} (layer {}) uses {b} (layer {})", LAYERS[layer(a)], LAYERS[layer(b)]))
+        .collect();
+    assert!(upward.is_empty(), "imports that run up a layer: {upward:#?}");
+}
+
 #[test]
 fn the_module_graph_has_no_cycle() {
     let graph = module_graph();
-    assert!(graph.contains_key("saved") && graph.contains_key("zoo"), "{graph:?}");
     let cycles: Vec<String> = graph
         .iter()
         .flat_map(|(a, deps)| deps.iter().map(move |b| (a, b)))
@@ -71,49 +135,12 @@ fn the_module_graph_has_no_cycle() {
     assert!(cycles.is_empty(), "module cycles: {cycles:#?}");
 }
 
-#[test]
-fn the_environment_core_uses_nothing_of_the_training_stack() {
-    let graph = module_graph();
-    let core = [
-        "actor",
-        "align",
-        "check",
-        "diff",
-        "env",
-        "evaluate",
-        "hindsight",
-        "io",
-        "limits",
-        "load",
-        "math",
-        "mj",
-        "outcome",
-        "policy",
-        "progress",
-        "provenance",
-        "results",
-        "rollout",
-        "rules",
-        "saved",
-        "scene",
-        "stream",
-        "suite",
-        "task",
-        "zoo",
-    ];
-    let stack = ["agents", "bench", "blas", "cli", "table", "train", "render"];
-    for m in core {
-        let bad: Vec<_> = reach(&graph, m).into_iter().filter(|d| stack.contains(&d.as_str())).collect();
-        assert!(bad.is_empty(), "the core module {m} uses {bad:?}");
-    }
-}
-
 /// Inside agents/, imports go one way: the interface (algorithm.rs) and the shared settings
 /// (shared.rs) name no algorithm, the algorithm files do not name the list of them
 /// (registry.rs), and the list names every algorithm file.
 #[test]
 fn the_algorithm_interface_knows_no_algorithm_and_no_algorithm_knows_the_list() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/agents");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/learn/agents");
     let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
     let registry = read("registry.rs");
     let files = ["ddpg", "pggd", "sac", "bc", "dagger"];
@@ -133,7 +160,7 @@ fn the_algorithm_interface_knows_no_algorithm_and_no_algorithm_knows_the_list() 
         let text = read(&format!("{a}.rs"));
         assert!(!names(&text, "registry"), "{a}.rs names the registry");
         for other in algorithms.iter().filter(|o| *o != a) {
-            // SAC exports its mean action as the core's tanh actor (crate::actor), not DDPG's learner.
+            // SAC exports its mean action as the core's tanh actor (crate::policy::actor), not DDPG's learner.
             assert!(!names(&text, other), "{a}.rs names {other}");
         }
     }

@@ -37,7 +37,7 @@ fn rollout_writes_a_replayable_dump() {
     let o = scripted_rollout(&out);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("success 1.000"), "{}", text(&o));
-    let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
+    let eps = blockpuzzle::episode::rollout::read_dump(&out).unwrap();
     assert_eq!(eps.len(), 3);
     let ep = &eps[1];
     assert_eq!((ep.env_id.as_str(), ep.seed, ep.level), ("BlocksTouch-v0", 6, 0));
@@ -63,13 +63,13 @@ fn rollout_writes_a_replayable_dump() {
 
 #[test]
 fn rollout_and_eval_count_why_episodes_did_not_succeed() {
-    use blockpuzzle::outcome::Outcomes;
+    use blockpuzzle::episode::outcome::Outcomes;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("random.jsonl");
     let args = "rollout --env BlocksChoose-v0 --policy random --episodes 4 --seed 3 --out";
     let o = bp(&args.split(' ').chain([out.to_str().unwrap()]).collect::<Vec<_>>());
     assert!(o.status.success(), "{}", text(&o));
-    let eps = blockpuzzle::rollout::read_dump(&out).unwrap();
+    let eps = blockpuzzle::episode::rollout::read_dump(&out).unwrap();
     let tally: Outcomes = eps.iter().collect();
     assert_eq!(tally.total(), 4);
     assert_eq!(tally.success, eps.iter().filter(|e| e.success).count());
@@ -378,7 +378,7 @@ fn task_files_work_wherever_an_id_does_and_task_check_reports() {
     let o =
         bp(&["rollout", "--env", f, "--distribution", "challenge", "--episodes", "2", "--out", out.to_str().unwrap()]);
     assert!(o.status.success() && text(&o).contains("(challenge)"), "{}", text(&o));
-    let ep = &blockpuzzle::rollout::read_dump(&out).unwrap()[0];
+    let ep = &blockpuzzle::episode::rollout::read_dump(&out).unwrap()[0];
     assert_eq!((ep.env_id.as_str(), ep.distribution.as_deref()), ("Mine-v0", Some("challenge")));
     assert!(ep.task.as_ref().unwrap().toml.contains("Mine-v0"), "the dump carries the task");
     let o = bp(&["scene", "--env", f]);
@@ -441,9 +441,9 @@ fn the_openmp_wait_policy_is_left_to_libgomp_unless_the_user_set_it() {
     };
     assert!(info(None).contains("\nOMP_WAIT_POLICY=(unset)\n"), "{}", info(None));
     assert!(info(Some("PASSIVE")).contains("\nOMP_WAIT_POLICY=PASSIVE\n"));
-    let missing = blockpuzzle::blas::missing_settings(|_| None);
+    let missing = blockpuzzle::learn::blas::missing_settings(|_| None);
     assert!(missing.iter().all(|(k, _)| *k == "OPENBLAS_CORETYPE"), "{missing:?}");
-    let set = blockpuzzle::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
+    let set = blockpuzzle::learn::blas::missing_settings(|k| (k == "OPENBLAS_CORETYPE").then(|| "Haswell".into()));
     assert!(set.is_empty(), "a value the user set is left alone: {set:?}");
     // Only the commands that run or report libtorch's products start a second time for them.
     let wants = |line: &str| blockpuzzle::cli::wants_fast_kernels(&line.split(' ').map(Into::into).collect::<Vec<_>>());
@@ -576,7 +576,7 @@ fn suite_help_lists_every_built_in_suite() {
     for cmd in ["eval", "demos"] {
         let o = crate::common::blockpuzzle(&[cmd, "--help"]).output().unwrap();
         let help = String::from_utf8_lossy(&o.stdout);
-        for (name, _) in blockpuzzle::suite::BUILTIN {
+        for (name, _) in blockpuzzle::benchmark::suite::BUILTIN {
             let listed = [" ", "("].iter().any(|b| [",", ")"].iter().any(|a| help.contains(&format!("{b}{name}{a}"))));
             assert!(listed, "{cmd}: {name}: {help}");
         }

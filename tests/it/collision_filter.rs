@@ -4,7 +4,7 @@
 use crate::common::trajectory;
 use blockpuzzle::env::{registry, BlockEnv};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
-use blockpuzzle::scene::EXCLUDED_BODY_PAIRS;
+use blockpuzzle::sim::scene::EXCLUDED_BODY_PAIRS;
 
 fn pair(id: &str) -> (BlockEnv, BlockEnv) {
     let mut off = registry::config(id).unwrap();

@@ -2,11 +2,11 @@
 //! the outcomes the suite evaluator counts, padded to the split's largest row count, written and
 //! read back intact; files that are not demos are named.
 
-use blockpuzzle::demos::{self, Demos};
+use blockpuzzle::benchmark::demos::{self, Demos};
+use blockpuzzle::benchmark::evaluate::{evaluate_suite, Baseline, Subject};
+use blockpuzzle::benchmark::provenance::Harness;
 use blockpuzzle::env::{BlockEnv, EnvConfig};
-use blockpuzzle::evaluate::{evaluate_suite, Baseline, Subject};
-use blockpuzzle::outcome::Outcome;
-use blockpuzzle::provenance::Harness;
+use blockpuzzle::episode::outcome::Outcome;
 
 /// BlocksTouch-v0 (two blocks) and BlocksAvoid-v0 (five block slots, a red floor): rows of different
 /// entity counts.
@@ -30,7 +30,7 @@ episodes = 1
 
 #[test]
 fn demos_are_the_solvers_episodes_padded_and_round_trip() {
-    let suite = blockpuzzle::suite::parse(SUITE, "demo-test.toml", None).unwrap();
+    let suite = blockpuzzle::benchmark::suite::parse(SUITE, "demo-test.toml", None).unwrap();
     let one = demos::record(&suite, "train", None, 1, Harness::Cli).unwrap();
     let two = demos::record(&suite, "train", None, 2, Harness::Cli).unwrap();
     assert_eq!(one.tensors.robot, two.tensors.robot, "the same episodes whatever the thread count");

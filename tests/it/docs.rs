@@ -171,7 +171,7 @@ fn every_toml_block_in_the_docs_is_a_valid_task_family_or_suite_file() {
             let task = blockpuzzle::task::Task::from_file(&file);
             assert!(task.is_ok(), "{}: {}", b.at, task.err().unwrap());
         } else {
-            let suite = blockpuzzle::suite::parse(&b.text, &b.at, Some(dir.path()));
+            let suite = blockpuzzle::benchmark::suite::parse(&b.text, &b.at, Some(dir.path()));
             assert!(suite.is_ok(), "{}: {}", b.at, suite.err().unwrap());
         }
     }

@@ -5,7 +5,7 @@ use blockpuzzle::env::{
     registry, BlockEnv, EnvConfig, Fixture, ObsMode, ObsSpec, COLOUR_FEATURE, OBJECT_FEATURES, ROBOT_OBS, TYPE_FEATURE,
 };
 use blockpuzzle::policy::{Policy, Script, ScriptedPolicy};
-use blockpuzzle::rules::Colour;
+use blockpuzzle::sim::rules::Colour;
 use blockpuzzle::task::Task;
 
 fn env_of(task: Task, mode: ObsMode) -> BlockEnv {
@@ -183,7 +183,7 @@ fn the_solver_names_what_it_cannot_solve() {
     let err = Script::from_observation(&flat.obs_spec(), &fobs).unwrap_err().to_string();
     assert!(err.contains("entities"), "{err}");
     // The solver as the episode loop runs it: a flat environment, the entities view for the solver.
-    let ep = blockpuzzle::rollout::run_episode(&mut flat, &mut ScriptedPolicy::solver(2), 0).unwrap();
+    let ep = blockpuzzle::episode::rollout::run_episode(&mut flat, &mut ScriptedPolicy::solver(2), 0).unwrap();
     assert!(ep.success, "the solver solves BlocksTouch-v0 from a flat environment's entities view");
 }
 

@@ -3,9 +3,9 @@
 //! the settings results/headline.md reports, and the command line wins over the file.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::shared::Precision;
 use blockpuzzle::cli::train_config;
-use blockpuzzle::train::{Algo, TrainConfig};
+use blockpuzzle::learn::agents::shared::Precision;
+use blockpuzzle::learn::train::{Algo, TrainConfig};
 use std::path::{Path, PathBuf};
 
 fn recipe(path: &Path, extra: &[&str]) -> anyhow::Result<TrainConfig> {

@@ -1,7 +1,7 @@
 //! Task families and the generator: family files checked like task files, generated tasks
 //! deterministic in the seed and valid, candidates the solver cannot play rejected and counted.
 
-use blockpuzzle::generate::{generate, generate_seed, rejections};
+use blockpuzzle::episode::generate::{generate, generate_seed, rejections};
 use blockpuzzle::task::family::Family;
 use blockpuzzle::task::Task;
 
@@ -73,7 +73,7 @@ fn generation_is_deterministic_valid_and_counts_its_rejections() {
     let family = quick("gripper");
     let one = generate(&family, 0, 4, 1).unwrap();
     let two = generate(&family, 0, 4, 2).unwrap();
-    let key = |r: &[blockpuzzle::generate::SeedResult]| -> Vec<Option<(String, String, usize)>> {
+    let key = |r: &[blockpuzzle::episode::generate::SeedResult]| -> Vec<Option<(String, String, usize)>> {
         r.iter().map(|s| s.task.as_ref().map(|t| (t.id.clone(), t.hash.clone(), t.candidate))).collect()
     };
     assert_eq!(key(&one), key(&two));
@@ -132,7 +132,7 @@ fn task_generate_writes_the_tasks_and_their_record() {
         "version = 1\nname = \"t\"\nsummary = \"s\"\n[[splits.train]]\n{row}seed = 0\nepisodes = 1\n\
          [[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 10\nepisodes = 1\n"
     );
-    let pinned = blockpuzzle::suite::parse(&suite_text, "t.toml", None).unwrap();
+    let pinned = blockpuzzle::benchmark::suite::parse(&suite_text, "t.toml", None).unwrap();
     let hashes: Vec<&str> = pinned.splits[0].rows.iter().map(|r| r.task.source.hash.as_str()).collect();
     let kept: Vec<&str> = record["tasks"].as_array().unwrap().iter().map(|t| t["hash"].as_str().unwrap()).collect();
     assert_eq!(hashes, kept);
@@ -187,7 +187,7 @@ fn task_generate_writes_the_tasks_and_their_record() {
     assert_eq!(record["tasks"][0]["script"], "pick-place", "{record}");
     let file = out.join("stack-2-v0.toml");
     let task = Task::from_toml(&std::fs::read_to_string(&file).unwrap(), Some(&file)).unwrap();
-    assert_eq!(task.spec.table.colour, blockpuzzle::rules::Colour::Red);
+    assert_eq!(task.spec.table.colour, blockpuzzle::sim::rules::Colour::Red);
 }
 
 /// A pinned candidate is one the generator would keep (issue 60): a family edited since its pins
@@ -195,7 +195,7 @@ fn task_generate_writes_the_tasks_and_their_record() {
 /// is refused, naming the row and the candidate, before anything is evaluated, recorded or trained.
 #[test]
 fn pinned_candidates_are_ones_the_generator_would_keep() {
-    use blockpuzzle::suite;
+    use blockpuzzle::benchmark::suite;
     let dir = tempfile::tempdir().unwrap();
     let fam = dir.path().join("green-gripper.toml");
     // Every candidate compiles, but the solver does not play a green gripper.
@@ -223,10 +223,21 @@ fn pinned_candidates_are_ones_the_generator_would_keep() {
     for want in ["splits.train[0]", "not the one its candidates were pinned from", &hash, "task generate"] {
         assert!(e.contains(want), "{want:?} missing from: {e}");
     }
+    // Every shipped suite's pins are candidates the generator keeps.
+    for name in ["procgen", "procgen-v2", "compose", "cross-task-v2"] {
+        suite::load(name).unwrap().check_pinned(None, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
     // The commands that play a suite refuse it, and write nothing.
-    let file = dir.path().join("t.toml");
-    std::fs::write(&file, suite_text("")).unwrap();
-    let out = dir.path().join("out");
+    #[cfg(feature = "cli")]
+    commands_refuse_the_suite(dir.path(), &suite_text(""));
+}
+
+/// `eval --suite` and `demos` of a suite with a pin the generator would not keep refuse it, writing nothing.
+#[cfg(feature = "cli")]
+fn commands_refuse_the_suite(dir: &std::path::Path, text: &str) {
+    let file = dir.join("t.toml");
+    std::fs::write(&file, text).unwrap();
+    let out = dir.join("out");
     for args in [
         vec!["eval", "--suite", file.to_str().unwrap(), "--baseline", "scripted", "--out", out.to_str().unwrap()],
         vec!["demos", "--suite", file.to_str().unwrap(), "--split", "train", "--out", out.to_str().unwrap()],
@@ -236,17 +247,13 @@ fn pinned_candidates_are_ones_the_generator_would_keep() {
         assert!(!o.status.success() && text.contains("seed 3, candidate 0"), "{args:?}: {text}");
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
-    // Every shipped suite's pins are candidates the generator keeps.
-    for name in ["procgen", "procgen-v2", "compose", "cross-task-v2"] {
-        suite::load(name).unwrap().check_pinned(None, 2).unwrap_or_else(|e| panic!("{name}: {e}"));
-    }
 }
 
 /// Suite rows drawn from a family: one row per generator seed, each the seed's task; the suite's
 /// hash covers the family's; what a family row must say is checked.
 #[test]
 fn suites_draw_rows_from_families() {
-    use blockpuzzle::suite;
+    use blockpuzzle::benchmark::suite;
     let s = suite::load("procgen").unwrap();
     let (train, test) = (&s.splits[0], &s.splits[1]);
     assert_eq!((train.rows.len(), test.rows.len()), (16, 16));
@@ -324,7 +331,7 @@ fn the_solver_plays_a_suite_of_generated_tasks() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let suite = blockpuzzle::suite::load(file.to_str().unwrap()).unwrap();
+    let suite = blockpuzzle::benchmark::suite::load(file.to_str().unwrap()).unwrap();
     for (split, rows) in r["splits"].as_array().unwrap().iter().zip(&suite.splits) {
         for (row, want) in split["rows"].as_array().unwrap().iter().zip(&rows.rows) {
             assert_eq!(row["task_sha256"].as_str().unwrap(), want.task.source.hash, "{row}");
@@ -341,13 +348,13 @@ fn the_solver_plays_a_suite_of_generated_tasks() {
 /// narrowing outside the family is refused by name.
 #[test]
 fn compose_rows_narrow_their_families() {
-    use blockpuzzle::rules::Colour;
-    let s = blockpuzzle::suite::load("compose").unwrap();
+    use blockpuzzle::sim::rules::Colour;
+    let s = blockpuzzle::benchmark::suite::load("compose").unwrap();
     let (train, test) = (&s.splits[0], &s.splits[1]);
     assert_eq!((train.rows.len(), test.rows.len()), (16, 16));
-    let floor = |r: &blockpuzzle::suite::Row| r.task.spec.floor.as_ref().map(|f| f.colour);
-    let gripper = |r: &blockpuzzle::suite::Row| r.task.spec.robot.gripper;
-    let reds = |r: &blockpuzzle::suite::Row| r.task.colours().iter().filter(|&&c| c == Colour::Red).count();
+    let floor = |r: &blockpuzzle::benchmark::suite::Row| r.task.spec.floor.as_ref().map(|f| f.colour);
+    let gripper = |r: &blockpuzzle::benchmark::suite::Row| r.task.spec.robot.gripper;
+    let reds = |r: &blockpuzzle::benchmark::suite::Row| r.task.colours().iter().filter(|&&c| c == Colour::Red).count();
     // Training: never two variations together.
     for r in &train.rows {
         let variations = [floor(r) == Some(Colour::Red), reds(r) > 0, gripper(r) != Colour::Grey];
@@ -371,7 +378,7 @@ fn compose_rows_narrow_their_families() {
 /// version stays as it was (the hash its recorded results carry).
 #[test]
 fn cross_task_v2_shows_the_rules_in_training_and_version_1_is_unchanged() {
-    let v1 = blockpuzzle::suite::load("cross-task").unwrap();
+    let v1 = blockpuzzle::benchmark::suite::load("cross-task").unwrap();
     let recorded: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -381,7 +388,7 @@ fn cross_task_v2_shows_the_rules_in_training_and_version_1_is_unchanged() {
     )
     .unwrap();
     assert_eq!(recorded["suite"]["sha256"].as_str().unwrap(), v1.sha256);
-    let v2 = blockpuzzle::suite::load("cross-task-v2").unwrap();
+    let v2 = blockpuzzle::benchmark::suite::load("cross-task-v2").unwrap();
     let ids = |split: usize| -> Vec<String> { v2.splits[split].rows.iter().map(|r| r.task.id().to_owned()).collect() };
     assert_eq!(ids(1), ["ReachAvoid-v0", "ToppleTower-v0", "BlocksStack-v0"]);
     let train = ids(0);
@@ -389,7 +396,7 @@ fn cross_task_v2_shows_the_rules_in_training_and_version_1_is_unchanged() {
     assert!(v2.splits[0]
         .rows
         .iter()
-        .any(|r| r.generated && r.task.spec.robot.gripper == blockpuzzle::rules::Colour::Red));
+        .any(|r| r.generated && r.task.spec.robot.gripper == blockpuzzle::sim::rules::Colour::Red));
 }
 
 /// The built-in tasks stay held out: no shipped family draws a task with a built-in task's content,
@@ -430,7 +437,7 @@ fn no_family_generates_a_built_in_task() {
 /// cache used the second time (and a stale entry worked out again), held-out seeds refused.
 #[test]
 fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
-    use blockpuzzle::stream::{check_held_out, families, pool, SeedRange, StreamError};
+    use blockpuzzle::benchmark::stream::{check_held_out, families, pool, SeedRange, StreamError};
     let cache = tempfile::tempdir().unwrap();
     let list = families("gripper, push").unwrap();
     let range: SeedRange = "0..3".parse().unwrap();
@@ -482,7 +489,7 @@ fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
 /// A stream whose every candidate is rejected is an error naming the reasons.
 #[test]
 fn a_stream_without_tasks_names_the_rejections() {
-    use blockpuzzle::stream::{pool, StreamError};
+    use blockpuzzle::benchmark::stream::{pool, StreamError};
     // No green block: the solver cannot play any draw.
     let text = shipped("gripper")
         .replace("max_candidates = 20", "max_candidates = 2")

@@ -10,11 +10,11 @@
 //! prints the digests instead of checking them (only for a deliberate,
 //! documented break).
 
-use blockpuzzle::rollout::episode_digest;
+use blockpuzzle::episode::rollout::episode_digest;
 
 #[test]
 fn environments_are_bit_identical_to_the_recorded_digests() {
-    let engine = blockpuzzle::mj::version();
+    let engine = blockpuzzle::sim::mj::version();
     let golden: serde_json::Value =
         serde_json::from_str(include_str!("../golden.json")).expect("tests/golden.json is JSON");
     let cases = golden["cases"].as_array().expect("a list of cases");

@@ -3,10 +3,10 @@
 //! the rewards and terminations the environment reported, and an episode in
 //! which blue touched grey is a success of the task in which grey is green.
 
+use blockpuzzle::env::hindsight::{alternatives, recolour_obs, replay, Replayed, Strategy};
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig};
-use blockpuzzle::hindsight::{alternatives, recolour_obs, replay, Replayed, Strategy};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
-use blockpuzzle::rules::{Colour, Touching};
+use blockpuzzle::sim::rules::{Colour, Touching};
 
 /// One episode: the rule objects' colours, each step's substep contacts, what the env reported, the observations.
 fn episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64) -> (Vec<Colour>, Vec<Vec<Touching>>, Vec<Replayed>) {

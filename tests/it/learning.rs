@@ -4,7 +4,7 @@
 //! environment steps and 4,000 updates), with hidden layers of 64 units instead
 //! of the paper's 256 (they learn it too, in about 4× the time: 173 s against 39 s
 //! on the 2-core AMD EPYC VM). Runs the `blockpuzzle` binary so that OpenBLAS
-//! gets its fast kernels (see src/blas.rs).
+//! gets its fast kernels (see src/learn/blas.rs).
 #![cfg(feature = "train")]
 
 fn bp(args: &[&str]) -> String {
@@ -23,7 +23,7 @@ fn ddpg_learns_to_touch_the_block_within_a_step_budget() {
         .into_iter()
         .chain(["--hidden", "64", "--torch-threads", "1", "--seed", "0", "--run-dir", run])
         .collect::<Vec<_>>());
-    let rows = blockpuzzle::train::read_progress(&dir.path().join("run/progress.csv")).unwrap();
+    let rows = blockpuzzle::learn::train::read_progress(&dir.path().join("run/progress.csv")).unwrap();
     let steps = rows.last().unwrap().env_steps;
     assert!(steps <= 20_000, "budget exceeded: {steps} env steps");
 

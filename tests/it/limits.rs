@@ -186,7 +186,7 @@ fn eval_writes_beside_runs_or_in_the_current_folder_named_by_policy_and_distribu
     let run = tiny_run(dir.path(), "run");
     let cwd = dir.path().join("work");
     std::fs::create_dir(&cwd).unwrap();
-    let zoo_before = entries(&blockpuzzle::zoo::dir());
+    let zoo_before = entries(&blockpuzzle::benchmark::zoo::dir());
     let o = bp_in(&cwd, &["eval", "--checkpoint", "BlocksTouch-v0-ddpg", "--episodes", "2"]);
     assert!(o.status.success(), "{}", text(&o));
     let o = bp_in(&cwd, &["eval", "--checkpoint", "BlocksTouch-v0-ddpg-epoch60", "--episodes", "2"]);
@@ -199,7 +199,7 @@ fn eval_writes_beside_runs_or_in_the_current_folder_named_by_policy_and_distribu
         ],
         "two policies on one task: two files"
     );
-    assert_eq!(entries(&blockpuzzle::zoo::dir()), zoo_before, "nothing written into the zoo");
+    assert_eq!(entries(&blockpuzzle::benchmark::zoo::dir()), zoo_before, "nothing written into the zoo");
     let o = bp_in(
         &cwd,
         &["eval", "--checkpoint", run.join("policy.json").to_str().unwrap(), "--episodes", "2", "--level", "0"],

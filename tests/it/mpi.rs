@@ -3,7 +3,7 @@
 //! the job without corrupting any checkpoint.
 #![cfg(feature = "mpi")]
 
-use blockpuzzle::train::checkpoint;
+use blockpuzzle::learn::train::checkpoint;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};

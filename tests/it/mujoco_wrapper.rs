@@ -1,6 +1,6 @@
 //! The safe MuJoCo wrapper against the real library.
 
-use blockpuzzle::mj::{Data, MjError, Model, ObjType, Warning};
+use blockpuzzle::sim::mj::{Data, MjError, Model, ObjType, Warning};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -111,7 +111,7 @@ fn copy_restores_state_exactly() {
 fn nan_state_raises_warning_counters() {
     let m = Arc::new(Model::from_xml_string(PENDULUM, Path::new("/tmp/x.xml")).unwrap());
     let mut d = Data::new(m).unwrap();
-    blockpuzzle::mj::install_handlers();
+    blockpuzzle::sim::mj::install_handlers();
     d.qvel_mut()[2] = f64::NAN;
     d.step().unwrap();
     assert!(d.warning_count(Warning::BadQvel) > 0);
@@ -120,8 +120,8 @@ fn nan_state_raises_warning_counters() {
 #[test]
 fn version_is_the_engine_built_for() {
     let want = if cfg!(feature = "mujoco3") { "3.11.0" } else { "2.2.2" };
-    assert_eq!(blockpuzzle::mj::version(), want);
-    assert_eq!(blockpuzzle::mj::header_version(), want);
+    assert_eq!(blockpuzzle::sim::mj::version(), want);
+    assert_eq!(blockpuzzle::sim::mj::header_version(), want);
 }
 
 /// A fatal MuJoCo error (here: its stack is too small once the ball touches

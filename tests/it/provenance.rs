@@ -1,13 +1,13 @@
-//! Every result says what made it (crate::provenance), and results of
+//! Every result says what made it (crate::benchmark::provenance), and results of
 //! different engines, suites or task contents are never put in one column:
 //! the writers' provenance blocks, the task hash of a suite row, `results
 //! compare` and `results leaderboard`, and the committed leaderboard is what
 //! its result files give.
 #![cfg(feature = "train")]
 
-use blockpuzzle::evaluate::{evaluate_suite, Baseline, Subject, SuiteResult};
-use blockpuzzle::provenance::Harness;
-use blockpuzzle::results::{self, ResultFile};
+use blockpuzzle::benchmark::evaluate::{evaluate_suite, Baseline, Subject, SuiteResult};
+use blockpuzzle::benchmark::provenance::Harness;
+use blockpuzzle::benchmark::results::{self, ResultFile};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
@@ -35,7 +35,7 @@ episodes = 3
 "#;
 
 fn obs_hash_on(suite: &Path) -> SuiteResult {
-    let suite = blockpuzzle::suite::load(suite.to_str().unwrap()).unwrap();
+    let suite = blockpuzzle::benchmark::suite::load(suite.to_str().unwrap()).unwrap();
     evaluate_suite(Subject::Baseline(Baseline::ObsHash), &suite, 2, Harness::Cli, &mut |_, _, _, _| Ok(())).unwrap()
 }
 
@@ -49,7 +49,7 @@ fn a_suite_result_names_engine_package_policy_suite_and_each_task() {
     std::fs::write(&suite, SUITE).unwrap();
     let a = obs_hash_on(&suite);
     let p = &a.provenance;
-    assert_eq!(p.build.mujoco, blockpuzzle::mj::version());
+    assert_eq!(p.build.mujoco, blockpuzzle::sim::mj::version());
     assert_eq!(p.build.blockpuzzle, env!("CARGO_PKG_VERSION"));
     assert_eq!(
         (p.harness, p.policy.name.as_str(), p.policy.sha256.as_deref()),
@@ -86,7 +86,7 @@ fn a_shortened_run_says_so_and_is_never_ranked() {
     let path = dir.path().join("edited.toml");
     std::fs::write(&path, SUITE).unwrap();
     // The library: rows cut to 2 episodes, the result's suite id says so, each row is reported once.
-    let suite = blockpuzzle::suite::load(path.to_str().unwrap()).unwrap();
+    let suite = blockpuzzle::benchmark::suite::load(path.to_str().unwrap()).unwrap();
     assert!(suite.clone().first_episodes(0).is_err());
     let short = suite.first_episodes(2).unwrap();
     let mut heard = Vec::new();
@@ -149,10 +149,10 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&a).unwrap()).unwrap();
     assert_eq!(v["provenance"]["harness"], "cli");
-    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::mj::version().as_str());
+    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::sim::mj::version().as_str());
     assert_eq!(v["provenance"]["policy"]["name"], "baseline:scripted");
     let md = std::fs::read_to_string(a.with_extension("md")).unwrap();
-    assert!(md.contains(&format!("Made on MuJoCo {}", blockpuzzle::mj::version())), "{md}");
+    assert!(md.contains(&format!("Made on MuJoCo {}", blockpuzzle::sim::mj::version())), "{md}");
 
     // The same file twice compares; the copy claiming another engine or suite text is refused.
     let o = bp(&["results", "compare", a.to_str().unwrap(), a.to_str().unwrap()]);
@@ -200,7 +200,7 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
     e["successes"] = s.into();
     let rate = s as f64 / n as f64;
     e["success_rate"] = rate.into();
-    e["ci95"] = serde_json::json!(blockpuzzle::outcome::wilson95(s, n));
+    e["ci95"] = serde_json::json!(blockpuzzle::episode::outcome::wilson95(s, n));
     if s == 0 {
         e["mean_steps_to_success"] = serde_json::Value::Null;
     }
@@ -220,19 +220,23 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     let o = bp(&["eval", "--checkpoint", "ReachAvoid-v0-ddpg", "--episodes", "2", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    let (meta, saved) =
-        blockpuzzle::zoo::load(&blockpuzzle::zoo::find(&blockpuzzle::zoo::dir(), "ReachAvoid-v0-ddpg").unwrap())
-            .unwrap();
+    let (meta, saved) = blockpuzzle::benchmark::zoo::load(
+        &blockpuzzle::benchmark::zoo::find(&blockpuzzle::benchmark::zoo::dir(), "ReachAvoid-v0-ddpg").unwrap(),
+    )
+    .unwrap();
     assert_eq!(v["task_sha256"], meta.task.hash.as_str());
     assert_eq!(v["provenance"]["policy"]["sha256"], saved.policy_id("x").sha256.unwrap().as_str());
-    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::mj::version().as_str());
+    assert_eq!(v["provenance"]["mujoco"], blockpuzzle::sim::mj::version().as_str());
 
     // The paper's table says which engine, and each policy by content.
     let table = dir.path().join("t.md");
     let o = bp(&["table", "--ddpg", "BlocksChoose-v0-ddpg", "--episodes", "2", "--out", table.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     let md = std::fs::read_to_string(&table).unwrap();
-    assert!(md.contains(&format!("Made on MuJoCo {}", blockpuzzle::mj::version())) && md.contains("sha256:"), "{md}");
+    assert!(
+        md.contains(&format!("Made on MuJoCo {}", blockpuzzle::sim::mj::version())) && md.contains("sha256:"),
+        "{md}"
+    );
 
     // A zoo entry exported with an evaluation records it with its engine; `zoo evaluate` plays it
     // again on this engine and replaces it; a record without provenance with the same numbers is
@@ -242,17 +246,17 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     args.extend(["--trained-with", "t", "--evaluate", "3", "--zoo", z.to_str().unwrap()]);
     assert!(bp(&args).status.success());
     let entry = z.join("r.json");
-    let (meta, _) = blockpuzzle::zoo::load(&entry).unwrap();
+    let (meta, _) = blockpuzzle::benchmark::zoo::load(&entry).unwrap();
     let recorded = meta.evaluations.len();
     let first = meta.evaluations[0].clone();
-    assert_eq!(first.mujoco(), Some(blockpuzzle::mj::version().as_str()));
+    assert_eq!(first.mujoco(), Some(blockpuzzle::sim::mj::version().as_str()));
     assert_eq!(first.task_sha256.as_deref(), Some(meta.task.hash.as_str()));
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
     v["evaluations"][0].as_object_mut().unwrap().remove("provenance");
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let o = bp(&["zoo", "evaluate", "r", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
-    let (meta, _) = blockpuzzle::zoo::load(&entry).unwrap();
+    let (meta, _) = blockpuzzle::benchmark::zoo::load(&entry).unwrap();
     assert_eq!(meta.evaluations.len(), recorded, "confirmed, not added: {:?}", meta.evaluations);
     assert!(meta.evaluations.contains(&first), "{:?}", meta.evaluations);
     // `zoo list` shows this engine's evaluations, and names the others.

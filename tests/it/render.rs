@@ -54,7 +54,7 @@ fn blocks_appear_where_the_camera_projects_them() {
 #[cfg(feature = "train")]
 mod cli {
     use super::*;
-    use blockpuzzle::rules::Colour;
+    use blockpuzzle::sim::rules::Colour;
     use image::AnimationDecoder;
 
     fn bp(args: &[&str], no_egl: bool) -> std::process::Output {
@@ -97,7 +97,7 @@ mod cli {
             false,
         );
         assert!(o.status.success(), "{}", text(&o));
-        let steps = blockpuzzle::rollout::read_dump(std::path::Path::new(&traj)).unwrap()[0].steps.len();
+        let steps = blockpuzzle::episode::rollout::read_dump(std::path::Path::new(&traj)).unwrap()[0].steps.len();
         let decoder = image::codecs::gif::GifDecoder::new(std::fs::File::open(&gif).unwrap()).unwrap();
         let frames = decoder.into_frames().collect_frames().unwrap();
         assert_eq!(frames.len(), steps + 1, "reset state + one frame per step");
@@ -281,7 +281,7 @@ mod cli {
         let args = format!("rollout --env BlocksChooseShuffled-v0 --policy random --episodes 1 --seed {seed} --out");
         let o = bp(&args.split(' ').chain([traj.to_str().unwrap()]).collect::<Vec<_>>(), false);
         assert!(o.status.success(), "{}", text(&o));
-        let ep = &blockpuzzle::rollout::read_dump(&traj).unwrap()[0];
+        let ep = &blockpuzzle::episode::rollout::read_dump(&traj).unwrap()[0];
         assert_eq!(ep.objects[2].colour, Colour::Green);
         let (frames, _) = blockpuzzle::render::replay::episode_frames(ep, &view).unwrap();
         let px = frames[0].get_pixel(x, y);

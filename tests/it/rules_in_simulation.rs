@@ -1,7 +1,7 @@
 //! Each rule scenario in simulation, with blocks placed by hand.
 
 use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError};
-use blockpuzzle::rules::{ContactState, Verdict};
+use blockpuzzle::sim::rules::{ContactState, Verdict};
 use blockpuzzle::task::TaskSpec;
 use blockpuzzle::Colour::{self, *};
 

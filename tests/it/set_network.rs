@@ -4,13 +4,13 @@
 //! round-trips through the zoo (format 3) acting identically.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::arch::{Arch, NetConfig, NetKind, Pooling};
-use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
-use blockpuzzle::agents::shared::SharedConfig;
-use blockpuzzle::agents::AnyPolicy;
+use blockpuzzle::benchmark::saved::SavedPolicy;
+use blockpuzzle::benchmark::zoo::{self, ExportInfo};
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, ObsMode, ObsSpec};
-use blockpuzzle::saved::SavedPolicy;
-use blockpuzzle::zoo::{self, ExportInfo};
+use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind, Pooling};
+use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::learn::agents::shared::SharedConfig;
+use blockpuzzle::learn::agents::AnyPolicy;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -1,7 +1,7 @@
 //! Evaluation suites: the built-in ones load, malformed files are clear
 //! errors naming the fix, and `eval --suite` runs end to end.
 
-use blockpuzzle::suite::{self, BUILTIN};
+use blockpuzzle::benchmark::suite::{self, BUILTIN};
 
 fn parse(text: &str) -> Result<suite::Suite, String> {
     suite::parse(text, "test.toml", None).map_err(|e| e.to_string())

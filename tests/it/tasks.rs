@@ -3,9 +3,9 @@
 //! the scripted controllers solve them, and task files round-trip.
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError};
+use blockpuzzle::episode::rollout::run_episode;
 use blockpuzzle::policy::{RandomPolicy, ScriptedPolicy};
-use blockpuzzle::rollout::run_episode;
-use blockpuzzle::rules::Colour;
+use blockpuzzle::sim::rules::Colour;
 use blockpuzzle::task::Task;
 
 fn make(id: &str) -> BlockEnv {

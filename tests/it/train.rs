@@ -2,12 +2,12 @@
 //! checkpoints, policies.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::arch::{NetConfig, NetKind, Pooling};
-use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
-use blockpuzzle::agents::shared::SharedConfig;
-use blockpuzzle::agents::AnyPolicy;
-use blockpuzzle::load::load_policy;
-use blockpuzzle::train::{
+use blockpuzzle::benchmark::load::load_policy;
+use blockpuzzle::learn::agents::arch::{NetConfig, NetKind, Pooling};
+use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::learn::agents::shared::SharedConfig;
+use blockpuzzle::learn::agents::AnyPolicy;
+use blockpuzzle::learn::train::{
     branch, checkpoint, read_progress, train, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig,
 };
 use std::path::Path;
@@ -18,7 +18,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         suite: None,
         families: None,
         generator_seeds: None,
-        active_tasks: blockpuzzle::train::DEFAULT_ACTIVE_TASKS,
+        active_tasks: blockpuzzle::learn::train::DEFAULT_ACTIVE_TASKS,
         split: "train".into(),
         counts: None,
         workers: 2,
@@ -105,9 +105,9 @@ fn short_run_writes_every_run_directory_file() {
     assert_eq!(task.id, "BlocksTouch-v0");
     assert_eq!(task.hash, blockpuzzle::env::registry::task("BlocksTouch-v0").unwrap().source.hash);
     // The builds and engines that ran its epochs (one here, from epoch 0).
-    let spans = blockpuzzle::train::RunDir { dir: dir.path().to_owned() }.read_provenance().unwrap();
+    let spans = blockpuzzle::learn::train::RunDir { dir: dir.path().to_owned() }.read_provenance().unwrap();
     assert_eq!(spans.len(), 1);
-    assert_eq!((spans[0].from_epoch, spans[0].build.mujoco.clone()), (0, blockpuzzle::mj::version()));
+    assert_eq!((spans[0].from_epoch, spans[0].build.mujoco.clone()), (0, blockpuzzle::sim::mj::version()));
     // a second fresh run into the same directory is refused
     let err = train(&tiny("BlocksTouch-v0", 2), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--resume"), "{err}");
@@ -127,7 +127,7 @@ fn resume_restores_the_exact_state() {
     );
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
     // A resume on the same build records no new span.
-    assert_eq!(blockpuzzle::train::RunDir { dir: split.path().to_owned() }.read_provenance().unwrap().len(), 1);
+    assert_eq!(blockpuzzle::learn::train::RunDir { dir: split.path().to_owned() }.read_provenance().unwrap().len(), 1);
 }
 
 /// A branch continues its parent's state exactly (no change: the same run
@@ -507,7 +507,7 @@ fn sac_resumes_exactly_and_saves_a_deterministic_policy() {
 
 #[test]
 fn expert_advantage_uses_the_critic_of_the_experts_epoch() {
-    use blockpuzzle::saved::SavedPolicy;
+    use blockpuzzle::benchmark::saved::SavedPolicy;
     let exp = tempfile::tempdir().unwrap();
     expert(exp.path());
     let adv = |expert: &Path| AggrevatedConfig {
@@ -585,7 +585,7 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     let run = dir.path().join("run");
     let env = file.to_str().unwrap();
     train(&tiny(env, 1), &run, false, &mut quiet).unwrap();
-    let saved = blockpuzzle::load::load_policy(&run).unwrap();
+    let saved = blockpuzzle::benchmark::load::load_policy(&run).unwrap();
     assert_eq!(saved.env_id, "MyReach-v0");
     assert_eq!(saved.task.as_ref().unwrap().id, "MyReach-v0");
     assert!(std::fs::read_to_string(run.join("config.json")).unwrap().contains("MyReach-v0"));
@@ -605,7 +605,7 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
     std::fs::remove_file(&file).unwrap();
     let rows = train(&tiny(env, 3), &run, true, &mut quiet).unwrap();
     assert_eq!(rows.len(), 3);
-    let saved = blockpuzzle::load::load_policy(&run).unwrap();
+    let saved = blockpuzzle::benchmark::load::load_policy(&run).unwrap();
     let task = blockpuzzle::env::registry::recorded(saved.task.as_ref().unwrap()).unwrap();
     assert_eq!((task.id(), task.spec.max_episode_steps), ("MyReach-v0", 50));
 }
@@ -643,7 +643,7 @@ fn checkpoints_with_the_old_counter_fields_still_load() {
     assert_eq!(then.agent.state(), now.agent.state());
     assert_eq!(then.agent.norm(), now.agent.norm());
 
-    let run = blockpuzzle::train::RunDir { dir: dir.path().to_owned() };
+    let run = blockpuzzle::learn::train::RunDir { dir: dir.path().to_owned() };
     let recorded = run.read_config().unwrap();
     let mut json: serde_json::Value = serde_json::from_slice(&std::fs::read(run.config()).unwrap()).unwrap();
     old_settings(&mut json);
@@ -692,7 +692,7 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
     let err = train(&flat, split.path(), true, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--net"), "{err}");
     let pairs = TrainConfig {
-        hindsight_strategy: blockpuzzle::hindsight::Strategy::Pairs,
+        hindsight_strategy: blockpuzzle::env::hindsight::Strategy::Pairs,
         ..tiny_set("BlocksChooseN-v0", 4, Pooling::MeanMax)
     };
     let err = train(&pairs, split.path(), true, &mut quiet).unwrap_err().to_string();
@@ -700,7 +700,7 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
     // The policy plays BlocksChoose-v0 (three slots) and BlocksTouch-v0 (two) as well.
     for id in ["BlocksChoose-v0", "BlocksTouch-v0", "BlocksChooseN-v0"] {
         let task = blockpuzzle::env::registry::task(id).unwrap();
-        let spec = blockpuzzle::evaluate::EvalSpec {
+        let spec = blockpuzzle::benchmark::evaluate::EvalSpec {
             task: &task,
             challenge: false,
             distribution: None,
@@ -710,7 +710,7 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
             threads: 2,
         };
         let path = straight.path().join("policy.json");
-        let r = blockpuzzle::evaluate::evaluate(&path, pa.clone(), &spec).unwrap();
+        let r = blockpuzzle::benchmark::evaluate::evaluate(&path, pa.clone(), &spec).unwrap();
         assert_eq!(r.episodes, 4, "{id}");
     }
     // Hindsight colours ran: the environments recorded contacts (progress has the columns).
@@ -722,7 +722,7 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
 fn attention_pooling_trains_and_its_policy_acts_as_saved() {
     let dir = tempfile::tempdir().unwrap();
     let c = TrainConfig {
-        hindsight_strategy: blockpuzzle::hindsight::Strategy::Pairs,
+        hindsight_strategy: blockpuzzle::env::hindsight::Strategy::Pairs,
         ..tiny_set("BlocksChoose-v0", 1, Pooling::Attention)
     };
     train(&c, dir.path(), false, &mut quiet).unwrap();
@@ -733,7 +733,8 @@ fn attention_pooling_trains_and_its_policy_acts_as_saved() {
     assert_eq!(cfg.net.set_pooling, Pooling::Attention);
     assert!(cfg.title().contains("set network + attention") && cfg.title().contains("hindsight colours 2"));
     assert!(
-        cfg.hindsight_strategy == blockpuzzle::hindsight::Strategy::Pairs && cfg.title().contains("hindsight pairs")
+        cfg.hindsight_strategy == blockpuzzle::env::hindsight::Strategy::Pairs
+            && cfg.title().contains("hindsight pairs")
     );
 }
 
@@ -779,13 +780,13 @@ fn an_entity_set_network_trains_and_its_policy_reads_the_entities() {
         blockpuzzle::env::BlockEnv::new(EnvConfig { obs_mode: mode, ..EnvConfig::new(task) }).unwrap()
     };
     let mut avoid = env_of("BlocksAvoid-v0", ObsMode::Entities);
-    let mut t = blockpuzzle::evaluate::trained_policy(&path, saved.clone(), &avoid).unwrap();
+    let mut t = blockpuzzle::benchmark::evaluate::trained_policy(&path, saved.clone(), &avoid).unwrap();
     let (obs, _) = avoid.reset(Some(0)).unwrap();
     let a = blockpuzzle::policy::Policy::act(&mut t, &obs);
     assert!(a.iter().all(|x| x.abs() <= 1.0), "{a:?}");
-    let e = blockpuzzle::evaluate::trained_policy(&path, saved, &env_of("BlocksAvoid-v0", ObsMode::Objects));
+    let e = blockpuzzle::benchmark::evaluate::trained_policy(&path, saved, &env_of("BlocksAvoid-v0", ObsMode::Objects));
     assert!(e.unwrap_err().to_string().contains("give the environment obs_mode entities"));
-    let wrong = blockpuzzle::agents::arch::Arch::of(&ObsSpec::new(ObsMode::Objects, 3), &c.net).unwrap_err();
+    let wrong = blockpuzzle::learn::agents::arch::Arch::of(&ObsSpec::new(ObsMode::Objects, 3), &c.net).unwrap_err();
     assert!(wrong.contains("--net entity reads the `entities` observation"), "{wrong}");
 }
 
@@ -1081,7 +1082,8 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     let b = train(&multi(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
     assert_eq!(comparable(&a), comparable(&branched));
-    let recorded = |dir: &std::path::Path| blockpuzzle::train::RunDir { dir: dir.to_owned() }.read_config().unwrap();
+    let recorded =
+        |dir: &std::path::Path| blockpuzzle::learn::train::RunDir { dir: dir.to_owned() }.read_config().unwrap();
     assert_eq!(recorded(&child).tasks, recorded(split.path()).tasks);
     assert_eq!(a.iter().map(|r| r.level).collect::<Vec<_>>(), [0, 2, 4], "both tasks move up every epoch");
     let state = checkpoint::peek_state(&straight.path().join("checkpoint.bin")).unwrap();
@@ -1115,7 +1117,7 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     let ids: Vec<&str> = saved.tasks.iter().map(|t| t.id.as_str()).collect();
     assert_eq!(ids, ["BlocksTouch-v0", "BlocksChoose-v0"]);
     let zoo = tempfile::tempdir().unwrap();
-    let info = blockpuzzle::zoo::ExportInfo {
+    let info = blockpuzzle::benchmark::zoo::ExportInfo {
         name: "two-tasks".into(),
         description: "a multi-task test entry".into(),
         trained_with: "tests/it/train.rs".into(),
@@ -1125,14 +1127,14 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
         keep_critic: false,
         overwrite: false,
     };
-    let entry = blockpuzzle::zoo::export(zoo.path(), &saved, &info).unwrap();
-    let (meta, back) = blockpuzzle::zoo::load(&entry).unwrap();
-    assert_eq!(meta.format, blockpuzzle::zoo::FORMAT);
+    let entry = blockpuzzle::benchmark::zoo::export(zoo.path(), &saved, &info).unwrap();
+    let (meta, back) = blockpuzzle::benchmark::zoo::load(&entry).unwrap();
+    assert_eq!(meta.format, blockpuzzle::benchmark::zoo::FORMAT);
     assert_eq!((meta.trained_on(), meta.task.id.as_str()), ("BlocksTouch-v0+BlocksChoose-v0", "BlocksTouch-v0"));
     assert_eq!(meta.probes[0].obs.len(), state.obs_dim, "the probes are in the policy's layout");
     assert_eq!((back.env_id.as_str(), back.task.is_none(), &back.tasks), (saved.env_id.as_str(), true, &saved.tasks));
     assert_eq!(back.policy_id("x").sha256, saved.policy_id("x").sha256);
-    let one = blockpuzzle::saved::SavedPolicy { tasks: vec![saved.tasks[0].clone()], ..saved.clone() };
+    let one = blockpuzzle::benchmark::saved::SavedPolicy { tasks: vec![saved.tasks[0].clone()], ..saved.clone() };
     assert_ne!(one.policy_id("x").sha256, saved.policy_id("x").sha256, "the tasks are part of what made it");
     // `zoo export --evaluate` of it needs the tasks to evaluate on, and says so before writing anything.
     let o = std::process::Command::new(crate::common::CLI)
@@ -1149,10 +1151,10 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     flat.algo = Algo::named("ddpg").unwrap();
     train(&flat, flat_dir.path(), false, &mut quiet).unwrap();
     let flat_saved = load_policy(&flat_dir.path().join("policy.json")).unwrap();
-    let e = blockpuzzle::zoo::export(
+    let e = blockpuzzle::benchmark::zoo::export(
         zoo.path(),
         &flat_saved,
-        &blockpuzzle::zoo::ExportInfo { name: "flat".into(), ..info.clone() },
+        &blockpuzzle::benchmark::zoo::ExportInfo { name: "flat".into(), ..info.clone() },
     )
     .unwrap_err();
     assert!(e.to_string().contains("flat network trained on several tasks"), "{e}");
@@ -1232,7 +1234,7 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     let b = train(&stream(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
     assert!(a.iter().all(|r| r.level == 0) && a[2].env_steps > a[0].env_steps);
-    let config = blockpuzzle::train::RunDir { dir: straight.path().to_owned() }.read_config().unwrap();
+    let config = blockpuzzle::learn::train::RunDir { dir: straight.path().to_owned() }.read_config().unwrap();
     let record = config.stream.clone().unwrap();
     assert!(config.tasks.is_empty() && config.task.is_none());
     assert_eq!(record.generator_seeds, [0, 3]);
@@ -1250,7 +1252,7 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     let hashes: Vec<&str> = tasks.iter().map(|t| t.hash.as_str()).collect();
     assert_eq!(hashes, record.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>());
     // Named as the same tasks listed would be.
-    let listed = blockpuzzle::saved::SavedPolicy { tasks: tasks.clone(), stream: None, ..saved.clone() };
+    let listed = blockpuzzle::benchmark::saved::SavedPolicy { tasks: tasks.clone(), stream: None, ..saved.clone() };
     assert_eq!(listed.policy_id("p"), saved.policy_id("p"));
     // An edited record is refused by what it draws, naming the task or the family.
     let mut edited = record.clone();
@@ -1267,10 +1269,10 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     assert!(e.contains("push") && e.contains("by hash alone"), "{e}");
     // The zoo keeps the record too (format 6), and loading draws the tasks again and refuses an edited one.
     let zoo = tempfile::tempdir().unwrap();
-    let info = blockpuzzle::zoo::ExportInfo { name: "streamed".into(), ..Default::default() };
-    let json = blockpuzzle::zoo::export(zoo.path(), &saved, &info).unwrap().with_extension("json");
-    let (meta, loaded) = blockpuzzle::zoo::load(&json).unwrap();
-    assert_eq!(meta.format, blockpuzzle::zoo::FORMAT);
+    let info = blockpuzzle::benchmark::zoo::ExportInfo { name: "streamed".into(), ..Default::default() };
+    let json = blockpuzzle::benchmark::zoo::export(zoo.path(), &saved, &info).unwrap().with_extension("json");
+    let (meta, loaded) = blockpuzzle::benchmark::zoo::load(&json).unwrap();
+    assert_eq!(meta.format, blockpuzzle::benchmark::zoo::FORMAT);
     let multi = meta.multi_task.as_ref().unwrap();
     assert!(multi.tasks.is_empty() && multi.stream.as_ref() == Some(&record) && meta.task.hash == hashes[0]);
     assert_eq!(loaded.policy_id("p"), saved.policy_id("p"));
@@ -1280,7 +1282,7 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     let edit = at + text[at..].find(&candidate).unwrap();
     let edited = format!("{}\"candidate\": 7{}", &text[..edit], &text[edit + candidate.len()..]);
     std::fs::write(&json, edited).unwrap();
-    let e = blockpuzzle::zoo::load(&json).unwrap_err().to_string();
+    let e = blockpuzzle::benchmark::zoo::load(&json).unwrap_err().to_string();
     assert!(e.contains(&record.tasks[1].id) && e.contains("edited"), "{e}");
     // The layout has a slot for every block the families can draw (push: 1 + 1 + 1 + 2 + 2), whichever
     // seeds the pool holds, so that pools of the same families train policies of one layout.

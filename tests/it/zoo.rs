@@ -3,15 +3,15 @@
 //! policies they were exported from.
 #![cfg(feature = "train")]
 
-use blockpuzzle::agents::arch::Arch;
-use blockpuzzle::agents::ddpg::{Ddpg, DdpgConfig};
-use blockpuzzle::agents::pggd::{Pggd, PggdConfig};
-use blockpuzzle::agents::shared::SharedConfig;
-use blockpuzzle::agents::AnyPolicy;
+use blockpuzzle::benchmark::load::load_policy;
+use blockpuzzle::benchmark::saved::SavedPolicy;
+use blockpuzzle::benchmark::zoo::{self, ExportInfo};
 use blockpuzzle::env::registry;
-use blockpuzzle::load::load_policy;
-use blockpuzzle::saved::SavedPolicy;
-use blockpuzzle::zoo::{self, ExportInfo};
+use blockpuzzle::learn::agents::arch::Arch;
+use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::learn::agents::pggd::{Pggd, PggdConfig};
+use blockpuzzle::learn::agents::shared::SharedConfig;
+use blockpuzzle::learn::agents::AnyPolicy;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;

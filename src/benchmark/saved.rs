@@ -1,0 +1,137 @@
+//! A trained policy as a file: [`SavedPolicy`] (the actor, its normaliser,
+//! the task it was trained on and, for DDPG, its critic), the JSON form runs
+//! write (`policy.json`, `best_policy.json`, snapshots). The zoo's
+//! safetensors form is `crate::benchmark::zoo`; a policy named on the command line
+//! (file, run directory or zoo name) is resolved by `crate::benchmark::load`.
+
+use crate::policy::actor::mlp::PlainNet;
+use crate::policy::actor::AnyPolicy;
+use anyhow::{Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A run directory's configuration file: its presence makes a folder a run directory.
+pub const CONFIG_FILE: &str = "config.json";
+/// A run's latest policy, in its run directory.
+pub const POLICY_FILE: &str = "policy.json";
+/// A run's policy of the best finals success, in its run directory.
+pub const BEST_POLICY_FILE: &str = "best_policy.json";
+
+/// A saved policy: the actor, its normaliser and what it was trained on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SavedPolicy {
+    /// Environment id it was trained on.
+    pub env_id: String,
+    /// The task it was trained on, by content (absent in policies saved before tasks were files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub task: Option<crate::task::TaskSource>,
+    /// A policy trained on several tasks (`train --env A,B` or `--suite S`): its training tasks by
+    /// content, in the run's order (`task` is then absent and `env_id` the run's label; empty for
+    /// one task and in policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tasks: Vec<crate::task::TaskSource>,
+    /// A policy trained on a stream of generated tasks (`train --families F --generator-seeds A..B`): the
+    /// stream's record, from which its tasks are drawn again ([`SavedPolicy::training_tasks`]); `tasks` is
+    /// then empty (a thousand tasks by content would be megabytes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stream: Option<crate::benchmark::stream::StreamRecord>,
+    /// Epochs of training behind it.
+    pub epoch: usize,
+    /// Environment steps of training behind it (absent in policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub env_steps: Option<u64>,
+    /// Its finals success when saved.
+    pub finals_success: f64,
+    /// The policy.
+    pub policy: AnyPolicy,
+    /// DDPG's critic Q(s, a) of the same epoch (input: the normalised
+    /// observation, then the action), so that the policy can be an AggreVaTeD
+    /// expert with `--pg-weight expert-advantage`. Absent for PGGD and in
+    /// policies saved before the critic was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critic: Option<PlainNet>,
+}
+
+impl SavedPolicy {
+    /// Whether the policy (and critic, if kept) can act: see
+    /// [`AnyPolicy::check`]; the critic maps observation and action to one value.
+    ///
+    /// # Errors
+    /// The first problem, named.
+    pub fn check(&self) -> Result<(), String> {
+        self.policy.check()?;
+        if let Some(c) = &self.critic {
+            let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
+            c.check(n_in, 1, crate::policy::actor::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
+        }
+        Ok(())
+    }
+}
+
+impl SavedPolicy {
+    /// The tasks it was trained on, by content, in the run's order: its one task, a multi-task run's
+    /// tasks, or a stream's drawn again from its record (empty for policies saved before tasks were files).
+    ///
+    /// # Errors
+    /// A stream record whose tasks do not draw as recorded ([`crate::benchmark::stream::StreamRecord::draw`]).
+    pub fn training_tasks(&self) -> Result<Vec<crate::task::TaskSource>, crate::benchmark::stream::RecordError> {
+        Ok(match (&self.task, &self.stream) {
+            (Some(t), _) => vec![t.clone()],
+            (None, Some(stream)) => stream.draw()?.into_iter().map(|t| t.source).collect(),
+            (None, None) => self.tasks.clone(),
+        })
+    }
+
+    /// The block slots of the observation it reads: a multi-task run shows every task in the layout
+    /// of its most blocks (a stream: of the most its families can draw), so a flat or `objects`
+    /// policy of several tasks reads that layout on any task; 0 for a one-task policy and a set
+    /// network (each reads a task's own layout).
+    ///
+    /// # Errors
+    /// A recorded task that no longer compiles to its hash.
+    pub fn slots(&self) -> Result<usize, crate::task::TaskError> {
+        if self.policy.net().set.is_some() || !self.is_multi_task() {
+            return Ok(0);
+        }
+        let most = self.stream.as_ref().map_or(0, |s| s.max_blocks);
+        let tasks = self.tasks.iter().map(|t| t.compile().map(|t| t.object_count())).collect::<Result<Vec<_>, _>>()?;
+        Ok(tasks.into_iter().max().unwrap_or(0).max(most))
+    }
+
+    /// Whether it was trained on more than one task (a list, a suite split or a stream).
+    pub fn is_multi_task(&self) -> bool {
+        !self.tasks.is_empty() || self.stream.is_some()
+    }
+
+    /// The policy as results name it: `name` as the user gave it and the
+    /// `sha256:` of what acts ([`AnyPolicy::canonical`]) with the task it was
+    /// trained on (its content hash; a multi-task policy's tasks' hashes joined by `+`;
+    /// the environment id for policies saved before tasks were files).
+    pub fn policy_id(&self, name: &str) -> crate::benchmark::provenance::PolicyId {
+        let task = match (&self.task, &self.tasks[..], &self.stream) {
+            (Some(t), _, _) => t.hash.clone(),
+            // A stream's tasks are named as a list of the same tasks would be.
+            (None, _, Some(s)) => s.tasks.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
+            (None, [], None) => self.env_id.clone(),
+            (None, all, None) => all.iter().map(|t| t.hash.as_str()).collect::<Vec<_>>().join("+"),
+        };
+        let text = format!("{}\ntask {task}", self.policy.canonical());
+        crate::benchmark::provenance::PolicyId {
+            name: name.to_owned(),
+            sha256: Some(crate::benchmark::provenance::sha256(text.as_bytes())),
+        }
+    }
+}
+
+/// Reads a policy file written by a run (JSON), checked ([`SavedPolicy::check`]).
+///
+/// # Errors
+/// A missing, malformed or damaged file, named.
+pub fn read(file: &Path) -> Result<SavedPolicy> {
+    let text = crate::support::io::read_text(file, "policy file", crate::support::limits::POLICY_FILE_BYTES)
+        .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
+    let saved: SavedPolicy =
+        serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;
+    saved.check().map_err(|e| anyhow::anyhow!("policy {} is not usable: {e}", file.display()))?;
+    Ok(saved)
+}

@@ -1,0 +1,589 @@
+//! Task streams: training tasks generated from families over a range of generator seeds, with no task
+//! file written by hand (`train --families push,topple --generator-seeds 0..256`).
+//!
+//! A stream's pool is every task the families give for the seeds of the range (a seed whose candidates
+//! all fail gives none), in family order, then seed order. Working a seed out costs the solver's check
+//! ([`crate::episode::generate`]): up to `max_candidates × episodes` episodes. A disk cache keeps each seed's
+//! kept candidate by family hash and engine, so a second run over the same pool draws its tasks
+//! without playing (the kept candidate is drawn again and its hash compared with the cached one).
+//! The cache is a help, never a source of truth: a missing, unreadable or stale entry is worked out
+//! again.
+//!
+//! A stream records itself ([`StreamRecord`]): its families by name and hash, its seed range and each
+//! task by id, seed, candidate and hash. A run's `config.json` keeps that record; resume compares it.
+//! Streams refuse seeds that a built-in suite holds out ([`crate::benchmark::suite::held_out_generator_seeds`]).
+
+use crate::episode::generate::{generate_seed, SeedResult};
+use crate::task::family::Family;
+use crate::task::Task;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The most generator seeds one stream may span (per family).
+pub const MAX_STREAM_SEEDS: u64 = 100_000;
+
+/// A range of generator seeds `[first, end)`, written `FIRST..END` on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SeedRange(pub [u64; 2]);
+
+impl SeedRange {
+    /// The number of seeds in the range.
+    pub fn len(&self) -> u64 {
+        self.0[1].saturating_sub(self.0[0])
+    }
+
+    /// Whether the range holds no seed.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl std::fmt::Display for SeedRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.0[0], self.0[1])
+    }
+}
+
+impl std::str::FromStr for SeedRange {
+    type Err = String;
+
+    /// `FIRST..END` (END excluded), e.g. `0..1024`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let usage = "write the generator seeds as FIRST..END (END excluded), e.g. 0..1024";
+        let Some((a, b)) = s.trim().split_once("..") else {
+            return Err(format!("{s:?} is not a seed range; {usage}"));
+        };
+        let num = |x: &str| x.trim().parse::<u64>().map_err(|_| format!("{x:?} in {s:?} is not a seed; {usage}"));
+        let (first, end) = (num(a)?, num(b)?);
+        if end <= first {
+            return Err(format!("the seed range {s} is empty (END must be above FIRST); {usage}"));
+        }
+        if end - first > MAX_STREAM_SEEDS {
+            return Err(format!(
+                "the seed range {s} spans {} seeds; a stream spans at most {MAX_STREAM_SEEDS} seeds a family",
+                end - first
+            ));
+        }
+        Ok(SeedRange([first, end]))
+    }
+}
+
+/// A stream's family, as recorded.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FamilyRecord {
+    /// As named on the command line (a shipped family's name or a file).
+    pub name: String,
+    /// The family's own name (`family = ...` in its file): generated ids are `FAMILY-SEED-v0`.
+    pub family: String,
+    /// `sha256:` of the family's content.
+    pub hash: String,
+    /// The family file's text, so that the pool can be drawn again anywhere ([`StreamRecord::draw`]):
+    /// with no family file, cache or solver. Empty in records written before it was kept.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub text: String,
+}
+
+/// One task of a stream's pool.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PoolTask {
+    /// `FAMILY-SEED-v0`.
+    pub id: String,
+    /// Index into [`StreamRecord::families`].
+    pub family: usize,
+    /// Its generator seed.
+    pub seed: u64,
+    /// The seed's kept candidate.
+    pub candidate: usize,
+    /// `sha256:` of the task's canonical form.
+    pub hash: String,
+}
+
+/// What a stream is: enough to draw its tasks again and to compare two runs' pools.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StreamRecord {
+    /// The families, in the order given.
+    pub families: Vec<FamilyRecord>,
+    /// The generator seeds `[first, end)` of every family.
+    pub generator_seeds: [u64; 2],
+    /// The pool's tasks, in family order, then seed order.
+    pub tasks: Vec<PoolTask>,
+    /// Seeds (over all families) whose candidates all failed: they give no task.
+    pub seeds_without_task: usize,
+    /// The most blocks any of the families can draw (the sum of its groups' largest counts): a stream
+    /// run's observation layout has so many block slots, whichever seeds its pool holds, so that runs
+    /// over pools of the same families read the same layout.
+    pub max_blocks: usize,
+}
+
+impl StreamRecord {
+    /// What differs between this pool and `other`, in words (empty: the same pool).
+    pub fn differences(&self, other: &StreamRecord) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.generator_seeds != other.generator_seeds {
+            out.push(format!(
+                "generator seeds {} against {}",
+                SeedRange(self.generator_seeds),
+                SeedRange(other.generator_seeds)
+            ));
+        }
+        for (a, b) in self.families.iter().zip(&other.families) {
+            if a.hash != b.hash {
+                out.push(format!("family {} ({} against {})", a.name, short(&a.hash), short(&b.hash)));
+            }
+        }
+        if self.families.len() != other.families.len() {
+            out.push(format!("{} families against {}", self.families.len(), other.families.len()));
+        }
+        if out.is_empty() && self.tasks != other.tasks {
+            let first = self.tasks.iter().zip(&other.tasks).find(|(a, b)| a != b);
+            out.push(match first {
+                Some((a, b)) => format!("task {} (candidate {} against {})", a.id, a.candidate, b.candidate),
+                None => format!("{} tasks against {}", self.tasks.len(), other.tasks.len()),
+            });
+        }
+        out
+    }
+}
+
+impl StreamRecord {
+    /// The pool's tasks drawn again from the families' recorded texts, each checked against its recorded
+    /// id and hash: a stream's tasks anywhere (a policy file, a zoo entry), with no family file, cache or
+    /// solver (each task is its seed's recorded candidate).
+    ///
+    /// # Errors
+    /// [`RecordError`]: a family recorded without its text (by a blockpuzzle before it kept
+    /// them), a text whose hash is not the recorded one, a task of no recorded family, a task that draws
+    /// otherwise than recorded (the record was edited, or another generator drew it).
+    pub fn draw(&self) -> Result<Vec<Task>, RecordError> {
+        let bad = RecordError;
+        let mut families = Vec::with_capacity(self.families.len());
+        for f in &self.families {
+            if f.text.is_empty() {
+                return Err(bad(format!(
+                    "the stream's family {} is recorded by hash alone (written before stream records kept their \
+                     families' texts): its tasks cannot be drawn from the record; train the policy again",
+                    f.name
+                )));
+            }
+            let family = Family::from_toml(&f.text, &f.name).map_err(|e| bad(format!("the stream's family: {e}")))?;
+            if family.hash != f.hash || family.spec.family != f.family {
+                return Err(bad(format!(
+                    "the stream's family {} is recorded as {} ({}), its text is {} ({}): the record was edited; \
+                     restore it",
+                    f.name,
+                    f.family,
+                    short(&f.hash),
+                    family.spec.family,
+                    short(&family.hash)
+                )));
+            }
+            families.push(family);
+        }
+        self.tasks
+            .iter()
+            .map(|t| {
+                let family = families.get(t.family).ok_or_else(|| {
+                    bad(format!(
+                        "the stream's task {} names family {} of {}: the record was edited; restore it",
+                        t.id,
+                        t.family,
+                        families.len()
+                    ))
+                })?;
+                let drawn = family
+                    .draw(t.seed, t.candidate)
+                    .map_err(|e| {
+                        bad(format!(
+                            "the stream's task {} (seed {}, candidate {}) no longer draws: {e}; the record was edited, \
+                             or this blockpuzzle's generator draws otherwise than the one that recorded it",
+                            t.id, t.seed, t.candidate
+                        ))
+                    })?;
+                if drawn.task.id() != t.id || drawn.task.source.hash != t.hash {
+                    return Err(bad(format!(
+                        "the stream's task {} (seed {}, candidate {}) is recorded as {}, but draws as {} {}: the \
+                         record was edited, or this blockpuzzle's generator draws otherwise than the one that recorded it",
+                        t.id,
+                        t.seed,
+                        t.candidate,
+                        short(&t.hash),
+                        drawn.task.id(),
+                        short(&drawn.task.source.hash)
+                    )));
+                }
+                Ok(drawn.task)
+            })
+            .collect()
+    }
+}
+
+fn short(hash: &str) -> &str {
+    &hash[..hash.len().min(19)]
+}
+
+/// A stream's tasks and its record.
+#[derive(Debug, Clone)]
+pub struct Pool {
+    /// The tasks, compiled, in the record's order.
+    pub tasks: Vec<Task>,
+    /// The record.
+    pub record: StreamRecord,
+    /// Seeds taken from the disk cache.
+    pub cached: usize,
+    /// Seeds worked out by the solver's check in this call.
+    pub checked: usize,
+}
+
+/// A recorded stream whose tasks do not draw again as recorded ([`StreamRecord::draw`]), named with the fix.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct RecordError(pub String);
+
+/// A stream that cannot be drawn; each names the problem and the fix.
+#[derive(Debug, thiserror::Error)]
+pub enum StreamError {
+    /// No families given.
+    #[error("--families is empty: name one or more families, comma-separated (shipped: {0})")]
+    NoFamilies(String),
+    /// A family that cannot be loaded (unknown name, bad file).
+    #[error("--families: {0}")]
+    Family(String),
+    /// The same family twice.
+    #[error("--families names the family {0:?} twice; name each once")]
+    Repeated(String),
+    /// The range overlaps a built-in suite's held-out seeds.
+    #[error(
+        "--generator-seeds {range}: the suite {suite} holds out the {family} family's seeds {held} (its {split} \
+         split); choose seeds outside them, e.g. {suggest}"
+    )]
+    HeldOut { range: SeedRange, suite: String, split: String, family: String, held: SeedRange, suggest: String },
+    /// Every seed of every family failed.
+    #[error(
+        "no task in the stream: every candidate of the {seeds} seeds was rejected ({reasons}); loosen the families' \
+         ranges or [check], or choose other families"
+    )]
+    Empty { seeds: u64, reasons: String },
+    /// A thread pool that cannot be made.
+    #[error("{0}")]
+    Threads(String),
+}
+
+/// The most blocks `family` can draw: the sum of its groups' largest counts.
+pub fn max_blocks(family: &Family) -> usize {
+    family.spec.blocks.iter().map(|g| g.get_ref().count[1]).sum()
+}
+
+/// Loads the families of a comma-separated list (shipped names or files).
+///
+/// # Errors
+/// An empty list, an unknown family or bad file, a family named twice.
+pub fn families(list: &str) -> Result<Vec<(String, Family)>, StreamError> {
+    let names: Vec<&str> = list.split(',').map(str::trim).filter(|s| !s.is_empty()).collect();
+    if names.is_empty() {
+        let shipped: Vec<&str> = crate::task::family::BUILTIN_FAMILIES.iter().map(|(n, _)| *n).collect();
+        return Err(StreamError::NoFamilies(shipped.join(", ")));
+    }
+    let mut out: Vec<(String, Family)> = Vec::new();
+    for name in names {
+        let family = Family::load(name, None).map_err(|e| StreamError::Family(e.to_string()))?;
+        if out.iter().any(|(_, f)| f.spec.family == family.spec.family) {
+            return Err(StreamError::Repeated(family.spec.family.clone()));
+        }
+        out.push((name.to_owned(), family));
+    }
+    Ok(out)
+}
+
+/// Refuses a range that overlaps seeds a built-in suite holds out for any of `families`.
+///
+/// # Errors
+/// [`StreamError::HeldOut`] naming the suite, the split and its seeds.
+pub fn check_held_out(families: &[(String, Family)], range: SeedRange) -> Result<(), StreamError> {
+    let held = crate::benchmark::suite::held_out_generator_seeds();
+    for (_, family) in families {
+        for h in held.iter().filter(|h| h.family == family.spec.family) {
+            let [a, b] = h.seeds;
+            if range.0[0] < b && a < range.0[1] {
+                // The largest held-out end of any family here: a range above it overlaps nothing.
+                let above = held
+                    .iter()
+                    .filter(|x| families.iter().any(|(_, f)| f.spec.family == x.family))
+                    .map(|x| x.seeds[1])
+                    .max()
+                    .unwrap_or(b);
+                let below = range.0[0] < a;
+                let suggest = if below {
+                    SeedRange([range.0[0], a.min(range.0[1])]).to_string()
+                } else {
+                    SeedRange([above, above.saturating_add(range.len())]).to_string()
+                };
+                return Err(StreamError::HeldOut {
+                    range,
+                    suite: h.suite.clone(),
+                    split: h.split.clone(),
+                    family: family.spec.family.clone(),
+                    held: SeedRange([a, b]),
+                    suggest,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The stream of `families` over `range`: every seed's task, from the disk cache in `cache` (a folder;
+/// [`cache_dir`] is the usual one, None: no cache) where it holds the seed (drawn again and checked by
+/// hash), else by the solver's check on `threads` threads (the cache then records it). `progress`
+/// draws a bar on a terminal.
+///
+/// # Errors
+/// Held-out seeds, no task at all, a thread pool that cannot be made.
+pub fn pool(
+    families: &[(String, Family)],
+    range: SeedRange,
+    threads: usize,
+    cache: Option<&Path>,
+    progress: bool,
+) -> Result<Pool, StreamError> {
+    use rayon::prelude::*;
+    check_held_out(families, range)?;
+    let engine = crate::sim::mj::version();
+    let mut record = StreamRecord {
+        families: families
+            .iter()
+            .map(|(name, f)| FamilyRecord {
+                name: name.clone(),
+                family: f.spec.family.clone(),
+                hash: f.hash.clone(),
+                text: f.text.clone().unwrap_or_default(),
+            })
+            .collect(),
+        generator_seeds: range.0,
+        tasks: Vec::new(),
+        seeds_without_task: 0,
+        max_blocks: families.iter().map(|(_, f)| max_blocks(f)).max().unwrap_or(0),
+    };
+    let (mut tasks, mut cached, mut checked) = (Vec::new(), 0, 0);
+    let (mut rejected, mut examples) = (BTreeMap::<String, usize>::new(), BTreeMap::<String, String>::new());
+    let threadpool = crate::env::vector::model_threads(threads).map_err(StreamError::Threads)?;
+    let total = range.len() * families.len() as u64;
+    let bar = if progress {
+        crate::support::progress::bar(total, "generator seeds")
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    for (index, (_, family)) in families.iter().enumerate() {
+        let mut cache_file = Cache::read(cache, family, &engine);
+        let seeds: Vec<u64> = (range.0[0]..range.0[1]).collect();
+        // Cached seeds are drawn again (cheap) and kept where the hash still matches.
+        let results: Vec<(u64, Option<(usize, Task)>, Option<SeedResult>)> = threadpool.install(|| {
+            seeds
+                .par_iter()
+                .map(|&seed| {
+                    let from_cache = cache_file.seeds.get(&seed).and_then(|entry| match entry {
+                        None => Some(None),
+                        Some(p) => family
+                            .draw(seed, p.candidate)
+                            .ok()
+                            .filter(|d| d.task.source.hash == p.hash)
+                            .map(|d| Some((p.candidate, d.task))),
+                    });
+                    let out = match from_cache {
+                        Some(hit) => (seed, hit, None),
+                        None => {
+                            let r = generate_seed(family, seed);
+                            let kept = r
+                                .task
+                                .as_ref()
+                                .and_then(|g| Task::from_toml(&g.toml, None).ok().map(|t| (g.candidate, t)));
+                            (seed, kept, Some(r))
+                        }
+                    };
+                    bar.inc(1);
+                    out
+                })
+                .collect()
+        });
+        let mut changed = false;
+        for (seed, kept, worked) in results {
+            match &worked {
+                Some(r) => {
+                    checked += 1;
+                    for (why, n) in &r.rejected {
+                        *rejected.entry(why.clone()).or_insert(0) += n;
+                    }
+                    for (why, detail) in &r.examples {
+                        examples
+                            .entry(why.clone())
+                            .or_insert_with(|| format!("{} seed {seed}: {detail}", family.spec.family));
+                    }
+                    let entry = kept.as_ref().map(|(c, t)| Pinned { candidate: *c, hash: t.source.hash.clone() });
+                    cache_file.seeds.insert(seed, entry);
+                    changed = true;
+                }
+                None => cached += 1,
+            }
+            match kept {
+                Some((candidate, task)) => {
+                    record.tasks.push(PoolTask {
+                        id: task.id().to_owned(),
+                        family: index,
+                        seed,
+                        candidate,
+                        hash: task.source.hash.clone(),
+                    });
+                    tasks.push(task);
+                }
+                None => record.seeds_without_task += 1,
+            }
+        }
+        if changed {
+            cache_file.write(cache, family, &engine);
+        }
+    }
+    bar.finish_and_clear();
+    if tasks.is_empty() {
+        let reasons = if rejected.is_empty() {
+            "the cache records no task for any of them".to_owned()
+        } else {
+            let example = |why: &String| examples.get(why).map_or(String::new(), |e| format!(", first: {e}"));
+            rejected.iter().map(|(why, n)| format!("{n} {why}{}", example(why))).collect::<Vec<_>>().join("; ")
+        };
+        return Err(StreamError::Empty { seeds: total, reasons });
+    }
+    Ok(Pool { tasks, record, cached, checked })
+}
+
+/// The pool indices that have environments in `epoch` of a run of `seed`: `k` tasks a time, taken in
+/// turn from a permutation of the pool drawn anew for every pass (so every task is seen once a pass),
+/// without repeats within an epoch. All of them when `k` reaches the pool's size.
+pub fn active_tasks(seed: u64, epoch: usize, pool: usize, k: usize) -> Vec<usize> {
+    use rand::seq::SliceRandom;
+    use rand::SeedableRng;
+    if k >= pool {
+        return (0..pool).collect();
+    }
+    let pass_of = |p: usize| {
+        let mut order: Vec<usize> = (0..pool).collect();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5354_5245_414D);
+        rng.set_stream(p as u64);
+        order.shuffle(&mut rng);
+        order
+    };
+    let start = epoch * k;
+    let (mut pass, mut at) = (start / pool, start % pool);
+    let mut order = pass_of(pass);
+    let mut out = Vec::with_capacity(k);
+    while out.len() < k {
+        if at == pool {
+            (pass, at) = (pass + 1, 0);
+            order = pass_of(pass);
+        }
+        if !out.contains(&order[at]) {
+            out.push(order[at]);
+        }
+        at += 1;
+    }
+    out
+}
+
+/// A seed's kept candidate, as cached.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Pinned {
+    candidate: usize,
+    hash: String,
+}
+
+/// One family's cache file: each worked-out seed's kept candidate (null: no task).
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct Cache {
+    family: String,
+    hash: String,
+    engine: String,
+    seeds: BTreeMap<u64, Option<Pinned>>,
+}
+
+/// The cache folder: `$BLOCKPUZZLE_CACHE_DIR`, else `$XDG_CACHE_HOME/blockpuzzle`, else
+/// `~/.cache/blockpuzzle` (None: none of them set).
+pub fn cache_dir() -> Option<PathBuf> {
+    let var = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty()).map(PathBuf::from);
+    var("BLOCKPUZZLE_CACHE_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("blockpuzzle")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache/blockpuzzle")))
+}
+
+impl Cache {
+    fn path(dir: Option<&Path>, family: &Family, engine: &str) -> Option<PathBuf> {
+        let hex = family.hash.trim_start_matches("sha256:");
+        let name = format!("{}-{}-mujoco-{engine}.json", family.spec.family, &hex[..hex.len().min(16)]);
+        Some(dir?.join("generated").join(name))
+    }
+
+    /// The family's cache on this engine in `dir` (empty where there is none or it does not read).
+    fn read(dir: Option<&Path>, family: &Family, engine: &str) -> Cache {
+        let empty = Cache {
+            family: family.spec.family.clone(),
+            hash: family.hash.clone(),
+            engine: engine.to_owned(),
+            ..Default::default()
+        };
+        let Some(path) = Self::path(dir, family, engine) else { return empty };
+        let Ok(text) = crate::support::io::read_text(&path, "stream cache", crate::support::limits::TEXT_FILE_BYTES)
+        else {
+            return empty;
+        };
+        match serde_json::from_str::<Cache>(&text) {
+            Ok(c) if c.hash == family.hash && c.engine == engine => c,
+            _ => empty,
+        }
+    }
+
+    /// Writes the cache (a failure only costs the next run the check again: it is reported, not fatal).
+    fn write(&self, dir: Option<&Path>, family: &Family, engine: &str) {
+        let Some(path) = Self::path(dir, family, engine) else { return };
+        let result = path
+            .parent()
+            .map_or(Ok(()), std::fs::create_dir_all)
+            .map_err(anyhow::Error::from)
+            .and_then(|()| crate::support::io::write_json(&path, self));
+        if let Err(e) = result {
+            eprintln!("warning: cannot write the stream cache {}: {e:#}", path.display());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seed_ranges_read_and_refuse() {
+        assert_eq!("0..1024".parse::<SeedRange>(), Ok(SeedRange([0, 1024])));
+        assert!("5..5".parse::<SeedRange>().unwrap_err().contains("empty"));
+        assert!("9..3".parse::<SeedRange>().unwrap_err().contains("empty"));
+        assert!("0-8".parse::<SeedRange>().unwrap_err().contains("FIRST..END"));
+        assert!("a..8".parse::<SeedRange>().unwrap_err().contains("not a seed"));
+        assert!("0..100001".parse::<SeedRange>().unwrap_err().contains("at most"));
+    }
+
+    #[test]
+    fn active_sets_cover_the_pool_once_a_pass_without_repeats() {
+        let (pool, k) = (10, 4);
+        let mut seen = vec![0; pool];
+        for epoch in 0..5 {
+            let a = active_tasks(3, epoch, pool, k);
+            assert_eq!(a.len(), k);
+            let mut s = a.clone();
+            s.sort_unstable();
+            s.dedup();
+            assert_eq!(s.len(), k, "{a:?}");
+            a.iter().for_each(|&t| seen[t] += 1);
+        }
+        // 20 places over 2 passes of 10: every task twice (a repeat at a pass boundary is skipped).
+        assert!(seen.iter().all(|&n| (1..=3).contains(&n)), "{seen:?}");
+        assert_eq!(active_tasks(3, 2, pool, k), active_tasks(3, 2, pool, k));
+        assert_ne!(active_tasks(3, 0, pool, k), active_tasks(4, 0, pool, k));
+        assert_eq!(active_tasks(3, 7, 5, 8), vec![0, 1, 2, 3, 4]);
+    }
+}

@@ -1,0 +1,271 @@
+//! Generated tasks: a family ([`crate::task::family`]) and a generator seed give one task, the first
+//! of the seed's candidates that passes the checks the family states: it compiles and resets, the
+//! solver ([`ScriptedPolicy::solver`], which reads only the observation) can play it and succeeds
+//! often enough over a fixed set of episodes (no impossible task), and few of those episodes are
+//! decided at their first step (no trivial task). Every rejected candidate is counted by reason.
+//! Each seed is independent of the others, so a range of seeds gives the same tasks on any number
+//! of threads.
+
+use crate::env::{BlockEnv, EnvConfig, ObsMode};
+use crate::episode::rollout::run_episode;
+use crate::policy::ScriptedPolicy;
+use crate::task::family::Family;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A kept task.
+#[derive(Debug, Clone, Serialize)]
+pub struct Generated {
+    /// Its id (`FAMILY-SEED-v0`).
+    pub id: String,
+    /// The generator seed.
+    pub seed: u64,
+    /// Which of the seed's candidates it is.
+    pub candidate: usize,
+    /// `sha256:` of the task's canonical form (what results record).
+    pub hash: String,
+    /// The solver's behaviour on it.
+    pub script: String,
+    /// The solver's success over the family's check episodes.
+    pub solver_success: f64,
+    /// The share of those episodes decided at their first step.
+    pub decided_at_first_step: f64,
+    /// The task file's text.
+    #[serde(skip)]
+    pub toml: String,
+}
+
+/// What one generator seed gave: its task, or none within the family's candidates; and the
+/// candidates rejected on the way, by reason.
+#[derive(Debug, Clone, Serialize)]
+pub struct SeedResult {
+    /// The generator seed.
+    pub seed: u64,
+    /// The kept task, if a candidate passed.
+    pub task: Option<Generated>,
+    /// Rejected candidates by reason.
+    pub rejected: BTreeMap<String, usize>,
+    /// The first rejection's whole message for each reason (the compiler's or the solver's words).
+    pub examples: BTreeMap<String, String>,
+}
+
+/// Why a candidate was not kept: the reason it is counted under, and the whole message.
+struct Rejection {
+    kind: String,
+    detail: String,
+}
+
+/// A rejection of kind `kind` (counted), with `detail` (the first one of each kind is kept).
+fn reason(kind: &str, detail: &str) -> Rejection {
+    Rejection { kind: kind.to_owned(), detail: detail.to_owned() }
+}
+
+/// The checks of a candidate that play no episode to its end, and so give the same answer on every
+/// engine and build: its scene builds, its first check episode's layout can be drawn, and the solver
+/// can play it (it chooses its behaviour from that first observation). A pinned candidate
+/// ([`crate::benchmark::suite`]) must pass them: the generator would not keep one that does not.
+///
+/// # Errors
+/// The reason, in the words the generator counts it under, and the detail.
+pub fn solver_can_play(task: &crate::task::Task) -> Result<(), String> {
+    let mut env = BlockEnv::new(EnvConfig { obs_mode: ObsMode::Entities, ..EnvConfig::new(task.clone()) })
+        .map_err(|e| format!("cannot build its scene: {e}"))?;
+    let (obs, _) = env.reset(Some(0)).map_err(|e| format!("no layout at reset: {e}"))?;
+    let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
+    crate::policy::Policy::act(&mut solver, &obs);
+    match solver.unsolvable() {
+        Some(why) => Err(format!("the solver cannot play it: {why}")),
+        None => Ok(()),
+    }
+}
+
+/// Checks a drawn candidate; `Ok` with what the kept task records, or the reason it is rejected.
+fn check(family: &Family, seed: u64, candidate: usize) -> Result<Generated, Rejection> {
+    let drawn = family.draw(seed, candidate).map_err(|e| reason("does not compile", &e.message))?;
+    let c = &family.spec.check;
+    let mut env = BlockEnv::new(EnvConfig { obs_mode: ObsMode::Entities, ..EnvConfig::new(drawn.task.clone()) })
+        .map_err(|e| reason("cannot build its scene", &e.to_string()))?;
+    let mut solver = ScriptedPolicy::solver(env.obs_spec().max_objects);
+    let (mut success, mut decided, mut script) = (0usize, 0usize, None);
+    for episode in 0..c.episodes as u64 {
+        let ep = match run_episode(&mut env, &mut solver, episode) {
+            Ok(ep) => ep,
+            // A task whose layouts cannot be drawn (the placement gives up) is not kept.
+            Err(e) => return Err(reason("no layout at reset", &e.to_string())),
+        };
+        if let Some(why) = solver.unsolvable() {
+            // Counted by what the solver cannot do (its words name no object of the task).
+            return Err(reason(&format!("the solver cannot play it: {why}"), ""));
+        }
+        script = script.or(solver.script());
+        success += ep.success as usize;
+        decided += (ep.steps.len() <= 1 && (ep.success || ep.failure)) as usize;
+    }
+    let n = c.episodes as f64;
+    let (solver_success, decided_share) = (success as f64 / n, decided as f64 / n);
+    if decided_share >= c.max_decided_at_first_step {
+        return Err(reason("decided at the first step too often", &format!("{decided} of {} episodes", c.episodes)));
+    }
+    if solver_success < c.min_solver_success {
+        return Err(reason("solver success below the family's threshold", &format!("{solver_success:.2}")));
+    }
+    Ok(Generated {
+        id: family.task_id(seed),
+        seed,
+        candidate,
+        hash: drawn.task.source.hash.clone(),
+        script: script.map_or("none", |s| s.name()).to_owned(),
+        solver_success,
+        decided_at_first_step: decided_share,
+        toml: drawn.toml,
+    })
+}
+
+/// The task of generator seed `seed`: its candidates in order until one passes. A seed's result
+/// depends on the family's content (its hash) and the seed alone, so a process keeps each one it
+/// has worked out (suites that draw from families load again without checking again).
+pub fn generate_seed(family: &Family, seed: u64) -> SeedResult {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    type Memo = Mutex<HashMap<(String, u64), SeedResult>>;
+    static MEMO: OnceLock<Memo> = OnceLock::new();
+    let memo = MEMO.get_or_init(Default::default);
+    let key = (family.hash.clone(), seed);
+    if let Some(r) = memo.lock().ok().and_then(|m| m.get(&key).cloned()) {
+        return r;
+    }
+    let r = check_seed(family, seed);
+    if let Ok(mut m) = memo.lock() {
+        m.insert(key, r.clone());
+    }
+    r
+}
+
+/// [`generate_seed`]'s work: the seed's candidates in order until one passes.
+fn check_seed(family: &Family, seed: u64) -> SeedResult {
+    let (mut rejected, mut examples) = (BTreeMap::new(), BTreeMap::new());
+    for candidate in 0..family.spec.check.max_candidates {
+        match check(family, seed, candidate) {
+            Ok(task) => return SeedResult { seed, task: Some(task), rejected, examples },
+            Err(why) => {
+                *rejected.entry(why.kind.clone()).or_insert(0) += 1;
+                if !why.detail.is_empty() {
+                    examples.entry(why.kind).or_insert(why.detail);
+                }
+            }
+        }
+    }
+    SeedResult { seed, task: None, rejected, examples }
+}
+
+/// The tasks of generator seeds `first .. first + count`, on `threads` threads (the same tasks for
+/// any thread count).
+///
+/// # Errors
+/// A thread pool that cannot be made.
+pub fn generate(family: &Family, first: u64, count: usize, threads: usize) -> Result<Vec<SeedResult>, String> {
+    use rayon::prelude::*;
+    let pool = crate::env::vector::model_threads(threads)?;
+    Ok(pool.install(|| (0..count as u64).into_par_iter().map(|k| generate_seed(family, first + k)).collect()))
+}
+
+/// The rejection counts of several seeds together, by reason.
+pub fn rejections(results: &[SeedResult]) -> BTreeMap<String, usize> {
+    let mut all = BTreeMap::new();
+    for r in results {
+        for (why, n) in &r.rejected {
+            *all.entry(why.clone()).or_insert(0) += n;
+        }
+    }
+    all
+}
+
+/// The first message of each rejection reason over several seeds (in seed order).
+pub fn examples(results: &[SeedResult]) -> BTreeMap<String, String> {
+    let mut all = BTreeMap::new();
+    for r in results {
+        for (why, detail) in &r.examples {
+            all.entry(why.clone()).or_insert_with(|| format!("seed {}: {detail}", r.seed));
+        }
+    }
+    all
+}
+
+/// Writes the kept tasks of `results` (generator seeds `first ..`, `family`'s) to `out` as ID.toml,
+/// and `out/generated.json`: the family, its file and hash, `build` (what made them: the caller's
+/// `provenance::Build`, which this module, below provenance, cannot name), each kept task's record,
+/// the seeds without a task and the rejections by reason; returns that record. `out` is made if
+/// missing.
+///
+/// # Errors
+/// `out` is not a folder or cannot be made; a file cannot be written.
+pub fn write_folder(
+    out: &std::path::Path,
+    family: &Family,
+    family_source: &str,
+    first: u64,
+    results: &[SeedResult],
+    build: &impl Serialize,
+) -> anyhow::Result<serde_json::Value> {
+    use std::io::Write as _;
+    // A folder made here goes again if anything fails.
+    let created = match std::fs::metadata(out) {
+        Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
+        Ok(_) => None,
+        Err(_) => Some(
+            crate::support::io::CreatedDir::create(out)
+                .map_err(|e| anyhow::anyhow!("cannot make the folder {}: {e}", out.display()))?,
+        ),
+    };
+    let kept: Vec<&Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
+    let manifest = serde_json::json!({
+        "family": family.spec.family,
+        "family_file": family_source,
+        "family_hash": family.hash,
+        "first_seed": first,
+        "count": results.len(),
+        "build": build,
+        "tasks": kept,
+        "seeds_without_a_task": results.iter().filter(|r| r.task.is_none()).map(|r| r.seed).collect::<Vec<_>>(),
+        "rejected": rejections(results),
+        "rejection_examples": examples(results),
+    });
+    let json = serde_json::to_vec_pretty(&manifest)?;
+    // Every output is written in full before any is put in place: a full disk, or an output that is a
+    // folder, leaves nothing behind.
+    let files = kept.iter().map(|t| (out.join(format!("{}.toml", t.id)), t.toml.as_bytes()));
+    let mut outputs = Vec::new();
+    for (path, bytes) in files.chain(std::iter::once((out.join(MANIFEST), &json[..]))) {
+        let cannot = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {e}", path.display());
+        let mut output = crate::support::io::Output::create(&path).map_err(cannot)?;
+        output.write_all(bytes).and_then(|()| output.flush()).map_err(cannot)?;
+        outputs.push((path, output));
+    }
+    for (path, output) in outputs {
+        output.finish().map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+    }
+    created.into_iter().for_each(crate::support::io::CreatedDir::keep);
+    Ok(manifest)
+}
+
+/// The record `task generate` writes beside the task files.
+pub const MANIFEST: &str = "generated.json";
+
+/// Checks, before any candidate is played, that `out` is a folder (or can be made) and that every file
+/// `task generate` may write into it (each seed's `FAMILY-SEED-v0.toml` and [`MANIFEST`]) can be written.
+///
+/// # Errors
+/// `out` is not a folder, or the first output that cannot be written (a folder in its place, a read-only
+/// file), named.
+pub fn check_outputs(out: &std::path::Path, family: &Family, first: u64, count: usize) -> anyhow::Result<()> {
+    match std::fs::metadata(out) {
+        Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
+        Ok(_) => {}
+        Err(_) => return Ok(()),
+    }
+    for seed in (0..count as u64).map(|k| first + k) {
+        crate::support::io::check_output(&out.join(format!("{}.toml", family.task_id(seed))))?;
+    }
+    crate::support::io::check_output(&out.join(MANIFEST))?;
+    Ok(())
+}

@@ -1,0 +1,287 @@
+//! The paper's results table ("Final evaluation of different agents on the
+//! 3 blocks environment"): each agent on BlocksChoose-v0 at full difficulty
+//! (Normal) and in the challenge distribution, with 95% intervals and the
+//! paper's numbers beside them. Rows without a trained policy say so.
+
+use crate::benchmark::evaluate::{evaluate, EvalSpec, Evaluation};
+use crate::benchmark::load::load_policy;
+use anyhow::Result;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The environment of the paper's table (the default of `table --env`).
+pub const ENV: &str = "BlocksChoose-v0";
+
+/// One row: a method, where its policy is, the paper's (Normal, Challenge).
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Method name as in the paper.
+    pub method: &'static str,
+    /// Policy file or run directory (None: not given).
+    pub policy: Option<PathBuf>,
+    /// The paper's success rates, where it gives them.
+    pub paper: (Option<f64>, Option<f64>),
+    /// The kind of policy the row stands for: a row takes only that kind.
+    pub takes: Takes,
+}
+
+/// The kind of policy a row of the paper's table stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Takes {
+    /// A deterministic actor (DDPG's rows).
+    Deterministic,
+    /// A Gaussian PGGD policy (PGGD's rows).
+    Pggd,
+}
+
+impl Row {
+    /// Whether `saved` is the kind of policy this row stands for: the row's kind (deterministic or
+    /// PGGD), trained on one task (the table may play it on another: `table --env`). A policy file does not record the algorithm that trained a deterministic actor (DDPG or an
+    /// imitator), so that part rests on the row's policy being named as the row asks.
+    ///
+    /// # Errors
+    /// The mismatch, naming the row, the policy and the fix.
+    pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy) -> Result<()> {
+        let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
+        let is_pggd = matches!(saved.policy, crate::policy::actor::AnyPolicy::Pggd(_));
+        let wanted = match self.takes {
+            Takes::Deterministic => "a deterministic (DDPG) actor",
+            Takes::Pggd => "a PGGD policy",
+        };
+        if is_pggd != (self.takes == Takes::Pggd) {
+            anyhow::bail!(
+                "the row \"{}\" takes {wanted}, and {name} is a {} policy; give that row a policy of its kind",
+                self.method,
+                saved.policy.algo()
+            );
+        }
+        if saved.is_multi_task() {
+            anyhow::bail!(
+                "the row \"{}\" takes a single-task agent, and {name} was trained on several tasks ({}); give that \
+                 row a policy trained on one task (the paper's rows are single-task agents)",
+                self.method,
+                saved.env_id
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The policy of each row (a file, run directory or zoo name; None: not given).
+#[derive(Debug, Clone, Default)]
+pub struct Policies {
+    /// DDPG trained on BlocksTouch-v0: "DDPG (2 blocks)", AggreVaTeD's expert.
+    pub expert: Option<PathBuf>,
+    /// DDPG trained on BlocksChoose-v0 with the paper's configuration.
+    pub ddpg: Option<PathBuf>,
+    /// DDPG trained on BlocksChoose-v0 with this project's changes.
+    pub ddpg_ours: Option<PathBuf>,
+    /// PGGD trained by AggreVaTeD.
+    pub pggd: Option<PathBuf>,
+    /// PGGD trained alone.
+    pub pggd_alone: Option<PathBuf>,
+}
+
+impl Policies {
+    /// The shipped zoo's entries for the rows (`table --zoo`).
+    pub fn zoo() -> Self {
+        let name = |n: &str| Some(PathBuf::from(n));
+        Self {
+            expert: name(ZOO_EXPERT),
+            ddpg: name("BlocksChoose-v0-ddpg"),
+            ddpg_ours: name("BlocksChoose-v0-ddpg-ours"),
+            pggd: name("BlocksChoose-v0-pggd-aggrevated"),
+            pggd_alone: name("BlocksChoose-v0-pggd"),
+        }
+    }
+
+    /// Each row's policy from `self`, else from `other`.
+    pub fn or(self, other: Self) -> Self {
+        Self {
+            expert: self.expert.or(other.expert),
+            ddpg: self.ddpg.or(other.ddpg),
+            ddpg_ours: self.ddpg_ours.or(other.ddpg_ours),
+            pggd: self.pggd.or(other.pggd),
+            pggd_alone: self.pggd_alone.or(other.pggd_alone),
+        }
+    }
+}
+
+/// The zoo entry of the 2-block expert (DDPG on BlocksTouch-v0).
+pub const ZOO_EXPERT: &str = "BlocksTouch-v0-ddpg";
+
+/// The paper's rows for the given policies, in the paper's order, this
+/// project's DDPG after the paper's (where given), and PGGD alone.
+pub fn rows(p: Policies) -> Vec<Row> {
+    // This project's row is shown only when it has a policy (it is not the paper's).
+    let (ddpg, pggd) = (Takes::Deterministic, Takes::Pggd);
+    let ours = p.ddpg_ours.map(|policy| Row {
+        method: "DDPG (3 blocks), ours",
+        policy: Some(policy),
+        paper: (Some(0.97), Some(0.90)),
+        takes: ddpg,
+    });
+    let mut rows = vec![
+        Row {
+            method: "DDPG (2 blocks), grey removed from its view",
+            policy: p.expert,
+            paper: (Some(0.44), Some(0.24)),
+            takes: ddpg,
+        },
+        Row { method: "DDPG (3 blocks)", policy: p.ddpg, paper: (Some(0.97), Some(0.90)), takes: ddpg },
+        Row { method: "PGGD + AggreVaTeD", policy: p.pggd, paper: (Some(0.64), Some(0.40)), takes: pggd },
+        // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
+        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None), takes: pggd },
+    ];
+    if let Some(ours) = ours {
+        rows.insert(2, ours);
+    }
+    rows
+}
+
+/// A row's result.
+#[derive(Debug)]
+pub enum RowResult {
+    /// No policy was given for the row.
+    NotGiven,
+    /// The policy could not be loaded or evaluated (the message says why).
+    Missing(String),
+    /// Evaluated: (Normal, Challenge), the policy's epoch and env steps (where recorded).
+    Done {
+        normal: Box<Evaluation>,
+        challenge: Box<Evaluation>,
+        epoch: usize,
+        env_steps: Option<u64>,
+        /// The policy by content.
+        policy: crate::benchmark::provenance::PolicyId,
+    },
+}
+
+/// Evaluates one row.
+pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: u64, threads: usize) -> RowResult {
+    let Some(path) = &row.policy else { return RowResult::NotGiven };
+    // A zoo name without an entry: the row's policy has not been shipped yet.
+    if crate::benchmark::zoo::is_name(path)
+        && crate::benchmark::zoo::find(&crate::benchmark::zoo::dir(), &path.to_string_lossy()).is_err()
+    {
+        return RowResult::Missing("not in the zoo yet (train it, then `blockpuzzle zoo export`)".into());
+    }
+    // The policy file is read once; each evaluation gets its own copy.
+    let run = || -> Result<RowResult> {
+        let saved = load_policy(path)?;
+        row.check(&saved)?;
+        let (epoch, env_steps) = (saved.epoch, saved.env_steps);
+        let policy = saved.policy_id(&path.display().to_string());
+        let spec = |challenge| EvalSpec { task, challenge, distribution: None, level: None, episodes, seed, threads };
+        let normal = evaluate(path, saved.clone(), &spec(false))?;
+        let challenge = evaluate(path, saved, &spec(true))?;
+        Ok(RowResult::Done { normal: Box::new(normal), challenge: Box::new(challenge), epoch, env_steps, policy })
+    };
+    match run() {
+        Ok(done) => done,
+        Err(e) => RowResult::Missing(format!("{e:#}")),
+    }
+}
+
+fn cell(e: &Evaluation, paper: Option<f64>) -> String {
+    let paper = paper.map_or("paper: no number".to_owned(), |p| format!("paper {p:.2}"));
+    format!("{:.3} ({:.3}–{:.3}); {paper}", e.success_rate, e.ci95.0, e.ci95.1)
+}
+
+/// The table as Markdown.
+pub fn markdown(rows: &[(Row, RowResult)], env: &str, episodes: usize, seed: u64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "Final evaluation on {env}: Normal = the maximum curriculum level, Challenge = the challenge");
+    let _ = writeln!(
+        s,
+        "distribution. {episodes} episodes per cell (seeds {seed}–{}), success rate",
+        seed + episodes as u64 - 1
+    );
+    if env == ENV {
+        let _ = writeln!(s, "with its 95% Wilson interval, and the paper's number.\n");
+    } else {
+        let _ = writeln!(s, "with its 95% Wilson interval, and the paper's number on {ENV} for comparison.\n");
+    }
+    let _ = writeln!(s, "| Method | Normal | Challenge | Policy |");
+    let _ = writeln!(s, "|---|---|---|---|");
+    for (row, outcome) in rows {
+        let paper = |p: Option<f64>| p.map_or("no number".to_owned(), |p| format!("{p:.2}"));
+        let shown = |p: &Path| p.display().to_string();
+        match outcome {
+            RowResult::NotGiven => {
+                let _ = writeln!(
+                    s,
+                    "| {} | not trained (paper {}) | not trained (paper {}) | none given |",
+                    row.method,
+                    paper(row.paper.0),
+                    paper(row.paper.1)
+                );
+            }
+            RowResult::Missing(why) => {
+                let _ = writeln!(
+                    s,
+                    "| {} | missing (paper {}) | missing (paper {}) | {}: {} |",
+                    row.method,
+                    paper(row.paper.0),
+                    paper(row.paper.1),
+                    row.policy.as_deref().map(shown).unwrap_or_default(),
+                    why.replace('|', "/").replace('\n', " ")
+                );
+            }
+            RowResult::Done { normal, challenge, epoch, env_steps, .. } => {
+                let steps = env_steps.map_or(String::new(), |n| format!(", {:.2} M env steps", n as f64 / 1e6));
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} (epoch {epoch}{steps}{}) |",
+                    row.method,
+                    cell(normal, row.paper.0),
+                    cell(challenge, row.paper.1),
+                    row.policy.as_deref().map(shown).unwrap_or_default(),
+                    if normal.grey_blind { ", grey removed" } else { "" }
+                );
+            }
+        }
+    }
+    let done: Vec<_> = rows
+        .iter()
+        .filter_map(|(row, r)| match r {
+            RowResult::Done { normal, challenge, .. } => Some((row.method, normal, challenge)),
+            _ => None,
+        })
+        .collect();
+    if !done.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nHow the other episodes ended, as shares of all episodes (`failure`: red touched blue; \
+             `no_contact`: the gripper touched no block; `off_table`: a blue or green block left the table; \
+             `blue_met_grey`: blue touched grey; `timeout`: anything else):\n"
+        );
+        for (method, normal, challenge) in done {
+            let _ = writeln!(
+                s,
+                "- {method}: Normal {}; Challenge {}",
+                normal.outcomes.summary(),
+                challenge.outcomes.summary()
+            );
+        }
+    }
+    // What made the numbers (crate::benchmark::provenance): the engine above all.
+    let _ = writeln!(s, "\nMade on {}, harness cli.", crate::benchmark::provenance::Build::current().describe());
+    let done: Vec<String> = rows
+        .iter()
+        .filter_map(|(row, r)| match r {
+            RowResult::Done { policy, .. } => {
+                Some(format!("{}: `{}` {}", row.method, policy.name, policy.sha256.as_deref().unwrap_or("none")))
+            }
+            _ => None,
+        })
+        .collect();
+    let task = rows.iter().find_map(|(_, r)| match r {
+        RowResult::Done { normal, .. } => Some(format!("{} {}", normal.env, normal.task_sha256)),
+        _ => None,
+    });
+    if let Some(task) = task {
+        let _ = writeln!(s, "Task {task}. Policies by content: {}.", done.join("; "));
+    }
+    s
+}

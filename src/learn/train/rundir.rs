@@ -1,0 +1,165 @@
+//! The run directory: its files and `progress.csv`.
+
+use super::{EpochRow, TrainConfig};
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Files of a run directory.
+pub struct RunDir {
+    /// The folder.
+    pub dir: PathBuf,
+}
+
+impl RunDir {
+    /// `config.json`.
+    pub fn config(&self) -> PathBuf {
+        self.dir.join(crate::benchmark::saved::CONFIG_FILE)
+    }
+    /// `progress.csv`.
+    pub fn progress(&self) -> PathBuf {
+        self.dir.join("progress.csv")
+    }
+    /// `checkpoint.bin`.
+    pub fn checkpoint(&self) -> PathBuf {
+        self.dir.join("checkpoint.bin")
+    }
+    /// `policy.json`.
+    pub fn policy(&self) -> PathBuf {
+        self.dir.join(crate::benchmark::saved::POLICY_FILE)
+    }
+    /// `success.png`.
+    pub fn plot(&self) -> PathBuf {
+        self.dir.join("success.png")
+    }
+    /// `best_policy.json`.
+    pub fn best_policy(&self) -> PathBuf {
+        self.dir.join(crate::benchmark::saved::BEST_POLICY_FILE)
+    }
+    /// `snapshots/`: policies kept with `--snapshot-every`.
+    pub fn snapshots(&self) -> PathBuf {
+        self.dir.join("snapshots")
+    }
+    /// `snapshots/epoch-NNNN.json`: the policy after `epoch` epochs.
+    pub fn snapshot(&self, epoch: usize) -> PathBuf {
+        self.snapshots().join(format!("epoch-{epoch:04}.json"))
+    }
+    /// The run's `config.json`.
+    ///
+    /// # Errors
+    /// A missing or malformed file, named.
+    pub fn read_config(&self) -> Result<TrainConfig> {
+        let path = self.config();
+        let text = crate::support::io::read_text(&path, "run config", crate::support::limits::RESULT_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("{} is not a training config", path.display()))
+    }
+    /// `provenance.json`: the builds and engines that ran the run's epochs ([`Span`]).
+    pub fn provenance(&self) -> PathBuf {
+        self.dir.join("provenance.json")
+    }
+    /// The builds that ran the run's epochs, in order (empty for runs started before runs recorded them).
+    ///
+    /// # Errors
+    /// A malformed file, named.
+    pub fn read_provenance(&self) -> Result<Vec<Span>> {
+        let path = self.provenance();
+        if !path.exists() {
+            return Ok(Vec::new());
+        }
+        let text = crate::support::io::read_text(&path, "run provenance", crate::support::limits::RESULT_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("{} is not a run's provenance", path.display()))
+    }
+    /// Records that the epochs from `from_epoch` on run on this build (rank 0; nothing is written when the
+    /// last recorded build is this one).
+    ///
+    /// # Errors
+    /// The file cannot be read or written.
+    pub fn record_provenance(&self, from_epoch: usize) -> Result<()> {
+        let mut spans = self.read_provenance()?;
+        let build = crate::benchmark::provenance::Build::current();
+        if spans.last().is_some_and(|s| s.build == build) {
+            return Ok(());
+        }
+        spans.push(Span { from_epoch, build });
+        crate::support::io::write_json(&self.provenance(), &spans)
+    }
+    /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
+    /// (a resumed run uses this copy, so the expert cannot change under it).
+    pub fn expert_policy(&self) -> PathBuf {
+        self.dir.join("expert_policy.json")
+    }
+}
+
+/// The build that ran a run's epochs from `from_epoch` on (until the next span's).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Span {
+    /// The first epoch it ran (0-based: the number of epochs done before).
+    pub from_epoch: usize,
+    /// Package, commit and engine.
+    #[serde(flatten)]
+    pub build: crate::benchmark::provenance::Build,
+}
+
+pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
+    crate::support::io::write_atomic_via(path, |tmp| {
+        let mut w = csv::Writer::from_path(tmp)?;
+        for r in rows {
+            w.serialize(r)?;
+        }
+        w.flush()?;
+        Ok(())
+    })
+}
+
+/// The largest log read whole: a million epochs of about 400 bytes.
+const MAX_LOG_BYTES: u64 = 400 << 20;
+
+/// Reads the rows of a CSV log (`what` names it in messages, `columns` says
+/// what it must hold), refusing a log without rows.
+///
+/// # Errors
+/// A missing, oversized, malformed or empty file, named.
+pub fn read_log<T: serde::de::DeserializeOwned>(path: &Path, what: &str, columns: &str) -> Result<Vec<T>> {
+    let text = crate::support::io::read_text(path, what, MAX_LOG_BYTES)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let rows = csv::Reader::from_reader(text.as_bytes())
+        .deserialize()
+        .collect::<Result<Vec<T>, _>>()
+        .with_context(|| format!("{} is not a {what} ({columns})", path.display()))?;
+    if rows.is_empty() {
+        bail!("{} has no rows: a {what} gains one per epoch (train the run for at least one epoch)", path.display());
+    }
+    Ok(rows)
+}
+
+/// Reads `progress.csv`, whose success rates must be rates.
+///
+/// # Errors
+/// A message naming the file for a missing, malformed or empty file, or a
+/// success rate that is not a number from 0 to 1.
+pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
+    let rows: Vec<EpochRow> = read_log(path, "progress log", "a run's progress.csv, written by `blockpuzzle train`")?;
+    for r in &rows {
+        for (column, v) in
+            [("train/success", r.train_success), ("test/success", r.test_success), ("finals/success", r.finals_success)]
+        {
+            check_rate(path, r.epoch, column, v)?;
+        }
+    }
+    Ok(rows)
+}
+
+/// A log's success column must hold a rate from 0 to 1.
+///
+/// # Errors
+/// Anything else (NaN included), naming the file, epoch and column.
+pub fn check_rate(path: &Path, epoch: usize, column: &str, v: f64) -> Result<()> {
+    if !(0.0..=1.0).contains(&v) {
+        bail!(
+            "{}: epoch {epoch}: {column} is {v}, not a rate from 0 to 1; the log was edited or damaged",
+            path.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,1013 @@
+//! The training loop, one epoch as four steps: `collect` (exploration
+//! episodes into replay), `learn` (gradient steps), `evaluate` (test and
+//! finals), `persist` (files and checkpoint). What ranks exchange is in
+//! these steps only, through [`Comm`]; rank 0 alone writes the run's shared
+//! files, and every rank writes its own checkpoint.
+
+use super::checkpoint::{self, RunState};
+use super::comm::Comm;
+use super::learner::{Algorithm, Expert, Learner};
+use super::rollouts::{play_plan, stream_seed, Behaviour, Draw, Episode, Planned};
+use super::rundir::{read_progress, write_progress, RunDir};
+use super::tasks::{draw_task, run_tasks, test_task};
+use super::{computation_differences, plot, EpochRow, ReplayLayout, TrainConfig};
+use crate::benchmark::saved::SavedPolicy;
+use crate::env::{registry, EnvConfig, VectorEnv};
+use crate::learn::agents::algorithm::{Spec, UpdateStats};
+use crate::learn::agents::arch::Arch;
+use crate::learn::agents::registry::Algo;
+use crate::learn::agents::replay::{Batch, ReplayBuffer};
+use crate::learn::agents::AnyPolicy;
+use crate::support::io::write_json;
+use crate::task::Task;
+use anyhow::{bail, Context, Result};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Per-epoch callback for progress reporting (called on rank 0 only).
+pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
+
+/// Trains in this process; with `resume`, continues from the run directory's checkpoint.
+///
+/// # Errors
+/// Bad configuration, environment errors, I/O and checkpoint errors.
+pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpoch) -> Result<Vec<EpochRow>> {
+    train_ranks(&Comm::local(), config, run_dir, resume, on_epoch)
+}
+
+/// Trains as one rank of `comm`'s job (every rank calls it with the same
+/// arguments). Returns the progress rows on rank 0, none elsewhere.
+///
+/// # Errors
+/// As [`train`]; under MPI the caller aborts the job on an error.
+pub fn train_ranks(
+    comm: &Comm,
+    config: &TrainConfig,
+    run_dir: &Path,
+    resume: bool,
+    on_epoch: OnEpoch,
+) -> Result<Vec<EpochRow>> {
+    let mut trainer = Trainer::start(comm, config, run_dir, resume)?;
+    while trainer.state.epoch < trainer.config.epochs {
+        let row = trainer.epoch()?;
+        if comm.is_root() {
+            on_epoch(&row, &trainer.config);
+        }
+    }
+    Ok(trainer.rows)
+}
+
+/// Checks every setting before anything is written.
+fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
+    use crate::support::limits::{BATCHES, BATCH_SIZE, BUFFER_SIZE, CYCLES, EPOCHS, ROLLOUTS, TEST_EPISODES, WORKERS};
+    let c = config;
+    for (bound, v) in [
+        (WORKERS, c.workers),
+        (EPOCHS, c.epochs),
+        (CYCLES, c.cycles),
+        (ROLLOUTS, c.rollouts),
+        (BATCHES, c.batches),
+        (BATCH_SIZE, c.batch_size),
+        (BUFFER_SIZE, c.buffer_size),
+        (TEST_EPISODES, c.test_episodes),
+    ] {
+        bound.check_usize(v).map_err(anyhow::Error::msg)?;
+    }
+    crate::learn::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?;
+    Algo::validate(&config.shared, &config.algos).map_err(anyhow::Error::msg)?;
+    if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
+        bail!("--level-replay and --challenge-share must be in [0, 1]");
+    }
+    config.net.validate().map_err(anyhow::Error::msg)?;
+    if config.suite.is_none() && config.split != "train" {
+        bail!("--split {} is only used with --suite (the split of a suite to train on)", config.split);
+    }
+    if config.suite.is_none() && config.families.is_none() && config.env.trim().is_empty() {
+        bail!("no task: pass --env ID (several comma-separated), --suite S, or --families F --generator-seeds A..B");
+    }
+    if config.families.is_some() != config.generator_seeds.is_some() {
+        bail!("--families and --generator-seeds go together: give both (e.g. --families push,gripper --generator-seeds 0..256)");
+    }
+    let (width, flag) = match config.net.set_width {
+        0 => (config.shared.hidden, "--hidden"),
+        w => (w, "--set-width"),
+    };
+    if config.net.set_transformer > 0 && width % crate::learn::agents::mlp::TRANSFORMER_HEADS != 0 {
+        bail!(
+            "--set-transformer splits {flag} {width} into {} heads; give a multiple of {}",
+            crate::learn::agents::mlp::TRANSFORMER_HEADS,
+            crate::learn::agents::mlp::TRANSFORMER_HEADS
+        );
+    }
+    // Which algorithm takes an expert first: the network matters only to one that does, and an
+    // imitator given one is told to drop it before anything about its network.
+    let expert = config.aggrevated.expert.is_some();
+    config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
+    super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
+    if expert && config.net.net != crate::learn::agents::arch::NetKind::Mlp {
+        bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
+    }
+    let t0 = config.aggrevated.t0;
+    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
+        bail!("--beta0 must be in [0, 1] and --t0 at least 0");
+    }
+    if let Some(t) = config.success_threshold {
+        if !(0.0..=1.0).contains(&t) {
+            bail!("--success-threshold must be in [0, 1]");
+        }
+    }
+    if config.families.is_none() && config.active_tasks != super::DEFAULT_ACTIVE_TASKS {
+        bail!("--active-tasks applies to a stream of generated tasks (--families); leave it out here");
+    }
+    if comm.size() > 1 && config.replay == Some(ReplayLayout::Shared) {
+        bail!(
+            "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
+             computes; use --replay per-worker (the default) under mpirun",
+            comm.size()
+        );
+    }
+    Ok(())
+}
+
+/// The tasks with environments in `epoch` (indices into the run's `n` tasks): a stream run's active
+/// set ([`crate::benchmark::stream::active_tasks`]), else every task.
+fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
+    match config.stream {
+        Some(_) => crate::benchmark::stream::active_tasks(config.seed, epoch, n, config.active_tasks),
+        None => (0..n).collect(),
+    }
+}
+
+/// One environment per worker and task of `active` (worker-major), built on the workers' threads,
+/// stepped on one thread per worker.
+fn build_envs(config: &TrainConfig, env_configs: &[EnvConfig], active: &[usize]) -> Result<VectorEnv> {
+    use rayon::prelude::*;
+    let wanted: Vec<&EnvConfig> = (0..config.workers).flat_map(|_| active.iter().map(|&t| &env_configs[t])).collect();
+    let pool = crate::env::vector::model_threads(config.workers).map_err(anyhow::Error::msg)?;
+    let built = pool.install(|| {
+        wanted.par_iter().map(|c| crate::env::BlockEnv::new((*c).clone())).collect::<Result<Vec<_>, _>>()
+    })?;
+    let mut envs = VectorEnv::from_envs(built, config.workers)?;
+    // Hindsight colours replay the rules over every substep's contacts: the environments record them.
+    envs.envs_mut().iter_mut().for_each(|e| e.record_substeps(config.hindsight_colours > 0));
+    Ok(envs)
+}
+
+/// Refuses a task the solver cannot play (an imitation learner would learn to
+/// stand still): the solver's reason, read off a first reset's observation of
+/// each task (worker 0's environments).
+fn solver_plays(envs: &mut VectorEnv, tasks: &[Task], seed: u64) -> Result<()> {
+    for (env, task) in envs.envs_mut().iter_mut().zip(tasks) {
+        let (obs, _) = env.reset(Some(seed))?;
+        crate::policy::Script::from_observation(&env.obs_spec(), &obs).map_err(|why| {
+            anyhow::anyhow!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id())
+        })?;
+    }
+    Ok(())
+}
+
+/// The memory a run needs at most, in bytes: its replay buffers when full
+/// (or when they hold every transition the run collects, if fewer), one
+/// update's batches and activations, and the learner's networks and
+/// optimiser state (as its registration counts them, for MLPs of the run's shape).
+fn memory_needed(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> u64 {
+    let (workers, shards) = match config.replay_layout() {
+        ReplayLayout::PerWorker => (1, config.workers),
+        ReplayLayout::Shared => (config.workers, 1),
+    };
+    let collected = (config.epochs as u64)
+        .saturating_mul(config.cycles as u64)
+        .saturating_mul(config.rollouts as u64)
+        .saturating_mul(max_episode_steps as u64)
+        .saturating_mul(workers as u64)
+        .saturating_mul(1 + config.hindsight_colours as u64);
+    let stored = collected.min(config.buffer_size as u64);
+    // obs, next obs, action, reward, done, extra, discount: f32 each.
+    let transition = 4 * (2 * obs_dim + act_dim + 4) as u64;
+    let replay = stored.saturating_mul(transition).saturating_mul(shards as u64);
+    let batch_rows = (config.batch_size as u64).saturating_mul(config.workers as u64);
+    let activations = (config.shared.hidden as u64) * (config.shared.layers as u64) * 16;
+    let spec = Spec { arch: Arch::mlp(obs_dim), act_dim, shared: &config.shared };
+    replay
+        .saturating_add(batch_rows.saturating_mul(transition + activations))
+        .saturating_add(config.algo.memory(&spec, &config.algos))
+}
+
+/// Refuses a run whose replay buffers and batches would not fit in this
+/// machine's memory, naming the settings that size them.
+fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episode_steps: usize) -> Result<()> {
+    let (Some(have), need) =
+        (crate::support::limits::memory_bytes(), memory_needed(config, obs_dim, act_dim, max_episode_steps))
+    else {
+        return Ok(());
+    };
+    if need > have {
+        bail!(
+            "this run would need {} of memory (--workers {} with --buffer-size {} and --batch-size {}: replay \
+             buffers of {obs_dim}-dimensional observations, filled by {} epochs, the update batches, and networks \
+             of --layers {} x --hidden {}), more than this machine's {}; lower --buffer-size, --batch-size, \
+             --hidden or --workers, or spread the workers over MPI ranks on several machines",
+            crate::support::limits::gigabytes(need),
+            config.workers,
+            config.buffer_size,
+            config.batch_size,
+            config.epochs,
+            config.shared.layers,
+            config.shared.hidden,
+            crate::support::limits::gigabytes(have)
+        );
+    }
+    Ok(())
+}
+
+/// Before anything is created on a resume: the run exists and was written by
+/// a job of this job's size (rank 0's checkpoint says; every rank learns it).
+fn check_resume(comm: &Comm, run: &RunDir) -> Result<()> {
+    comm.root_check(|| {
+        let path = [run.checkpoint(), checkpoint::previous(&run.checkpoint())].into_iter().find(|p| p.exists());
+        let Some(path) = path else {
+            bail!(
+                "--resume: {} holds no run (no {}); start a new run without --resume",
+                run.dir.display(),
+                run.checkpoint().display()
+            );
+        };
+        let ranks = checkpoint::peek_state(&path)?.ranks;
+        if ranks != comm.size() {
+            bail!(
+                "{} was written by a job of {ranks} rank(s), this one has {}; resume with mpirun -np {ranks} (or \
+                 without mpirun for 1)",
+                path.display(),
+                comm.size()
+            );
+        }
+        Ok(())
+    })
+}
+
+/// The folder of rank `rank`'s own files: the run directory for rank 0,
+/// `rank-R/` inside it for the others.
+pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
+    if rank == 0 {
+        RunDir { dir: run.dir.clone() }
+    } else {
+        RunDir { dir: run.dir.join(format!("rank-{rank}")) }
+    }
+}
+
+/// The run's settings and tasks: the tasks resolved by rank 0 (checked against
+/// the run's recorded copies on resume, `saved`) and built by every other rank
+/// from them; the recorded tasks, branch and replay layout filled in.
+fn run_config(
+    comm: &Comm,
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(TrainConfig, Vec<Task>)> {
+    let (mut tasks, stream) = shared_tasks(comm, config, run, saved)?;
+    if let (Some(counts), [task]) = (&config.counts, &mut tasks[..]) {
+        *task = task.with_counts(counts)?;
+    }
+    let mut config = config.clone();
+    if stream.is_some() {
+        // A stream's pool is recorded by hashes: its tasks are drawn again from the families.
+        config.stream = stream;
+    } else if super::tasks::is_multi(&config) {
+        config.tasks = tasks.iter().map(|t| t.source.clone()).collect();
+    } else {
+        config.task = Some(tasks[0].source.clone());
+    }
+    if let Some(saved) = saved {
+        config.branched_from = saved.branched_from.clone();
+    }
+    // Replay: as given; else a resumed run's own; else per worker.
+    let recorded = saved.map(TrainConfig::replay_layout);
+    config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
+    if comm.size() > 1 && config.replay_layout() == ReplayLayout::Shared {
+        bail!(
+            "{} shares replay per process (it predates per-worker replay); it cannot continue under mpirun",
+            run.dir.display()
+        );
+    }
+    Ok((config, tasks))
+}
+
+/// Where a run begins: a fresh agent and empty buffers, or a checkpoint's.
+struct StartingPoint {
+    agent: Box<dyn Algorithm>,
+    replays: Vec<ReplayBuffer>,
+    replay_log: checkpoint::ReplayLog,
+    state: RunState,
+    /// progress.csv's rows so far (rank 0).
+    rows: Vec<EpochRow>,
+}
+
+impl StartingPoint {
+    /// The agent and buffers fit the run's settings.
+    fn check(&self, config: &TrainConfig, mine: &RunDir) -> Result<()> {
+        if self.agent.name() != config.algo.name() {
+            let (file, held) = (mine.checkpoint(), Algo::named(self.agent.name()).map_err(anyhow::Error::msg)?);
+            bail!("{} holds a {held:?} agent, not {:?}; pass --algo {held}", file.display(), config.algo);
+        }
+        let layout = config.replay_layout();
+        let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
+        if self.replays.len() != expected {
+            bail!(
+                "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
+                mine.checkpoint().display(),
+                self.replays.len(),
+                config.workers,
+                layout
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A new run: weights drawn from the run seed (the same on every rank), empty buffers.
+fn fresh(
+    comm: &Comm,
+    config: &TrainConfig,
+    run_id: &str,
+    tasks: usize,
+    run: &RunDir,
+    mine: &RunDir,
+    dims: (Arch, usize),
+) -> Result<StartingPoint> {
+    let (arch, act_dim) = dims;
+    let obs_dim = arch.obs_dim;
+    if mine.checkpoint().exists() || run.checkpoint().exists() {
+        bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
+    let spec = Spec { arch, act_dim, shared: &config.shared };
+    let agent = config.algo.build(&spec, &config.algos, &mut rng);
+    let state = RunState {
+        env_id: run_id.to_owned(),
+        obs_dim,
+        act_dim,
+        epoch: 0,
+        level: 0,
+        levels: vec![0; tasks],
+        tallies: vec![[0, 0]; tasks],
+        env_steps: 0,
+        updates: 0,
+        episodes_per_worker: 0,
+        wall_seconds: 0.0,
+        best_finals: -1.0,
+        ranks: comm.size(),
+        rank: comm.rank(),
+    };
+    let shards = match config.replay_layout() {
+        ReplayLayout::PerWorker => config.workers,
+        ReplayLayout::Shared => 1,
+    };
+    let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
+    Ok(StartingPoint { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
+}
+
+/// A resumed run: this rank's checkpoint of the last epoch every rank
+/// completed, after rank 0 checked that the settings are the run's.
+#[allow(clippy::too_many_arguments)]
+fn resumed(
+    comm: &Comm,
+    config: &TrainConfig,
+    run_id: &str,
+    tasks: usize,
+    run: &RunDir,
+    mine: &RunDir,
+    saved_config: Option<TrainConfig>,
+    dims: (Arch, usize),
+) -> Result<StartingPoint> {
+    let path = resume_checkpoint(comm, &mine.checkpoint(), run)?;
+    if comm.is_root() {
+        let mut saved = match saved_config {
+            Some(c) => c,
+            None => run.read_config()?,
+        };
+        saved.replay = Some(saved.replay_layout());
+        let changed = computation_differences(&saved, config);
+        if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
+            bail!(
+                "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
+                run.config().display(),
+                if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
+            );
+        }
+    }
+    let mut loaded = checkpoint::load(&path, run_id, dims.0.obs_dim, dims.1)?;
+    // One-task checkpoints written before per-task levels hold the level alone.
+    if loaded.state.levels.is_empty() && tasks == 1 {
+        loaded.state.levels = vec![loaded.state.level];
+    }
+    if loaded.state.levels.len() != tasks {
+        bail!(
+            "--resume: {} holds the levels of {} task(s), this run has {tasks}",
+            path.display(),
+            loaded.state.levels.len()
+        );
+    }
+    loaded.state.tallies.resize(tasks, [0, 0]);
+    if loaded.agent.norm().set_layout() != dims.0.set {
+        bail!("--resume: {} was saved with other networks than --net asks for", path.display());
+    }
+    // A resume has the checkpoint's settings; a branch's first epoch, its own.
+    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos);
+    let epoch = loaded.state.epoch;
+    let rows = if comm.is_root() {
+        read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < epoch).collect()
+    } else {
+        Vec::new()
+    };
+    Ok(StartingPoint {
+        agent: loaded.agent,
+        replays: loaded.replays,
+        replay_log: loaded.log,
+        state: loaded.state,
+        rows,
+    })
+}
+
+/// Everything a run holds between epochs.
+struct Trainer<'a> {
+    comm: &'a Comm,
+    config: TrainConfig,
+    /// The run directory (rank 0 writes its shared files).
+    run: RunDir,
+    /// This rank's own files (checkpoint, expert copy).
+    mine: RunDir,
+    /// The tasks (one, or a multi-task run's, in its recorded order).
+    tasks: Vec<Task>,
+    /// Every task's environment configuration (one observation layout for all).
+    env_configs: Vec<EnvConfig>,
+    /// The tasks with environments this epoch (indices into `tasks`): all of them, or a stream's
+    /// active set ([`active_set`]).
+    active: Vec<usize>,
+    /// One environment per worker of this rank and active task (worker-major: `worker × active + k`
+    /// holds task `active[k]`).
+    envs: VectorEnv,
+    learner: Learner,
+    /// One buffer per worker (`per-worker`) or one (`shared`).
+    replays: Vec<ReplayBuffer>,
+    /// The replay buffers' log on disk (appended by every checkpoint).
+    replay_log: checkpoint::ReplayLog,
+    state: RunState,
+    /// progress.csv's rows (rank 0).
+    rows: Vec<EpochRow>,
+    /// Each task's test success that moves its curriculum up a level.
+    thresholds: Vec<f64>,
+    /// Each task's maximum level.
+    max_levels: Vec<usize>,
+    obs_dim: usize,
+    /// Seconds spent persisting the previous epoch (reported in the next row).
+    persist_seconds: f64,
+    /// The folders this run created, removed if it stops before its first
+    /// checkpoint (kept from then on).
+    created: Vec<crate::support::io::CreatedDir>,
+}
+
+/// What one epoch's collection and learning measured on this rank.
+#[derive(Default)]
+struct EpochTally {
+    env_seconds: f64,
+    update_seconds: f64,
+    forward_seconds: f64,
+    episodes: usize,
+    wins: usize,
+    steps: usize,
+    expert_steps: usize,
+    /// Hindsight colours: relabelled episodes stored, and those that succeed under their colours.
+    relabelled: usize,
+    relabelled_wins: usize,
+    stats: Vec<UpdateStats>,
+}
+
+impl<'a> Trainer<'a> {
+    /// Validates, resolves the task, builds environments and the agent
+    /// (fresh, or from this rank's checkpoint).
+    fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, resume: bool) -> Result<Self> {
+        validate(config, comm)?;
+        let run = RunDir { dir: run_dir.to_owned() };
+        let mine = rank_dir(&run, comm.rank());
+        if resume {
+            check_resume(comm, &run)?;
+        }
+        if std::fs::metadata(&run.dir).is_ok_and(|m| !m.is_dir()) {
+            bail!(
+                "--run-dir {} is a file, not a folder; give the path of a new folder (or of a run to --resume)",
+                run.dir.display()
+            );
+        }
+        let created = [&run.dir, &mine.dir]
+            .into_iter()
+            .map(|d| {
+                crate::support::io::CreatedDir::create(d)
+                    .with_context(|| format!("cannot create run directory {}", d.display()))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        tch::set_num_threads(crate::learn::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?);
+
+        let saved_config =
+            if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
+        let (config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
+        let thresholds: Vec<f64> =
+            tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
+        // One layout for every task: the most block slots of any (a stream: of any its families can draw).
+        let most = config.stream.as_ref().map_or(0, |s| s.max_blocks);
+        let slots = tasks.iter().map(Task::object_count).max().unwrap_or(0).max(most);
+        let env_configs: Vec<EnvConfig> = tasks
+            .iter()
+            .map(|t| EnvConfig { obs_mode: config.net.obs_mode(), slots, ..EnvConfig::new(t.clone()) })
+            .collect();
+        let max_steps = tasks.iter().map(|t| t.spec.max_episode_steps).max().unwrap_or(0);
+        // Sized from the configuration before any environment is built (256 of them take a minute).
+        check_memory(&config, env_configs[0].obs_spec().dim(), crate::env::ACTION_DIM, max_steps)?;
+        let active = active_set(&config, 0, tasks.len());
+        crate::support::limits::NUM_ENVS.check_usize(config.workers * active.len()).map_err(|e| {
+            anyhow::anyhow!("{e}: {} workers × {} tasks; use fewer workers or tasks", config.workers, active.len())
+        })?;
+        let mut envs = build_envs(&config, &env_configs, &active)?;
+        // A stream's tasks passed the solver's check when they were generated.
+        if config.algo.registration().info.imitates && config.stream.is_none() {
+            solver_plays(&mut envs, &tasks, config.seed)?;
+        }
+        let first = &envs.envs()[0];
+        let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
+        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
+        let max_levels: Vec<usize> = tasks.iter().map(Task::max_level).collect();
+        if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
+            match &tasks[..] {
+                [task] => bail!("--challenge-share: the task {} has no challenge distribution", task.id()),
+                _ => bail!("--challenge-share: none of the run's tasks has a challenge distribution"),
+            }
+        }
+
+        let dims = (arch, act_dim);
+        let run_id = config.task_id();
+        let begun = if resume {
+            resumed(comm, &config, &run_id, tasks.len(), &run, &mine, saved_config, dims)?
+        } else {
+            fresh(comm, &config, &run_id, tasks.len(), &run, &mine, dims)?
+        };
+        begun.check(&config, &mine)?;
+        let seen = crate::learn::agents::expert::obs_dim_without_grey(&envs.envs()[0].config().blocks());
+        let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
+        if comm.is_root() {
+            write_json(&run.config(), &config)?;
+            run.record_provenance(begun.state.epoch)?;
+        }
+        if comm.is_root() && comm.size() > 1 {
+            let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
+            eprintln!(
+                "mpirun: {p} ranks × {w} workers; each update averages {} gradients of {} KiB: every rank sends and \
+                 receives about {} KiB",
+                p * w,
+                bytes / 1024,
+                2 * (p - 1) * w * bytes / p / 1024
+            );
+        }
+        Ok(Self {
+            comm,
+            config,
+            run,
+            mine,
+            tasks,
+            env_configs,
+            active,
+            envs,
+            learner: Learner { agent: begun.agent, expert, reduce_seconds: 0.0 },
+            replays: begun.replays,
+            replay_log: begun.replay_log,
+            state: begun.state,
+            rows: begun.rows,
+            thresholds,
+            max_levels,
+            obs_dim,
+            persist_seconds: 0.0,
+            created,
+        })
+    }
+
+    /// The global index of this rank's worker `w` (it keys the worker's random streams).
+    fn shard(&self, w: usize) -> usize {
+        self.comm.rank() * self.config.workers + w
+    }
+
+    /// One epoch: cycles of collect + learn, then evaluate, then persist.
+    fn epoch(&mut self) -> Result<EpochRow> {
+        let epoch = self.state.epoch;
+        let started = Instant::now();
+        let cpu_started = cpu_seconds();
+        self.activate(epoch)?;
+        self.set_levels(false)?;
+        let mut tally = EpochTally::default();
+        self.learner.reduce_seconds = 0.0;
+        for cycle in 0..self.config.cycles {
+            self.collect(epoch, &mut tally)?;
+            self.learn(epoch, cycle, &mut tally);
+        }
+        let eval_started = Instant::now();
+        let (policy, test, test_tasks, finals) = self.evaluate(epoch)?;
+        let eval_seconds = eval_started.elapsed().as_secs_f64();
+        tally.env_seconds += eval_seconds;
+        tally.forward_seconds +=
+            test.iter().chain(&finals).map(|e| e.forward_seconds).sum::<f64>() / self.config.workers as f64;
+        let (row, tested) = self.row(epoch, &tally, (&test, &test_tasks), &finals, eval_seconds, started, cpu_started);
+        self.advance_curricula(&tested);
+        self.state.epoch += 1;
+        self.persist(&row, policy)?;
+        Ok(row)
+    }
+
+    /// Builds the environments of `epoch`'s active set where it differs from the current one (a
+    /// stream run's; a run of listed tasks keeps its environments).
+    fn activate(&mut self, epoch: usize) -> Result<()> {
+        let active = active_set(&self.config, epoch, self.tasks.len());
+        if active != self.active {
+            self.envs = build_envs(&self.config, &self.env_configs, &active)?;
+            self.active = active;
+        }
+        Ok(())
+    }
+
+    /// Sets every environment to its task's level, or (`top`) to its task's maximum level.
+    fn set_levels(&mut self, top: bool) -> Result<()> {
+        let n = self.active.len();
+        for (i, env) in self.envs.envs_mut().iter_mut().enumerate() {
+            let t = self.active[i % n];
+            let level = if top { self.max_levels[t] } else { self.state.levels[t].min(self.max_levels[t]) };
+            env.set_level(level)?;
+        }
+        Ok(())
+    }
+
+    /// Adds the epoch's test episodes of each task (summed over ranks) to its tally; a task whose
+    /// tally holds `test_episodes` episodes moves up a level if their success reaches its threshold,
+    /// and its tally starts again. One task is tested `workers × ranks × test_episodes` times an
+    /// epoch: the paper's rule, a decision every epoch on that epoch's test success.
+    fn advance_curricula(&mut self, tested: &[[u64; 2]]) {
+        let state = &mut self.state;
+        for (t, got) in tested.iter().enumerate() {
+            let tally = &mut state.tallies[t];
+            (tally[0], tally[1]) = (tally[0] + got[0], tally[1] + got[1]);
+            if tally[1] >= self.config.test_episodes as u64 {
+                let success = if tally[1] == 0 { 0.0 } else { tally[0] as f64 / tally[1] as f64 };
+                if success >= self.thresholds[t] && state.levels[t] < self.max_levels[t] {
+                    state.levels[t] += 1;
+                }
+                *tally = [0, 0];
+            }
+        }
+        state.level = state.levels.iter().sum();
+    }
+
+    /// Every worker plays `rollouts` exploration episodes; their transitions
+    /// go to the worker's buffer, and every rank's observations (in global
+    /// shard order) to the normaliser.
+    fn collect(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
+        let t = Instant::now();
+        let config = &self.config;
+        let explorer = self.learner.agent.explorer();
+        let mixture = self.learner.mixture(&*explorer, epoch, config);
+        let behaviour = match &mixture {
+            Some(m) => Behaviour::Mixture(m),
+            None => Behaviour::exploring(&*self.learner.agent, &*explorer, epoch),
+        };
+        let base = self.state.episodes_per_worker;
+        let draws = (config.level_replay > 0.0 || config.challenge_share > 0.0).then(|| {
+            self.tasks
+                .iter()
+                .enumerate()
+                .map(|(t, task)| Draw {
+                    level: self.state.levels[t].min(self.max_levels[t]),
+                    max_level: self.max_levels[t],
+                    level_replay: config.level_replay,
+                    // A multi-task run's tasks without a challenge distribution play their own.
+                    challenge_share: if task.distribution("challenge").is_some() {
+                        config.challenge_share
+                    } else {
+                        0.0
+                    },
+                })
+                .collect::<Vec<_>>()
+        });
+        let active = &self.active;
+        let plan: Vec<Planned> = (0..config.workers)
+            .flat_map(|w| (0..config.rollouts).map(move |k| (w, k)))
+            .map(|(w, k)| {
+                let seed = stream_seed(config.seed, &[1, self.shard(w) as u64, base + k as u64]);
+                let task = active[draw_task(seed, active.len())];
+                Planned { worker: w, task, seed, draw: draws.as_ref().map(|d| d[task]) }
+            })
+            .collect();
+        let eps = play_plan(&mut self.envs, active, &behaviour, &plan)?;
+        self.state.episodes_per_worker += config.rollouts as u64;
+        tally.env_seconds += t.elapsed().as_secs_f64();
+        let mut rows = Vec::new();
+        for (ep, planned) in eps.iter().zip(&plan) {
+            let max_steps = self.tasks[planned.task].spec.max_episode_steps;
+            tally.episodes += 1;
+            tally.wins += ep.success as usize;
+            tally.steps += ep.len();
+            tally.expert_steps += ep.expert_steps;
+            tally.forward_seconds += ep.forward_seconds / config.workers as f64;
+            let replay = match config.replay_layout() {
+                ReplayLayout::PerWorker => &mut self.replays[planned.worker],
+                ReplayLayout::Shared => &mut self.replays[0],
+            };
+            ep.store_transitions(replay, config.shared.gamma, config.shared.n_step);
+            rows.extend(ep.obs.iter().flatten());
+            // Hindsight colours: the same episode under other colourings, beside the original.
+            for other in
+                ep.relabelled(&self.envs.obs_spec(), config.hindsight_colours, config.hindsight_strategy, max_steps)
+            {
+                tally.relabelled += 1;
+                tally.relabelled_wins += other.success as usize;
+                other.store_transitions(replay, config.shared.gamma, config.shared.n_step);
+                rows.extend(other.obs.iter().flatten());
+            }
+        }
+        let all = self.comm.gather_f32(&rows);
+        self.learner.agent.norm_mut().update(&all);
+        Ok(())
+    }
+
+    /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
+    fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut EpochTally) {
+        let t = Instant::now();
+        let config = &self.config;
+        let (e, c) = (epoch as u64, cycle as u64);
+        let first = self.shard(0);
+        match config.replay_layout() {
+            // One batch of batch_size × workers from the process's buffer.
+            ReplayLayout::Shared => {
+                let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
+                for _ in 0..config.batches {
+                    let batch = self.replays[0].sample(config.batch_size * config.workers, &mut rng);
+                    tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
+                    self.state.updates += 1;
+                }
+            }
+            // One batch per worker, each from its own buffer and stream.
+            ReplayLayout::PerWorker => {
+                let mut rngs: Vec<ChaCha8Rng> = (0..config.workers)
+                    .map(|w| ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[5, e, c, (first + w) as u64])))
+                    .collect();
+                for _ in 0..config.batches {
+                    let batches: Vec<Batch> =
+                        self.replays.iter().zip(&mut rngs).map(|(r, rng)| r.sample(config.batch_size, rng)).collect();
+                    tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));
+                    self.state.updates += 1;
+                }
+            }
+        }
+        self.learner.end_cycle();
+        tally.update_seconds += t.elapsed().as_secs_f64();
+    }
+
+    /// The deterministic policy's test episodes at the current level and
+    /// finals at the maximum level (a multi-task run's tasks in turn, each at its
+    /// own levels), and the task of each test episode.
+    #[allow(clippy::type_complexity)]
+    fn evaluate(&mut self, epoch: usize) -> Result<(AnyPolicy, Vec<Episode>, Vec<usize>, Vec<Episode>)> {
+        let (seed, n, tasks) = (self.config.seed, self.config.test_episodes, self.active.len());
+        let shards = self.comm.size() * self.config.workers;
+        let plan = |stream: u64| -> Vec<Planned> {
+            (0..self.config.workers)
+                .flat_map(|w| (0..n).map(move |k| (w, k)))
+                .map(|(w, k)| {
+                    let shard = self.shard(w);
+                    let task = self.active[test_task(epoch, shards, n, shard, k, tasks)];
+                    let seed = stream_seed(seed, &[stream, epoch as u64, shard as u64, k as u64]);
+                    Planned { worker: w, task, seed, draw: None }
+                })
+                .collect()
+        };
+        let (test_plan, finals_plan) = (plan(3), plan(4));
+        let policy = self.learner.agent.policy();
+        let greedy = Behaviour::Greedy(&policy);
+        self.set_levels(false)?;
+        for env in self.envs.envs_mut() {
+            env.set_distribution(None)?;
+        }
+        let test = play_plan(&mut self.envs, &self.active, &greedy, &test_plan)?;
+        self.set_levels(true)?;
+        let finals = play_plan(&mut self.envs, &self.active, &greedy, &finals_plan)?;
+        Ok((policy, test, test_plan.iter().map(|p| p.task).collect(), finals))
+    }
+
+    /// The epoch's row: counts and success summed over ranks (one exchange),
+    /// times measured on this rank.
+    #[allow(clippy::too_many_arguments)]
+    fn row(
+        &mut self,
+        epoch: usize,
+        tally: &EpochTally,
+        (test, test_tasks): (&[Episode], &[usize]),
+        finals: &[Episode],
+        eval_seconds: f64,
+        started: Instant,
+        cpu_started: f64,
+    ) -> (EpochRow, Vec<[u64; 2]>) {
+        let wins = |eps: &[Episode]| eps.iter().filter(|e| e.success).count() as f64;
+        let sum_of = |f: fn(&UpdateStats) -> f64| {
+            let v: Vec<f64> = tally.stats.iter().map(f).filter(|x| !x.is_nan()).collect();
+            (v.iter().sum::<f64>(), v.len() as f64)
+        };
+        let (q, cl, al) = (sum_of(|s| s.mean_q), sum_of(|s| s.critic_loss), sum_of(|s| s.actor_loss));
+        let mut local = vec![
+            tally.episodes as f64,
+            tally.wins as f64,
+            tally.steps as f64,
+            tally.expert_steps as f64,
+            wins(test),
+            test.len() as f64,
+            wins(finals),
+            finals.len() as f64,
+            q.0,
+            q.1,
+            cl.0,
+            cl.1,
+            al.0,
+            al.1,
+            tally.relabelled as f64,
+            tally.relabelled_wins as f64,
+        ];
+        // Each task's test (successes, episodes).
+        const TASKS_AT: usize = 16;
+        for t in 0..self.tasks.len() {
+            let of_t = || test.iter().zip(test_tasks).filter(move |(_, &k)| k == t).map(|(e, _)| e);
+            local.extend([of_t().filter(|e| e.success).count() as f64, of_t().count() as f64]);
+        }
+        let per_rank = self.comm.gather_f64(&local);
+        let total = |i: usize| -> f64 {
+            if per_rank.len() == 1 {
+                per_rank[0][i]
+            } else {
+                per_rank.iter().map(|r| r[i]).sum()
+            }
+        };
+        let ratio = |a: usize, b: usize| if total(b) == 0.0 { 0.0 } else { total(a) / total(b) };
+        self.state.env_steps += total(2) as u64;
+        let epoch_wall = started.elapsed().as_secs_f64();
+        self.state.wall_seconds += epoch_wall;
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+        let tested =
+            (0..self.tasks.len()).map(|t| [total(TASKS_AT + 2 * t) as u64, total(TASKS_AT + 2 * t + 1) as u64]);
+        let row = EpochRow {
+            epoch,
+            level: self.state.level,
+            train_success: ratio(1, 0),
+            test_success: ratio(4, 5),
+            finals_success: ratio(6, 7),
+            mean_q: ratio(8, 9),
+            critic_loss: ratio(10, 11),
+            actor_loss: ratio(12, 13),
+            env_steps: self.state.env_steps,
+            updates: self.state.updates,
+            wall_seconds: self.state.wall_seconds,
+            env_seconds: tally.env_seconds,
+            forward_seconds: tally.forward_seconds,
+            update_seconds: tally.update_seconds,
+            reduce_seconds: self.learner.reduce_seconds,
+            eval_seconds,
+            persist_seconds: self.persist_seconds,
+            beta: self.learner.beta(epoch, &self.config).unwrap_or(0.0),
+            expert_share: ratio(3, 2),
+            relabelled: total(14) / total(0).max(1.0),
+            relabelled_success: ratio(15, 14),
+            cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
+        };
+        (row, tested.collect())
+    }
+
+    /// Rank 0 writes progress, plot and policies; then every rank its
+    /// checkpoint (last, so that a crash before it repeats at most this epoch).
+    fn persist(&mut self, row: &EpochRow, policy: AnyPolicy) -> Result<()> {
+        let started = Instant::now();
+        if self.comm.is_root() {
+            let (run, state) = (&self.run, &self.state);
+            self.rows.push(row.clone());
+            write_progress(&run.progress(), &self.rows)?;
+            // A multi-task run's level is the sum of its tasks' levels.
+            let max_level = self.max_levels.iter().sum();
+            plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
+            // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task;
+            // a stream run's, its stream's record.
+            let (task, tasks, stream) = match (&self.tasks[..], &self.config.stream) {
+                (_, Some(stream)) => (None, Vec::new(), Some(stream.clone())),
+                ([task], None) => (Some(task.source.clone()), Vec::new(), None),
+                (all, None) => (None, all.iter().map(|t| t.source.clone()).collect(), None),
+            };
+            let saved = SavedPolicy {
+                env_id: self.state.env_id.clone(),
+                task,
+                tasks,
+                stream,
+                epoch: state.epoch,
+                env_steps: Some(state.env_steps),
+                finals_success: row.finals_success,
+                policy,
+                critic: self.learner.agent.critic(),
+            };
+            write_json(&run.policy(), &saved)?;
+            if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
+                std::fs::create_dir_all(run.snapshots())
+                    .with_context(|| format!("cannot create {}", run.snapshots().display()))?;
+                write_json(&run.snapshot(state.epoch), &saved)?;
+            }
+            // Ties go to the newer policy: same finals score, more training.
+            if row.finals_success >= state.best_finals {
+                write_json(&run.best_policy(), &saved)?;
+            }
+        }
+        self.state.best_finals = self.state.best_finals.max(row.finals_success);
+        let (agent, settings) = (&mut *self.learner.agent, (&self.config.shared, &self.config.algos));
+        checkpoint::save(&self.mine.checkpoint(), &self.state, agent, settings, &self.replays, &mut self.replay_log)?;
+        self.created.drain(..).for_each(crate::support::io::CreatedDir::keep);
+        // Counted from the next epoch's wall time on (the checkpoint already holds this epoch's).
+        self.persist_seconds = started.elapsed().as_secs_f64();
+        self.state.wall_seconds += self.persist_seconds;
+        Ok(())
+    }
+}
+
+/// The run's tasks on every rank: rank 0 resolves them (see [`run_tasks`]) and
+/// sends their recorded form to the others, so all ranks build the same tasks
+/// even when their hosts' task files differ.
+fn shared_tasks(
+    comm: &Comm,
+    config: &TrainConfig,
+    run: &RunDir,
+    saved: Option<&TrainConfig>,
+) -> Result<(Vec<Task>, Option<crate::benchmark::stream::StreamRecord>)> {
+    if comm.size() == 1 {
+        return run_tasks(config, run, saved);
+    }
+    let mut bytes = Vec::new();
+    let tasks = if comm.is_root() {
+        let (tasks, stream) = run_tasks(config, run, saved)?;
+        let sources: Vec<&crate::task::TaskSource> = tasks.iter().map(|t| &t.source).collect();
+        bytes = serde_json::to_vec(&(sources, &stream))?;
+        Some((tasks, stream))
+    } else {
+        None
+    };
+    comm.broadcast_bytes(&mut bytes);
+    match tasks {
+        Some(t) => Ok(t),
+        None => {
+            let (sources, stream): (Vec<crate::task::TaskSource>, Option<crate::benchmark::stream::StreamRecord>) =
+                serde_json::from_slice(&bytes).context("the tasks sent by rank 0")?;
+            Ok((sources.iter().map(registry::recorded).collect::<Result<_, _>>()?, stream))
+        }
+    }
+}
+
+/// The checkpoint this rank resumes from: its latest, or under MPI the
+/// previous one when another rank stopped before writing the latest epoch
+/// (every rank resumes from the last epoch all of them completed). Both
+/// files are considered, so a rank stopped between setting its latest
+/// checkpoint aside and writing the next one resumes from the one set aside.
+fn resume_checkpoint(comm: &Comm, path: &Path, run: &RunDir) -> Result<PathBuf> {
+    let candidates: Vec<(u64, PathBuf)> = [path.to_owned(), checkpoint::previous(path)]
+        .into_iter()
+        .filter(|p| p.exists())
+        .map(|p| Ok((checkpoint::peek_state(&p)?.epoch as u64, p)))
+        .collect::<Result<_, checkpoint::CheckpointError>>()?;
+    let Some(latest) = candidates.iter().map(|c| c.0).max() else {
+        bail!(
+            "--resume: no checkpoint for rank {} in {} ({}); start a new run without --resume",
+            comm.rank(),
+            run.dir.display(),
+            path.display()
+        );
+    };
+    let epoch = comm.gather_u64(latest).into_iter().min().unwrap_or(latest);
+    match candidates.into_iter().find(|c| c.0 == epoch) {
+        Some((_, p)) => Ok(p),
+        None => bail!(
+            "--resume: rank {} has no checkpoint of epoch {epoch}, the last epoch every rank completed (its latest \
+             is of epoch {latest}, in {}); the run cannot continue exactly",
+            comm.rank(),
+            path.display()
+        ),
+    }
+}
+
+/// User + system CPU seconds of this process so far.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage writes one rusage struct into the zeroed value we
+    // pass; RUSAGE_SELF is always valid.
+    let usage = unsafe {
+        let mut u: libc::rusage = std::mem::zeroed();
+        if libc::getrusage(libc::RUSAGE_SELF, &mut u) != 0 {
+            return 0.0;
+        }
+        u
+    };
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    secs(usage.ru_utime) + secs(usage.ru_stime)
+}
