@@ -25,9 +25,9 @@ use blockpuzzle::env::{ObsMode, ObsSpec, ACTION_DIM, BLOCK_OBS};
 use blockpuzzle::episode::outcome::{wilson95, Outcome, Outcomes};
 use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind};
-use blockpuzzle::learn::agents::ddpg::DeterministicPolicy;
 use blockpuzzle::learn::agents::nets::{append_grads, Adam, Net};
 use blockpuzzle::learn::agents::shared::SharedConfig;
+use blockpuzzle::policy::actor::DeterministicPolicy;
 use blockpuzzle::policy::Policy;
 use blockpuzzle::BlockEnv;
 use clap::Parser;
@@ -346,7 +346,7 @@ fn collect(expert: &Trained, env: &mut BlockEnv, episodes: u64, challenge: bool)
 struct Student {
     name: &'static str,
     net: Net,
-    norm: blockpuzzle::learn::agents::normalizer::Normalizer,
+    norm: blockpuzzle::policy::actor::normalizer::Normalizer,
     opt: Adam,
     /// It reads the flat view (else the `objects` observation as it is).
     flat: bool,

@@ -27,7 +27,8 @@ pub mod learn;
 pub mod cli;
 
 // The crate's public face: what the README's example and a first script need, at the top.
-pub use env::{make, BlockEnv, EnvConfig, EnvError, Info, Step};
+pub use env::registry::make;
+pub use env::{BlockEnv, EnvConfig, EnvError, Info, Step};
 pub use sim::rules::Colour;
 
 /// The README's Rust example, compiled and run by `cargo test` (a doctest).

@@ -1,10 +1,11 @@
-//! `VecEnv`: the core's vector engine ([`blockpuzzle::env::VectorEnv`]: N
+//! `VecEnv`: the core's vector engine ([`blockpuzzle::env::vector::VectorEnv`]: N
 //! environments on K Rust threads, next-step autoreset, environment i the
 //! same whatever N and K are) for Python, with the GIL released while it
 //! steps, writing into numpy arrays the caller allocated once.
 
 use crate::to_py;
-use blockpuzzle::env::{EnvConfig, Info, ObsMode, ResetOptions, VecError, VectorEnv};
+use blockpuzzle::env::{EnvConfig, Info, ObsMode};
+use blockpuzzle::env::vector::{ResetOptions, VecError, VectorEnv};
 use blockpuzzle::sim::rules::ContactState;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadwriteArray1, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};

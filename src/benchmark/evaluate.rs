@@ -5,8 +5,9 @@
 
 use crate::benchmark::provenance::{Harness, PolicyId, Provenance};
 use crate::benchmark::saved::SavedPolicy;
-use crate::env::{BlockEnv, EnvConfig, ObsMode, VectorEnv, ACTION_DIM};
-pub use crate::episode::outcome::wilson95;
+use crate::env::vector::VectorEnv;
+use crate::env::{BlockEnv, EnvConfig, ObsMode, ACTION_DIM};
+use crate::episode::outcome::wilson95;
 use crate::episode::outcome::{Outcome, Outcomes};
 use crate::episode::rollout::run_episode;
 use crate::policy::actor::{obs_dim_without_grey, without_grey, AnyPolicy};

@@ -3,7 +3,9 @@
 use crate::sim::mj::MjError;
 use crate::sim::rules::Colour;
 use crate::sim::scene::{BlockSpec, SceneError, SceneSpec};
-use crate::task::{PlacementError, Task, TaskError, TaskSpec};
+use crate::task::sampler::PlacementError;
+use crate::task::spec::TaskSpec;
+use crate::task::{Task, TaskError};
 use thiserror::Error;
 
 /// Everything that defines an environment: the task (objects, colours,

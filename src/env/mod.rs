@@ -20,13 +20,12 @@ pub use obs::{
     obs_dim, Fixture, ObsMode, ObsSpec, BLOCK_OBS, COLOUR_FEATURE, ENTITY_FEATURES, OBJECT_FEATURES, ROBOT_FEATURES,
     ROBOT_OBS, TYPE_FEATURE,
 };
-pub use registry::{ids, make, REGISTRY};
-pub use vector::{ResetOptions, VecError, VecStep, VectorEnv};
 
 use crate::sim::mj::{Data, ObjType, Warning};
 use crate::sim::rules::{Colour, ContactMatrix, Rules, Touching, Verdict};
 use crate::sim::scene::{Scene, SceneObject};
-use crate::task::{Placed, Tally};
+use crate::task::sampler::Placed;
+use crate::task::Tally;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

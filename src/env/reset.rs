@@ -143,7 +143,7 @@ impl BlockEnv {
                 roles[slot] = role;
             }
         }
-        let specs: Vec<&crate::task::ObjectSpec> = self.config.task.objects().collect();
+        let specs: Vec<&crate::task::spec::ObjectSpec> = self.config.task.objects().collect();
         for (slot, &role) in roles.iter().enumerate() {
             self.colours[slot] = specs[role].colour;
             let o = &mut self.objects[crate::sim::scene::FIRST_BLOCK_OBJECT + slot];

@@ -15,12 +15,7 @@ pub mod family;
 pub mod sampler;
 pub mod spec;
 
-pub use counts::Counts;
-pub use sampler::{Placed, PlacementError};
-pub use spec::{
-    Anchor, CurriculumSpec, Density, DistributionSpec, Kind, ObjectSpec, PlacementSpec, RobotSpec, StartSpec,
-    SurfaceSpec, TaskSpec, Value, Yaw, FORMAT_VERSION,
-};
+use spec::{ObjectSpec, TaskSpec};
 
 use crate::sim::rules::{Colour, MAX_OBJECTS};
 pub(crate) use compile::{draws_nothing, least_count, parse_value, Checker, Scope};

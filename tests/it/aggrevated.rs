@@ -4,7 +4,7 @@
 #![cfg(feature = "train")]
 
 use blockpuzzle::env::{registry, BlockEnv, EnvConfig, BLOCK_OBS, ROBOT_OBS};
-use blockpuzzle::learn::agents::expert::{obs_dim_without_grey, without_grey};
+use blockpuzzle::policy::actor::{obs_dim_without_grey, without_grey};
 
 const BLUE: [f64; 2] = [1.30, 0.70];
 const GREEN: [f64; 2] = [1.40, 0.82];

@@ -165,3 +165,35 @@ fn the_algorithm_interface_knows_no_algorithm_and_no_algorithm_knows_the_list() 
         }
     }
 }
+
+/// One path per type: outside lib.rs (the crate's public face), a `pub use` only presents an item
+/// of a private file of the same folder (`mod x;` beside `pub use x::...`), so nothing is reachable
+/// under two public paths; an alias of another module's item (`pub use crate::...`) is refused.
+#[test]
+fn no_type_has_two_public_paths() {
+    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    walk(&src, &mut files);
+    let mut bad = Vec::new();
+    for f in files.iter().filter(|f| !f.ends_with("src/lib.rs")) {
+        let text = std::fs::read_to_string(f).unwrap();
+        for line in text.lines().map(str::trim_start).filter(|l| l.starts_with("pub use ")) {
+            let from = line["pub use ".len()..].split("::").next().unwrap_or("");
+            let private = text.lines().any(|l| l.trim() == format!("mod {from};"));
+            if !private {
+                bad.push(format!("{}: {line}", f.strip_prefix(&src).unwrap().display()));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "re-exports that give an item a second public path: {bad:#?}");
+}

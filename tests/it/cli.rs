@@ -17,8 +17,8 @@ fn envs_lists_one_line_per_id() {
     let o = bp(&["envs"]);
     assert!(o.status.success());
     let out = String::from_utf8_lossy(&o.stdout).to_string();
-    assert_eq!(out.lines().count(), blockpuzzle::env::ids().len(), "{out}");
-    for id in blockpuzzle::env::ids() {
+    assert_eq!(out.lines().count(), blockpuzzle::env::registry::ids().len(), "{out}");
+    for id in blockpuzzle::env::registry::ids() {
         assert!(out.contains(id), "{id} missing from {out}");
     }
 }
@@ -372,7 +372,7 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
 fn task_files_work_wherever_an_id_does_and_task_check_reports() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("mine.toml");
-    let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "BlocksChoose-v0").unwrap().toml;
+    let source = blockpuzzle::env::registry::REGISTRY.iter().find(|r| r.id == "BlocksChoose-v0").unwrap().toml;
     std::fs::write(&file, source.replace("BlocksChoose-v0", "Mine-v0")).unwrap();
     let (f, out) = (file.to_str().unwrap(), dir.path().join("x.jsonl"));
     let o =

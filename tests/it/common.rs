@@ -1,7 +1,8 @@
 #![allow(dead_code)]
 //! Helpers shared by the integration tests.
 
-use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError, ResetOptions, VectorEnv, ACTION_DIM};
+use blockpuzzle::env::vector::{ResetOptions, VectorEnv};
+use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError, ACTION_DIM};
 use blockpuzzle::policy::Policy;
 
 /// One recorded step: (qpos, qvel, obs, reward, terminated, truncated).

@@ -206,7 +206,7 @@ fn tasks_without_counts_draw_nothing_for_them() {
 #[cfg(feature = "train")]
 #[test]
 fn the_grey_blind_view_drops_absent_greys_too() {
-    use blockpuzzle::learn::agents::expert::without_grey;
+    use blockpuzzle::policy::actor::without_grey;
     let mut e = env("BlocksChooseN-v0", ObsMode::Flat);
     for seed in 0..10 {
         let (obs, _) = e.reset(Some(seed)).unwrap();

@@ -2,7 +2,8 @@
 //! (the task sampler alone, no MuJoCo): the curricula of the paper.
 
 use blockpuzzle::env::registry;
-use blockpuzzle::task::{Placed, Task};
+use blockpuzzle::task::sampler::Placed;
+use blockpuzzle::task::Task;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

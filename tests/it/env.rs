@@ -2,7 +2,8 @@
 //! determinism, bad input, instability handling.
 
 use crate::common::trajectory;
-use blockpuzzle::env::{ids, make, registry, BlockEnv, EnvConfig, EnvError, ACTION_DIM};
+use blockpuzzle::env::registry::{ids, make};
+use blockpuzzle::env::{registry, BlockEnv, EnvConfig, EnvError, ACTION_DIM};
 use blockpuzzle::policy::{Policy, RandomPolicy, ScriptedPolicy};
 
 #[test]

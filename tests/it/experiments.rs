@@ -4,8 +4,9 @@
 #![cfg(feature = "train")]
 
 use blockpuzzle::cli::train_config;
+use blockpuzzle::learn::agents::registry::Algo;
 use blockpuzzle::learn::agents::shared::Precision;
-use blockpuzzle::learn::train::{Algo, TrainConfig};
+use blockpuzzle::learn::train::TrainConfig;
 use std::path::{Path, PathBuf};
 
 fn recipe(path: &Path, extra: &[&str]) -> anyhow::Result<TrainConfig> {
@@ -43,7 +44,7 @@ fn every_recipe_is_a_valid_train_command_line() {
         // ddpg-task takes its task from the command line (--env ID).
         let env: &[&str] = if path.ends_with("ddpg-task.toml") { &["--env", "ReachAvoid-v0"] } else { &[] };
         let c = recipe(&path, env).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
-        let known = blockpuzzle::env::ids().contains(&c.env.as_str()) || root.join(&c.env).is_file();
+        let known = blockpuzzle::env::registry::ids().contains(&c.env.as_str()) || root.join(&c.env).is_file();
         assert!(known, "{}: {}", path.display(), c.env);
         // Counts name entries the task has, in range.
         if let Some(counts) = &c.counts {

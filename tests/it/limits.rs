@@ -98,7 +98,7 @@ fn numbers_without_an_upper_limit_are_refused_before_anything_is_created() {
 #[test]
 fn task_files_bound_their_numbers_and_ids_with_file_line_and_field() {
     let dir = tempfile::tempdir().unwrap();
-    let base = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "BlocksTouch-v0").unwrap().toml;
+    let base = blockpuzzle::env::registry::REGISTRY.iter().find(|r| r.id == "BlocksTouch-v0").unwrap().toml;
     let cases: &[(&str, &str, &[&str])] = &[
         (
             "max_episode_steps = 50",

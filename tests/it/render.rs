@@ -289,7 +289,7 @@ mod cli {
 
         // A dump of a task file renders after the file is gone (from the copy in the dump).
         let file = dir.path().join("gone.toml");
-        let source = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
+        let source = blockpuzzle::env::registry::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
         std::fs::write(&file, source.replace("GripperTouch-v0", "Gone-v0")).unwrap();
         let traj = dir.path().join("gone.jsonl");
         let o = bp(

@@ -2,7 +2,7 @@
 
 use blockpuzzle::env::{BlockEnv, EnvConfig, EnvError};
 use blockpuzzle::sim::rules::{ContactState, Verdict};
-use blockpuzzle::task::TaskSpec;
+use blockpuzzle::task::spec::TaskSpec;
 use blockpuzzle::Colour::{self, *};
 
 const FAR: [f64; 2] = [1.12, 1.02];

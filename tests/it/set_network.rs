@@ -10,7 +10,7 @@ use blockpuzzle::env::{registry, BlockEnv, EnvConfig, ObsMode, ObsSpec};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind, Pooling};
 use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::learn::agents::shared::SharedConfig;
-use blockpuzzle::learn::agents::AnyPolicy;
+use blockpuzzle::policy::actor::AnyPolicy;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -232,7 +232,7 @@ fn a_layout_that_cannot_be_met_names_the_constraint() {
 
 #[test]
 fn a_coloured_floor_is_a_rule_object_and_only_blocks_avoid_has_one() {
-    use blockpuzzle::task::{SurfaceSpec, TaskSpec};
+    use blockpuzzle::task::spec::{SurfaceSpec, TaskSpec};
     // Blue near the table's edge, green far from it; the gripper pushes blue off the table.
     let spec = |floor: Option<Colour>| {
         let mut s = TaskSpec::fixed("Floor-v0", &[Colour::Blue, Colour::Green], &[[1.30, 0.44], [1.12, 1.02]]).unwrap();

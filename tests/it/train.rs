@@ -5,11 +5,12 @@
 use blockpuzzle::benchmark::load::load_policy;
 use blockpuzzle::learn::agents::arch::{NetConfig, NetKind, Pooling};
 use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
+use blockpuzzle::learn::agents::registry::Algo;
 use blockpuzzle::learn::agents::shared::SharedConfig;
-use blockpuzzle::learn::agents::AnyPolicy;
 use blockpuzzle::learn::train::{
-    branch, checkpoint, read_progress, train, AggrevatedConfig, Algo, EpochRow, PgWeight, ReplayLayout, TrainConfig,
+    branch, checkpoint, read_progress, train, AggrevatedConfig, EpochRow, PgWeight, ReplayLayout, TrainConfig,
 };
+use blockpuzzle::policy::actor::AnyPolicy;
 use std::path::Path;
 
 fn tiny(env: &str, epochs: usize) -> TrainConfig {
@@ -580,7 +581,7 @@ fn each_method_has_its_own_default_run_directory() {
 fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_one() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("reach.toml");
-    let text = blockpuzzle::env::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
+    let text = blockpuzzle::env::registry::REGISTRY.iter().find(|r| r.id == "GripperTouch-v0").unwrap().toml;
     std::fs::write(&file, text.replace("GripperTouch-v0", "MyReach-v0")).unwrap();
     let run = dir.path().join("run");
     let env = file.to_str().unwrap();

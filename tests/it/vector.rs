@@ -3,7 +3,8 @@
 //! seeds and masks, and bad input refused before anything moves.
 
 use crate::common::vector_actions as actions;
-use blockpuzzle::env::{registry, EnvConfig, ResetOptions, VectorEnv, ACTION_DIM};
+use blockpuzzle::env::vector::{ResetOptions, VectorEnv};
+use blockpuzzle::env::{registry, EnvConfig, ACTION_DIM};
 
 fn config(id: &str) -> EnvConfig {
     EnvConfig::new(registry::task(id).unwrap())

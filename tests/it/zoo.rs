@@ -11,7 +11,7 @@ use blockpuzzle::learn::agents::arch::Arch;
 use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::learn::agents::pggd::{Pggd, PggdConfig};
 use blockpuzzle::learn::agents::shared::SharedConfig;
-use blockpuzzle::learn::agents::AnyPolicy;
+use blockpuzzle::policy::actor::AnyPolicy;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;

@@ -13,12 +13,12 @@
 //! no algorithm.
 
 use super::arch::Arch;
-use super::mlp::PlainNet;
 use super::nets::{Adam, Net};
-use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::shared::SharedConfig;
-use super::AnyPolicy;
+use crate::policy::actor::mlp::PlainNet;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::collections::BTreeMap;

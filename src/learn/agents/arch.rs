@@ -7,10 +7,10 @@
 //! actor, critics and normaliser through [`Arch`], so `--net set` reaches
 //! DDPG, TD3, SAC and PGGD without any of them knowing which it got.
 
-use super::mlp::SetLayout;
 use super::nets::{mlp_sizes, Net};
-use super::normalizer::Normalizer;
 use crate::env::{ObsMode, ObsSpec};
+use crate::policy::actor::mlp::SetLayout;
+use crate::policy::actor::normalizer::Normalizer;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 

@@ -25,12 +25,12 @@
 
 use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, UpdateStats};
 use super::arch::Arch;
-use super::mlp::PlainNet;
 use super::nets::{append_grads, Adam, Net};
-use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::shared::SharedConfig;
-use super::AnyPolicy;
+use crate::policy::actor::mlp::PlainNet;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -533,7 +533,7 @@ impl Explorer for DdpgExplorer {
     }
 }
 
-pub use crate::policy::actor::DeterministicPolicy;
+use crate::policy::actor::DeterministicPolicy;
 
 /// DDPG's exploration (training only: the policy itself is the core's).
 impl DeterministicPolicy {
@@ -656,7 +656,7 @@ mod tests {
 
     #[test]
     fn flat_critics_read_the_rows_in_order_while_the_set_actor_ignores_it() {
-        use super::super::mlp::SetLayout;
+        use crate::policy::actor::mlp::SetLayout;
         // 3 robot features, 3 slots of 4 features, a mask.
         let layout = SetLayout::new(3, 4, 3, 1);
         let arch = Arch { obs_dim: layout.obs_dim(), set: Some(layout) };

@@ -2,15 +2,15 @@
 //! of the 3-block observation (the grey block removed), the annealed mixing
 //! probability β, and the mixed roll-in policy.
 
-use super::ddpg::DeterministicPolicy;
-use super::mlp::PlainNet;
 use super::nets::{tensor_to_vec, Net};
-use super::normalizer::Normalizer;
+use crate::policy::actor::mlp::PlainNet;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::DeterministicPolicy;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use tch::Tensor;
 
-pub use crate::policy::actor::{obs_dim_without_grey, without_grey};
+use crate::policy::actor::without_grey;
 
 /// β at `epoch`: β0 + (1 − β0)·exp(−epoch / t0) (t0 = 0: β0 from the start).
 pub fn beta(epoch: usize, beta0: f64, t0: f64) -> f64 {

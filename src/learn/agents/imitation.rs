@@ -20,9 +20,9 @@
 
 use super::algorithm::{param_count, Algorithm, Explorer, Part, Spec, UpdateStats};
 use super::nets::{append_grads, Adam, Net};
-use super::normalizer::Normalizer;
 use super::replay::Batch;
-use super::AnyPolicy;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use crate::policy::actor::DeterministicPolicy;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;

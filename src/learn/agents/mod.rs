@@ -19,5 +19,3 @@ pub mod registry;
 pub mod replay;
 pub mod sac;
 pub mod shared;
-
-pub use crate::policy::actor::{mlp, normalizer, AnyPolicy, MAX_ABS_WEIGHT};

@@ -3,7 +3,7 @@
 //! all simple loops over a list of tensors), plus an Adam optimiser whose
 //! state can be saved and restored exactly.
 
-use super::mlp::{Dense, PlainNet, SetLayout, COLOURS, NORM_EPS};
+use crate::policy::actor::mlp::{Dense, PlainNet, SetLayout, COLOURS, NORM_EPS};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
@@ -13,7 +13,7 @@ pub fn mlp_sizes(input: usize, hidden: usize, layers: usize, output: usize) -> V
 }
 
 /// A fully connected network: ReLU hidden layers, linear or tanh output;
-/// or, with a [`SetLayout`], a set network (see [`super::mlp`]): the same
+/// or, with a [`SetLayout`], a set network (see [`crate::policy::actor::mlp`]): the same
 /// list of layers, the first ones a per-object encoder, the rest a head.
 pub struct Net {
     /// Weight `[out, in]` and bias `[out]` of each layer, input first.
@@ -72,9 +72,11 @@ impl Net {
         let mut shapes = vec![(layout.token_width(extra), width)];
         shapes.extend(std::iter::repeat((width, width)).take(layout.encoder_layers - 1));
         if layout.attention {
-            shapes.extend(std::iter::repeat((width, width)).take(super::mlp::ATTENTION_LAYERS));
+            shapes.extend(std::iter::repeat((width, width)).take(crate::policy::actor::mlp::ATTENTION_LAYERS));
         }
-        shapes.extend(std::iter::repeat((width, width)).take(layout.transformer * super::mlp::TRANSFORMER_LAYERS));
+        shapes.extend(
+            std::iter::repeat((width, width)).take(layout.transformer * crate::policy::actor::mlp::TRANSFORMER_LAYERS),
+        );
         if layout.query {
             // The score (one output per row) and the value projection.
             shapes.extend([(width, 1), (width, width)]);
@@ -266,7 +268,7 @@ impl Net {
 
     /// The self-attention block of layers `first..first + 4` over encoded rows
     /// `h` `[n, m, d]` whose keys the mask `[n, m, 1]` leaves out where 0 (see
-    /// [`super::mlp`]); rows that are absent come out as junk, masked later.
+    /// [`crate::policy::actor::mlp`]); rows that are absent come out as junk, masked later.
     fn attend(&self, h: &Tensor, mask: &Tensor, first: usize) -> Tensor {
         let project = |l: usize| self.affine(h, l, true);
         let (q, k, v) = (project(first), project(first + 1), project(first + 2));
@@ -284,14 +286,14 @@ impl Net {
     /// [`SetLayout::transformer`]); absent rows come out as junk, masked later.
     fn transform(&self, h: &Tensor, mask: &Tensor, first: usize, blocks: usize) -> Tensor {
         let (n, m, d) = (h.size()[0], h.size()[1], h.size()[2]);
-        let heads = super::mlp::TRANSFORMER_HEADS as i64;
+        let heads = crate::policy::actor::mlp::TRANSFORMER_HEADS as i64;
         let dh = d / heads;
         let ln = |t: &Tensor| t.layer_norm([d].as_slice(), None::<Tensor>, None::<Tensor>, NORM_EPS.into(), false);
         // [n, 1, 1, m]: absent keys get −1e9 in every head and query.
         let absent = mask.transpose(1, 2).eq(0.0).unsqueeze(1);
         let mut h = h.shallow_clone();
         for b in 0..blocks {
-            let l = first + b * super::mlp::TRANSFORMER_LAYERS;
+            let l = first + b * crate::policy::actor::mlp::TRANSFORMER_LAYERS;
             let a = ln(&h);
             let split = |t: Tensor| t.reshape([n, m, heads, dh].as_slice()).transpose(1, 2);
             let (q, k, v) = (
@@ -520,7 +522,7 @@ pub fn grads(params: &[Tensor]) -> Vec<Tensor> {
         .collect()
 }
 
-impl super::normalizer::Normalizer {
+impl crate::policy::actor::normalizer::Normalizer {
     /// Rows of raw observations, normalised, as a `[n, dim]` tensor.
     pub fn tensor(&self, rows: &[f32]) -> Tensor {
         let mut x = rows.to_vec();

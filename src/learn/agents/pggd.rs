@@ -16,9 +16,9 @@
 use super::algorithm::{param_count, Algorithm, Explorer, Info, Part, Registration, UpdateStats};
 use super::arch::Arch;
 use super::nets::{append_grads, Adam, Net};
-use super::normalizer::Normalizer;
 use super::replay::Batch;
-use super::AnyPolicy;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -275,7 +275,7 @@ impl Explorer for PggdPolicy {
     }
 }
 
-pub use crate::policy::actor::PggdPolicy;
+use crate::policy::actor::PggdPolicy;
 
 /// PGGD's exploration (training only: the policy itself is the core's).
 impl PggdPolicy {

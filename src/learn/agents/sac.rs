@@ -31,12 +31,12 @@
 
 use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, Spec, UpdateStats};
 use super::arch::Arch;
-use super::mlp::{Dense, PlainNet};
 use super::nets::{append_grads, Adam, Net};
-use super::normalizer::Normalizer;
 use super::replay::Batch;
 use super::shared::SharedConfig;
-use super::AnyPolicy;
+use crate::policy::actor::mlp::{Dense, PlainNet};
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use crate::policy::actor::DeterministicPolicy;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -5,7 +5,8 @@
 
 pub mod train;
 
-use crate::env::{registry, BlockEnv, EnvError, VectorEnv};
+use crate::env::vector::VectorEnv;
+use crate::env::{registry, BlockEnv, EnvError};
 use crate::policy::{Policy, RandomPolicy};
 use serde::Serialize;
 use std::time::Instant;

@@ -131,7 +131,7 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
     tch::set_num_threads(crate::learn::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
     let task = registry::task(&c.env)?;
     let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
-    let mut envs = crate::env::VectorEnv::new(&env_config, c.workers, c.workers)?;
+    let mut envs = crate::env::vector::VectorEnv::new(&env_config, c.workers, c.workers)?;
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
     let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
     c.precision.check().map_err(anyhow::Error::msg)?;

@@ -14,10 +14,10 @@
 //! they load, and their next save starts the log.
 
 use crate::learn::agents::algorithm::{Algorithm, Spec, StateDict};
-use crate::learn::agents::normalizer::Normalizer;
 use crate::learn::agents::registry::{Algo, AlgoConfigs};
 use crate::learn::agents::replay::{Batch, ReplayBuffer};
 use crate::learn::agents::shared::SharedConfig;
+use crate::policy::actor::normalizer::Normalizer;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Write;

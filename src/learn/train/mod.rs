@@ -34,8 +34,9 @@ mod rundir;
 mod tasks;
 mod trainer;
 
+use crate::learn::agents::registry::Algo;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
-pub use learner::{AggrevatedConfig, Algo, Algorithm, PgWeight};
+pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{read_progress, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch};
@@ -104,7 +105,7 @@ pub struct TrainConfig {
     /// task's own ranges.
     #[arg(long)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub counts: Option<crate::task::Counts>,
+    pub counts: Option<crate::task::counts::Counts>,
     /// Parallel workers (the paper's MPI workers), one environment each.
     #[arg(long, default_value_t = 2, value_parser = crate::support::limits::WORKERS.parser::<usize>())]
     pub workers: usize,

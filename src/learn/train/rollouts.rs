@@ -4,13 +4,14 @@
 //! in parallel threads.
 
 use crate::env::hindsight;
-use crate::env::{BlockEnv, EnvError, ObsSpec, VectorEnv, ACTION_DIM};
+use crate::env::vector::VectorEnv;
+use crate::env::{BlockEnv, EnvError, ObsSpec, ACTION_DIM};
 use crate::episode::rollout::{play_episode, Event};
 use crate::learn::agents::algorithm::{Algorithm, Explorer};
 use crate::learn::agents::expert::{Actor, Mixture};
-use crate::learn::agents::normalizer::Normalizer;
 use crate::learn::agents::replay::ReplayBuffer;
-use crate::learn::agents::AnyPolicy;
+use crate::policy::actor::normalizer::Normalizer;
+use crate::policy::actor::AnyPolicy;
 use crate::policy::{Policy, ScriptedPolicy};
 use crate::sim::rules::{Colour, Touching};
 use anyhow::Result;

@@ -6,18 +6,20 @@
 
 use super::checkpoint::{self, RunState};
 use super::comm::Comm;
-use super::learner::{Algorithm, Expert, Learner};
+use super::learner::{Expert, Learner};
 use super::rollouts::{play_plan, stream_seed, Behaviour, Draw, Episode, Planned};
 use super::rundir::{read_progress, write_progress, RunDir};
 use super::tasks::{draw_task, run_tasks, test_task};
 use super::{computation_differences, plot, EpochRow, ReplayLayout, TrainConfig};
 use crate::benchmark::saved::SavedPolicy;
-use crate::env::{registry, EnvConfig, VectorEnv};
+use crate::env::vector::VectorEnv;
+use crate::env::{registry, EnvConfig};
+use crate::learn::agents::algorithm::Algorithm;
 use crate::learn::agents::algorithm::{Spec, UpdateStats};
 use crate::learn::agents::arch::Arch;
 use crate::learn::agents::registry::Algo;
 use crate::learn::agents::replay::{Batch, ReplayBuffer};
-use crate::learn::agents::AnyPolicy;
+use crate::policy::actor::AnyPolicy;
 use crate::support::io::write_json;
 use crate::task::Task;
 use anyhow::{bail, Context, Result};
@@ -94,11 +96,11 @@ fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
         0 => (config.shared.hidden, "--hidden"),
         w => (w, "--set-width"),
     };
-    if config.net.set_transformer > 0 && width % crate::learn::agents::mlp::TRANSFORMER_HEADS != 0 {
+    if config.net.set_transformer > 0 && width % crate::policy::actor::mlp::TRANSFORMER_HEADS != 0 {
         bail!(
             "--set-transformer splits {flag} {width} into {} heads; give a multiple of {}",
-            crate::learn::agents::mlp::TRANSFORMER_HEADS,
-            crate::learn::agents::mlp::TRANSFORMER_HEADS
+            crate::policy::actor::mlp::TRANSFORMER_HEADS,
+            crate::policy::actor::mlp::TRANSFORMER_HEADS
         );
     }
     // Which algorithm takes an expert first: the network matters only to one that does, and an
@@ -552,7 +554,7 @@ impl<'a> Trainer<'a> {
             fresh(comm, &config, &run_id, tasks.len(), &run, &mine, dims)?
         };
         begun.check(&config, &mine)?;
-        let seen = crate::learn::agents::expert::obs_dim_without_grey(&envs.envs()[0].config().blocks());
+        let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
             write_json(&run.config(), &config)?;
