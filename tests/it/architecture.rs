@@ -22,21 +22,24 @@ fn unit(parts: &[String]) -> String {
     }
 }
 
-/// Each file's unit -> the units its code names as `crate::X::Y`.
-fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
-    fn walk(dir: &Path, files: &mut Vec<std::path::PathBuf>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(&p, files);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                files.push(p);
-            }
+/// Every .rs file under `dir`.
+fn rust_files(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(rust_files(&p));
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
         }
     }
+    out
+}
+
+/// Each file's unit -> the units its code names as `crate::X::Y`.
+fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    walk(&src, &mut files);
+    let files = rust_files(&src);
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for f in files {
         let rel: Vec<String> = f
@@ -171,19 +174,8 @@ fn the_algorithm_interface_knows_no_algorithm_and_no_algorithm_knows_the_list() 
 /// under two public paths; an alias of another module's item (`pub use crate::...`) is refused.
 #[test]
 fn no_type_has_two_public_paths() {
-    fn walk(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(&p, out);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                out.push(p);
-            }
-        }
-    }
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    walk(&src, &mut files);
+    let files = rust_files(&src);
     let mut bad = Vec::new();
     for f in files.iter().filter(|f| !f.ends_with("src/lib.rs")) {
         let text = std::fs::read_to_string(f).unwrap();
