@@ -87,7 +87,15 @@ pub(crate) fn evaluate_saved(
     episodes: Option<usize>,
     on_row: Option<PyObject>,
 ) -> PyResult<String> {
-    let (_, saved) = blockpuzzle::benchmark::zoo::load(&path).map_err(zoo_err)?;
+    // The one resolver, as the CLI's `eval --suite` uses it.
+    let saved = match blockpuzzle::benchmark::load::resolve(&path) {
+        Ok(blockpuzzle::benchmark::load::Named::Saved(_, saved)) => saved,
+        Ok(_) => return Err(PyValueError::new_err(format!("{}: not a trained policy", path.display()))),
+        Err(e) => match e.downcast::<blockpuzzle::benchmark::zoo::ZooError>() {
+            Ok(z) => return Err(zoo_err(z)),
+            Err(e) => return Err(PyValueError::new_err(format!("{e:#}"))),
+        },
+    };
     let mut suite = blockpuzzle::benchmark::suite::load(suite).map_err(crate::suite_err)?;
     if let Some(n) = episodes {
         suite = suite.first_episodes(n).map_err(crate::suite_err)?;

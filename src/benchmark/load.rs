@@ -1,36 +1,84 @@
-//! The one way a policy named by a user is found: a policy file (`policy.json`
-//! of a run, a snapshot, or a zoo entry's `.safetensors`/`.json`), a run
-//! directory (its `best_policy.json`, else `policy.json`), or a zoo entry by
-//! name. Above both [`crate::benchmark::saved`] and [`crate::benchmark::zoo`], so neither needs the other's caller.
+//! The one resolver: what a policy name a user gives (`--policy`, `--checkpoint`, `--from`,
+//! `--expert`, Python's `evaluate`) stands for. In order: `random` (uniform random actions), a
+//! baseline that needs no training (`scripted`, the solver; `obs-hash`), a zoo entry's file
+//! (`.safetensors`/`.json`), a run directory (its `best_policy.json`, else `policy.json`), a policy
+//! file, a zoo entry by name. Above both [`crate::benchmark::saved`] and [`crate::benchmark::zoo`],
+//! so neither needs the other's caller.
 
+use crate::benchmark::evaluate::{Baseline, Subject};
 use crate::benchmark::saved::{SavedPolicy, BEST_POLICY_FILE, POLICY_FILE};
-use anyhow::Result;
-use std::path::Path;
+use anyhow::{bail, Result};
+use std::path::{Path, PathBuf};
 
-/// Loads the policy `path` names (see the module). The policy is checked
-/// before it is returned: non-finite or absurd weights, or layers that do not
-/// fit together, are an error naming the file.
+/// What a policy name stands for.
+#[derive(Debug, Clone)]
+pub enum Named {
+    /// Uniform random actions (seeded by the command that plays them).
+    Random,
+    /// A policy that needs no training.
+    Baseline(Baseline),
+    /// A trained policy, with the name it was given (results name it so).
+    Saved(PathBuf, SavedPolicy),
+}
+
+impl Named {
+    /// What suites and evaluations play: a trained policy or a baseline (random actions are no
+    /// subject of an evaluation: None).
+    pub fn subject(&self) -> Option<Subject<'_>> {
+        match self {
+            Named::Random => None,
+            Named::Baseline(b) => Some(Subject::Baseline(*b)),
+            Named::Saved(path, saved) => Some(Subject::Saved(path, saved)),
+        }
+    }
+}
+
+/// The policy `name` stands for (see the module). A trained policy is checked before it is
+/// returned: non-finite or absurd weights, or layers that do not fit together, are an error naming
+/// the file.
 ///
 /// # Errors
 /// A clear message for a missing, malformed or damaged file, or an unknown zoo name.
-pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
-    if crate::benchmark::zoo::is_name(path) {
+pub fn resolve(path: &Path) -> Result<Named> {
+    if path.to_str() == Some("random") {
+        return Ok(Named::Random);
+    }
+    if let Some(b) = path.to_str().and_then(Baseline::named) {
+        return Ok(Named::Baseline(b));
+    }
+    let saved = if crate::benchmark::zoo::is_name(path) {
         let file = crate::benchmark::zoo::find(&crate::benchmark::zoo::dir(), &path.to_string_lossy())?;
-        return Ok(crate::benchmark::zoo::load(&file)?.1);
-    }
-    if crate::benchmark::zoo::is_zoo_file(path) {
-        return Ok(crate::benchmark::zoo::load(path)?.1);
-    }
-    if crate::benchmark::zoo::is_lone_metadata(path) {
-        return Err(crate::benchmark::zoo::ZooError::NoTensors {
-            json: path.to_owned(),
-            tensors: path.with_extension("safetensors"),
-        }
-        .into());
-    }
-    if path.is_dir() {
+        crate::benchmark::zoo::load(&file)?.1
+    } else if crate::benchmark::zoo::is_zoo_file(path) {
+        crate::benchmark::zoo::load(path)?.1
+    } else if crate::benchmark::zoo::is_lone_metadata(path) {
+        let tensors = path.with_extension("safetensors");
+        return Err(crate::benchmark::zoo::ZooError::NoTensors { json: path.to_owned(), tensors }.into());
+    } else if path.is_dir() {
         let best = path.join(BEST_POLICY_FILE);
-        return crate::benchmark::saved::read(&if best.exists() { best } else { path.join(POLICY_FILE) });
+        crate::benchmark::saved::read(&if best.exists() { best } else { path.join(POLICY_FILE) })?
+    } else {
+        crate::benchmark::saved::read(path)?
+    };
+    Ok(Named::Saved(path.to_owned(), saved))
+}
+
+/// The trained policy `path` names ([`resolve`]); `random` and the baselines are refused, naming
+/// what they are.
+///
+/// # Errors
+/// As [`resolve`], and a name that is no trained policy.
+pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
+    match resolve(path)? {
+        Named::Saved(_, saved) => Ok(saved),
+        Named::Random => {
+            bail!("`random` is random actions, not a trained policy; give a policy file, run directory or zoo name")
+        }
+        Named::Baseline(b) => bail!(
+            "`{}` is a baseline that needs no training, not a trained policy; give a policy file, run directory or \
+             zoo name (suites evaluate baselines: `eval --suite S --baseline {}`)",
+            b.name(),
+            b.name()
+        ),
     }
-    crate::benchmark::saved::read(path)
 }

@@ -188,9 +188,10 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     }
     // A trained policy is loaded first: the environment shows its layout (its observation mode and,
     // for one of several tasks, its training tasks' block slots).
-    let saved = match (a.policy.as_str(), crate::benchmark::evaluate::Baseline::named(&a.policy)) {
-        ("random", _) | (_, Some(_)) => None,
-        (path, None) => Some(crate::benchmark::load::load_policy(Path::new(path))?),
+    let named = crate::benchmark::load::resolve(Path::new(&a.policy))?;
+    let saved = match &named {
+        crate::benchmark::load::Named::Saved(_, saved) => Some(saved),
+        _ => None,
     };
     let mut config = registry::config(&a.env)?;
     config.obs_mode = a.obs_mode.unwrap_or_default();
@@ -211,13 +212,11 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     env.set_level(level)?;
     crate::support::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     let mut writer = DumpWriter::create(&a.out)?;
-    let mut policy: Box<dyn Policy> = match (a.policy.as_str(), crate::benchmark::evaluate::Baseline::named(&a.policy))
-    {
-        ("random", _) => Box::new(RandomPolicy::new(a.seed)),
-        (_, Some(baseline)) => baseline.policy(&env),
-        (path, None) => {
-            let saved = saved.expect("a trained policy was loaded above");
-            Box::new(crate::benchmark::evaluate::trained_policy(Path::new(path), saved, &env)?)
+    let mut policy: Box<dyn Policy> = match named {
+        crate::benchmark::load::Named::Random => Box::new(RandomPolicy::new(a.seed)),
+        crate::benchmark::load::Named::Baseline(baseline) => baseline.policy(&env),
+        crate::benchmark::load::Named::Saved(path, saved) => {
+            Box::new(crate::benchmark::evaluate::trained_policy(&path, saved, &env)?)
         }
     };
     let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);

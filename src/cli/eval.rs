@@ -206,13 +206,18 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     if let Some(md) = &md {
         crate::support::io::check_output(md)?;
     }
-    let saved;
+    // The one resolver: a trained policy, or a baseline by name (`--checkpoint scripted` is `--baseline scripted`).
+    let named;
     let subject = match (&a.checkpoint, a.baseline) {
         (_, Some(b)) => Subject::Baseline(b),
         (checkpoint, None) => {
-            let checkpoint = checkpoint.as_deref().unwrap_or(Path::new(""));
-            saved = crate::benchmark::load::load_policy(checkpoint)?;
-            Subject::Saved(checkpoint, &saved)
+            named = crate::benchmark::load::resolve(checkpoint.as_deref().unwrap_or(Path::new("")))?;
+            named.subject().ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--checkpoint random: random actions are not evaluated on suites; give a trained policy, or \
+                     --baseline obs-hash (seeded pseudo-random actions, the same in Python)"
+                )
+            })?
         }
     };
     let r =

@@ -461,3 +461,46 @@ fn a_lone_metadata_file_and_a_long_name_are_named() {
     assert!(!ok && e.contains("1 to 100 letters") && !e.contains(&long), "{e}");
     assert_eq!(std::fs::read_dir(&z).unwrap().count(), 1, "nothing written");
 }
+
+/// One resolver turns every policy name into a policy (issue 61): `random`, the baselines, a zoo
+/// name, a zoo file, a run directory, a policy file; a command that needs a trained policy names
+/// what a baseline is; `eval --suite --checkpoint scripted` is `--baseline scripted`.
+#[test]
+fn one_resolver_names_every_policy() {
+    use blockpuzzle::benchmark::evaluate::Baseline;
+    use blockpuzzle::benchmark::load::{load_policy, resolve, Named};
+    use std::path::Path;
+    assert!(matches!(resolve(Path::new("random")).unwrap(), Named::Random));
+    assert!(matches!(resolve(Path::new("scripted")).unwrap(), Named::Baseline(Baseline::Scripted)));
+    assert!(matches!(resolve(Path::new("obs-hash")).unwrap(), Named::Baseline(Baseline::ObsHash)));
+    let by_name = match resolve(Path::new("BlocksTouch-v0-ddpg")).unwrap() {
+        Named::Saved(_, s) => s,
+        other => panic!("{other:?}"),
+    };
+    let file = zoo::dir().join("BlocksTouch-v0-ddpg.json");
+    let Named::Saved(_, by_file) = resolve(&file).unwrap() else { panic!("a zoo file is a trained policy") };
+    assert_eq!(by_name.policy_id("x"), by_file.policy_id("x"));
+    let e = format!("{:#}", load_policy(Path::new("scripted")).unwrap_err());
+    assert!(e.contains("baseline") && e.contains("--baseline scripted"), "{e}");
+    assert!(format!("{:#}", resolve(Path::new("no-such-policy")).unwrap_err()).contains("no policy file or zoo entry"));
+    // The CLI resolves with it: a suite evaluated by --checkpoint scripted and by --baseline scripted.
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("s.toml");
+    std::fs::write(
+        &suite,
+        "version = 1\nname = \"s\"\nsummary = \"s\"\n[[splits.train]]\ntask = \"BlocksTouch-v0\"\nseed = 0\n\
+         episodes = 2\n[[splits.test]]\ntask = \"BlocksTouch-v0\"\nseed = 10\nepisodes = 2\n",
+    )
+    .unwrap();
+    let run = |how: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let o = crate::common::blockpuzzle(&[&["eval", "--suite", suite.to_str().unwrap()][..], how].concat())
+            .args(["--threads", "1", "--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out).unwrap()).unwrap();
+        (v["provenance"]["policy"].clone(), v["score"].clone())
+    };
+    assert_eq!(run(&["--checkpoint", "scripted"], "a.json"), run(&["--baseline", "scripted"], "b.json"));
+}
