@@ -95,6 +95,28 @@ pub struct Registration<C: AlgorithmConfig> {
     pub memory: fn(&Spec, &C) -> u64,
     /// Its own settings away from the paper's, in words for titles, e.g. "TD3", "no action penalty".
     pub describe: fn(&C) -> Vec<String>,
+    /// Gives a learner of it (loaded from a checkpoint) the settings a branch may change,
+    /// [`Info::branchable`], from the branch's own ([`take_fields`] copies the listed ones;
+    /// [`no_branch`] for an algorithm with none).
+    pub take_branch: fn(&mut dyn Algorithm, &C) -> Result<(), String>,
+}
+
+/// The `take_branch` of an algorithm with no branchable setting.
+pub fn no_branch<C>(_: &mut dyn Algorithm, _: &C) -> Result<(), String> {
+    Ok(())
+}
+
+/// `agent` as the learner type `T` of the algorithm `name` (a branch's settings go to their own
+/// algorithm's learner).
+///
+/// # Errors
+/// A learner of another type.
+pub fn learner_mut<'a, T: 'static>(agent: &'a mut dyn Algorithm, name: &str) -> Result<&'a mut T, String> {
+    agent.as_any_mut().downcast_mut::<T>().ok_or_else(|| {
+        format!(
+            "{name}: a branch's settings are for another algorithm's learner (the registry pairs each with its own)"
+        )
+    })
 }
 
 /// What an algorithm is built from besides its own settings: the networks'
@@ -200,10 +222,6 @@ pub trait Algorithm: Send {
         None
     }
 
-    /// Takes over the settings a branch may change ([`Registration::branchable`])
-    /// from `own`, its own settings (its registration's config type).
-    fn take_branch_settings(&mut self, _own: &dyn std::any::Any) {}
-
     /// The parts of its state, by name: everything a checkpoint must hold to
     /// continue bit for bit (the normaliser apart). [`Algorithm::state`] and
     /// [`Algorithm::load_state`] follow from this one list.
@@ -262,6 +280,9 @@ pub trait Algorithm: Send {
 
     /// This learner as `Any`, for callers that need one algorithm's internals (tests, experts).
     fn as_any(&self) -> &dyn std::any::Any;
+
+    /// The same, mutable (a branch's settings, [`Registration::take_branch`]).
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
 
 /// How a frozen policy explores: one action per step (stored as produced;
@@ -367,4 +388,24 @@ mod tests {
         assert_eq!(spec.mlp_bytes(0, 2, 1), 4 * 46);
         assert_eq!(spec.mlp_bytes(2, 1, 2), 4 * 2 * (24 + 20 + 5));
     }
+}
+
+/// `into` with the fields named in `fields` taken from `from` (a branch's settings: the one list,
+/// [`Info::branchable`], says which), through their serde form.
+///
+/// # Errors
+/// A name that is no field of the settings, or a value that does not read back.
+pub fn take_fields<C>(into: &C, from: &C, fields: &[&str]) -> Result<C, String>
+where
+    C: serde::Serialize + serde::de::DeserializeOwned,
+{
+    let (mut to, from) = (serde_json::to_value(into), serde_json::to_value(from));
+    let (Ok(serde_json::Value::Object(to)), Ok(serde_json::Value::Object(from))) = (&mut to, from) else {
+        return Err("settings that are not a table of fields".into());
+    };
+    for f in fields {
+        let v = from.get(*f).ok_or_else(|| format!("branchable setting {f:?} is no field of the settings"))?;
+        to.insert((*f).to_owned(), v.clone());
+    }
+    serde_json::from_value(serde_json::Value::Object(to.clone())).map_err(|e| e.to_string())
 }

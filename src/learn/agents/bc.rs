@@ -29,6 +29,7 @@ pub const REGISTRATION: Registration<BcConfig> = Registration {
     unused: |_| Vec::new(),
     // The actor with Adam's two moments.
     memory: |spec, _| spec.mlp_bytes(0, spec.act_dim, 3),
+    take_branch: super::algorithm::no_branch,
     describe: |c| if c.noise > 0.0 { vec![format!("noise {} on the solver's actions", c.noise)] } else { Vec::new() },
 };
 

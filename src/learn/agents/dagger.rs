@@ -24,6 +24,11 @@ pub const REGISTRATION: Registration<DaggerConfig> = Registration {
     unused: |_| Vec::new(),
     // The actor with Adam's two moments.
     memory: |spec, _| spec.mlp_bytes(0, spec.act_dim, 3),
+    // β0 and t0, the schedule of the solver's share.
+    take_branch: |agent, own| {
+        super::algorithm::learner_mut::<super::imitation::Cloner>(agent, "dagger")?.schedule = own.schedule();
+        Ok(())
+    },
     describe: |c| {
         let d = DaggerConfig::DEFAULT;
         if (c.beta0, c.t0) == (d.beta0, d.t0) {

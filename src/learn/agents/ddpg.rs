@@ -63,6 +63,11 @@ pub const REGISTRATION: Registration<DdpgConfig> = Registration {
     },
     // Actor and critic(s), each with its target and Adam's two moments.
     memory: |spec, c| spec.mlp_bytes(0, spec.act_dim, 4) + spec.mlp_bytes(spec.act_dim, 1, if c.td3 { 8 } else { 4 }),
+    take_branch: |agent, own| {
+        let ddpg = super::algorithm::learner_mut::<Ddpg>(agent, "ddpg")?;
+        ddpg.config = super::algorithm::take_fields(&ddpg.config, own, REGISTRATION.info.branchable)?;
+        Ok(())
+    },
     describe: |c| {
         let paper = DdpgConfig::DEFAULT;
         let mut v = Vec::new();
@@ -478,17 +483,6 @@ impl Algorithm for Ddpg {
         Some(self.critic.to_plain())
     }
 
-    fn take_branch_settings(&mut self, own: &dyn std::any::Any) {
-        if let Some(c) = own.downcast_ref::<DdpgConfig>() {
-            self.config.random_eps = c.random_eps;
-            self.config.noise_eps = c.noise_eps;
-            self.config.noise_correlation = c.noise_correlation;
-            self.config.action_l2 = c.action_l2;
-            self.config.preact_l2 = c.preact_l2;
-            self.config.preact_margin = c.preact_margin;
-        }
-    }
-
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
         let mut parts = vec![
             ("actor", Part::Net(&mut self.actor)),
@@ -510,6 +504,10 @@ impl Algorithm for Ddpg {
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self
     }
 }

@@ -156,6 +156,10 @@ impl Algorithm for Cloner {
     fn as_any(&self) -> &dyn std::any::Any {
         self
     }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
 }
 
 /// A deterministic policy as an [`Explorer`] that adds nothing.

@@ -48,6 +48,7 @@ pub const REGISTRATION: Registration<PggdConfig> = Registration {
     // The network with Adam's two moments.
     memory: |spec, _| spec.mlp_bytes(0, 2 * spec.act_dim, 3),
     // The title names the method ("PGGD + AggreVaTeD"); its settings are the paper's or given in the config.
+    take_branch: super::algorithm::no_branch,
     describe: |_| Vec::new(),
 };
 
@@ -264,6 +265,10 @@ impl Algorithm for Pggd {
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self
     }
 }

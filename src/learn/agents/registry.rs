@@ -21,7 +21,7 @@ pub struct Entry {
     given: fn(&AlgoConfigs) -> Vec<String>,
     memory: fn(&Spec, &AlgoConfigs) -> u64,
     describe: fn(&AlgoConfigs) -> Vec<String>,
-    take_branch: fn(&mut dyn Algorithm, &AlgoConfigs),
+    take_branch: fn(&mut dyn Algorithm, &AlgoConfigs) -> Result<(), String>,
 }
 
 /// Lists the algorithms: `module: SettingsType`, the first the default.
@@ -38,6 +38,13 @@ macro_rules! algorithms {
             )+
         }
 
+        /// Each algorithm's place in [`ALGORITHMS`], by its module's name (so that a named
+        /// constant such as [`Algo::PGGD`] follows the list, whatever its order).
+        #[allow(non_camel_case_types, dead_code)]
+        enum Slot {
+            $($module),+
+        }
+
         /// Every algorithm `--algo` accepts, in the order of the list.
         pub const ALGORITHMS: &[Entry] = &[$(Entry {
             info: super::$module::REGISTRATION.info,
@@ -47,7 +54,7 @@ macro_rules! algorithms {
             given: |c| given_flags(&c.$module, super::$module::REGISTRATION.info.flag_prefix),
             memory: |spec, c| (super::$module::REGISTRATION.memory)(spec, &c.$module),
             describe: |c| (super::$module::REGISTRATION.describe)(&c.$module),
-            take_branch: |agent, c| agent.take_branch_settings(&c.$module),
+            take_branch: |agent, c| (super::$module::REGISTRATION.take_branch)(agent, &c.$module),
         }),+];
     };
 }
@@ -79,9 +86,9 @@ pub struct Algo(&'static Entry);
 
 impl Algo {
     /// DDPG (the default; the paper's).
-    pub const DDPG: Self = Self(&ALGORITHMS[0]);
+    pub const DDPG: Self = Self(&ALGORITHMS[Slot::ddpg as usize]);
     /// PGGD (the paper's; with `--expert`, AggreVaTeD).
-    pub const PGGD: Self = Self(&ALGORITHMS[1]);
+    pub const PGGD: Self = Self(&ALGORITHMS[Slot::pggd as usize]);
 
     /// The registered algorithm called `name`.
     ///
@@ -182,8 +189,11 @@ impl Algo {
     }
 
     /// Gives `agent` (a learner of this algorithm) the settings a branch may change.
-    pub fn take_branch_settings(self, agent: &mut dyn Algorithm, algos: &AlgoConfigs) {
-        (self.0.take_branch)(agent, algos);
+    ///
+    /// # Errors
+    /// An agent of another algorithm than these settings'.
+    pub fn take_branch_settings(self, agent: &mut dyn Algorithm, algos: &AlgoConfigs) -> Result<(), String> {
+        (self.0.take_branch)(agent, algos)
     }
 
     /// clap's parser for `--algo`: the registered names, each with its summary.
@@ -262,6 +272,34 @@ mod tests {
         let e = Algo::named("ppo").unwrap_err();
         assert!(e.contains("unknown algorithm \"ppo\"") && e.contains("ddpg, pggd"), "{e}");
         assert_eq!((Algo::DDPG.name(), Algo::PGGD.name()), ("ddpg", "pggd"));
+    }
+
+    /// A branch's settings reach the learner loaded from the parent's checkpoint: the fields each
+    /// registration lists as branchable, no other; a learner of another algorithm is an error, not
+    /// nothing (issue 61).
+    #[test]
+    fn a_branch_takes_the_listed_settings_and_only_its_own_algorithms() {
+        use rand::SeedableRng;
+        let shared = SharedConfig::default();
+        let spec = Spec { arch: super::super::arch::Arch::mlp(40), act_dim: 4, shared: &shared };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+        let parent = AlgoConfigs::default();
+        let mut branch = AlgoConfigs::default();
+        branch.ddpg.noise_eps = 0.05;
+        branch.ddpg.td3 = true; // not branchable: not taken
+        branch.dagger.beta0 = 0.5;
+        branch.dagger.t0 = 0.0;
+        let mut ddpg = Algo::DDPG.build(&spec, &parent, &mut rng);
+        Algo::DDPG.take_branch_settings(&mut *ddpg, &branch).unwrap();
+        let c = &ddpg.as_any().downcast_ref::<super::super::ddpg::Ddpg>().unwrap().config;
+        assert_eq!((c.noise_eps, c.td3), (0.05, false));
+        let dagger_algo = Algo::named("dagger").unwrap();
+        let mut dagger = dagger_algo.build(&spec, &parent, &mut rng);
+        assert_ne!(dagger.solver_share(0), Some(0.5));
+        dagger_algo.take_branch_settings(&mut *dagger, &branch).unwrap();
+        assert_eq!(dagger.solver_share(7), Some(0.5));
+        let e = Algo::DDPG.take_branch_settings(&mut *dagger, &branch).unwrap_err();
+        assert!(e.contains("another algorithm"), "{e}");
     }
 
     #[test]

@@ -62,6 +62,7 @@ pub const REGISTRATION: Registration<SacConfig> = Registration {
     unused: |_| Vec::new(),
     // The actor with Adam's two moments; two critics, each with its target and moments.
     memory: |spec, _| spec.mlp_bytes(0, 2 * spec.act_dim, 3) + spec.mlp_bytes(spec.act_dim, 1, 8),
+    take_branch: super::algorithm::no_branch,
     describe: |c| {
         let mut v = Vec::new();
         if c.alpha_init != SacConfig::DEFAULT.alpha_init {
@@ -329,6 +330,10 @@ impl Algorithm for Sac {
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self
     }
 }

@@ -416,7 +416,7 @@ fn resumed(
         bail!("--resume: {} was saved with other networks than --net asks for", path.display());
     }
     // A resume has the checkpoint's settings; a branch's first epoch, its own.
-    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos);
+    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos).map_err(anyhow::Error::msg)?;
     let epoch = loaded.state.epoch;
     let rows = if comm.is_root() {
         read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < epoch).collect()
