@@ -27,7 +27,7 @@ def check(folder):
         error = policy.probe_error()
         worst = max(worst, error)
         verdict = "reproduced" if error < 1e-5 else f"NOT reproduced (action difference {error:.2e})"
-        print(f"{entry.stem}: {policy.task_id} {policy.meta['algo']} epoch {policy.meta['epoch']}, "
+        print(f"{entry.stem}: {policy.task_id} {policy.algo or 'algorithm unrecorded'} epoch {policy.meta['epoch']}, "
               f"{len(policy.meta['probes'])} probes {verdict}")
     print(f"{len(entries)} entries, largest action difference {worst:.2e}")
     return len(entries) > 0 and worst < 1e-5

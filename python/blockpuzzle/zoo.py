@@ -29,7 +29,7 @@ import pathlib
 import numpy as np
 
 FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5",
-           "blockpuzzle-zoo/6")
+           "blockpuzzle-zoo/6", "blockpuzzle-zoo/7")
 #: Where an object row's colour one-hot (red, blue, green, grey) begins.
 COLOUR_FEATURE = 15
 #: The zoo the package carries.
@@ -256,12 +256,36 @@ class ZooPolicy:
         return [t["id"] for t in multi["tasks"]]
 
     @property
+    def version(self) -> int:
+        """The entry's format version (``blockpuzzle-zoo/7`` -> 7)."""
+        return int(self.meta["format"].rsplit("/", 1)[1])
+
+    @property
     def obs_mode(self) -> str:
-        """The observation mode it reads: "flat" for an MLP; for a set network "entities" where its
+        """The observation mode it reads, as the entry records it (format 7); an older entry's is
+        read off its network as before: "flat" for an MLP, for a set network "entities" where its
         rows have the entities' 26 features (``train --net entity``), else "objects"."""
+        if self.version >= 7:
+            return self.meta["obs_mode"]
         if self.set is None:
             return "flat"
         return "entities" if self.set["object"] == ENTITY_FEATURES else "objects"
+
+    @property
+    def algo(self) -> str | None:
+        """The algorithm that trained it ("bc", "dagger", "ddpg", "td3", "sac", "pggd") where the
+        entry records it (format 7, not "unrecorded"); None otherwise."""
+        if self.version >= 7 and self.meta["algo"] != "unrecorded":
+            return self.meta["algo"]
+        return None
+
+    @property
+    def kind(self) -> str:
+        """What acts: "deterministic" (a tanh actor) or "gaussian" (PGGD), recorded (format 7) or
+        read from an older entry's ``algo`` ("ddpg" or "pggd")."""
+        if self.version >= 7:
+            return self.meta["kind"]
+        return {"ddpg": "deterministic", "pggd": "gaussian"}[self.meta["algo"]]
 
     @property
     def evaluations(self) -> list[dict]:
@@ -280,7 +304,7 @@ class ZooPolicy:
         return self.meta.get("evaluations", [])
 
     def __repr__(self) -> str:
-        return f"ZooPolicy({self.name!r}, {self.meta['algo']}, task {self.task_id}, epoch {self.meta['epoch']})"
+        return f"ZooPolicy({self.name!r}, {self.algo or 'algorithm unrecorded'}, task {self.task_id}, epoch {self.meta['epoch']})"
 
     def __call__(self, obs) -> np.ndarray:
         """Actions for one observation (a vector or a dict of arrays) or a batch of them: the

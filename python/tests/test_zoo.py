@@ -34,7 +34,7 @@ def test_a_multi_task_entry_names_every_training_task_and_a_single_task_entry_it
 
 def test_a_stream_entry_names_its_stream_s_tasks():
     generalist = zoo.load("generalist-bc-entity")
-    assert generalist.meta["format"] == "blockpuzzle-zoo/6"
+    assert generalist.meta["format"] == "blockpuzzle-zoo/7"
     tasks = generalist.training_tasks
     assert len(tasks) == 1029 and tasks[0] == generalist.task_id == "push-200-v0"
     assert "clutter-346-v0" in tasks and not any(t.endswith("-v0") and "-20000-" in t for t in tasks)
@@ -108,3 +108,36 @@ def test_unpickling_an_entry_whose_files_changed_is_refused_naming_it(tmp_path):
     (tmp_path / "mine.json").unlink()
     with pytest.raises(FileNotFoundError, match="cannot unpickle the zoo policy 'mine'"):
         pickle.loads(data)
+
+
+def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
+    """Format 7 records what the policy reads and is and who trained it; readers take it from the
+    fields (issue 61). An older entry (format 6) is read as before: its mode off the network, its
+    kind from ``algo``, its algorithm unrecorded."""
+    import json
+    import shutil
+    expected = {"generalist-bc-entity": ("entities", "bc"), "BlocksChoose-v0-dagger-entity": ("entities", "dagger"),
+                "BlocksChoose-v0-ddpg-ours": ("flat", "td3"), "BlocksChoose-v0-pggd": ("flat", "pggd")}
+    for name, (mode, algo) in expected.items():
+        p = zoo.load(name, native=False)
+        assert (p.version, p.obs_mode, p.algo) == (7, mode, algo), name
+        assert (p.meta["obs_mode"], p.meta["algo"]) == (mode, algo)
+    assert zoo.load("BlocksChoose-v0-pggd", native=False).kind == "gaussian"
+    assert zoo.load("BlocksTouch-v0-ddpg", native=False).kind == "deterministic"
+    # The record is what the numpy reader uses: an edited mode is what it reports.
+    for ext in ("json", "safetensors"):
+        shutil.copy(zoo.FOLDER / f"BlocksTouch-v0-ddpg.{ext}", tmp_path / f"x.{ext}")
+    meta = json.loads((tmp_path / "x.json").read_text())
+    meta["obs_mode"] = "objects"
+    (tmp_path / "x.json").write_text(json.dumps(meta))
+    assert zoo.load("x", folder=tmp_path, native=False).obs_mode == "objects"
+    # ...and the extension's reader refuses it, naming the field.
+    with pytest.raises(ValueError, match="obs_mode records `objects`"):
+        zoo.load("x", folder=tmp_path, native=True)
+    # A format-6 entry: read as before.
+    old = dict(meta, format="blockpuzzle-zoo/6", algo="ddpg")
+    for k in ("obs_mode", "kind", "meta_sha256"):
+        old.pop(k)
+    (tmp_path / "x.json").write_text(json.dumps(old))
+    p = zoo.load("x", folder=tmp_path, native=False)
+    assert (p.version, p.obs_mode, p.kind, p.algo) == (6, "flat", "deterministic", None)

@@ -42,6 +42,10 @@ pub struct SavedPolicy {
     pub env_steps: Option<u64>,
     /// Its finals success when saved.
     pub finals_success: f64,
+    /// The algorithm that trained it (`bc`, `dagger`, `ddpg`, `td3`, `sac`, `pggd`; absent in
+    /// policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub algo: Option<String>,
     /// The policy.
     pub policy: AnyPolicy,
     /// DDPG's critic Q(s, a) of the same epoch (input: the normalised

@@ -37,16 +37,28 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 /// The format tag this blockpuzzle writes in every entry's metadata.
-pub const FORMAT: &str = "blockpuzzle-zoo/6";
+pub const FORMAT: &str = "blockpuzzle-zoo/7";
 
 /// The formats it reads: version 2 added the outcome counts of evaluations
 /// (version 1 entries load with none); version 3 set networks (a network's
 /// `set` layout and `layers` shapes; entries without them are MLPs as before);
 /// version 4 each evaluation's provenance and task hash (one record per engine);
 /// version 5 policies trained on several tasks ([`ZooMeta::multi_task`]); version 6 policies trained on
-/// a stream of generated tasks ([`MultiTask::stream`]).
-pub const READS: [&str; 6] =
-    ["blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5", FORMAT];
+/// a stream of generated tasks ([`MultiTask::stream`]); version 7 records what the policy is
+/// ([`ZooMeta::kind`], [`ZooMeta::obs_mode`]) and the algorithm that trained it ([`ZooMeta::algo`]).
+pub const READS: [&str; 7] = [
+    "blockpuzzle-zoo/1",
+    "blockpuzzle-zoo/2",
+    "blockpuzzle-zoo/3",
+    "blockpuzzle-zoo/4",
+    "blockpuzzle-zoo/5",
+    "blockpuzzle-zoo/6",
+    FORMAT,
+];
+
+/// The algorithms a format-7 entry may name as the one that trained it (`ddpg` with `--td3` is
+/// `td3`), and `unrecorded` for an entry written before it was recorded.
+pub const ALGOS: [&str; 7] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd", "unrecorded"];
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -158,8 +170,17 @@ pub struct ZooMeta {
     pub name: String,
     /// One line on what it is (e.g. the table row it stands for).
     pub description: String,
-    /// `ddpg` or `pggd`.
+    /// Format 7 on: the algorithm that trained it (one of [`ALGOS`]; `unrecorded` for an entry
+    /// upgraded from an older format without `zoo upgrade --algo`). Formats 1–6: what acts, `ddpg`
+    /// (a tanh actor) or `pggd` ([`ZooMeta::kind`] reads both).
     pub algo: String,
+    /// Format 7 on: what acts, `deterministic` (a tanh actor: DDPG, TD3, SAC's mean action, BC,
+    /// DAgger) or `gaussian` (PGGD).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    /// Format 7 on: the observation the policy reads, as recorded (readers take it from here).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obs_mode: Option<crate::env::ObsMode>,
     /// The task it was trained on, by content; for a policy trained on several tasks the first
     /// of them (its probes are that task's).
     pub task: TaskSource,
@@ -203,6 +224,28 @@ pub struct ZooMeta {
 }
 
 impl ZooMeta {
+    /// The format's version number (`blockpuzzle-zoo/7` -> 7).
+    pub fn version(&self) -> u32 {
+        self.format.rsplit('/').next().and_then(|v| v.parse().ok()).unwrap_or(0)
+    }
+
+    /// What acts: `deterministic` or `gaussian`, recorded (format 7) or read from `algo` (before).
+    pub fn kind(&self) -> Option<&str> {
+        if self.version() >= 7 {
+            return self.kind.as_deref();
+        }
+        match self.algo.as_str() {
+            "ddpg" => Some("deterministic"),
+            "pggd" => Some("gaussian"),
+            _ => None,
+        }
+    }
+
+    /// The algorithm that trained it, where the entry records it (format 7, not `unrecorded`).
+    pub fn trained_by(&self) -> Option<&str> {
+        (self.version() >= 7 && self.algo != "unrecorded").then_some(self.algo.as_str())
+    }
+
     /// `sha256:` of the metadata with its evaluations (which `zoo evaluate` adds to) and `meta_sha256`
     /// set aside: what [`ZooMeta::meta_sha256`] records.
     pub fn seal(&self) -> String {
@@ -401,6 +444,8 @@ pub struct ExportInfo {
     pub keep_critic: bool,
     /// Replace an entry of the same name (else that is an error).
     pub overwrite: bool,
+    /// The algorithm that trained it where the policy file does not record it (older runs).
+    pub algo: Option<String>,
 }
 
 /// Whether the entry `name` may be written in `zoo`: it does not exist yet, or `overwrite`.
@@ -484,11 +529,33 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let header: HashMap<String, String> =
         [("format".to_owned(), FORMAT.to_owned()), ("name".to_owned(), info.name.clone())].into_iter().collect();
     let bytes = safetensors::tensor::serialize(views, Some(header)).map_err(|e| corrupt(e.to_string()))?;
+    // PGGD trains a Gaussian policy, every other algorithm a deterministic one.
+    if let Some(a) = saved.algo.as_ref().or(info.algo.as_ref()) {
+        if (a == "pggd") != matches!(saved.policy, AnyPolicy::Pggd(_)) {
+            return Err(corrupt(format!(
+                "{a} trains a {} policy, and this one is {}; record the algorithm that trained it",
+                if a == "pggd" { "gaussian" } else { "deterministic" },
+                kind_of(&saved.policy)
+            )));
+        }
+    }
+    if let (Some(recorded), Some(given)) = (&saved.algo, &info.algo) {
+        if recorded != given {
+            return Err(corrupt(format!(
+                "--algo {given}: the policy file records that {recorded} trained it; leave --algo out"
+            )));
+        }
+    }
     let meta = ZooMeta {
         format: FORMAT.into(),
         name: info.name.clone(),
         description: info.description.clone(),
-        algo: saved.policy.algo().into(),
+        algo: match (&saved.algo, &info.algo) {
+            (Some(a), _) | (None, Some(a)) => a.clone(),
+            (None, None) => "unrecorded".into(),
+        },
+        kind: Some(kind_of(&saved.policy).into()),
+        obs_mode: Some(saved.policy.obs_mode()),
         task,
         multi_task,
         epoch: saved.epoch,
@@ -607,6 +674,13 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
             ),
         });
     }
+    if meta.version() < 7 {
+        // What an older entry says of itself, recorded: its kind, its observation; who trained it
+        // is unknown here (`zoo upgrade --algo` records it).
+        meta.kind = Some(kind_of(&saved.policy).into());
+        meta.obs_mode = Some(saved.policy.obs_mode());
+        meta.algo = "unrecorded".into();
+    }
     meta.format = FORMAT.into();
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
@@ -614,6 +688,42 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
     crate::support::io::write_file(&json_path, &json)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("{e:#}") })?;
     Ok(done)
+}
+
+/// What acts, in a format-7 entry's words.
+fn kind_of(policy: &AnyPolicy) -> &'static str {
+    match policy {
+        AnyPolicy::Deterministic(_) => "deterministic",
+        AnyPolicy::Pggd(_) => "gaussian",
+    }
+}
+
+/// Records `algo` as the algorithm that trained the entry at `path` (upgraded to this format and
+/// sealed), where it records none yet.
+///
+/// # Errors
+/// An unknown algorithm, an entry that records another already, or one that does not load.
+pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
+    let json_path = path.with_extension("json");
+    let bad = |reason: String| ZooError::Corrupt { path: json_path.clone(), reason };
+    if !ALGOS[..ALGOS.len() - 1].contains(&algo) {
+        return Err(bad(format!("--algo {algo:?}: give one of {}", ALGOS[..ALGOS.len() - 1].join(", "))));
+    }
+    record_evaluations(path, Vec::new())?;
+    let mut meta = read_meta(path)?;
+    match meta.trained_by() {
+        Some(a) if a == algo => return Ok(()),
+        Some(a) => {
+            return Err(bad(format!(
+                "it records {a} as the algorithm that trained it; --algo {algo} would change a record"
+            )))
+        }
+        None => {}
+    }
+    meta.algo = algo.into();
+    meta.meta_sha256 = Some(meta.seal());
+    let json = serde_json::to_vec_pretty(&meta).map_err(|e| bad(e.to_string()))?;
+    crate::support::io::write_file(&json_path, &json).map_err(|e| bad(format!("{e:#}")))
 }
 
 /// Reads an entry's metadata (`X.json`, or the one beside `X.safetensors`).
@@ -761,13 +871,39 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         meta.norm_clip,
     );
     let out = *meta.actor.sizes.last().unwrap_or(&0);
-    let policy = match (meta.algo.as_str(), meta.sigma_min) {
-        ("ddpg", None) => AnyPolicy::Deterministic(DeterministicPolicy { net, norm }),
-        ("pggd", Some(sigma_min)) => AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min }),
-        (algo, s) => {
-            return Err(corrupt(format!("algorithm {algo:?} with sigma_min {s:?} is not a known policy kind")))
+    let policy = match (meta.kind(), meta.sigma_min) {
+        (Some("deterministic"), None) => AnyPolicy::Deterministic(DeterministicPolicy { net, norm }),
+        (Some("gaussian"), Some(sigma_min)) => AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min }),
+        (kind, s) => {
+            let field = if meta.version() >= 7 { "kind" } else { "algo" };
+            return Err(bad_meta(format!(
+                "{field} {:?} with sigma_min {s:?} is not a known policy kind (deterministic without sigma_min, \
+                 gaussian with it); restore the entry",
+                kind.unwrap_or(&meta.algo)
+            )));
         }
     };
+    if meta.version() >= 7 {
+        if !ALGOS.contains(&meta.algo.as_str()) {
+            return Err(bad_meta(format!("algo {:?} is none of {}; restore the entry", meta.algo, ALGOS.join(", "))));
+        }
+        if meta.algo != "unrecorded" && (meta.algo == "pggd") != (meta.kind() == Some("gaussian")) {
+            return Err(bad_meta(format!(
+                "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
+                 deterministic one; restore the entry",
+                meta.algo,
+                meta.kind().unwrap_or_default()
+            )));
+        }
+        // The recorded observation is what its network reads.
+        let reads = policy.obs_mode();
+        if meta.obs_mode != Some(reads) {
+            return Err(bad_meta(format!(
+                "obs_mode records {}, but its network reads the `{reads}` observation; restore the entry",
+                meta.obs_mode.map_or_else(|| "nothing".to_owned(), |m| format!("`{m}`"))
+            )));
+        }
+    }
     // A multi-task policy loads as its run saved it: no one task, its label and its tasks.
     let (env_id, task, tasks) = match &meta.multi_task {
         None => (meta.task.id.clone(), Some(meta.task.clone()), Vec::new()),
@@ -781,6 +917,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         epoch: meta.epoch,
         env_steps: meta.env_steps,
         finals_success: meta.finals_success,
+        algo: meta.trained_by().map(str::to_owned),
         policy,
         critic,
     };

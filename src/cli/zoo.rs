@@ -22,14 +22,19 @@ pub(super) enum ZooCommand {
         #[arg(long)]
         zoo: Option<PathBuf>,
     },
-    /// Rewrite entries of an older format in this one, sealed with their metadata's hash (format 6),
-    /// after checking that they load; the tensors stay as they are.
+    /// Rewrite entries of an older format in this one (format 7: what the policy is, its
+    /// observation, the algorithm that trained it), sealed with their metadata's hash, after
+    /// checking that they load; the tensors stay as they are.
     Upgrade {
         /// Entries to upgrade (default: all).
         names: Vec<String>,
         /// The zoo folder.
         #[arg(long)]
         zoo: Option<PathBuf>,
+        /// Record the algorithm that trained them (bc, dagger, ddpg, td3, sac, pggd) where they
+        /// record none (older entries say `unrecorded`).
+        #[arg(long)]
+        algo: Option<String>,
     },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
     #[cfg(feature = "train")]
@@ -64,6 +69,10 @@ pub(super) struct ZooExportArgs {
     /// The command that trained it (recorded as given).
     #[arg(long)]
     trained_with: String,
+    /// The algorithm that trained it (bc, dagger, ddpg, td3, sac, pggd), where the policy file does
+    /// not record it (runs before it was recorded).
+    #[arg(long, value_parser = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"])]
+    algo: Option<String>,
     /// Evaluation results (JSON written by `blockpuzzle eval`) to record with it.
     #[arg(long = "eval")]
     evals: Vec<PathBuf>,
@@ -104,7 +113,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 println!(
                     "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
                     meta.trained_on(),
-                    meta.algo,
+                    meta.trained_by().unwrap_or("(algorithm unrecorded)"),
                     meta.epoch
                 );
                 println!("    {}", meta.description);
@@ -152,11 +161,16 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             }
             for name in &names {
                 let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find(&zoo, name)?)?;
-                println!("{name}: ok ({} {}, epoch {})", meta.trained_on(), meta.algo, meta.epoch);
+                println!(
+                    "{name}: ok ({} {}, epoch {})",
+                    meta.trained_on(),
+                    meta.trained_by().unwrap_or("(algorithm unrecorded)"),
+                    meta.epoch
+                );
             }
             Ok(())
         }
-        ZooCommand::Upgrade { names, zoo } => {
+        ZooCommand::Upgrade { names, zoo, algo } => {
             let zoo = folder(zoo);
             crate::benchmark::zoo::existing(&zoo)?;
             let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
@@ -164,7 +178,11 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 let path = crate::benchmark::zoo::find(&zoo, name)?;
                 let before = crate::benchmark::zoo::read_meta(&path)?.format;
                 crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
-                println!("{name}: {before} -> {}, sealed", crate::benchmark::zoo::FORMAT);
+                if let Some(algo) = &algo {
+                    crate::benchmark::zoo::record_algo(&path, algo)?;
+                }
+                let after = crate::benchmark::zoo::read_meta(&path)?;
+                println!("{name}: {before} -> {}, sealed, trained by {}", after.format, after.algo);
             }
             Ok(())
         }
@@ -229,6 +247,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 evaluations,
                 keep_critic: a.critic,
                 overwrite: a.force,
+                algo: a.algo,
             };
             let out = crate::benchmark::zoo::export(&zoo, &saved, &info)?;
             let size = std::fs::metadata(&out).map_or(0, |m| m.len());

@@ -1127,6 +1127,7 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
         evaluations: Vec::new(),
         keep_critic: false,
         overwrite: false,
+        algo: None,
     };
     let entry = blockpuzzle::benchmark::zoo::export(zoo.path(), &saved, &info).unwrap();
     let (meta, back) = blockpuzzle::benchmark::zoo::load(&entry).unwrap();

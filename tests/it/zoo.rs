@@ -42,6 +42,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         epoch: 12,
         env_steps: Some(34_000),
         finals_success: 0.5,
+        algo: Some("ddpg".into()),
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
     }
@@ -99,10 +100,15 @@ fn pggd_entry_round_trips() {
     let d = obs_dim();
     let mut p = Pggd::new(Arch::mlp(d), 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
     p.norm.update(&random_obs(&mut rng, 20 * d));
-    let saved = SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, ..ddpg_saved(1) };
+    let saved =
+        SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, algo: Some("pggd".into()), ..ddpg_saved(1) };
     let path = zoo::export(dir.path(), &saved, &info("pggd-test")).unwrap();
     let (meta, loaded) = zoo::load(&path).unwrap();
-    assert_eq!(meta.algo, "pggd");
+    assert_eq!((meta.algo.as_str(), meta.kind()), ("pggd", Some("gaussian")));
+    // PGGD trains a Gaussian and nothing else does: a record that says otherwise is refused.
+    let wrong = SavedPolicy { algo: Some("ddpg".into()), ..saved.clone() };
+    let e = err_text(zoo::export(dir.path(), &wrong, &info("pggd-wrong")).unwrap_err());
+    assert!(e.contains("ddpg trains a deterministic"), "{e}");
     assert!(meta.sigma_min.is_some() && !meta.actor.tanh_out);
     let obs = random_obs(&mut rng, d);
     assert_eq!(loaded.policy.act(&obs), saved.policy.act(&obs));
@@ -400,7 +406,10 @@ fn entries_are_checked_as_a_whole() {
     // An unsealed label that is a path is refused by itself (an entry of format 5, before the seal).
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
-    v.as_object_mut().unwrap().remove("meta_sha256");
+    v["algo"] = "ddpg".into(); // before format 7, `algo` said what acts
+    for k in ["meta_sha256", "kind", "obs_mode"] {
+        v.as_object_mut().unwrap().remove(k);
+    }
     assert!(check(&v).0, "a format 5 entry as it was loads");
     v["multi_task"]["label"] = "../../x y".into();
     let (ok, t) = check(&v);
@@ -422,9 +431,12 @@ fn entries_are_checked_as_a_whole() {
     // zoo upgrade seals an older entry that loads, and the sealed entry checks.
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
-    v.as_object_mut().unwrap().remove("meta_sha256");
+    v["algo"] = "ddpg".into();
+    for k in ["meta_sha256", "kind", "obs_mode"] {
+        v.as_object_mut().unwrap().remove(k);
+    }
     check(&v);
-    let o = bp(&["zoo", "upgrade", "x", "--zoo", z.to_str().unwrap()]);
+    let o = bp(&["zoo", "upgrade", "x", "--algo", "dagger", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (meta, _) = zoo::load(&entry).unwrap();
     assert_eq!((meta.format.as_str(), meta.meta_sha256.as_deref()), (zoo::FORMAT, original["meta_sha256"].as_str()));
@@ -503,4 +515,50 @@ fn one_resolver_names_every_policy() {
         (v["provenance"]["policy"].clone(), v["score"].clone())
     };
     assert_eq!(run(&["--checkpoint", "scripted"], "a.json"), run(&["--baseline", "scripted"], "b.json"));
+}
+
+/// Format 7 records what a policy reads and is and the algorithm that trained it, and readers take
+/// them from the fields; an older entry is read as before and `zoo upgrade` records them, `--algo`
+/// the one thing it cannot know (issue 61).
+#[test]
+fn an_entry_records_its_mode_kind_and_algorithm() {
+    use blockpuzzle::env::ObsMode;
+    let (meta, saved) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    assert_eq!(
+        (meta.version(), meta.obs_mode, meta.kind(), meta.trained_by()),
+        (7, Some(ObsMode::Entities), Some("deterministic"), Some("bc"))
+    );
+    assert_eq!(saved.algo.as_deref(), Some("bc"));
+    assert_eq!(zoo::load(&zoo::dir().join("BlocksChoose-v0-pggd.json")).unwrap().0.kind(), Some("gaussian"));
+    // Exported: the policy file's record; an --algo that disagrees with it is refused.
+    let dir = tempfile::tempdir().unwrap();
+    let path = zoo::export(dir.path(), &ddpg_saved(3), &info("e")).unwrap();
+    let (meta, _) = zoo::load(&path).unwrap();
+    assert_eq!((meta.trained_by(), meta.obs_mode), (Some("ddpg"), Some(ObsMode::Flat)));
+    let e = err_text(
+        zoo::export(dir.path(), &ddpg_saved(3), &ExportInfo { algo: Some("sac".into()), ..info("f") }).unwrap_err(),
+    );
+    assert!(e.contains("records that ddpg trained it"), "{e}");
+    // A format-6 entry (sealed as format 6 was): read as before, then upgraded.
+    let z = dir.path().join("z");
+    std::fs::create_dir(&z).unwrap();
+    std::fs::copy(zoo::dir().join("BlocksTouch-v0-ddpg.safetensors"), z.join("old.safetensors")).unwrap();
+    let mut old = zoo::read_meta(&zoo::dir().join("BlocksTouch-v0-ddpg.json")).unwrap();
+    (old.format, old.algo, old.kind, old.obs_mode, old.name) =
+        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, "old".into());
+    old.meta_sha256 = Some(old.seal());
+    std::fs::write(z.join("old.json"), serde_json::to_vec_pretty(&old).unwrap()).unwrap();
+    let (meta, saved) = zoo::load(&z.join("old.json")).unwrap();
+    assert_eq!((meta.version(), meta.kind(), meta.trained_by(), saved.algo), (6, Some("deterministic"), None, None));
+    let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
+    let o = bp(&["zoo", "upgrade", "old", "--zoo", z.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let meta = zoo::read_meta(&z.join("old.json")).unwrap();
+    assert_eq!((meta.version(), meta.algo.as_str(), meta.obs_mode), (7, "unrecorded", Some(ObsMode::Flat)));
+    let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some("ddpg"));
+    let o = bp(&["zoo", "upgrade", "old", "--algo", "td3", "--zoo", z.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("records ddpg"), "{e}");
 }

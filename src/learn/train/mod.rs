@@ -351,6 +351,14 @@ impl TrainConfig {
         }
     }
 
+    /// The algorithm's name as policy files and zoo entries record it (`ddpg` with `--td3` is `td3`).
+    pub fn algo_label(&self) -> &'static str {
+        match self.algo.name() {
+            "ddpg" if self.algos.ddpg.td3 => "td3",
+            name => name,
+        }
+    }
+
     /// The task's id: the recorded one, else `--env` (a task file's stem when it is a path); for a
     /// multi-task run, `SUITE-SPLIT` or the tasks' ids joined by `+`.
     pub fn task_id(&self) -> String {

@@ -911,6 +911,7 @@ impl<'a> Trainer<'a> {
                 epoch: state.epoch,
                 env_steps: Some(state.env_steps),
                 finals_success: row.finals_success,
+                algo: Some(self.config.algo_label().to_owned()),
                 policy,
                 critic: self.learner.agent.critic(),
             };
