@@ -30,7 +30,8 @@ import numpy as np
 
 FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5",
            "blockpuzzle-zoo/6", "blockpuzzle-zoo/7")
-#: Where an object row's colour one-hot (red, blue, green, grey) begins.
+#: Where an object row's colour one-hot (red, blue, green, grey) begins in entries of formats 1-6,
+#: which do not record it (format 7 records ``colour_feature``, written by the Rust exporter).
 COLOUR_FEATURE = 15
 #: The zoo the package carries.
 FOLDER = pathlib.Path(__file__).resolve().parent / "zoo_files"
@@ -109,8 +110,8 @@ def _native_actor(path: pathlib.Path, required: bool):
     return _native.ZooActor(str(path))
 
 
-#: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how a set
-#: network's layout tells the two observations apart.
+#: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how an entry of
+#: formats 1-6, which does not record its observation, is read (format 7 records ``obs_mode``).
 ENTITY_FEATURES = 26
 
 
@@ -406,7 +407,8 @@ class ZooPolicy:
         else:
             if self.set.get("by_colour", False):
                 # One group per colour (red, blue, green, grey): the row's one-hot, passed by the normaliser.
-                groups = [rows[:, COLOUR_FEATURE + c] > 0.5 for c in range(4)]
+                at = self.meta.get("colour_feature", COLOUR_FEATURE)
+                groups = [rows[:, at + c] > 0.5 for c in range(4)]
             else:
                 groups = [np.ones(len(h), bool)]
             means = [h[g].mean(axis=0) if g.any() else np.zeros(width, np.float32) for g in groups]

@@ -122,6 +122,8 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
         p = zoo.load(name, native=False)
         assert (p.version, p.obs_mode, p.algo) == (7, mode, algo), name
         assert (p.meta["obs_mode"], p.meta["algo"]) == (mode, algo)
+        # The colour one-hot's place, recorded by the Rust exporter from the observation's one definition.
+        assert p.meta["colour_feature"] == zoo.COLOUR_FEATURE
     assert zoo.load("BlocksChoose-v0-pggd", native=False).kind == "gaussian"
     assert zoo.load("BlocksTouch-v0-ddpg", native=False).kind == "deterministic"
     # The record is what the numpy reader uses: an edited mode is what it reports.
@@ -136,7 +138,7 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
         zoo.load("x", folder=tmp_path, native=True)
     # A format-6 entry: read as before.
     old = dict(meta, format="blockpuzzle-zoo/6", algo="ddpg")
-    for k in ("obs_mode", "kind", "meta_sha256"):
+    for k in ("obs_mode", "kind", "meta_sha256", "colour_feature"):
         old.pop(k)
     (tmp_path / "x.json").write_text(json.dumps(old))
     p = zoo.load("x", folder=tmp_path, native=False)

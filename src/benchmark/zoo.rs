@@ -181,6 +181,10 @@ pub struct ZooMeta {
     /// Format 7 on: the observation the policy reads, as recorded (readers take it from here).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obs_mode: Option<crate::env::ObsMode>,
+    /// Format 7 on: where an object row's colour one-hot begins in that observation (a set network
+    /// pooled by colour reads it; the Python reader takes it from here, [`crate::env::COLOUR_FEATURE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colour_feature: Option<usize>,
     /// The task it was trained on, by content; for a policy trained on several tasks the first
     /// of them (its probes are that task's).
     pub task: TaskSource,
@@ -556,6 +560,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         },
         kind: Some(kind_of(&saved.policy).into()),
         obs_mode: Some(saved.policy.obs_mode()),
+        colour_feature: Some(crate::env::COLOUR_FEATURE),
         task,
         multi_task,
         epoch: saved.epoch,
@@ -681,6 +686,7 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
         meta.obs_mode = Some(saved.policy.obs_mode());
         meta.algo = "unrecorded".into();
     }
+    meta.colour_feature = Some(crate::env::COLOUR_FEATURE);
     meta.format = FORMAT.into();
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
@@ -893,6 +899,14 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                  deterministic one; restore the entry",
                 meta.algo,
                 meta.kind().unwrap_or_default()
+            )));
+        }
+        if meta.colour_feature != Some(crate::env::COLOUR_FEATURE) {
+            return Err(bad_meta(format!(
+                "colour_feature records {:?}, but this build's observation rows have their colour at feature {}; \
+                 restore the entry",
+                meta.colour_feature,
+                crate::env::COLOUR_FEATURE
             )));
         }
         // The recorded observation is what its network reads.

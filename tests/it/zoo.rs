@@ -379,7 +379,9 @@ fn entries_are_checked_as_a_whole() {
     };
     assert!(check(&original).0);
     type Edit = fn(&mut serde_json::Value);
-    let edits: [(&str, Edit); 7] = [
+    let edits: [(&str, Edit); 9] = [
+        ("colour_feature edited", |v| v["colour_feature"] = 3.into()),
+        ("obs_mode edited", |v| v["obs_mode"] = "flat".into()),
         ("the set layout's slots edited", |v| v["actor"]["set"]["slots"] = 11.into()),
         ("the set layout's encoder edited", |v| v["actor"]["set"]["encoder_layers"] = 9.into()),
         ("multi_task dropped", |v| {
@@ -407,7 +409,7 @@ fn entries_are_checked_as_a_whole() {
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
     v["algo"] = "ddpg".into(); // before format 7, `algo` said what acts
-    for k in ["meta_sha256", "kind", "obs_mode"] {
+    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature"] {
         v.as_object_mut().unwrap().remove(k);
     }
     assert!(check(&v).0, "a format 5 entry as it was loads");
@@ -432,7 +434,7 @@ fn entries_are_checked_as_a_whole() {
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
     v["algo"] = "ddpg".into();
-    for k in ["meta_sha256", "kind", "obs_mode"] {
+    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature"] {
         v.as_object_mut().unwrap().remove(k);
     }
     check(&v);
@@ -529,6 +531,7 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
         (7, Some(ObsMode::Entities), Some("deterministic"), Some("bc"))
     );
     assert_eq!(saved.algo.as_deref(), Some("bc"));
+    assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
     assert_eq!(zoo::load(&zoo::dir().join("BlocksChoose-v0-pggd.json")).unwrap().0.kind(), Some("gaussian"));
     // Exported: the policy file's record; an --algo that disagrees with it is refused.
     let dir = tempfile::tempdir().unwrap();
@@ -544,8 +547,8 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     std::fs::create_dir(&z).unwrap();
     std::fs::copy(zoo::dir().join("BlocksTouch-v0-ddpg.safetensors"), z.join("old.safetensors")).unwrap();
     let mut old = zoo::read_meta(&zoo::dir().join("BlocksTouch-v0-ddpg.json")).unwrap();
-    (old.format, old.algo, old.kind, old.obs_mode, old.name) =
-        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, "old".into());
+    (old.format, old.algo, old.kind, old.obs_mode, old.colour_feature, old.name) =
+        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, None, "old".into());
     old.meta_sha256 = Some(old.seal());
     std::fs::write(z.join("old.json"), serde_json::to_vec_pretty(&old).unwrap()).unwrap();
     let (meta, saved) = zoo::load(&z.join("old.json")).unwrap();
@@ -555,6 +558,7 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let meta = zoo::read_meta(&z.join("old.json")).unwrap();
     assert_eq!((meta.version(), meta.algo.as_str(), meta.obs_mode), (7, "unrecorded", Some(ObsMode::Flat)));
+    assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
     let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some("ddpg"));
