@@ -46,6 +46,10 @@ pub struct SavedPolicy {
     /// policies saved before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub algo: Option<String>,
+    /// The observation it reads, as the run recorded it (absent in policies saved before it was
+    /// recorded; checked against the network when the file is read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub obs_mode: Option<crate::env::ObsMode>,
     /// The policy.
     pub policy: AnyPolicy,
     /// DDPG's critic Q(s, a) of the same epoch (input: the normalised
@@ -64,6 +68,12 @@ impl SavedPolicy {
     /// The first problem, named.
     pub fn check(&self) -> Result<(), String> {
         self.policy.check()?;
+        if let Some(m) = self.obs_mode.filter(|&m| m != self.policy.obs_mode()) {
+            return Err(format!(
+                "obs_mode records `{m}`, but its network reads the `{}` observation (an edited file)",
+                self.policy.obs_mode()
+            ));
+        }
         if let Some(c) = &self.critic {
             let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
             c.check(n_in, 1, crate::policy::actor::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;

@@ -932,6 +932,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         env_steps: meta.env_steps,
         finals_success: meta.finals_success,
         algo: meta.trained_by().map(str::to_owned),
+        obs_mode: meta.obs_mode,
         policy,
         critic,
     };

@@ -92,6 +92,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             env_steps: Some(1000),
             finals_success: 0.0,
             algo: Some("td3".into()),
+            obs_mode: None,
             policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
         };

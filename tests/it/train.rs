@@ -1368,6 +1368,15 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
     let saved = load_policy(&policy).unwrap();
     let choose = blockpuzzle::env::registry::task("BlocksChoose-v0").unwrap().object_count();
     assert_eq!(saved.slots().unwrap(), choose);
+    // The policy file records who trained it and what it reads (issue 61); an edited record is refused.
+    assert_eq!((saved.algo.as_deref(), saved.obs_mode), (Some("ddpg"), Some(blockpuzzle::env::ObsMode::Flat)));
+    let mut edited: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&policy).unwrap()).unwrap();
+    edited["obs_mode"] = "entities".into();
+    let file = run.path().join("edited.json");
+    std::fs::write(&file, edited.to_string()).unwrap();
+    let e = format!("{:#}", load_policy(&file).unwrap_err());
+    assert!(e.contains("obs_mode records `entities`") && e.contains("edited.json"), "{e}");
+    std::fs::remove_file(&file).unwrap();
     let cli = |args: &[&str]| {
         let o = std::process::Command::new(crate::common::CLI).args(args).current_dir(run.path()).output().unwrap();
         (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))

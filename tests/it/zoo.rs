@@ -43,6 +43,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         env_steps: Some(34_000),
         finals_success: 0.5,
         algo: Some("ddpg".into()),
+        obs_mode: None,
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
     }

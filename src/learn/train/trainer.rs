@@ -912,6 +912,7 @@ impl<'a> Trainer<'a> {
                 env_steps: Some(state.env_steps),
                 finals_success: row.finals_success,
                 algo: Some(self.config.algo_label().to_owned()),
+                obs_mode: Some(self.config.net.obs_mode()),
                 policy,
                 critic: self.learner.agent.critic(),
             };
