@@ -57,8 +57,12 @@ pub const READS: [&str; 7] = [
 ];
 
 /// The algorithms a format-7 entry may name as the one that trained it (`ddpg` with `--td3` is
-/// `td3`), and `unrecorded` for an entry written before it was recorded.
-pub const ALGOS: [&str; 7] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd", "unrecorded"];
+/// `td3`; the training registry's names are checked against this list by its tests).
+pub const TRAINERS: [&str; 6] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"];
+
+/// What a format-7 entry upgraded from an older format names as its algorithm until `zoo upgrade
+/// --algo` records it.
+pub const UNRECORDED: &str = "unrecorded";
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -170,7 +174,7 @@ pub struct ZooMeta {
     pub name: String,
     /// One line on what it is (e.g. the table row it stands for).
     pub description: String,
-    /// Format 7 on: the algorithm that trained it (one of [`ALGOS`]; `unrecorded` for an entry
+    /// Format 7 on: the algorithm that trained it (one of [`TRAINERS`]; [`UNRECORDED`] for an entry
     /// upgraded from an older format without `zoo upgrade --algo`). Formats 1–6: what acts, `ddpg`
     /// (a tanh actor) or `pggd` ([`ZooMeta::kind`] reads both).
     pub algo: String,
@@ -247,7 +251,7 @@ impl ZooMeta {
 
     /// The algorithm that trained it, where the entry records it (format 7, not `unrecorded`).
     pub fn trained_by(&self) -> Option<&str> {
-        (self.version() >= 7 && self.algo != "unrecorded").then_some(self.algo.as_str())
+        (self.version() >= 7 && self.algo != UNRECORDED).then_some(self.algo.as_str())
     }
 
     /// `sha256:` of the metadata with its evaluations (which `zoo evaluate` adds to) and `meta_sha256`
@@ -539,7 +543,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
             return Err(corrupt(format!(
                 "{a} trains a {} policy, and this one is {}; record the algorithm that trained it",
                 if a == "pggd" { "gaussian" } else { "deterministic" },
-                kind_of(&saved.policy)
+                saved.policy.kind()
             )));
         }
     }
@@ -556,9 +560,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         description: info.description.clone(),
         algo: match (&saved.algo, &info.algo) {
             (Some(a), _) | (None, Some(a)) => a.clone(),
-            (None, None) => "unrecorded".into(),
+            (None, None) => UNRECORDED.into(),
         },
-        kind: Some(kind_of(&saved.policy).into()),
+        kind: Some(saved.policy.kind().into()),
         obs_mode: Some(saved.policy.obs_mode()),
         colour_feature: Some(crate::env::COLOUR_FEATURE),
         task,
@@ -632,39 +636,81 @@ pub enum Recorded {
 /// # Errors
 /// The entry does not load ([`load`]) or cannot be written; an evaluation names another policy.
 pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Recorded>, ZooError> {
-    let json_path = path.with_extension("json");
-    // The entry loads first (read once): an edited entry is not rewritten, nor sealed.
-    let (mut meta, saved) = load(&json_path)?;
-    let mut done = Vec::new();
-    for e in new {
-        let unlabelled = |r: &ZooEvaluation| {
-            r.provenance.is_none()
-                && (&r.env, &r.distribution, r.grey_blind, r.episodes, r.seed)
-                    == (&e.env, &e.distribution, e.grey_blind, e.episodes, e.seed)
-        };
-        // The same numbers: the same success rate, and the same outcome counts where the record has them
-        // (format 1 entries do not).
-        let agrees =
-            |r: &ZooEvaluation| r.success_rate == e.success_rate && (r.outcomes.is_none() || r.outcomes == e.outcomes);
-        let before = meta.evaluations.len();
-        meta.evaluations.retain(|r| !(unlabelled(r) && agrees(r)));
-        let confirmed = meta.evaluations.len() < before;
-        let what = if let Some(r) = meta.evaluations.iter_mut().find(|r| r.same_measurement(&e)) {
-            *r = e;
-            Recorded::Replaced
-        } else {
-            let disagrees = meta.evaluations.iter().any(unlabelled);
-            meta.evaluations.push(e);
-            match (confirmed, disagrees) {
-                (_, true) => Recorded::Disagrees,
-                (true, false) => Recorded::Confirmed,
-                (false, false) => Recorded::Added,
-            }
-        };
-        done.push(what);
+    rewrite(path, |meta, _| {
+        let mut done = Vec::new();
+        for e in new {
+            let unlabelled = |r: &ZooEvaluation| {
+                r.provenance.is_none()
+                    && (&r.env, &r.distribution, r.grey_blind, r.episodes, r.seed)
+                        == (&e.env, &e.distribution, e.grey_blind, e.episodes, e.seed)
+            };
+            // The same numbers: the same success rate, and the same outcome counts where the record has
+            // them (format 1 entries do not).
+            let agrees = |r: &ZooEvaluation| {
+                r.success_rate == e.success_rate && (r.outcomes.is_none() || r.outcomes == e.outcomes)
+            };
+            let before = meta.evaluations.len();
+            meta.evaluations.retain(|r| !(unlabelled(r) && agrees(r)));
+            let confirmed = meta.evaluations.len() < before;
+            let what = if let Some(r) = meta.evaluations.iter_mut().find(|r| r.same_measurement(&e)) {
+                *r = e;
+                Recorded::Replaced
+            } else {
+                let disagrees = meta.evaluations.iter().any(unlabelled);
+                meta.evaluations.push(e);
+                match (confirmed, disagrees) {
+                    (_, true) => Recorded::Disagrees,
+                    (true, false) => Recorded::Confirmed,
+                    (false, false) => Recorded::Added,
+                }
+            };
+            done.push(what);
+        }
+        Ok(done)
+    })
+}
+
+/// Records `algo` as the algorithm that trained the entry at `path` (upgraded to this format and
+/// sealed, as [`record_evaluations`] rewrites it), where it records none yet.
+///
+/// # Errors
+/// An unknown algorithm, an entry that records another already, or one that does not load.
+pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
+    let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    if !TRAINERS.contains(&algo) {
+        return Err(bad(format!("--algo {algo:?}: give one of {}", TRAINERS.join(", "))));
     }
-    // Rewritten in this format, and sealed: every evaluation must name this policy as this build names it
-    // (a sealed entry requires it).
+    rewrite(path, |meta, _| match meta.trained_by() {
+        Some(a) if a != algo => {
+            Err(bad(format!("it records {a} as the algorithm that trained it; --algo {algo} would change a record")))
+        }
+        _ => {
+            meta.algo = algo.into();
+            Ok(())
+        }
+    })
+}
+
+/// The one rewrite of an entry's metadata: it loads first (an edited entry is neither rewritten
+/// nor sealed), an older format is brought to this one (its kind and observation recorded, its
+/// algorithm [`UNRECORDED`]), `edit` changes it, and it is written atomically in [`FORMAT`],
+/// sealed, once every evaluation names this policy as this build names it.
+fn rewrite<T>(
+    path: &Path,
+    edit: impl FnOnce(&mut ZooMeta, &SavedPolicy) -> Result<T, ZooError>,
+) -> Result<T, ZooError> {
+    let json_path = path.with_extension("json");
+    let (mut meta, saved) = load(&json_path)?;
+    if meta.version() < 7 {
+        // What an older entry says of itself, recorded: its kind, its observation; who trained it
+        // is unknown here (`zoo upgrade --algo` records it).
+        meta.kind = Some(saved.policy.kind().into());
+        meta.obs_mode = Some(saved.policy.obs_mode());
+        meta.algo = UNRECORDED.into();
+    }
+    meta.colour_feature = Some(crate::env::COLOUR_FEATURE);
+    let out = edit(&mut meta, &saved)?;
+    // A sealed entry requires every evaluation to name this policy.
     let policy_sha = saved.policy_id(&meta.name).sha256;
     if let Some(e) = meta.evaluations.iter().find(|e| e.names_another_policy(policy_sha.as_deref())) {
         return Err(ZooError::Corrupt {
@@ -679,57 +725,13 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
             ),
         });
     }
-    if meta.version() < 7 {
-        // What an older entry says of itself, recorded: its kind, its observation; who trained it
-        // is unknown here (`zoo upgrade --algo` records it).
-        meta.kind = Some(kind_of(&saved.policy).into());
-        meta.obs_mode = Some(saved.policy.obs_mode());
-        meta.algo = "unrecorded".into();
-    }
-    meta.colour_feature = Some(crate::env::COLOUR_FEATURE);
     meta.format = FORMAT.into();
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
     crate::support::io::write_file(&json_path, &json)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("{e:#}") })?;
-    Ok(done)
-}
-
-/// What acts, in a format-7 entry's words.
-fn kind_of(policy: &AnyPolicy) -> &'static str {
-    match policy {
-        AnyPolicy::Deterministic(_) => "deterministic",
-        AnyPolicy::Pggd(_) => "gaussian",
-    }
-}
-
-/// Records `algo` as the algorithm that trained the entry at `path` (upgraded to this format and
-/// sealed), where it records none yet.
-///
-/// # Errors
-/// An unknown algorithm, an entry that records another already, or one that does not load.
-pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
-    let json_path = path.with_extension("json");
-    let bad = |reason: String| ZooError::Corrupt { path: json_path.clone(), reason };
-    if !ALGOS[..ALGOS.len() - 1].contains(&algo) {
-        return Err(bad(format!("--algo {algo:?}: give one of {}", ALGOS[..ALGOS.len() - 1].join(", "))));
-    }
-    record_evaluations(path, Vec::new())?;
-    let mut meta = read_meta(path)?;
-    match meta.trained_by() {
-        Some(a) if a == algo => return Ok(()),
-        Some(a) => {
-            return Err(bad(format!(
-                "it records {a} as the algorithm that trained it; --algo {algo} would change a record"
-            )))
-        }
-        None => {}
-    }
-    meta.algo = algo.into();
-    meta.meta_sha256 = Some(meta.seal());
-    let json = serde_json::to_vec_pretty(&meta).map_err(|e| bad(e.to_string()))?;
-    crate::support::io::write_file(&json_path, &json).map_err(|e| bad(format!("{e:#}")))
+    Ok(out)
 }
 
 /// Reads an entry's metadata (`X.json`, or the one beside `X.safetensors`).
@@ -890,10 +892,14 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         }
     };
     if meta.version() >= 7 {
-        if !ALGOS.contains(&meta.algo.as_str()) {
-            return Err(bad_meta(format!("algo {:?} is none of {}; restore the entry", meta.algo, ALGOS.join(", "))));
+        if !TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
+            return Err(bad_meta(format!(
+                "algo {:?} is none of {} or {UNRECORDED}; restore the entry",
+                meta.algo,
+                TRAINERS.join(", ")
+            )));
         }
-        if meta.algo != "unrecorded" && (meta.algo == "pggd") != (meta.kind() == Some("gaussian")) {
+        if meta.algo != UNRECORDED && (meta.algo == "pggd") != (meta.kind() == Some("gaussian")) {
             return Err(bad_meta(format!(
                 "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
                  deterministic one; restore the entry",
@@ -945,7 +951,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )));
         }
     }
-    let sealed = !READS[..5].contains(&meta.format.as_str());
+    let sealed = meta.version() >= 6;
     // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
     // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
     match &meta.meta_sha256 {

@@ -49,7 +49,10 @@ pub fn expand(args: Vec<OsString>, train: &clap::Command) -> Result<(Vec<OsStrin
 pub struct Origin {
     flag: String,
     file: std::path::PathBuf,
+    /// The recipe's line, `key = value`, as errors show it.
     line: String,
+    /// The value given to the flag (none for a switch).
+    value: Option<String>,
 }
 
 /// `e`, clap's error for the expanded command line, naming the recipe file and key where the
@@ -61,10 +64,10 @@ pub fn name_recipe(e: clap::Error, origins: &[Origin]) -> anyhow::Error {
     else {
         return e.into();
     };
-    let from = origins.iter().rev().find(|o| {
-        arg.split(' ').next() == Some(o.flag.as_str())
-            && (o.line.ends_with(&format!("= {value}")) || o.line.ends_with(&format!("= \"{value}\"")))
-    });
+    let from = origins
+        .iter()
+        .rev()
+        .find(|o| arg.split(' ').next() == Some(o.flag.as_str()) && o.value.as_deref() == Some(value.as_str()));
     match from {
         Some(o) => {
             let said = e.to_string();
@@ -99,15 +102,23 @@ fn flags(path: &Path, train: &clap::Command) -> Result<(Vec<OsString>, Vec<Origi
                 path.display()
             ),
         }
-        origins.push(Origin { flag: format!("--{flag}"), file: path.to_owned(), line: format!("{key} = {value}") });
-        match value {
-            toml::Value::Boolean(true) => out.push(format!("--{flag}").into()),
-            toml::Value::Boolean(false) => {}
-            toml::Value::String(s) => out.extend([format!("--{flag}").into(), s.into()]),
-            toml::Value::Integer(i) => out.extend([format!("--{flag}").into(), i.to_string().into()]),
-            toml::Value::Float(x) => out.extend([format!("--{flag}").into(), x.to_string().into()]),
+        let given = match &value {
+            toml::Value::Boolean(on) => {
+                if *on {
+                    out.push(format!("--{flag}").into());
+                }
+                None
+            }
+            toml::Value::String(s) => Some(s.clone()),
+            toml::Value::Integer(i) => Some(i.to_string()),
+            toml::Value::Float(x) => Some(x.to_string()),
             other => bail!("{}: `{key}` = {other}: give a number, a string or true/false", path.display()),
+        };
+        if let Some(v) = &given {
+            out.extend([format!("--{flag}").into(), v.into()]);
         }
+        let line = format!("{key} = {value}");
+        origins.push(Origin { flag: format!("--{flag}"), file: path.to_owned(), line, value: given });
     }
     Ok((out, origins))
 }

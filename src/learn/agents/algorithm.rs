@@ -167,8 +167,27 @@ pub enum Part<'a> {
     Counter(&'a mut u64),
 }
 
+/// A learner as `Any`, for callers that need one algorithm's internals (tests, experts, a branch's
+/// settings, [`Registration::take_branch`]); every learner has it. Only learners: a
+/// `Box<dyn Algorithm>` is none, so `boxed.as_any()` is always the learner inside.
+pub trait AsAny {
+    /// As `Any`.
+    fn as_any(&self) -> &dyn std::any::Any;
+    /// As `Any`, mutable.
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
+}
+
+impl<T: Algorithm + 'static> AsAny for T {
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
 /// A learner as the training loop sees it.
-pub trait Algorithm: Send {
+pub trait Algorithm: AsAny + Send {
     /// Its registration's name, e.g. "ddpg".
     fn name(&self) -> &'static str;
 
@@ -277,12 +296,6 @@ pub trait Algorithm: Send {
             None => Ok(()),
         }
     }
-
-    /// This learner as `Any`, for callers that need one algorithm's internals (tests, experts).
-    fn as_any(&self) -> &dyn std::any::Any;
-
-    /// The same, mutable (a branch's settings, [`Registration::take_branch`]).
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
 
 /// How a frozen policy explores: one action per step (stored as produced;

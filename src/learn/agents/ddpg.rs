@@ -502,14 +502,6 @@ impl Algorithm for Ddpg {
         }
         parts
     }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
 }
 
 /// DDPG's exploration with a frozen actor: see [`DeterministicPolicy::explore_correlated`].

@@ -152,14 +152,6 @@ impl Algorithm for Cloner {
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
         vec![("actor", Part::Net(&mut self.actor)), ("actor_adam", Part::Adam(&mut self.opt))]
     }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
 }
 
 /// A deterministic policy as an [`Explorer`] that adds nothing.

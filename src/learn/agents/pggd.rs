@@ -263,14 +263,6 @@ impl Algorithm for Pggd {
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
         vec![("actor", Part::Net(&mut self.net)), ("actor_adam", Part::Adam(&mut self.opt))]
     }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
 }
 
 /// PGGD explores by sampling its Gaussian (the action stored before clipping).

@@ -272,6 +272,10 @@ mod tests {
         let e = Algo::named("ppo").unwrap_err();
         assert!(e.contains("unknown algorithm \"ppo\"") && e.contains("ddpg, pggd"), "{e}");
         assert_eq!((Algo::DDPG.name(), Algo::PGGD.name()), ("ddpg", "pggd"));
+        // What policy files and zoo entries record as the training algorithm (`td3`: DDPG with --td3).
+        for name in ALGORITHMS.iter().map(|r| r.info.name).chain(["td3"]) {
+            assert!(crate::benchmark::zoo::TRAINERS.contains(&name), "{name} is not among the zoo's trainers");
+        }
     }
 
     /// A branch's settings reach the learner loaded from the parent's checkpoint: the fields each

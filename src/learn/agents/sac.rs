@@ -328,14 +328,6 @@ impl Algorithm for Sac {
             ("noise_seed", Part::Counter(&mut self.noise_seed)),
         ]
     }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
-        self
-    }
 }
 
 /// SAC's exploration: a sample tanh(μ + σ z) of the frozen actor.

@@ -153,6 +153,15 @@ impl AnyPolicy {
             Self::Deterministic(_) => "ddpg",
         }
     }
+
+    /// What acts, in the words of zoo format 7's `kind`: "deterministic" (a tanh actor) or
+    /// "gaussian" (PGGD).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Deterministic(_) => "deterministic",
+            Self::Pggd(_) => "gaussian",
+        }
+    }
 }
 
 /// A frozen deterministic tanh actor (DDPG, TD3, SAC's mean action) for
