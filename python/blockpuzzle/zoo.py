@@ -273,6 +273,15 @@ class ZooPolicy:
         return "entities" if self.set["object"] == ENTITY_FEATURES else "objects"
 
     @property
+    def fixtures(self) -> list[str]:
+        """The rule objects other than blocks whose rows follow the blocks' in its observation, in
+        row order ("gripper", "table", "floor" in the entities observation; none otherwise), as the
+        entry records them; an entry written before they were recorded has its mode's."""
+        if "fixtures" in self.meta:
+            return list(self.meta["fixtures"])
+        return ["gripper", "table", "floor"] if self.obs_mode == "entities" else []
+
+    @property
     def algo(self) -> str | None:
         """The algorithm that trained it ("bc", "dagger", "ddpg", "td3", "sac", "pggd") where the
         entry records it (format 7, not "unrecorded"); None otherwise."""

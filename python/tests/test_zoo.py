@@ -124,6 +124,9 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
         assert (p.meta["obs_mode"], p.meta["algo"]) == (mode, algo)
         # The colour one-hot's place, recorded by the Rust exporter from the observation's one definition.
         assert p.meta["colour_feature"] == zoo.COLOUR_FEATURE
+        # The fixtures' rows after the blocks' (a set layout with statistics per row type has one for each).
+        assert p.fixtures == (["gripper", "table", "floor"] if mode == "entities" else [])
+        assert (p.set or {}).get("fixtures", 0) in (0, len(p.fixtures))
     assert zoo.load("BlocksChoose-v0-pggd", native=False).kind == "gaussian"
     assert zoo.load("BlocksTouch-v0-ddpg", native=False).kind == "deterministic"
     # The record is what the numpy reader uses: an edited mode is what it reports.
@@ -138,8 +141,8 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
         zoo.load("x", folder=tmp_path, native=True)
     # A format-6 entry: read as before.
     old = dict(meta, format="blockpuzzle-zoo/6", algo="ddpg")
-    for k in ("obs_mode", "kind", "meta_sha256", "colour_feature"):
+    for k in ("obs_mode", "kind", "meta_sha256", "colour_feature", "fixtures"):
         old.pop(k)
     (tmp_path / "x.json").write_text(json.dumps(old))
     p = zoo.load("x", folder=tmp_path, native=False)
-    assert (p.version, p.obs_mode, p.kind, p.algo) == (6, "flat", "deterministic", None)
+    assert (p.version, p.obs_mode, p.kind, p.algo, p.fixtures) == (6, "flat", "deterministic", None, [])

@@ -102,7 +102,7 @@ impl Subject<'_> {
     /// baseline), the flat one (`obs-hash`).
     pub fn obs_mode(&self) -> ObsMode {
         match self {
-            Subject::Saved(_, saved) => saved.policy.obs_mode(),
+            Subject::Saved(_, saved) => saved.obs_mode(),
             Subject::Baseline(Baseline::Scripted) => ObsMode::Entities,
             Subject::Baseline(Baseline::ObsHash) => ObsMode::Flat,
         }
@@ -189,14 +189,14 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
                 "policy {} is a set network over `{}` observations ({} robot and {} row features); {} \
                  gives `{}` observations with {} and {} (give the environment obs_mode {})",
                 path.display(),
-                saved.policy.obs_mode(),
+                saved.obs_mode(),
                 layout.robot,
                 layout.object,
                 env.id(),
                 spec.mode,
                 spec.robot_dim(),
                 spec.object_dim(),
-                saved.policy.obs_mode()
+                saved.obs_mode()
             );
         }
         return Ok(Trained { policy: saved.policy.with_slots(spec.rows()), grey_blind: false });
@@ -214,7 +214,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
              ({wanted}-dimensional `{}` observations); {} has {} blocks ({dim}): a flat network plays no task \
              with more blocks than its training tasks had (a set network, `--net set`, plays any number)",
             path.display(),
-            saved.policy.obs_mode(),
+            saved.obs_mode(),
             env.id(),
             env.config().task.object_count()
         );
@@ -303,7 +303,7 @@ pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Resu
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    let env = make_env(spec, saved.policy.obs_mode(), saved.slots()?)?;
+    let env = make_env(spec, saved.obs_mode(), saved.slots()?)?;
     let policy = Actor::Trained(trained_policy(path, saved, &env)?);
     play(spec, env, policy)
 }

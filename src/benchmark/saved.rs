@@ -50,6 +50,11 @@ pub struct SavedPolicy {
     /// recorded; checked against the network when the file is read).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obs_mode: Option<crate::env::ObsMode>,
+    /// The rule objects other than blocks whose rows follow the blocks' ([`crate::env::Fixture`]), in
+    /// row order, as the run recorded them (absent in policies saved before it was recorded; checked
+    /// against the mode's when the file is read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixtures: Option<Vec<crate::env::Fixture>>,
     /// The policy.
     pub policy: AnyPolicy,
     /// DDPG's critic Q(s, a) of the same epoch (input: the normalised
@@ -68,12 +73,18 @@ impl SavedPolicy {
     /// The first problem, named.
     pub fn check(&self) -> Result<(), String> {
         self.policy.check()?;
-        if let Some(m) = self.obs_mode.filter(|&m| m != self.policy.obs_mode()) {
-            return Err(format!(
-                "obs_mode records `{m}`, but its network reads the `{}` observation (an edited file)",
-                self.policy.obs_mode()
-            ));
-        }
+        let mode = match self.obs_mode {
+            Some(m) if !self.policy.reads(m) => {
+                let reads =
+                    self.policy.legacy_obs_mode().map_or_else(|_| "another".to_owned(), |r| format!("the `{r}`"));
+                return Err(format!(
+                    "obs_mode records `{m}`, but its network reads {reads} observation (an edited file)"
+                ));
+            }
+            Some(m) => m,
+            None => self.policy.legacy_obs_mode()?,
+        };
+        check_fixtures(self.fixtures.as_deref(), mode)?;
         if let Some(c) = &self.critic {
             let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
             c.check(n_in, 1, crate::policy::actor::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
@@ -82,7 +93,41 @@ impl SavedPolicy {
     }
 }
 
+/// Whether a recorded fixtures list is the one `mode` has in this build.
+///
+/// # Errors
+/// A list that differs, both named.
+pub fn check_fixtures(recorded: Option<&[crate::env::Fixture]>, mode: crate::env::ObsMode) -> Result<(), String> {
+    match recorded {
+        Some(f) if f != mode.fixtures() => {
+            let names = |f: &[crate::env::Fixture]| f.iter().map(|x| x.name()).collect::<Vec<_>>().join(", ");
+            Err(format!(
+                "fixtures records [{}], but this build's `{mode}` observation has [{}] after the blocks' rows; \
+                 the file was written for another layout (or edited): export it again from its run",
+                names(f),
+                names(mode.fixtures())
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
 impl SavedPolicy {
+    /// The observation it reads: the recorded mode ([`SavedPolicy::obs_mode`] field), or for a file
+    /// written before it was recorded the one its network reads ([`AnyPolicy::legacy_obs_mode`]).
+    pub fn obs_mode(&self) -> crate::env::ObsMode {
+        self.obs_mode.or_else(|| self.policy.legacy_obs_mode().ok()).unwrap_or_default()
+    }
+
+    /// Its record completed: the mode and fixtures of a file written before they were recorded,
+    /// as [`SavedPolicy::obs_mode`] reads them, so that writing it again (`zoo export`) records them.
+    pub fn with_record(mut self) -> Self {
+        let mode = self.obs_mode();
+        self.obs_mode = Some(mode);
+        self.fixtures = Some(mode.fixtures().to_vec());
+        self
+    }
+
     /// The tasks it was trained on, by content, in the run's order: its one task, a multi-task run's
     /// tasks, or a stream's drawn again from its record (empty for policies saved before tasks were files).
     ///
@@ -147,5 +192,5 @@ pub fn read(file: &Path) -> Result<SavedPolicy> {
     let saved: SavedPolicy =
         serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;
     saved.check().map_err(|e| anyhow::anyhow!("policy {} is not usable: {e}", file.display()))?;
-    Ok(saved)
+    Ok(saved.with_record())
 }

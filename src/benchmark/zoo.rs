@@ -189,6 +189,10 @@ pub struct ZooMeta {
     /// pooled by colour reads it; the Python reader takes it from here, [`crate::env::COLOUR_FEATURE`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub colour_feature: Option<usize>,
+    /// Format 7 on, where recorded: the rule objects other than blocks whose rows follow the blocks'
+    /// in that observation ([`crate::env::Fixture`], in row order); checked against this build's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixtures: Option<Vec<crate::env::Fixture>>,
     /// The task it was trained on, by content; for a policy trained on several tasks the first
     /// of them (its probes are that task's).
     pub task: TaskSource,
@@ -308,8 +312,8 @@ pub fn probes(saved: &SavedPolicy) -> Result<Vec<Probe>, ZooError> {
     };
     // In the policy's own layout: a multi-task policy's rows are those of its tasks' most blocks
     // (absent rows padded), so that its probes replay as saved.
-    let slots = saved.slots().map_err(|e| fail(e.to_string()))?.max(saved.policy.block_slots());
-    let obs_mode = saved.policy.obs_mode();
+    let slots = saved.slots().map_err(|e| fail(e.to_string()))?.max(saved.policy.block_slots(saved.obs_mode()));
+    let obs_mode = saved.obs_mode();
     let config = crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) };
     let mut env = crate::env::BlockEnv::new(config).map_err(|e| fail(e.to_string()))?;
     let level = env.max_level();
@@ -563,8 +567,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
             (None, None) => UNRECORDED.into(),
         },
         kind: Some(saved.policy.kind().into()),
-        obs_mode: Some(saved.policy.obs_mode()),
+        obs_mode: Some(saved.obs_mode()),
         colour_feature: Some(crate::env::COLOUR_FEATURE),
+        fixtures: Some(saved.obs_mode().fixtures().to_vec()),
         task,
         multi_task,
         epoch: saved.epoch,
@@ -705,10 +710,11 @@ fn rewrite<T>(
         // What an older entry says of itself, recorded: its kind, its observation; who trained it
         // is unknown here (`zoo upgrade --algo` records it).
         meta.kind = Some(saved.policy.kind().into());
-        meta.obs_mode = Some(saved.policy.obs_mode());
+        meta.obs_mode = Some(saved.obs_mode());
         meta.algo = UNRECORDED.into();
     }
     meta.colour_feature = Some(crate::env::COLOUR_FEATURE);
+    meta.fixtures = Some(saved.obs_mode().fixtures().to_vec());
     let out = edit(&mut meta, &saved)?;
     // A sealed entry requires every evaluation to name this policy.
     let policy_sha = saved.policy_id(&meta.name).sha256;
@@ -915,13 +921,18 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                 crate::env::COLOUR_FEATURE
             )));
         }
-        // The recorded observation is what its network reads.
-        let reads = policy.obs_mode();
-        if meta.obs_mode != Some(reads) {
-            return Err(bad_meta(format!(
-                "obs_mode records {}, but its network reads the `{reads}` observation; restore the entry",
-                meta.obs_mode.map_or_else(|| "nothing".to_owned(), |m| format!("`{m}`"))
-            )));
+        // The recorded observation is one its network reads, with this build's fixtures.
+        match meta.obs_mode {
+            Some(m) if policy.reads(m) => {
+                crate::benchmark::saved::check_fixtures(meta.fixtures.as_deref(), m).map_err(bad_meta)?;
+            }
+            recorded => {
+                let reads = policy.legacy_obs_mode().map_or_else(|_| "another".to_owned(), |r| format!("the `{r}`"));
+                return Err(bad_meta(format!(
+                    "obs_mode records {}, but its network reads {reads} observation; restore the entry",
+                    recorded.map_or_else(|| "nothing".to_owned(), |m| format!("`{m}`"))
+                )));
+            }
         }
     }
     // A multi-task policy loads as its run saved it: no one task, its label and its tasks.
@@ -939,6 +950,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         finals_success: meta.finals_success,
         algo: meta.trained_by().map(str::to_owned),
         obs_mode: meta.obs_mode,
+        fixtures: meta.fixtures.clone(),
         policy,
         critic,
     };
@@ -986,5 +998,5 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             policy_sha.as_deref().unwrap_or("unnamed")
         )));
     }
-    Ok((meta, saved))
+    Ok((meta, saved.with_record()))
 }

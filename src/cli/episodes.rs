@@ -196,7 +196,7 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     let mut config = registry::config(&a.env)?;
     config.obs_mode = a.obs_mode.unwrap_or_default();
     if let Some(saved) = &saved {
-        let reads = saved.policy.obs_mode();
+        let reads = saved.obs_mode();
         if let Some(mode) = a.obs_mode.filter(|&m| m != reads) {
             bail!("policy {} reads the `{reads}` observation, not the `{mode}` one: leave --obs-mode out", a.policy);
         }
@@ -269,7 +269,7 @@ pub(super) fn render(a: RenderArgs) -> Result<()> {
         (None, Some(path)) => {
             let saved = crate::benchmark::load::load_policy(path)?;
             let task = policy_task(a.env.as_deref(), &saved)?;
-            let (obs_mode, slots) = (saved.policy.obs_mode(), saved.slots()?);
+            let (obs_mode, slots) = (saved.obs_mode(), saved.slots()?);
             let mut env = BlockEnv::new(crate::env::EnvConfig { obs_mode, slots, ..crate::env::EnvConfig::new(task) })?;
             env.set_distribution(a.challenge.then_some("challenge"))?;
             let level = env.max_level();

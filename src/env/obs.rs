@@ -75,8 +75,10 @@ pub const ENTITY_FEATURES: [&str; 7] =
 pub const TYPE_FEATURE: usize = OBJECT_FEATURES.len() + SIZE_FEATURES.len();
 
 /// The rule objects other than blocks, in the order of their rows in the `entities` mode (after
-/// the blocks' rows).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// the blocks' rows). Saved policies record their mode's list (`fixtures`), so a file written
+/// before a change to it is refused rather than misread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Fixture {
     /// The gripper: both fingers and the gripper link.
     Gripper,

@@ -93,6 +93,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             finals_success: 0.0,
             algo: Some("td3".into()),
             obs_mode: None,
+            fixtures: None,
             policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
         };
@@ -107,7 +108,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
         assert_eq!(meta.format, zoo::FORMAT);
         assert_eq!(meta.actor.set, saved.policy.net().set);
         assert_eq!(meta.actor.sizes[0], observations[0].len(), "the observation's length");
-        assert_eq!(loaded.policy.obs_mode(), ObsMode::Objects);
+        assert_eq!(loaded.obs_mode(), ObsMode::Objects);
         for obs in &observations {
             assert_eq!(loaded.policy.act(obs), saved.policy.act(obs));
             let mut sa = obs.clone();

@@ -686,7 +686,7 @@ fn a_set_network_with_hindsight_colours_trains_resumes_exactly_and_plays_any_obj
         load_policy(&split.path().join("policy.json")).unwrap(),
     );
     assert_eq!(pa.policy, pb.policy, "same weights and normaliser after resuming");
-    assert_eq!(pa.policy.obs_mode(), blockpuzzle::env::ObsMode::Objects);
+    assert_eq!(pa.obs_mode(), blockpuzzle::env::ObsMode::Objects);
     assert!(pa.policy.net().set.is_some_and(|s| s.slots == 6), "BlocksChooseN-v0 has six object slots");
     // Resuming with the other network is refused, naming the flag.
     let flat = TrainConfig { net: NetConfig::default(), ..tiny_set("BlocksChooseN-v0", 4, Pooling::MeanMax) };
@@ -772,7 +772,7 @@ fn an_entity_set_network_trains_and_its_policy_reads_the_entities() {
     train(&c, dir.path(), false, &mut quiet).unwrap();
     let path = dir.path().join("policy.json");
     let saved = load_policy(&path).unwrap();
-    assert_eq!(saved.policy.obs_mode(), ObsMode::Entities);
+    assert_eq!(saved.obs_mode(), ObsMode::Entities);
     let blocks = blockpuzzle::env::registry::task("ToppleTower-v0").unwrap().object_count();
     assert!(saved.policy.net().set.is_some_and(|s| s.slots == blocks + 3 && s.object == 26));
     assert!(c.title().contains("entity set network") && c.default_run_dir().to_string_lossy().contains("-entity-s"));
@@ -860,7 +860,7 @@ fn sac_and_pggd_train_set_networks_too() {
         let saved = load_policy(&dir.path().join("policy.json")).unwrap();
         let set = saved.policy.net().set.expect("a set network");
         assert!(set.by_colour && set.slots == 5, "{algo}: {set:?}");
-        assert_eq!(saved.policy.obs_mode(), blockpuzzle::env::ObsMode::Objects, "{algo}");
+        assert_eq!(saved.obs_mode(), blockpuzzle::env::ObsMode::Objects, "{algo}");
     }
 }
 
@@ -971,7 +971,7 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     assert!(rows.iter().all(|r| r.critic_loss == 0.0 && r.mean_q == 0.0 && r.actor_loss > 0.0), "{rows:?}");
     assert!(rows[0].train_success >= 0.5, "the solver's own episodes at level 0: {rows:?}");
     let saved = load_policy(&dir.path().join("policy.json")).unwrap();
-    assert_eq!(saved.policy.obs_mode(), blockpuzzle::env::ObsMode::Entities);
+    assert_eq!(saved.obs_mode(), blockpuzzle::env::ObsMode::Entities);
     // DAgger: the solver's share decays (1, e^-1, e^-2) and a resumed run continues exactly.
     let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     let a = train(&imitate("dagger", 3), straight.path(), false, &mut quiet).unwrap();
@@ -1376,6 +1376,22 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
     std::fs::write(&file, edited.to_string()).unwrap();
     let e = format!("{:#}", load_policy(&file).unwrap_err());
     assert!(e.contains("obs_mode records `entities`") && e.contains("edited.json"), "{e}");
+    // The fixtures after the blocks' rows are recorded too (none in the flat observation), and a file
+    // recording other ones is refused.
+    assert_eq!(saved.fixtures.as_deref(), Some(&[][..]));
+    edited["obs_mode"] = "flat".into();
+    edited["fixtures"] = serde_json::json!(["gripper"]);
+    std::fs::write(&file, edited.to_string()).unwrap();
+    let e = format!("{:#}", load_policy(&file).unwrap_err());
+    assert!(e.contains("fixtures records [gripper]") && e.contains("export it again"), "{e}");
+    // A file written before the record is read as before (the one mode its network reads); `zoo
+    // export` records it (zoo::an_entry_records_its_mode_kind_and_algorithm).
+    let legacy = edited.as_object_mut().unwrap();
+    legacy.remove("obs_mode");
+    legacy.remove("fixtures");
+    std::fs::write(&file, edited.to_string()).unwrap();
+    let old = load_policy(&file).unwrap();
+    assert_eq!((old.obs_mode, old.fixtures.as_deref()), (Some(blockpuzzle::env::ObsMode::Flat), Some(&[][..])));
     std::fs::remove_file(&file).unwrap();
     let cli = |args: &[&str]| {
         let o = std::process::Command::new(crate::common::CLI).args(args).current_dir(run.path()).output().unwrap();

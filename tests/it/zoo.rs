@@ -44,6 +44,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         finals_success: 0.5,
         algo: Some("ddpg".into()),
         obs_mode: None,
+        fixtures: None,
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
     }
@@ -238,7 +239,7 @@ fn shipped_entries_load_and_act_as_their_source() {
         let task = registry::recorded(&meta.task).unwrap();
         // In the observation the policy reads (a set network's is the `objects` or `entities` one), in
         // its own layout (a multi-task entry's rows are those of its tasks' most blocks).
-        let (obs_mode, slots) = (saved.policy.obs_mode(), saved.policy.block_slots());
+        let (obs_mode, slots) = (saved.obs_mode(), saved.policy.block_slots(saved.obs_mode()));
         let config = blockpuzzle::EnvConfig { obs_mode, slots, ..blockpuzzle::EnvConfig::new(task) };
         let mut env = blockpuzzle::BlockEnv::new(config).unwrap();
         let level = env.max_level();
@@ -533,6 +534,7 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     );
     assert_eq!(saved.algo.as_deref(), Some("bc"));
     assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
+    assert_eq!(meta.fixtures.as_deref(), Some(&blockpuzzle::env::Fixture::ALL[..]));
     assert_eq!(zoo::load(&zoo::dir().join("BlocksChoose-v0-pggd.json")).unwrap().0.kind(), Some("gaussian"));
     // Exported: the policy file's record; an --algo that disagrees with it is refused.
     let dir = tempfile::tempdir().unwrap();
@@ -543,6 +545,10 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
         zoo::export(dir.path(), &ddpg_saved(3), &ExportInfo { algo: Some("sac".into()), ..info("f") }).unwrap_err(),
     );
     assert!(e.contains("records that ddpg trained it"), "{e}");
+    // A policy file written before it recorded its observation: exported with the one its network reads.
+    let legacy = SavedPolicy { obs_mode: None, fixtures: None, ..ddpg_saved(3) };
+    let meta = zoo::read_meta(&zoo::export(dir.path(), &legacy, &info("legacy")).unwrap()).unwrap();
+    assert_eq!((meta.obs_mode, meta.fixtures.as_deref()), (Some(ObsMode::Flat), Some(&[][..])));
     // A format-6 entry (sealed as format 6 was): read as before, then upgraded.
     let z = dir.path().join("z");
     std::fs::create_dir(&z).unwrap();
@@ -560,10 +566,19 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     let meta = zoo::read_meta(&z.join("old.json")).unwrap();
     assert_eq!((meta.version(), meta.algo.as_str(), meta.obs_mode), (7, "unrecorded", Some(ObsMode::Flat)));
     assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
+    assert_eq!(meta.fixtures.as_deref(), Some(&[][..]));
     let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some("ddpg"));
     let o = bp(&["zoo", "upgrade", "old", "--algo", "td3", "--zoo", z.to_str().unwrap()]);
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("records ddpg"), "{e}");
+    // An entry whose fixtures are not this build's is refused, naming both lists.
+    let mut edited = zoo::read_meta(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    edited.fixtures = Some(blockpuzzle::env::Fixture::ALL[..2].to_vec());
+    edited.meta_sha256 = Some(edited.seal());
+    std::fs::copy(zoo::dir().join("generalist-bc-entity.safetensors"), z.join("fx.safetensors")).unwrap();
+    std::fs::write(z.join("fx.json"), serde_json::to_vec_pretty(&edited).unwrap()).unwrap();
+    let e = err_text(zoo::load(&z.join("fx.json")).unwrap_err());
+    assert!(e.contains("fixtures records [gripper, table]") && e.contains("[gripper, table, floor]"), "{e}");
 }

@@ -913,6 +913,7 @@ impl<'a> Trainer<'a> {
                 finals_success: row.finals_success,
                 algo: Some(self.config.algo_label().to_owned()),
                 obs_mode: Some(self.config.net.obs_mode()),
+                fixtures: Some(self.config.net.obs_mode().fixtures().to_vec()),
                 policy,
                 critic: self.learner.agent.critic(),
             };

@@ -48,24 +48,40 @@ impl AnyPolicy {
         }
     }
 
-    /// The observation the policy reads: flat for an MLP; for a set network `entities` where its rows
-    /// have the entities' width (`--net entity`), else `objects`.
-    pub fn obs_mode(&self) -> crate::env::ObsMode {
-        use crate::env::{ObsMode, ObsSpec};
+    /// Whether its network reads observations of `mode`: an MLP reads the flat one, a set network
+    /// the set mode whose rows have its rows' width. A check of a recorded mode, not a guess.
+    pub fn reads(&self, mode: crate::env::ObsMode) -> bool {
+        use crate::env::ObsSpec;
         match self.net().set {
-            None => ObsMode::Flat,
-            // The two set layouts differ in their rows' features (the entities' type one-hot).
-            Some(l) if l.object == ObsSpec::new(ObsMode::Entities, 0).object_dim() => ObsMode::Entities,
-            Some(_) => ObsMode::Objects,
+            None => !mode.is_set(),
+            Some(l) => mode.is_set() && l.object == ObsSpec::new(mode, 0).object_dim(),
         }
     }
 
-    /// The block slots of the layout it was saved with ([`crate::env::EnvConfig::slots`]): a set
-    /// network's rows less the fixtures' (a multi-task policy's are its tasks' most blocks); 0 for
-    /// an MLP (its task's own).
-    pub fn block_slots(&self) -> usize {
-        let fixtures = self.obs_mode().fixtures().len();
-        self.net().set.map_or(0, |s| s.slots.saturating_sub(fixtures))
+    /// The observation of a file written before policies recorded it (`policy.json` without
+    /// `obs_mode`, zoo formats 1–6): the one mode of [`crate::env::ObsMode::ALL`] its network
+    /// [reads](Self::reads). Only readers of such files call this; everything else reads the record.
+    ///
+    /// # Errors
+    /// No mode, or more than one, fits the network.
+    pub fn legacy_obs_mode(&self) -> Result<crate::env::ObsMode, String> {
+        let fits: Vec<_> = crate::env::ObsMode::ALL.into_iter().filter(|&m| self.reads(m)).collect();
+        match fits[..] {
+            [m] => Ok(m),
+            _ => Err(format!(
+                "the file does not record its obs_mode, and its network reads {} of the observations ({}); \
+                 export it again from its run with `blockpuzzle zoo export`",
+                if fits.is_empty() { "none" } else { "several" },
+                crate::env::ObsMode::ALL.map(|m| m.name()).join(", ")
+            )),
+        }
+    }
+
+    /// The block slots of the layout it was saved with ([`crate::env::EnvConfig::slots`]) when it
+    /// reads `mode`: a set network's rows less the mode's fixtures' (a multi-task policy's are its
+    /// tasks' most blocks); 0 for an MLP (its task's own).
+    pub fn block_slots(&self, mode: crate::env::ObsMode) -> usize {
+        self.net().set.map_or(0, |s| s.slots.saturating_sub(mode.fixtures().len()))
     }
 
     /// A set network's policy on observations with `slots` object slots: the
