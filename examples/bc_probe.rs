@@ -160,7 +160,7 @@ fn make_env(mode: ObsMode) -> Result<BlockEnv> {
 fn load_expert(name: &Path, flat_env: &BlockEnv) -> Result<Trained> {
     let saved = blockpuzzle::benchmark::load::load_policy(name)
         .with_context(|| format!("cannot load --expert {}", name.display()))?;
-    if saved.policy.obs_mode() != ObsMode::Flat {
+    if saved.obs_mode() != ObsMode::Flat {
         bail!("--expert {} is a set network; the probe imitates a flat (MLP) policy", name.display());
     }
     if saved.env_id != ENV_ID {

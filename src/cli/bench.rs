@@ -27,13 +27,13 @@ pub(super) struct BenchArgs {
     #[arg(long = "train", alias = "ddpg", conflicts_with_all = ["threads", "no_collision_filter"])]
     pub(super) train: bool,
     /// With --train: collection workers, each stepping its own environment.
-    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::support::limits::WORKERS.parser::<usize>())]
+    #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::learn::train::WORKERS.parser::<usize>())]
     workers: usize,
     /// With --train: gradient updates to time.
-    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::support::limits::BENCH_UPDATES.parser::<usize>())]
+    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::learn::bench::train::BENCH_UPDATES.parser::<usize>())]
     updates: usize,
     /// With --train: transitions per update batch.
-    #[arg(long, default_value_t = 256, requires = "train", value_parser = crate::support::limits::BATCH_SIZE.parser::<usize>())]
+    #[arg(long, default_value_t = 256, requires = "train", value_parser = crate::learn::train::BATCH_SIZE.parser::<usize>())]
     batch_size: usize,
     /// With --train: threads libtorch may use for the updates (at most the number of cores).
     #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::support::limits::COUNT.parser::<usize>())]
@@ -63,10 +63,10 @@ pub(super) struct BenchArgs {
     #[arg(long, requires = "train")]
     set_type_norm: bool,
     /// With --train --net set: pre-LayerNorm transformer blocks (as `train --set-transformer`).
-    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::support::limits::SET_TRANSFORMER.parser::<usize>())]
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::learn::agents::arch::SET_TRANSFORMER.parser::<usize>())]
     set_transformer: usize,
     /// With --train --net set: the width of the per-row layers (as `train --set-width`).
-    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::support::limits::SET_WIDTH.parser::<usize>())]
+    #[arg(long, default_value_t = 0, requires = "train", value_parser = crate::learn::agents::arch::SET_WIDTH.parser::<usize>())]
     set_width: usize,
     /// With --train --net set: the critics are MLPs (as `train --flat-critic`).
     #[arg(long, requires = "train")]

@@ -5,8 +5,18 @@ use crate::env::{registry, BlockEnv};
 use crate::episode::outcome::{Outcome, Outcomes};
 use crate::episode::rollout::{run_episode, DumpWriter};
 use crate::policy::{Policy, RandomPolicy};
+use crate::support::limits::Bound;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
+
+/// Frame width and height in pixels.
+pub const FRAME_PIXELS: Bound =
+    Bound::new("--width/--height", 1, 16_384, "the renderer then checks the model's offscreen buffer");
+/// GIF frames per second.
+pub const FPS: Bound = Bound::new("--fps", 1, 100, "GIF frame delays are whole hundredths of a second");
+/// Frames of a filmstrip.
+pub const FILMSTRIP: Bound =
+    Bound::new("--filmstrip", 1, 64, "a strip is one row of frames: 64 frames of 480 px are 30,720 px wide");
 
 /// `blockpuzzle demos`.
 #[derive(Debug, clap::Args)]
@@ -102,10 +112,10 @@ pub(super) struct RolloutArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub(super) struct ViewArgs {
     /// Frame width in pixels.
-    #[arg(long, default_value_t = 480, value_parser = crate::support::limits::FRAME_PIXELS.parser::<usize>())]
+    #[arg(long, default_value_t = 480, value_parser = FRAME_PIXELS.parser::<usize>())]
     width: usize,
     /// Frame height in pixels.
-    #[arg(long, default_value_t = 480, value_parser = crate::support::limits::FRAME_PIXELS.parser::<usize>())]
+    #[arg(long, default_value_t = 480, value_parser = FRAME_PIXELS.parser::<usize>())]
     height: usize,
     /// Camera distance from the point it looks at (m).
     #[arg(long, default_value_t = 2.5)]
@@ -122,10 +132,10 @@ pub(super) struct ViewArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub(super) struct MovieArgs {
     /// Frames per second of a GIF.
-    #[arg(long, default_value_t = 10, value_parser = crate::support::limits::FPS.parser::<u32>())]
+    #[arg(long, default_value_t = 10, value_parser = FPS.parser::<u32>())]
     fps: u32,
     /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
-    #[arg(long, value_parser = crate::support::limits::FILMSTRIP.parser::<usize>())]
+    #[arg(long, value_parser = FILMSTRIP.parser::<usize>())]
     filmstrip: Option<usize>,
 }
 

@@ -13,6 +13,11 @@ use image::RgbImage;
 use std::ffi::CString;
 use thiserror::Error;
 
+/// The camera's distance from the point it looks at, metres (`--distance`).
+pub const CAMERA_DISTANCE_M: (f64, f64) = (0.1, 50.0);
+/// The camera's elevation, degrees (`--elevation`).
+pub const CAMERA_ELEVATION_DEG: (f64, f64) = (-90.0, 90.0);
+
 /// Every package headless rendering uses, on Debian and Ubuntu.
 const APT_ALL: &str = "apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri";
 /// The same on Fedora and RHEL.
@@ -125,7 +130,7 @@ impl View {
     /// # Errors
     /// The first value out of range, naming the flag and the range.
     pub fn check(&self) -> Result<(), String> {
-        let (d, e) = (crate::support::limits::CAMERA_DISTANCE_M, crate::support::limits::CAMERA_ELEVATION_DEG);
+        let (d, e) = (CAMERA_DISTANCE_M, CAMERA_ELEVATION_DEG);
         if !crate::support::limits::within(self.distance, d) {
             return Err(format!(
                 "--distance {}: the camera's distance is {} to {} m (closer puts it inside the objects, farther \

@@ -1,5 +1,8 @@
-//! The hard limits on numbers a user gives: command-line flags and task-file
-//! fields. Each bound is written once here, with why it exists, and checked
+//! The hard limits on numbers a user gives to the core (task-file fields, evaluation, rollouts,
+//! suites, the files it reads) and the [`Bound`] type every limit is written with. Each bound is
+//! written once, with why it exists; those of training and rendering are written beside the
+//! settings they bound (`learn::train`, `learn::agents`, `learn::bench`, `render`, the CLI's
+//! render flags). Each is checked
 //! before anything is created or allocated: by the command line's parsers
 //! ([`Bound::parse`], which also turns `--episodes -3` into a message naming
 //! the flag and its range) and again by the configs' own validation
@@ -84,8 +87,15 @@ impl Bound {
     }
 }
 
+impl Bound {
+    /// The bound of `name`: `min..=max`, ending there for `why`.
+    pub const fn new(name: &'static str, min: u64, max: u64, why: &'static str) -> Self {
+        Bound { name, min, max, why }
+    }
+}
+
 const fn bound(name: &'static str, min: u64, max: u64, why: &'static str) -> Bound {
-    Bound { name, min, max, why }
+    Bound::new(name, min, max, why)
 }
 
 /// A count with no bound of its own (a level, an index, a period).
@@ -109,69 +119,12 @@ pub const GENERATE_COUNT: Bound =
     bound("--count", 1, 100_000, "each task is checked by the solver's episodes: 100,000 take hours");
 /// Steps per thread of `bench` and `align --bench-steps`.
 pub const BENCH_STEPS: Bound = bound("--steps", 1, 10_000_000, "about an hour of stepping per thread");
-/// Gradient updates of `bench --ddpg`.
-pub const BENCH_UPDATES: Bound = bound("--updates", 1, 1_000_000, "");
 /// Threads of evaluations and benchmarks, each with its own environment.
 pub const THREADS: Bound =
     bound("--threads", 1, 256, "each thread steps its own MuJoCo environment; more than the cores only wait");
 /// Environments of one vector environment (Python's `VecEnv`).
 pub const NUM_ENVS: Bound =
     bound("num_envs", 1, 4_096, "each environment holds its own MuJoCo model and data, a few MB");
-/// Workers of one training process (spread more over MPI ranks).
-pub const WORKERS: Bound = bound(
-    "--workers",
-    1,
-    256,
-    "per process: each is a thread with its own environment and replay buffer; run more as MPI ranks",
-);
-/// A stream run's tasks with environments per epoch (`train --active-tasks`).
-pub const ACTIVE_TASKS: Bound = bound(
-    "--active-tasks",
-    1,
-    1_024,
-    "each active task has an environment per worker, built anew every epoch (about a quarter of a second each)",
-);
-/// Transitions per batch and worker.
-pub const BATCH_SIZE: Bound =
-    bound("--batch-size", 1, 65_536, "per worker; a batch's activations take batch × hidden × layers × 16 bytes");
-/// Replay capacity per worker.
-pub const BUFFER_SIZE: Bound =
-    bound("--buffer-size", 1, 100_000_000, "transitions per worker; the run's memory is checked too");
-/// Epochs of a run.
-pub const EPOCHS: Bound = bound("--epochs", 1, 100_000, "");
-/// Cycles per epoch.
-pub const CYCLES: Bound = bound("--cycles", 1, 10_000, "");
-/// Exploration episodes per worker and cycle.
-pub const ROLLOUTS: Bound = bound("--rollouts", 1, 10_000, "");
-/// Gradient steps per cycle.
-pub const BATCHES: Bound = bound("--batches", 0, 100_000, "");
-/// Test and finals episodes per worker and epoch.
-pub const TEST_EPISODES: Bound = bound("--test-episodes", 1, 100_000, "");
-/// Hidden units per layer.
-pub const HIDDEN: Bound = bound("--hidden", 1, 8_192, "a layer of 8,192 units already holds 67 M weights");
-/// Hidden layers.
-pub const LAYERS: Bound = bound("--layers", 1, 32, "");
-/// Relabelled copies of an episode (hindsight colours).
-pub const HINDSIGHT_COLOURS: Bound =
-    bound("--hindsight-colours", 0, 16, "an episode's blocks offer no more colourings");
-/// Layers of a set network's per-object encoder.
-pub const SET_ENCODER_LAYERS: Bound = bound("--set-encoder-layers", 1, 32, "");
-/// Pre-LayerNorm transformer blocks of a set network's encoder.
-pub const SET_TRANSFORMER: Bound = bound("--set-transformer", 0, 8, "");
-/// The width of a set network's per-row layers (0: `--hidden`).
-pub const SET_WIDTH: Bound = bound("--set-width", 0, 8_192, "a layer of 8,192 units already holds 67 M weights");
-/// Steps of an n-step return.
-pub const N_STEP: Bound = bound("--n-step", 1, 50, "an episode's length in the paper's tasks");
-/// TD3's critic updates per actor update.
-pub const POLICY_DELAY: Bound = bound("--policy-delay", 1, 1_000, "");
-/// Frames of a filmstrip.
-pub const FILMSTRIP: Bound =
-    bound("--filmstrip", 1, 64, "a strip is one row of frames: 64 frames of 480 px are 30,720 px wide");
-/// Frame width and height in pixels.
-pub const FRAME_PIXELS: Bound =
-    bound("--width/--height", 1, 16_384, "the renderer then checks the model's offscreen buffer");
-/// GIF frames per second.
-pub const FPS: Bound = bound("--fps", 1, 100, "GIF frame delays are whole hundredths of a second");
 /// Steps of one episode (task files).
 pub const EPISODE_STEPS: Bound =
     bound("max_episode_steps", 1, 10_000, "200 times the paper's 50; evaluation and replay hold whole episodes");
@@ -214,10 +167,6 @@ pub fn cut_long_lines(text: &str) -> String {
     out
 }
 
-/// The camera's distance from the point it looks at, metres (`--distance`).
-pub const CAMERA_DISTANCE_M: (f64, f64) = (0.1, 50.0);
-/// The camera's elevation, degrees (`--elevation`).
-pub const CAMERA_ELEVATION_DEG: (f64, f64) = (-90.0, 90.0);
 /// Object sizes in a task file: half extents in metres.
 pub const HALF_EXTENT_M: (f64, f64) = (0.001, 0.5);
 /// Object masses in a task file, kg.
@@ -279,11 +228,11 @@ mod tests {
 
     #[test]
     fn bounds_name_the_setting_and_the_range() {
-        assert_eq!(WORKERS.parse::<usize>("12"), Ok(12));
-        let e = WORKERS.parse::<usize>("-3").unwrap_err();
+        assert_eq!(THREADS.parse::<usize>("12"), Ok(12));
+        let e = THREADS.parse::<usize>("-3").unwrap_err();
         assert!(e.contains("whole number from 1 to 256"), "{e}");
-        let e = WORKERS.parse::<usize>("100000").unwrap_err();
-        assert!(e.contains("allowed are 1 to 256") && e.contains("MPI"), "{e}");
+        let e = THREADS.parse::<usize>("100000").unwrap_err();
+        assert!(e.contains("allowed are 1 to 256") && e.contains("cores"), "{e}");
         let e = EPISODE_STEPS.check(1_000_000_000_000).unwrap_err();
         assert!(e.starts_with("max_episode_steps = 1,000,000,000,000: allowed are 1 to 10,000"), "{e}");
         assert_eq!(SEED.parse::<u64>("18446744073709551615"), Ok(u64::MAX));

@@ -389,20 +389,6 @@ pub fn split_gradient<'g>(gradient: &'g [f32], nets: &[&Net]) -> Vec<&'g [f32]> 
     parts
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn mlp_bytes_count_weights_and_biases() {
-        let shared = SharedConfig { hidden: 4, layers: 2, ..SharedConfig::default() };
-        let spec = Spec { arch: Arch::mlp(3), act_dim: 2, shared: &shared };
-        // 3 -> 4 -> 4 -> 2: 16 + 20 + 10 parameters.
-        assert_eq!(spec.mlp_bytes(0, 2, 1), 4 * 46);
-        assert_eq!(spec.mlp_bytes(2, 1, 2), 4 * 2 * (24 + 20 + 5));
-    }
-}
-
 /// `into` with the fields named in `fields` taken from `from` (a branch's settings: the one list,
 /// [`Info::branchable`], says which), through their serde form.
 ///
@@ -421,4 +407,18 @@ where
         to.insert((*f).to_owned(), v.clone());
     }
     serde_json::from_value(serde_json::Value::Object(to.clone())).map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mlp_bytes_count_weights_and_biases() {
+        let shared = SharedConfig { hidden: 4, layers: 2, ..SharedConfig::default() };
+        let spec = Spec { arch: Arch::mlp(3), act_dim: 2, shared: &shared };
+        // 3 -> 4 -> 4 -> 2: 16 + 20 + 10 parameters.
+        assert_eq!(spec.mlp_bytes(0, 2, 1), 4 * 46);
+        assert_eq!(spec.mlp_bytes(2, 1, 2), 4 * 2 * (24 + 20 + 5));
+    }
 }

@@ -11,8 +11,16 @@ use super::nets::{mlp_sizes, Net};
 use crate::env::{ObsMode, ObsSpec};
 use crate::policy::actor::mlp::SetLayout;
 use crate::policy::actor::normalizer::Normalizer;
+use crate::support::limits::Bound;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
+
+/// Layers of a set network's per-object encoder.
+pub const SET_ENCODER_LAYERS: Bound = Bound::new("--set-encoder-layers", 1, 32, "");
+/// Pre-LayerNorm transformer blocks of a set network's encoder.
+pub const SET_TRANSFORMER: Bound = Bound::new("--set-transformer", 0, 8, "");
+/// The width of a set network's per-row layers (0: `--hidden`).
+pub const SET_WIDTH: Bound = Bound::new("--set-width", 0, 8_192, "a layer of 8,192 units already holds 67 M weights");
 
 /// The network's kind (`--net`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
@@ -73,7 +81,7 @@ pub struct NetConfig {
     #[serde(default)]
     pub net: NetKind,
     /// Set network: layers of the per-object encoder (of `--hidden` units; the head has `--layers`).
-    #[arg(long, default_value_t = 2, value_parser = crate::support::limits::SET_ENCODER_LAYERS.parser::<usize>())]
+    #[arg(long, default_value_t = 2, value_parser = SET_ENCODER_LAYERS.parser::<usize>())]
     #[serde(default = "two")]
     pub set_encoder_layers: usize,
     /// Set network: `mean-max` pooling (Deep Sets), `attention` (one masked
@@ -102,13 +110,13 @@ pub struct NetConfig {
     /// Set network: pre-LayerNorm transformer blocks after the encoder (0: none; the issue's
     /// recipe: 2), each masked multi-head self-attention (4 heads; `--hidden` a multiple of 4)
     /// and a feed-forward pair, with residual connections.
-    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SET_TRANSFORMER.parser::<usize>())]
+    #[arg(long, default_value_t = 0, value_parser = SET_TRANSFORMER.parser::<usize>())]
     #[serde(default, skip_serializing_if = "crate::policy::actor::mlp::is_zero")]
     pub set_transformer: usize,
     /// Set network: the width of the per-row layers (encoder, attention or transformer blocks,
     /// query pooling; 0: `--hidden`). They run once per row, the head once per sample, so a
     /// narrower row width (the published entity transformers use 64–128) cuts most of the cost.
-    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SET_WIDTH.parser::<usize>())]
+    #[arg(long, default_value_t = 0, value_parser = SET_WIDTH.parser::<usize>())]
     #[serde(default, skip_serializing_if = "crate::policy::actor::mlp::is_zero")]
     pub set_width: usize,
 }
@@ -147,9 +155,9 @@ impl NetConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        crate::support::limits::SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)?;
-        crate::support::limits::SET_TRANSFORMER.check_usize(self.set_transformer)?;
-        crate::support::limits::SET_WIDTH.check_usize(self.set_width)?;
+        SET_ENCODER_LAYERS.check_usize(self.set_encoder_layers)?;
+        SET_TRANSFORMER.check_usize(self.set_transformer)?;
+        SET_WIDTH.check_usize(self.set_width)?;
         if self.set_transformer > 0 && self.set_pooling == Pooling::Attention {
             return Err(
                 "--set-transformer replaces --set-pooling attention's block; pool with mean-max or query".into()

@@ -31,11 +31,15 @@ use super::shared::SharedConfig;
 use crate::policy::actor::mlp::PlainNet;
 use crate::policy::actor::normalizer::Normalizer;
 use crate::policy::actor::AnyPolicy;
+use crate::support::limits::Bound;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use tch::Tensor;
+
+/// TD3's critic updates per actor update.
+pub const POLICY_DELAY: Bound = Bound::new("--policy-delay", 1, 1_000, "");
 
 /// DDPG in the list of algorithms (`--algo ddpg`).
 pub const REGISTRATION: Registration<DdpgConfig> = Registration {
@@ -134,7 +138,7 @@ pub struct DdpgConfig {
     #[arg(long, default_value_t = Self::DEFAULT.target_noise_clip)]
     pub target_noise_clip: f64,
     /// TD3: the actor is updated on every this-many critic updates.
-    #[arg(long, default_value_t = Self::DEFAULT.policy_delay, value_parser = crate::support::limits::POLICY_DELAY.parser::<usize>())]
+    #[arg(long, default_value_t = Self::DEFAULT.policy_delay, value_parser = POLICY_DELAY.parser::<usize>())]
     pub policy_delay: usize,
 }
 
@@ -158,7 +162,7 @@ impl DdpgConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        crate::support::limits::POLICY_DELAY.check_usize(self.policy_delay)?;
+        POLICY_DELAY.check_usize(self.policy_delay)?;
         let checks: [(bool, &str); 8] = [
             (self.action_l2.is_finite() && self.action_l2 >= 0.0, "--action-l2 must be a number ≥ 0"),
             (self.preact_l2.is_finite() && self.preact_l2 >= 0.0, "--preact-l2 must be a number ≥ 0"),

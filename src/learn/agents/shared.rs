@@ -8,7 +8,15 @@
 //! Every default is written once, in [`SharedConfig::DEFAULT`]: the flags,
 //! the run files and `Default` take it from there.
 
+use crate::support::limits::Bound;
 use serde::{Deserialize, Serialize};
+
+/// Hidden units per layer.
+pub const HIDDEN: Bound = Bound::new("--hidden", 1, 8_192, "a layer of 8,192 units already holds 67 M weights");
+/// Hidden layers.
+pub const LAYERS: Bound = Bound::new("--layers", 1, 32, "");
+/// Steps of an n-step return.
+pub const N_STEP: Bound = Bound::new("--n-step", 1, 50, "an episode's length in the paper's tasks");
 
 /// Settings several algorithms read (defaults: the paper's, i.e. Plappert et al. 2018).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
@@ -16,10 +24,10 @@ use serde::{Deserialize, Serialize};
 #[command(next_help_heading = "Settings the algorithms share")]
 pub struct SharedConfig {
     /// Hidden layers of every network.
-    #[arg(long, default_value_t = Self::DEFAULT.layers, value_parser = crate::support::limits::LAYERS.parser::<usize>())]
+    #[arg(long, default_value_t = Self::DEFAULT.layers, value_parser = LAYERS.parser::<usize>())]
     pub layers: usize,
     /// Units per hidden layer.
-    #[arg(long, default_value_t = Self::DEFAULT.hidden, value_parser = crate::support::limits::HIDDEN.parser::<usize>())]
+    #[arg(long, default_value_t = Self::DEFAULT.hidden, value_parser = HIDDEN.parser::<usize>())]
     pub hidden: usize,
     /// Actor learning rate (Adam).
     #[arg(long, default_value_t = Self::DEFAULT.lr_actor)]
@@ -45,7 +53,7 @@ pub struct SharedConfig {
     #[arg(long, value_enum, default_value_t = Self::DEFAULT.precision)]
     pub precision: Precision,
     /// Steps of reward summed before bootstrapping (1: the paper's one-step target).
-    #[arg(long, default_value_t = Self::DEFAULT.n_step, value_parser = crate::support::limits::N_STEP.parser::<usize>())]
+    #[arg(long, default_value_t = Self::DEFAULT.n_step, value_parser = N_STEP.parser::<usize>())]
     pub n_step: usize,
     /// With `--net set`: the critics are MLPs over the same `objects` observation (its rows in
     /// the environment's order), only the actor a set network (an asymmetric actor-critic: the
@@ -90,7 +98,6 @@ impl SharedConfig {
     /// # Errors
     /// The first setting out of range.
     pub fn validate(&self) -> Result<(), String> {
-        use crate::support::limits::{HIDDEN, LAYERS, N_STEP};
         for (bound, v) in [(LAYERS, self.layers), (HIDDEN, self.hidden), (N_STEP, self.n_step)] {
             bound.check_usize(v)?;
         }

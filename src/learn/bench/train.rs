@@ -23,11 +23,15 @@ use crate::learn::agents::registry::{Algo, AlgoConfigs};
 use crate::learn::agents::replay::ReplayBuffer;
 use crate::learn::agents::shared::{Precision, SharedConfig};
 use crate::learn::train::{play_all, stream_seed, Behaviour};
+use crate::support::limits::Bound;
 use anyhow::{bail, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::time::Instant;
+
+/// Gradient updates of `bench --ddpg`.
+pub const BENCH_UPDATES: Bound = Bound::new("--updates", 1, 1_000_000, "");
 
 /// What to measure.
 #[derive(Debug, Clone)]
@@ -106,7 +110,9 @@ const WARMUP_UPDATES: usize = 20;
 /// # Errors
 /// Unknown environment id, zero counts, environment failures.
 pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
-    use crate::support::limits::{BATCH_SIZE, BENCH_STEPS, BENCH_UPDATES, WORKERS};
+    use crate::learn::bench::train::BENCH_UPDATES;
+    use crate::learn::train::{BATCH_SIZE, WORKERS};
+    use crate::support::limits::BENCH_STEPS;
     for (bound, v) in
         [(WORKERS, c.workers), (BENCH_STEPS, c.steps), (BENCH_UPDATES, c.updates), (BATCH_SIZE, c.batch_size)]
     {

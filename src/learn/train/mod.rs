@@ -45,10 +45,45 @@ use crate::env::registry;
 use crate::learn::agents::arch::{NetConfig, NetKind, Pooling};
 use crate::learn::agents::registry::AlgoConfigs;
 use crate::learn::agents::shared::{Precision, SharedConfig};
+use crate::support::limits::Bound;
 use crate::task::Task;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// Workers of one training process (spread more over MPI ranks).
+pub const WORKERS: Bound = Bound::new(
+    "--workers",
+    1,
+    256,
+    "per process: each is a thread with its own environment and replay buffer; run more as MPI ranks",
+);
+/// A stream run's tasks with environments per epoch (`train --active-tasks`).
+pub const ACTIVE_TASKS: Bound = Bound::new(
+    "--active-tasks",
+    1,
+    1_024,
+    "each active task has an environment per worker, built anew every epoch (about a quarter of a second each)",
+);
+/// Transitions per batch and worker.
+pub const BATCH_SIZE: Bound =
+    Bound::new("--batch-size", 1, 65_536, "per worker; a batch's activations take batch × hidden × layers × 16 bytes");
+/// Replay capacity per worker.
+pub const BUFFER_SIZE: Bound =
+    Bound::new("--buffer-size", 1, 100_000_000, "transitions per worker; the run's memory is checked too");
+/// Epochs of a run.
+pub const EPOCHS: Bound = Bound::new("--epochs", 1, 100_000, "");
+/// Cycles per epoch.
+pub const CYCLES: Bound = Bound::new("--cycles", 1, 10_000, "");
+/// Exploration episodes per worker and cycle.
+pub const ROLLOUTS: Bound = Bound::new("--rollouts", 1, 10_000, "");
+/// Gradient steps per cycle.
+pub const BATCHES: Bound = Bound::new("--batches", 0, 100_000, "");
+/// Test and finals episodes per worker and epoch.
+pub const TEST_EPISODES: Bound = Bound::new("--test-episodes", 1, 100_000, "");
+/// Relabelled copies of an episode (hindsight colours).
+pub const HINDSIGHT_COLOURS: Bound =
+    Bound::new("--hindsight-colours", 0, 16, "an episode's blocks offer no more colourings");
 
 /// Gradient steps per cycle in the paper's set-up (baselines' HER default).
 pub const PAPER_BATCHES: usize = 40;
@@ -90,7 +125,7 @@ pub struct TrainConfig {
     /// A stream run's tasks with environments in one epoch: so many of the pool, taken in turn from
     /// a permutation drawn anew every pass over it (building a task's environments costs about a
     /// quarter of a second each).
-    #[arg(long, default_value_t = DEFAULT_ACTIVE_TASKS, value_parser = crate::support::limits::ACTIVE_TASKS.parser::<usize>())]
+    #[arg(long, default_value_t = DEFAULT_ACTIVE_TASKS, value_parser = ACTIVE_TASKS.parser::<usize>())]
     #[serde(default = "default_active_tasks", skip_serializing_if = "is_default_active_tasks")]
     pub active_tasks: usize,
     /// The split of `--suite` to train on.
@@ -107,25 +142,25 @@ pub struct TrainConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub counts: Option<crate::task::counts::Counts>,
     /// Parallel workers (the paper's MPI workers), one environment each.
-    #[arg(long, default_value_t = 2, value_parser = crate::support::limits::WORKERS.parser::<usize>())]
+    #[arg(long, default_value_t = 2, value_parser = WORKERS.parser::<usize>())]
     pub workers: usize,
     /// Epochs to train (a resumed run continues up to this many).
-    #[arg(long, default_value_t = 200, value_parser = crate::support::limits::EPOCHS.parser::<usize>())]
+    #[arg(long, default_value_t = 200, value_parser = EPOCHS.parser::<usize>())]
     pub epochs: usize,
     /// Cycles per epoch.
-    #[arg(long, default_value_t = 50, value_parser = crate::support::limits::CYCLES.parser::<usize>())]
+    #[arg(long, default_value_t = 50, value_parser = CYCLES.parser::<usize>())]
     pub cycles: usize,
     /// Exploration episodes per worker per cycle.
-    #[arg(long, default_value_t = 2, value_parser = crate::support::limits::ROLLOUTS.parser::<usize>())]
+    #[arg(long, default_value_t = 2, value_parser = ROLLOUTS.parser::<usize>())]
     pub rollouts: usize,
     /// Gradient steps per cycle.
-    #[arg(long, default_value_t = PAPER_BATCHES, value_parser = crate::support::limits::BATCHES.parser::<usize>())]
+    #[arg(long, default_value_t = PAPER_BATCHES, value_parser = BATCHES.parser::<usize>())]
     pub batches: usize,
     /// Transitions per batch and worker.
-    #[arg(long, default_value_t = 256, value_parser = crate::support::limits::BATCH_SIZE.parser::<usize>())]
+    #[arg(long, default_value_t = 256, value_parser = BATCH_SIZE.parser::<usize>())]
     pub batch_size: usize,
     /// Replay buffer capacity in transitions, per worker (`--replay shared`: per process).
-    #[arg(long, default_value_t = 1_000_000, value_parser = crate::support::limits::BUFFER_SIZE.parser::<usize>())]
+    #[arg(long, default_value_t = 1_000_000, value_parser = BUFFER_SIZE.parser::<usize>())]
     pub buffer_size: usize,
     /// How workers share replay: `per-worker` (the paper's MPI workers: each
     /// worker keeps its buffer, samples its batch and computes its gradient,
@@ -137,7 +172,7 @@ pub struct TrainConfig {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayLayout>,
     /// Test and finals episodes per worker per epoch.
-    #[arg(long, default_value_t = 10, value_parser = crate::support::limits::TEST_EPISODES.parser::<usize>())]
+    #[arg(long, default_value_t = 10, value_parser = TEST_EPISODES.parser::<usize>())]
     pub test_episodes: usize,
     /// Test success rate that moves the curriculum up a level (default: the
     /// task file's `curriculum.success_threshold`, 0.7 for the paper's tasks).
@@ -169,7 +204,7 @@ pub struct TrainConfig {
     /// blocks taking its colour), observations recoloured and rewards and
     /// terminations replayed by the colour rules over the recorded contacts
     /// (0: off, the paper's).
-    #[arg(long, default_value_t = 0, value_parser = crate::support::limits::HINDSIGHT_COLOURS.parser::<usize>())]
+    #[arg(long, default_value_t = 0, value_parser = HINDSIGHT_COLOURS.parser::<usize>())]
     #[serde(default)]
     pub hindsight_colours: usize,
     /// Which tasks hindsight relabelling proposes: `blue-touched` (a block blue touched becomes
@@ -255,6 +290,12 @@ pub enum ReplayLayout {
     Shared,
 }
 
+/// A training configuration that cannot run ([`TrainConfig::validate`]): the setting and its fix,
+/// in words (the command line names the flag, a recipe its file and key).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ConfigError(pub String);
+
 /// One row of `progress.csv`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct EpochRow {
@@ -319,6 +360,92 @@ pub struct EpochRow {
 }
 
 impl TrainConfig {
+    /// Checks every setting before anything is written (`ranks`: the MPI processes of the run).
+    ///
+    /// # Errors
+    /// The first setting that cannot run, named with its fix.
+    pub fn validate(&self, ranks: usize) -> Result<(), ConfigError> {
+        use self::{BATCHES, BATCH_SIZE, BUFFER_SIZE, CYCLES, EPOCHS, ROLLOUTS, TEST_EPISODES, WORKERS};
+        let c = self;
+        for (bound, v) in [
+            (WORKERS, c.workers),
+            (EPOCHS, c.epochs),
+            (CYCLES, c.cycles),
+            (ROLLOUTS, c.rollouts),
+            (BATCHES, c.batches),
+            (BATCH_SIZE, c.batch_size),
+            (BUFFER_SIZE, c.buffer_size),
+            (TEST_EPISODES, c.test_episodes),
+        ] {
+            bound.check_usize(v).map_err(ConfigError)?;
+        }
+        crate::learn::blas::torch_threads(self.torch_threads).map_err(ConfigError)?;
+        Algo::validate(&self.shared, &self.algos).map_err(ConfigError)?;
+        if !(0.0..=1.0).contains(&self.level_replay) || !(0.0..=1.0).contains(&self.challenge_share) {
+            return Err(ConfigError("--level-replay and --challenge-share must be in [0, 1]".into()));
+        }
+        self.net.validate().map_err(ConfigError)?;
+        if self.suite.is_none() && self.split != "train" {
+            return Err(ConfigError(format!(
+                "--split {} is only used with --suite (the split of a suite to train on)",
+                self.split
+            )));
+        }
+        if self.suite.is_none() && self.families.is_none() && self.env.trim().is_empty() {
+            return Err(ConfigError(
+                "no task: pass --env ID (several comma-separated), --suite S, or --families F --generator-seeds A..B"
+                    .into(),
+            ));
+        }
+        if self.families.is_some() != self.generator_seeds.is_some() {
+            return Err(ConfigError("--families and --generator-seeds go together: give both (e.g. --families push,gripper --generator-seeds 0..256)".into()));
+        }
+        let (width, flag) = match self.net.set_width {
+            0 => (self.shared.hidden, "--hidden"),
+            w => (w, "--set-width"),
+        };
+        if self.net.set_transformer > 0 && width % crate::policy::actor::mlp::TRANSFORMER_HEADS != 0 {
+            return Err(ConfigError(format!(
+                "--set-transformer splits {flag} {width} into {} heads; give a multiple of {}",
+                crate::policy::actor::mlp::TRANSFORMER_HEADS,
+                crate::policy::actor::mlp::TRANSFORMER_HEADS
+            )));
+        }
+        // Which algorithm takes an expert first: the network matters only to one that does, and an
+        // imitator given one is told to drop it before anything about its network.
+        let expert = self.aggrevated.expert.is_some();
+        self.algo.check_expert(expert).map_err(ConfigError)?;
+        options::check(&self.settings()).map_err(ConfigError)?;
+        if expert && self.net.net != crate::learn::agents::arch::NetKind::Mlp {
+            return Err(ConfigError(
+                "--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp"
+                    .into(),
+            ));
+        }
+        let t0 = self.aggrevated.t0;
+        if !(0.0..=1.0).contains(&self.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
+            return Err(ConfigError("--beta0 must be in [0, 1] and --t0 at least 0".into()));
+        }
+        if let Some(t) = self.success_threshold {
+            if !(0.0..=1.0).contains(&t) {
+                return Err(ConfigError("--success-threshold must be in [0, 1]".into()));
+            }
+        }
+        if self.families.is_none() && self.active_tasks != DEFAULT_ACTIVE_TASKS {
+            return Err(ConfigError(
+                "--active-tasks applies to a stream of generated tasks (--families); leave it out here".into(),
+            ));
+        }
+        if ranks > 1 && self.replay == Some(ReplayLayout::Shared) {
+            return Err(ConfigError(format!(
+                "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
+                 computes; use --replay per-worker (the default) under mpirun",
+                ranks
+            )));
+        }
+        Ok(())
+    }
+
     /// The choices and settings [`options::check`] reads.
     pub fn settings(&self) -> options::Options<'_> {
         options::Options {
@@ -543,4 +670,18 @@ fn run_task(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> 
         );
     }
     Ok(current)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn training_bounds_name_the_flag_the_range_and_why() {
+        assert_eq!(WORKERS.parse::<usize>("12"), Ok(12));
+        let e = WORKERS.parse::<usize>("-3").unwrap_err();
+        assert!(e.contains("whole number from 1 to 256"), "{e}");
+        let e = WORKERS.parse::<usize>("100000").unwrap_err();
+        assert!(e.contains("allowed are 1 to 256") && e.contains("MPI"), "{e}");
+    }
 }

@@ -61,78 +61,6 @@ pub fn train_ranks(
     Ok(trainer.rows)
 }
 
-/// Checks every setting before anything is written.
-fn validate(config: &TrainConfig, comm: &Comm) -> Result<()> {
-    use crate::support::limits::{BATCHES, BATCH_SIZE, BUFFER_SIZE, CYCLES, EPOCHS, ROLLOUTS, TEST_EPISODES, WORKERS};
-    let c = config;
-    for (bound, v) in [
-        (WORKERS, c.workers),
-        (EPOCHS, c.epochs),
-        (CYCLES, c.cycles),
-        (ROLLOUTS, c.rollouts),
-        (BATCHES, c.batches),
-        (BATCH_SIZE, c.batch_size),
-        (BUFFER_SIZE, c.buffer_size),
-        (TEST_EPISODES, c.test_episodes),
-    ] {
-        bound.check_usize(v).map_err(anyhow::Error::msg)?;
-    }
-    crate::learn::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?;
-    Algo::validate(&config.shared, &config.algos).map_err(anyhow::Error::msg)?;
-    if !(0.0..=1.0).contains(&config.level_replay) || !(0.0..=1.0).contains(&config.challenge_share) {
-        bail!("--level-replay and --challenge-share must be in [0, 1]");
-    }
-    config.net.validate().map_err(anyhow::Error::msg)?;
-    if config.suite.is_none() && config.split != "train" {
-        bail!("--split {} is only used with --suite (the split of a suite to train on)", config.split);
-    }
-    if config.suite.is_none() && config.families.is_none() && config.env.trim().is_empty() {
-        bail!("no task: pass --env ID (several comma-separated), --suite S, or --families F --generator-seeds A..B");
-    }
-    if config.families.is_some() != config.generator_seeds.is_some() {
-        bail!("--families and --generator-seeds go together: give both (e.g. --families push,gripper --generator-seeds 0..256)");
-    }
-    let (width, flag) = match config.net.set_width {
-        0 => (config.shared.hidden, "--hidden"),
-        w => (w, "--set-width"),
-    };
-    if config.net.set_transformer > 0 && width % crate::policy::actor::mlp::TRANSFORMER_HEADS != 0 {
-        bail!(
-            "--set-transformer splits {flag} {width} into {} heads; give a multiple of {}",
-            crate::policy::actor::mlp::TRANSFORMER_HEADS,
-            crate::policy::actor::mlp::TRANSFORMER_HEADS
-        );
-    }
-    // Which algorithm takes an expert first: the network matters only to one that does, and an
-    // imitator given one is told to drop it before anything about its network.
-    let expert = config.aggrevated.expert.is_some();
-    config.algo.check_expert(expert).map_err(anyhow::Error::msg)?;
-    super::options::check(&config.settings()).map_err(anyhow::Error::msg)?;
-    if expert && config.net.net != crate::learn::agents::arch::NetKind::Mlp {
-        bail!("--expert: AggreVaTeD's expert view is the flat observation without grey blocks; train with --net mlp");
-    }
-    let t0 = config.aggrevated.t0;
-    if !(0.0..=1.0).contains(&config.aggrevated.beta0) || !t0.is_finite() || t0 < 0.0 {
-        bail!("--beta0 must be in [0, 1] and --t0 at least 0");
-    }
-    if let Some(t) = config.success_threshold {
-        if !(0.0..=1.0).contains(&t) {
-            bail!("--success-threshold must be in [0, 1]");
-        }
-    }
-    if config.families.is_none() && config.active_tasks != super::DEFAULT_ACTIVE_TASKS {
-        bail!("--active-tasks applies to a stream of generated tasks (--families); leave it out here");
-    }
-    if comm.size() > 1 && config.replay == Some(ReplayLayout::Shared) {
-        bail!(
-            "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \
-             computes; use --replay per-worker (the default) under mpirun",
-            comm.size()
-        );
-    }
-    Ok(())
-}
-
 /// The tasks with environments in `epoch` (indices into the run's `n` tasks): a stream run's active
 /// set ([`crate::benchmark::stream::active_tasks`]), else every task.
 fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
@@ -490,7 +418,7 @@ impl<'a> Trainer<'a> {
     /// Validates, resolves the task, builds environments and the agent
     /// (fresh, or from this rank's checkpoint).
     fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, resume: bool) -> Result<Self> {
-        validate(config, comm)?;
+        config.validate(comm.size())?;
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
         if resume {
