@@ -18,6 +18,7 @@ mod entities;
 mod env;
 mod experiments;
 mod families;
+mod finetune;
 mod golden;
 mod hindsight;
 mod learning;

@@ -41,6 +41,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         algo: Algo::DDPG,
         algos: Default::default(),
         aggrevated: Default::default(),
+        finetune: Default::default(),
         hindsight_colours: 0,
         hindsight_strategy: Default::default(),
         net: Default::default(),

@@ -19,6 +19,7 @@ use super::shared::SharedConfig;
 use crate::policy::actor::mlp::PlainNet;
 use crate::policy::actor::normalizer::Normalizer;
 use crate::policy::actor::AnyPolicy;
+use crate::policy::actor::DeterministicPolicy;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -77,6 +78,10 @@ pub struct Info {
     pub flag_prefix: &'static str,
     /// Its own settings a branch (`train --branch-from`) may change, by field name.
     pub branchable: &'static [&'static str],
+    /// Whether a run of it may start from a trained policy (`train --init-from`): its actor and
+    /// normaliser taken from the policy ([`Algorithm::init_from`]), its critics fresh, which a critic
+    /// warm-up ([`Algorithm::hold_actor`]) fits before the actor moves.
+    pub starts_from_policy: bool,
 }
 
 /// How an algorithm is named, configured and built: declared once in its
@@ -246,6 +251,20 @@ pub trait Algorithm: AsAny + Send {
     /// [`Algorithm::load_state`] follow from this one list.
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)>;
 
+    /// Takes the actor (its target too) and the observation normaliser from a trained deterministic
+    /// policy (`train --init-from`), already fitted to this learner's layout ([`fit_actor`]); the
+    /// critics stay as drawn. Only algorithms whose registration says [`Info::starts_from_policy`].
+    ///
+    /// # Errors
+    /// An algorithm that cannot, or a policy whose network does not fit.
+    fn init_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
+        Err(format!("{} cannot start from a trained policy (--init-from is for ddpg and sac)", self.name()))
+    }
+
+    /// Holds the actor still (`held`), or lets it learn again: while held, updates step the
+    /// critics alone (the critic warm-up of `train --critic-warmup`).
+    fn hold_actor(&mut self, _held: bool) {}
+
     /// Its state by name, from [`Algorithm::parts`].
     fn state(&mut self) -> StateDict {
         let mut s = StateDict::default();
@@ -364,6 +383,72 @@ impl StateDict {
     pub fn counter(&self, name: &str) -> Result<u64, String> {
         self.counters.get(name).copied().ok_or_else(|| format!("the counter {name} is missing"))
     }
+}
+
+/// A network in words, for messages that compare two: its kind, what it reads and its layers' widths.
+pub fn describe_net(net: &PlainNet) -> String {
+    let widths: Vec<usize> = net.layers.iter().map(|l| l.b.len()).collect();
+    match net.set {
+        None => {
+            format!("an MLP over {} observation features, layers {widths:?}", net.layers.first().map_or(0, |l| l.n_in))
+        }
+        Some(s) => format!(
+            "a set network over rows of {} features (robot features {}, encoder layers {}), layers {widths:?}",
+            s.object, s.robot, s.encoder_layers
+        ),
+    }
+}
+
+/// `policy` fitted to a learner whose actor is `ours` and normaliser `norm`: a set network's rows
+/// set to this layout's slots (its weights do not depend on them), and checked to be the same
+/// network (kind, layers, options) reading an observation of the same length.
+///
+/// # Errors
+/// A network or normaliser of another shape, both sides named.
+pub fn fit_actor(
+    ours: &PlainNet,
+    norm: &Normalizer,
+    policy: &DeterministicPolicy,
+) -> Result<DeterministicPolicy, String> {
+    let fitted = match (ours.set, policy.net.set) {
+        (Some(s), Some(_)) => match AnyPolicy::Deterministic(policy.clone()).with_slots(s.slots) {
+            AnyPolicy::Deterministic(p) => p,
+            AnyPolicy::Pggd(_) => unreachable!("with_slots keeps the kind"),
+        },
+        _ => policy.clone(),
+    };
+    let inputs = |n: &PlainNet| n.layers.first().map_or(0, |l| l.n_in);
+    if ours.set.is_none() && fitted.net.set.is_none() && inputs(&fitted.net) != inputs(ours) {
+        return Err(format!(
+            "the policy's actor is {}, and this run's is {}: a flat policy reads its own task's layout (its \
+             blocks' rows in order), so it starts only a run of a task with that layout; start from a policy of \
+             this task, or from a set network's (--net set or entity), which reads any number of blocks",
+            describe_net(&fitted.net),
+            describe_net(ours)
+        ));
+    }
+    let shape = |n: &PlainNet| n.layers.iter().map(|l| (l.n_in, l.b.len())).collect::<Vec<_>>();
+    if shape(&fitted.net) != shape(ours) || fitted.net.set != ours.set || fitted.net.tanh_out != ours.tanh_out {
+        return Err(format!(
+            "the policy's actor is {}, and this run's is {}: train with the policy's network settings \
+             (--net, --set-width, --hidden, --layers and the set options it was trained with)",
+            describe_net(&fitted.net),
+            describe_net(ours)
+        ));
+    }
+    if fitted.norm.dim() != norm.dim() || fitted.norm.set_layout() != norm.set_layout() {
+        return Err(format!(
+            "the policy's normaliser reads {} features, and this run's observation has {}",
+            fitted.norm.dim(),
+            norm.dim()
+        ));
+    }
+    Ok(fitted)
+}
+
+/// A plain network's parameters in a [`Net`]'s order (each layer's weights, then its biases).
+pub fn plain_vecs(net: &PlainNet) -> Vec<Vec<f32>> {
+    net.layers.iter().flat_map(|l| [l.w.clone(), l.b.clone()]).collect()
 }
 
 /// The number of values in `nets`' parameters (a gradient's length).

@@ -46,6 +46,15 @@ impl NetKind {
         }
     }
 
+    /// The network that reads `mode` (`--net` for a policy of that observation).
+    pub fn reading(mode: ObsMode) -> Self {
+        match mode {
+            ObsMode::Flat => NetKind::Mlp,
+            ObsMode::Objects => NetKind::Set,
+            ObsMode::Entities => NetKind::Entity,
+        }
+    }
+
     /// Whether it is a set network (`set` or `entity`).
     pub fn is_set(self) -> bool {
         match self {

@@ -53,6 +53,7 @@ pub const REGISTRATION: Registration<DdpgConfig> = Registration {
         reads: SharedConfig::FLAGS,
         flag_prefix: "",
         branchable: &["random_eps", "noise_eps", "noise_correlation", "action_l2", "preact_l2", "preact_margin"],
+        starts_from_policy: true,
     },
     new: |spec, own, rng| Box::new(Ddpg::build(spec.arch, spec.act_dim, spec.shared.clone(), own.clone(), rng)),
     validate: DdpgConfig::validate,
@@ -220,6 +221,8 @@ pub struct Ddpg {
     obs_dim: usize,
     act_dim: usize,
     last_targets: Vec<f32>,
+    /// The actor is held still: updates step the critics alone (a critic warm-up).
+    actor_held: bool,
 }
 
 /// TD3's second critic, its target and optimiser, and the seed of the
@@ -273,6 +276,7 @@ impl Ddpg {
             obs_dim,
             act_dim,
             last_targets: Vec::new(),
+            actor_held: false,
         }
     }
 
@@ -312,7 +316,7 @@ impl Ddpg {
     /// Whether the next update steps the actor (TD3 delays it to every
     /// `policy_delay`-th critic update).
     fn actor_steps(&self) -> bool {
-        self.twin.is_none() || self.critic_opt.t % self.config.policy_delay as u64 == 0
+        !self.actor_held && (self.twin.is_none() || self.critic_opt.t % self.config.policy_delay as u64 == 0)
     }
 
     /// The gradients of the next update on `batch`, flattened (critic, TD3's
@@ -471,6 +475,19 @@ impl Algorithm for Ddpg {
 
     fn policy(&self) -> AnyPolicy {
         AnyPolicy::Deterministic(Ddpg::policy(self))
+    }
+
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+        let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
+        let vecs = super::algorithm::plain_vecs(&fitted.net);
+        self.actor.load_vecs(&vecs)?;
+        self.actor_target.load_vecs(&vecs)?;
+        self.norm = fitted.norm;
+        Ok(())
+    }
+
+    fn hold_actor(&mut self, held: bool) {
+        self.actor_held = held;
     }
 
     fn explorer(&self) -> Box<dyn Explorer> {

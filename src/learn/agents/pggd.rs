@@ -37,6 +37,7 @@ pub const REGISTRATION: Registration<PggdConfig> = Registration {
         reads: &["--layers", "--hidden", "--gamma", "--norm-eps", "--norm-clip"],
         flag_prefix: "pg-",
         branchable: &[],
+        starts_from_policy: false,
     },
     new: |spec, own, rng| {
         let s = spec.shared;

@@ -44,6 +44,10 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 use tch::{Kind, Tensor};
 
+/// σ of the pre-squash Gaussian everywhere when a run starts from a trained policy (`--init-from`):
+/// the paper's DDPG exploration noise (`--noise-eps 0.2`).
+pub const INIT_STD: f64 = 0.2;
+
 /// SAC in the list of algorithms (`--algo sac`).
 pub const REGISTRATION: Registration<SacConfig> = Registration {
     info: Info {
@@ -56,6 +60,7 @@ pub const REGISTRATION: Registration<SacConfig> = Registration {
         reads: SharedConfig::FLAGS,
         flag_prefix: "sac-",
         branchable: &[],
+        starts_from_policy: true,
     },
     new: |spec, own, rng| Box::new(Sac::new(spec, own, rng)),
     validate: SacConfig::validate,
@@ -139,6 +144,8 @@ pub struct Sac {
     alpha_opt: Adam,
     noise_seed: u64,
     act_dim: usize,
+    /// The actor (and the temperature) held still: updates step the critics alone (a critic warm-up).
+    actor_held: bool,
 }
 
 impl Sac {
@@ -170,6 +177,7 @@ impl Sac {
             target_entropy: own.target_entropy.unwrap_or(-(a as f64)),
             shared: c,
             act_dim: a,
+            actor_held: false,
         }
     }
 
@@ -286,8 +294,10 @@ impl Algorithm for Sac {
         let parts = split_gradient(g_nets, &nets);
         self.q1_opt.step(&mut self.q1.params, parts[0]);
         self.q2_opt.step(&mut self.q2.params, parts[1]);
-        self.actor_opt.step(&mut self.actor.params, parts[2]);
-        self.alpha_opt.step(std::slice::from_mut(&mut self.log_alpha), g_alpha);
+        if !self.actor_held {
+            self.actor_opt.step(&mut self.actor.params, parts[2]);
+            self.alpha_opt.step(std::slice::from_mut(&mut self.log_alpha), g_alpha);
+        }
     }
 
     fn gradient_len(&self) -> usize {
@@ -298,6 +308,29 @@ impl Algorithm for Sac {
         let p = self.shared.polyak;
         self.q1_target.polyak_from(&self.q1, p);
         self.q2_target.polyak_from(&self.q2, p);
+    }
+
+    /// The mean rows of the last layer from the policy's; the log σ rows' weights zero and their
+    /// biases ln [`INIT_STD`], so that the first exploration is the policy's action with small noise
+    /// (the fresh rows would draw σ about 1, which undoes the policy's skill).
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+        let ours = self.mean_actor();
+        let fitted = super::algorithm::fit_actor(&ours, &self.norm, policy)?;
+        let mut vecs = super::algorithm::plain_vecs(&fitted.net);
+        let (n, a) = (vecs.len(), self.act_dim);
+        if let [.., w, b] = &mut vecs[..] {
+            let n_in = w.len() / a;
+            w.extend(std::iter::repeat(0.0).take(a * n_in));
+            b.extend(std::iter::repeat(INIT_STD.ln() as f32).take(a));
+        }
+        debug_assert_eq!(n, self.actor.params.len());
+        self.actor.load_vecs(&vecs)?;
+        self.norm = fitted.norm;
+        Ok(())
+    }
+
+    fn hold_actor(&mut self, held: bool) {
+        self.actor_held = held;
     }
 
     fn policy(&self) -> AnyPolicy {

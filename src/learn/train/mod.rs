@@ -23,6 +23,7 @@
 //! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
 
 mod branch;
+pub mod finetune;
 pub mod checkpoint;
 pub mod comm;
 mod learner;
@@ -228,6 +229,10 @@ pub struct TrainConfig {
     #[command(flatten)]
     #[serde(default)]
     pub aggrevated: AggrevatedConfig,
+    /// Starting from a trained policy (`--init-from`, `--critic-warmup`, `--start-at-top`).
+    #[command(flatten)]
+    #[serde(default, skip_serializing_if = "finetune::FinetuneConfig::is_off")]
+    pub finetune: finetune::FinetuneConfig,
     /// The task, by id and content, recorded when the run starts: a resumed
     /// run refuses a task file that changed, and survives one that moved.
     #[arg(skip)]
@@ -436,6 +441,7 @@ impl TrainConfig {
                 "--active-tasks applies to a stream of generated tasks (--families); leave it out here".into(),
             ));
         }
+        self.finetune.validate(self)?;
         if ranks > 1 && self.replay == Some(ReplayLayout::Shared) {
             return Err(ConfigError(format!(
                 "--replay shared keeps one buffer per process, so {} ranks would not compute what one process \

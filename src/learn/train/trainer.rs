@@ -20,6 +20,7 @@ use crate::learn::agents::arch::Arch;
 use crate::learn::agents::registry::Algo;
 use crate::learn::agents::replay::{Batch, ReplayBuffer};
 use crate::policy::actor::AnyPolicy;
+use crate::policy::actor::DeterministicPolicy;
 use crate::support::io::write_json;
 use crate::task::Task;
 use anyhow::{bail, Context, Result};
@@ -211,6 +212,7 @@ fn run_config(
     }
     if let Some(saved) = saved {
         config.branched_from = saved.branched_from.clone();
+        config.finetune.init_policy = saved.finetune.init_policy.clone();
     }
     // Replay: as given; else a resumed run's own; else per worker.
     let recorded = saved.map(TrainConfig::replay_layout);
@@ -257,15 +259,18 @@ impl StartingPoint {
 }
 
 /// A new run: weights drawn from the run seed (the same on every rank), empty buffers.
+#[allow(clippy::too_many_arguments)]
 fn fresh(
     comm: &Comm,
     config: &TrainConfig,
     run_id: &str,
-    tasks: usize,
+    max_levels: &[usize],
     run: &RunDir,
     mine: &RunDir,
     dims: (Arch, usize),
+    init: Option<&DeterministicPolicy>,
 ) -> Result<StartingPoint> {
+    let tasks = max_levels.len();
     let (arch, act_dim) = dims;
     let obs_dim = arch.obs_dim;
     if mine.checkpoint().exists() || run.checkpoint().exists() {
@@ -273,14 +278,19 @@ fn fresh(
     }
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
     let spec = Spec { arch, act_dim, shared: &config.shared };
-    let agent = config.algo.build(&spec, &config.algos, &mut rng);
+    let mut agent = config.algo.build(&spec, &config.algos, &mut rng);
+    if let (Some(policy), Some(path)) = (init, &config.finetune.init_from) {
+        agent.init_from(policy).map_err(|e| anyhow::anyhow!("--init-from {}: {e}", path.display()))?;
+    }
+    // The curriculum's start: level 0, or each task's top with --start-at-top.
+    let levels: Vec<usize> = max_levels.iter().map(|&m| if config.finetune.start_at_top { m } else { 0 }).collect();
     let state = RunState {
         env_id: run_id.to_owned(),
         obs_dim,
         act_dim,
         epoch: 0,
-        level: 0,
-        levels: vec![0; tasks],
+        level: levels.iter().sum(),
+        levels,
         tallies: vec![[0, 0]; tasks],
         env_steps: 0,
         updates: 0,
@@ -419,6 +429,9 @@ impl<'a> Trainer<'a> {
     /// (fresh, or from this rank's checkpoint).
     fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, resume: bool) -> Result<Self> {
         config.validate(comm.size())?;
+        // The policy a new run starts from, checked before anything is written (a resumed run's
+        // actor is in its checkpoint).
+        let init = if resume { None } else { config.finetune.load(config)? };
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
         if resume {
@@ -441,7 +454,10 @@ impl<'a> Trainer<'a> {
 
         let saved_config =
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
-        let (config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
+        let (mut config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
+        if let Some((id, _)) = &init {
+            config.finetune.init_policy = Some(id.clone());
+        }
         let thresholds: Vec<f64> =
             tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
         // One layout for every task: the most block slots of any (a stream: of any its families can draw).
@@ -479,7 +495,8 @@ impl<'a> Trainer<'a> {
         let begun = if resume {
             resumed(comm, &config, &run_id, tasks.len(), &run, &mine, saved_config, dims)?
         } else {
-            fresh(comm, &config, &run_id, tasks.len(), &run, &mine, dims)?
+            let policy = init.as_ref().map(|(_, p)| p);
+            fresh(comm, &config, &run_id, &max_levels, &run, &mine, dims, policy)?
         };
         begun.check(&config, &mine)?;
         let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
@@ -675,6 +692,7 @@ impl<'a> Trainer<'a> {
             ReplayLayout::Shared => {
                 let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
                 for _ in 0..config.batches {
+                    self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
                     let batch = self.replays[0].sample(config.batch_size * config.workers, &mut rng);
                     tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
                     self.state.updates += 1;
@@ -686,6 +704,7 @@ impl<'a> Trainer<'a> {
                     .map(|w| ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[5, e, c, (first + w) as u64])))
                     .collect();
                 for _ in 0..config.batches {
+                    self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
                     let batches: Vec<Batch> =
                         self.replays.iter().zip(&mut rngs).map(|(r, rng)| r.sample(config.batch_size, rng)).collect();
                     tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));

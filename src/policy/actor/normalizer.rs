@@ -200,7 +200,10 @@ impl Normalizer {
     /// statistics, slot 0's row statistics in every block slot (set
     /// statistics are shared by the slots), each fixture's own (the last
     /// [`SetLayout::fixtures`] rows, those of the last rows here), the mask
-    /// passed unchanged. Acting only: the running sums are rebuilt from the statistics.
+    /// passed unchanged. The running sums are rebuilt from the statistics, each part with its own
+    /// count (robot features: observations; block rows: rows; each fixture: its rows; a count not
+    /// recorded, as in zoo entries, taken as one row per observation), so that training on from
+    /// it (`train --init-from`) moves the statistics as the saved counts weigh them.
     pub fn with_slots(&self, layout: SetLayout) -> Self {
         let (r, f) = (layout.robot, layout.object);
         let here = (self.dim().saturating_sub(r)) / (f + 1);
@@ -216,8 +219,18 @@ impl Normalizer {
         };
         let mut n = Self::from_stats(pick(&self.mean, 0.0), pick(&self.std, 1.0), self.count, self.eps, self.clip);
         n.set = Some(layout);
-        n.rows = self.rows;
-        n.fixture_rows = self.fixture_rows.clone();
+        n.rows = if self.rows > 0 { self.rows } else { self.count };
+        let blocks = layout.slots.saturating_sub(layout.fixtures);
+        n.fixture_rows = (0..layout.slots - blocks)
+            .map(|i| self.fixture_rows.get(i).copied().filter(|&c| c > 0).unwrap_or(n.rows))
+            .collect();
+        for slot in 0..layout.slots {
+            let c = slot.checked_sub(blocks).map_or(n.rows, |i| n.fixture_rows[i]) as f64;
+            for at in r + slot * f..r + (slot + 1) * f {
+                let (m, sd) = (f64::from(n.mean[at]), f64::from(n.std[at]));
+                (n.sum[at], n.sumsq[at]) = (m * c, (sd * sd + m * m) * c);
+            }
+        }
         n
     }
 
@@ -298,6 +311,64 @@ mod tests {
         m.update(&b);
         m.update(&a);
         assert_eq!((m.mean(), m.std()), (n.mean(), n.std()));
+    }
+
+    /// A normaliser moved to another number of slots (as `train --init-from` does) goes on
+    /// counting as the original would: each part's sums weigh by its own count. A zoo entry's,
+    /// which records no row count, takes one row per observation.
+    #[test]
+    fn a_normaliser_with_other_slots_goes_on_as_the_original_would() {
+        let layout = SetLayout::new(2, 3, 3, 1);
+        let rows = |seed: f32| -> Vec<f32> {
+            (0..4)
+                .flat_map(|k| {
+                    let v = seed + k as f32;
+                    [
+                        v,
+                        -v,
+                        /**/ v,
+                        2.0 * v,
+                        1.0,
+                        /**/ -v,
+                        v,
+                        0.5,
+                        /**/ 9.0,
+                        9.0,
+                        9.0,
+                        /**/ 1.0,
+                        1.0,
+                        0.0,
+                    ]
+                })
+                .collect()
+        };
+        let mut n = Normalizer::for_set(layout, 0.01, 5.0);
+        n.update(&rows(1.0));
+        let mut moved = n.with_slots(layout);
+        assert_eq!((moved.mean(), moved.std()), (n.mean(), n.std()));
+        n.update(&rows(5.0));
+        moved.update(&rows(5.0));
+        for (a, b) in n.mean().iter().chain(n.std()).zip(moved.mean().iter().chain(moved.std())) {
+            assert!((a - b).abs() < 1e-4, "{a} vs {b}");
+        }
+        // Read back from its statistics alone (rows unknown): new rows at the mean leave the mean there.
+        let bare = Normalizer {
+            set: None,
+            ..Normalizer::from_stats(n.mean().to_vec(), n.std().to_vec(), n.count(), 0.01, 5.0)
+        };
+        let mut zoo = bare.with_slots(layout);
+        let at_mean: Vec<f32> = n.mean()[..2]
+            .iter()
+            .chain(&n.mean()[2..5])
+            .chain(&n.mean()[2..5])
+            .chain(&n.mean()[2..5])
+            .chain(&[1.0, 1.0, 1.0])
+            .copied()
+            .collect();
+        zoo.update(&at_mean);
+        for (a, b) in zoo.mean()[..11].iter().zip(&n.mean()[..11]) {
+            assert!((a - b).abs() < 1e-4, "{a} vs {b}");
+        }
     }
 
     #[test]

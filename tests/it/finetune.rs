@@ -1,0 +1,136 @@
+//! Starting a run from a trained policy (issue 62): `train --init-from` takes the actor and the
+//! normaliser from the policy, a critic warm-up holds the actor still, `--start-at-top` begins at
+//! the curriculum's top, and whatever does not fit is refused before anything is written.
+#![cfg(all(feature = "train", feature = "cli"))]
+
+use blockpuzzle::benchmark::saved::SavedPolicy;
+use blockpuzzle::benchmark::zoo;
+
+/// A DDPG run of two epochs of one cycle of two updates each.
+const TINY: &[&str] = &[
+    "--algo",
+    "ddpg",
+    "--workers",
+    "1",
+    "--epochs",
+    "2",
+    "--cycles",
+    "1",
+    "--rollouts",
+    "1",
+    "--batches",
+    "2",
+    "--batch-size",
+    "16",
+    "--buffer-size",
+    "1000",
+    "--test-episodes",
+    "1",
+    "--torch-threads",
+    "1",
+    "--snapshot-every",
+    "1",
+];
+
+fn train(dir: &std::path::Path, args: &[&str]) -> (bool, String) {
+    let o = crate::common::blockpuzzle(&["train"]).args(TINY).args(args).arg("--run-dir").arg(dir).output().unwrap();
+    (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+}
+
+/// The generalist's network.
+const ENTITY: [&str; 4] = ["--net", "entity", "--set-width", "64"];
+
+fn snapshot(dir: &std::path::Path, epoch: usize) -> SavedPolicy {
+    blockpuzzle::benchmark::saved::read(&dir.join(format!("snapshots/epoch-{epoch:04}.json"))).unwrap()
+}
+
+#[test]
+fn a_run_starts_from_the_policy_and_its_critics_warm_up_first() {
+    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let held = tmp.path().join("held");
+    let common =
+        [&ENTITY[..], &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity", "--start-at-top"]].concat();
+    let (ok, text) = train(&held, &[&common[..], &["--critic-warmup", "2"]].concat());
+    assert!(ok, "{text}");
+    // The first epoch's two updates were the warm-up: the actor is still the generalist's, weight for
+    // weight (a set network's weights do not depend on the task's rows); the second moved it.
+    assert_eq!(snapshot(&held, 1).policy.net().layers, generalist.policy.net().layers);
+    assert_ne!(snapshot(&held, 2).policy.net().layers, generalist.policy.net().layers);
+    // Without the warm-up the first epoch's updates move it at once.
+    let free = tmp.path().join("free");
+    let (ok, text) = train(&free, &common);
+    assert!(ok, "{text}");
+    assert_ne!(snapshot(&free, 1).policy.net().layers, generalist.policy.net().layers);
+    // SAC too: its saved policy (the mean action) is the generalist's after the warm-up.
+    let sac = tmp.path().join("sac");
+    let (ok, text) = train(&sac, &[&common[..], &["--algo", "sac", "--critic-warmup", "2"]].concat());
+    assert!(ok, "{text}");
+    assert_eq!(snapshot(&sac, 1).policy.net().layers, generalist.policy.net().layers);
+    // The run records the policy it started from, by the hash results name it with, and began at the top level.
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(held.join("config.json")).unwrap()).unwrap();
+    let id = generalist.policy_id("generalist-bc-entity");
+    assert_eq!(config["finetune"]["init_policy"]["sha256"].as_str(), id.sha256.as_deref());
+    let rows = blockpuzzle::learn::train::read_progress(&held.join("progress.csv")).unwrap();
+    let top = blockpuzzle::env::registry::task("ToppleTower-v0").unwrap().max_level();
+    assert_eq!(rows[0].level, top, "--start-at-top");
+    // A resumed run keeps its own actor (the checkpoint's), and its record.
+    let (ok, text) = train(&held, &[&common[..], &["--critic-warmup", "2", "--epochs", "3", "--resume"]].concat());
+    assert!(ok, "{text}");
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(held.join("config.json")).unwrap()).unwrap();
+    assert_eq!(config["finetune"]["init_policy"]["sha256"].as_str(), id.sha256.as_deref());
+}
+
+#[test]
+fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let corrupt = tmp.path().join("corrupt.json");
+    std::fs::write(&corrupt, "{").unwrap();
+    let corrupt = corrupt.to_str().unwrap();
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--env", "ToppleTower-v0", "--init-from", "/nonexistent/policy.json"], &["--init-from", "cannot load"]),
+        (&["--env", "ToppleTower-v0", "--init-from", corrupt], &["--init-from", "corrupt.json"]),
+        // Another observation: both named, and the network that reads the policy's.
+        (
+            &["--env", "BlocksTouch-v0", "--init-from", "BlocksTouch-v0-ddpg", "--net", "entity"],
+            &["reads the `flat` observation", "`entities`", "--net mlp"],
+        ),
+        // Another network: both sides described.
+        (
+            &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity", "--net", "entity", "--set-width", "32"],
+            &["the policy's actor is a set network", "this run's is a set network", "[64, 64,"],
+        ),
+        // A flat policy of another task layout: its observation's length and the run's.
+        (
+            &["--env", "BlocksChoose-v0", "--init-from", "BlocksTouch-v0-ddpg"],
+            &[
+                "the policy's actor is an MLP over 48 observation features",
+                "this run's is an MLP over 67",
+                "--net set or entity",
+            ],
+        ),
+        (&["--env", "BlocksChoose-v0", "--init-from", "BlocksChoose-v0-pggd"], &["PGGD", "deterministic"]),
+        (
+            &["--env", "ToppleTower-v0", "--algo", "bc", "--init-from", "generalist-bc-entity", "--net", "entity"],
+            &["bc cannot start from a trained policy", "--algo sac"],
+        ),
+        // Two epochs of one cycle of two updates: a warm-up of 4 leaves the actor nothing.
+        (
+            &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity", "--critic-warmup", "4"],
+            &["--critic-warmup 4", "make 4 updates", "more --epochs"],
+        ),
+        (&["--env", "ToppleTower-v0", "--critic-warmup", "4"], &["--init-from"]),
+    ];
+    for (k, (args, words)) in cases.iter().enumerate() {
+        let dir = tmp.path().join(format!("run-{k}"));
+        let (ok, text) = train(&dir, args);
+        assert!(!ok, "{args:?} was accepted: {text}");
+        for w in *words {
+            assert!(text.contains(w), "{args:?}: no {w:?} in: {text}");
+        }
+        assert!(!text.contains("panicked"), "{args:?}: {text}");
+        assert!(!dir.exists(), "{args:?} left {}", dir.display());
+    }
+}
