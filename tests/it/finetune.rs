@@ -40,6 +40,20 @@ fn train(dir: &std::path::Path, args: &[&str]) -> (bool, String) {
 /// The generalist's network.
 const ENTITY: [&str; 4] = ["--net", "entity", "--set-width", "64"];
 
+/// Each case's run is refused with every one of its words, no panic, and no run directory left.
+fn refused(tmp: &std::path::Path, cases: &[(&[&str], &[&str])]) {
+    for (k, (args, words)) in cases.iter().enumerate() {
+        let dir = tmp.join(format!("run-{k}"));
+        let (ok, text) = train(&dir, args);
+        assert!(!ok, "{args:?} was accepted: {text}");
+        for w in *words {
+            assert!(text.contains(w), "{args:?}: no {w:?} in: {text}");
+        }
+        assert!(!text.contains("panicked"), "{args:?}: {text}");
+        assert!(!dir.exists(), "{args:?} left {}", dir.display());
+    }
+}
+
 fn snapshot(dir: &std::path::Path, epoch: usize) -> SavedPolicy {
     blockpuzzle::benchmark::saved::read(&dir.join(format!("snapshots/epoch-{epoch:04}.json"))).unwrap()
 }
@@ -123,14 +137,55 @@ fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
         ),
         (&["--env", "ToppleTower-v0", "--critic-warmup", "4"], &["--init-from"]),
     ];
-    for (k, (args, words)) in cases.iter().enumerate() {
-        let dir = tmp.path().join(format!("run-{k}"));
-        let (ok, text) = train(&dir, args);
-        assert!(!ok, "{args:?} was accepted: {text}");
-        for w in *words {
-            assert!(text.contains(w), "{args:?}: no {w:?} in: {text}");
-        }
-        assert!(!text.contains("panicked"), "{args:?}: {text}");
-        assert!(!dir.exists(), "{args:?} left {}", dir.display());
-    }
+    refused(tmp.path(), cases);
+}
+
+/// Demonstrations beside the run's experience: recorded with `blockpuzzle demos`, checked against
+/// the run (its observation, its tasks, the share), recorded by hash; a resumed run refuses another file.
+#[test]
+fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let demos = tmp.path().join("topple.safetensors");
+    let suite = format!("{}/experiments/beyond-teacher/suites/ToppleTower-v0.toml", env!("CARGO_MANIFEST_DIR"));
+    let o = crate::common::blockpuzzle(&["demos", "--suite", &suite, "--episodes", "2", "--threads", "1", "--out"])
+        .arg(&demos)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d = demos.to_str().unwrap();
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["--env", "BlocksStack-v0", "--net", "entity", "--demos", d],
+            &["episode 0 is of task ToppleTower-v0", "(BlocksStack-v0)"],
+        ),
+        (&["--env", "ToppleTower-v0", "--demos", d], &["`entities` observation", "--net mlp", "--net entity"]),
+        (
+            &["--env", "ToppleTower-v0", "--net", "entity", "--demos", d, "--demos-ratio", "1.5"],
+            &["--demos-ratio 1.5", "from 0 to 1"],
+        ),
+        (
+            &["--env", "ToppleTower-v0", "--net", "entity", "--demos", "/nonexistent/d.safetensors"],
+            &["--demos", "cannot read"],
+        ),
+    ];
+    refused(tmp.path(), cases);
+    let run = tmp.path().join("run");
+    let args = ["--env", "ToppleTower-v0", "--net", "entity", "--demos", d, "--demos-ratio", "1"];
+    let (ok, text) = train(&run, &args);
+    assert!(ok, "{text}");
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    let bytes = std::fs::read(&demos).unwrap();
+    assert_eq!(
+        config["finetune"]["demos_sha256"].as_str(),
+        Some(blockpuzzle::benchmark::provenance::sha256(&bytes).as_str())
+    );
+    // Another file under the same name: a resumed run refuses it.
+    let o = crate::common::blockpuzzle(&["demos", "--suite", &suite, "--episodes", "3", "--threads", "1", "--out"])
+        .arg(&demos)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (ok, text) = train(&run, &[&args[..], &["--epochs", "3", "--resume"]].concat());
+    assert!(!ok && text.contains("not the file this run started with"), "{text}");
 }

@@ -261,6 +261,19 @@ pub trait Algorithm: AsAny + Send {
         Err(format!("{} cannot start from a trained policy (--init-from is for ddpg and sac)", self.name()))
     }
 
+    /// Keeps the actor near `policy` (the one it started from, `train --anchor-alpha`): its loss
+    /// becomes TD3+BC's (Fujimoto & Gu 2021) with the policy's action as the target,
+    /// −alpha·Q(s, π(s))/mean|Q| + mean ‖π(s) − π₀(s)‖². Not checkpointed: a resumed run calls it again.
+    ///
+    /// # Errors
+    /// An algorithm that cannot, or a policy that does not fit.
+    fn keep_near(&mut self, _policy: &DeterministicPolicy, _alpha: f64) -> Result<(), String> {
+        Err(format!(
+            "--anchor-alpha keeps a deterministic actor near its start (ddpg, with --td3 or not); {} cannot",
+            self.name()
+        ))
+    }
+
     /// Holds the actor still (`held`), or lets it learn again: while held, updates step the
     /// critics alone (the critic warm-up of `train --critic-warmup`).
     fn hold_actor(&mut self, _held: bool) {}

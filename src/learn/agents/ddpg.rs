@@ -223,6 +223,10 @@ pub struct Ddpg {
     last_targets: Vec<f32>,
     /// The actor is held still: updates step the critics alone (a critic warm-up).
     actor_held: bool,
+    /// The policy a fine-tuned actor is kept near and the critic's weight against it
+    /// ([`Algorithm::init_from`]'s `anchor`); not checkpointed: a resumed run takes it from the
+    /// policy it started from again.
+    anchor: Option<(Net, f64)>,
 }
 
 /// TD3's second critic, its target and optimiser, and the seed of the
@@ -277,6 +281,7 @@ impl Ddpg {
             act_dim,
             last_targets: Vec::new(),
             actor_held: false,
+            anchor: None,
         }
     }
 
@@ -363,8 +368,17 @@ impl Ddpg {
             let u = self.actor.preactivation(&obs);
             let pi = u.tanh();
             let frozen_critic = self.critic.detached_view();
-            let loss = -frozen_critic.q(&obs, &pi).mean(tch::Kind::Float)
-                + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
+            let q_pi = frozen_critic.q(&obs, &pi);
+            let value = match &self.anchor {
+                None => -q_pi.mean(tch::Kind::Float),
+                Some((start, alpha)) => {
+                    // TD3+BC's balance: the critic's term scaled to mean |Q| = alpha.
+                    let scale = q_pi.abs().mean(tch::Kind::Float).detach().clamp_min(1e-6);
+                    let near = (&pi - tch::no_grad(|| start.forward(&obs))).square().mean(tch::Kind::Float);
+                    -q_pi.mean(tch::Kind::Float) * *alpha / scale + near
+                }
+            };
+            let loss = value + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
             if self.config.preact_l2 == 0.0 {
                 loss
             } else if self.config.preact_margin > 0.0 {
@@ -483,6 +497,14 @@ impl Algorithm for Ddpg {
         self.actor.load_vecs(&vecs)?;
         self.actor_target.load_vecs(&vecs)?;
         self.norm = fitted.norm;
+        Ok(())
+    }
+
+    fn keep_near(&mut self, policy: &DeterministicPolicy, alpha: f64) -> Result<(), String> {
+        let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
+        let mut start = self.actor.detached_copy();
+        start.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
+        self.anchor = Some((start, alpha));
         Ok(())
     }
 

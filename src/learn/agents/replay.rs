@@ -185,13 +185,18 @@ impl ReplayBuffer {
     /// Empty if nothing is stored.
     pub fn sample(&self, n: usize, rng: &mut impl Rng) -> Batch {
         let mut b = Batch::default();
+        self.sample_into(n, rng, &mut b);
+        b
+    }
+
+    /// As [`ReplayBuffer::sample`], appending to `b` (a batch drawn from several buffers).
+    pub fn sample_into(&self, n: usize, rng: &mut impl Rng, b: &mut Batch) {
         if self.len == 0 {
-            return b;
+            return;
         }
         for _ in 0..n {
-            self.append_slot(rng.gen_range(0..self.len), &mut b);
+            self.append_slot(rng.gen_range(0..self.len), b);
         }
-        b
     }
 
     /// Appends the transition stored in slot `j` to `b`.

@@ -616,7 +616,7 @@ const RESUMABLE_CHANGES: &[&str] =
 /// entries); [`RESUMABLE_CHANGES`] left out.
 fn differing_fields<T: Serialize>(a: &T, b: &T, out: &mut Vec<String>) {
     use crate::learn::agents::registry::{flag, groups};
-    const GROUPS: [&str; 3] = ["net", crate::learn::agents::shared::SHARED_KEY, "aggrevated"];
+    const GROUPS: [&str; 4] = ["net", crate::learn::agents::shared::SHARED_KEY, "aggrevated", "finetune"];
     let (a, b) = (serde_json::to_value(a).unwrap_or_default(), serde_json::to_value(b).unwrap_or_default());
     for path in crate::support::diff::differences(&a, &b) {
         let Some(top) = path.key(0) else { continue };

@@ -62,6 +62,17 @@ pub fn train_ranks(
     Ok(trainer.rows)
 }
 
+/// A batch of `n` transitions: `ratio` of them (rounded) from the demonstrations where there are
+/// any, the rest from the run's own buffer.
+fn draw(own: &ReplayBuffer, demos: Option<&ReplayBuffer>, n: usize, ratio: f64, rng: &mut ChaCha8Rng) -> Batch {
+    let from_demos = demos.map_or(0, |_| ((n as f64) * ratio).round() as usize).min(n);
+    let mut batch = own.sample(n - from_demos, rng);
+    if let Some(d) = demos {
+        d.sample_into(from_demos, rng, &mut batch);
+    }
+    batch
+}
+
 /// The tasks with environments in `epoch` (indices into the run's `n` tasks): a stream run's active
 /// set ([`crate::benchmark::stream::active_tasks`]), else every task.
 fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
@@ -213,6 +224,7 @@ fn run_config(
     if let Some(saved) = saved {
         config.branched_from = saved.branched_from.clone();
         config.finetune.init_policy = saved.finetune.init_policy.clone();
+        config.finetune.demos_sha256 = saved.finetune.demos_sha256.clone();
     }
     // Replay: as given; else a resumed run's own; else per worker.
     let recorded = saved.map(TrainConfig::replay_layout);
@@ -281,6 +293,9 @@ fn fresh(
     let mut agent = config.algo.build(&spec, &config.algos, &mut rng);
     if let (Some(policy), Some(path)) = (init, &config.finetune.init_from) {
         agent.init_from(policy).map_err(|e| anyhow::anyhow!("--init-from {}: {e}", path.display()))?;
+        if config.finetune.anchor_alpha > 0.0 {
+            agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
+        }
     }
     // The curriculum's start: level 0, or each task's top with --start-at-top.
     let levels: Vec<usize> = max_levels.iter().map(|&m| if config.finetune.start_at_top { m } else { 0 }).collect();
@@ -391,6 +406,8 @@ struct Trainer<'a> {
     learner: Learner,
     /// One buffer per worker (`per-worker`) or one (`shared`).
     replays: Vec<ReplayBuffer>,
+    /// The demonstrations' transitions (`--demos`), which every batch draws its share from.
+    demo_replay: Option<ReplayBuffer>,
     /// The replay buffers' log on disk (appended by every checkpoint).
     replay_log: checkpoint::ReplayLog,
     state: RunState,
@@ -431,7 +448,12 @@ impl<'a> Trainer<'a> {
         config.validate(comm.size())?;
         // The policy a new run starts from, checked before anything is written (a resumed run's
         // actor is in its checkpoint).
-        let init = if resume { None } else { config.finetune.load(config)? };
+        let init = match resume {
+            // A resumed run's actor is in its checkpoint; its anchor (`--anchor-alpha`) is not.
+            true if config.finetune.anchor_alpha == 0.0 => None,
+            _ => config.finetune.load(config)?,
+        };
+        let demos = config.finetune.read_demos()?;
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
         if resume {
@@ -455,8 +477,17 @@ impl<'a> Trainer<'a> {
         let saved_config =
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
         let (mut config, tasks) = run_config(comm, config, &run, saved_config.as_ref())?;
-        if let Some((id, _)) = &init {
+        if let (false, Some((id, _))) = (resume, &init) {
             config.finetune.init_policy = Some(id.clone());
+        }
+        if let Some(file) = &demos {
+            match (&config.finetune.demos_sha256, resume) {
+                (Some(recorded), true) if *recorded != file.sha256 => bail!(
+                    "--resume: --demos {} is not the file this run started with ({recorded}); restore that file",
+                    config.finetune.demos.as_deref().unwrap_or(Path::new("")).display()
+                ),
+                _ => config.finetune.demos_sha256 = Some(file.sha256.clone()),
+            }
         }
         let thresholds: Vec<f64> =
             tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
@@ -498,7 +529,36 @@ impl<'a> Trainer<'a> {
             let policy = init.as_ref().map(|(_, p)| p);
             fresh(comm, &config, &run_id, &max_levels, &run, &mine, dims, policy)?
         };
+        let mut begun = begun;
+        if let (true, Some((id, policy))) = (resume, &init) {
+            // The policy the run started from, as recorded: its anchor again.
+            if let Some(recorded) = config.finetune.init_policy.as_ref().filter(|r| r.sha256 != id.sha256) {
+                bail!(
+                    "--resume: {} is not the policy this run started from ({}); restore that policy to resume the run",
+                    id.name,
+                    recorded.sha256.as_deref().unwrap_or("unrecorded")
+                );
+            }
+            begun.agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
+        }
         begun.check(&config, &mine)?;
+        // Demonstrations in a buffer of their own (their observations counted by a new run's
+        // normaliser, unless it starts from a policy's).
+        let demo_replay = match (&demos, &config.finetune.demos) {
+            (Some(file), Some(path)) => {
+                let episodes = super::finetune::demo_episodes(file, path, &envs.obs_spec(), &tasks)?;
+                let steps = episodes.iter().map(|e| e.len()).sum::<usize>();
+                let mut replay = ReplayBuffer::new(obs_dim, act_dim, steps);
+                for e in &episodes {
+                    e.store_transitions(&mut replay, config.shared.gamma, config.shared.n_step);
+                }
+                if !resume && config.finetune.init_from.is_none() {
+                    begun.agent.norm_mut().update(&episodes.iter().flat_map(|e| e.obs.concat()).collect::<Vec<_>>());
+                }
+                Some(replay)
+            }
+            _ => None,
+        };
         let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() {
@@ -526,6 +586,7 @@ impl<'a> Trainer<'a> {
             envs,
             learner: Learner { agent: begun.agent, expert, reduce_seconds: 0.0 },
             replays: begun.replays,
+            demo_replay,
             replay_log: begun.replay_log,
             state: begun.state,
             rows: begun.rows,
@@ -693,7 +754,9 @@ impl<'a> Trainer<'a> {
                 let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
                 for _ in 0..config.batches {
                     self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
-                    let batch = self.replays[0].sample(config.batch_size * config.workers, &mut rng);
+                    let n = config.batch_size * config.workers;
+                    let batch =
+                        draw(&self.replays[0], self.demo_replay.as_ref(), n, config.finetune.demos_ratio, &mut rng);
                     tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
                     self.state.updates += 1;
                 }
@@ -705,8 +768,13 @@ impl<'a> Trainer<'a> {
                     .collect();
                 for _ in 0..config.batches {
                     self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
-                    let batches: Vec<Batch> =
-                        self.replays.iter().zip(&mut rngs).map(|(r, rng)| r.sample(config.batch_size, rng)).collect();
+                    let (demos, ratio) = (self.demo_replay.as_ref(), config.finetune.demos_ratio);
+                    let batches: Vec<Batch> = self
+                        .replays
+                        .iter()
+                        .zip(&mut rngs)
+                        .map(|(r, rng)| draw(r, demos, config.batch_size, ratio, rng))
+                        .collect();
                     tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));
                     self.state.updates += 1;
                 }
