@@ -50,6 +50,10 @@ pub(super) struct PlotArgs {
     /// for success against the number of training tasks; a table of the points goes to stdout.
     #[arg(long, num_args = 1.., requires = "out", conflicts_with = "overlay")]
     scaling: Vec<String>,
+    /// With --overlay: suite results (JSON of `eval --suite`) as `LABEL:FILE`, each drawn as a dashed
+    /// line at its test score, e.g. `--level solver:results/beyond-teacher/ToppleTower-v0.solver.json`.
+    #[arg(long, num_args = 1.., requires = "overlay")]
+    level: Vec<String>,
     /// With --scaling: a suite result (e.g. the solver's) drawn as dashed train and test lines.
     #[arg(long, requires = "scaling")]
     reference: Option<PathBuf>,
@@ -233,8 +237,23 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
             };
             runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
         }
+        let mut levels = Vec::new();
+        for given in &a.level {
+            let Some((label, file)) = given.split_once(':') else {
+                bail!(
+                    "--level {given}: give LABEL:FILE, e.g. solver:results/beyond-teacher/ToppleTower-v0.solver.json"
+                );
+            };
+            let r = crate::benchmark::results::read(std::path::Path::new(file))
+                .map_err(|e| e.context(format!("--level {given}")))?
+                .result;
+            let Some(test) = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success) else {
+                bail!("--level {given}: {file} has no `test` split evaluated");
+            };
+            levels.push((format!("{label} ({test:.3})"), test));
+        }
         let title = a.title.as_deref().unwrap_or("Finals success (maximum level)");
-        crate::learn::train::plot::overlay(&out, title, &runs)?;
+        crate::learn::train::plot::overlay(&out, title, &runs, &levels)?;
         println!("wrote {}", out.display());
     }
     Ok(())

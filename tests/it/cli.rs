@@ -362,6 +362,15 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
         bp(&["plot", "--overlay", expert.to_str().unwrap(), pggd.to_str().unwrap(), "--out", png.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    // With a suite result's test score as a dashed level (issue 62: the solver's line).
+    let solver = format!(
+        "solver:{}/results/generalization/mujoco-2.2.2/baseline-scripted.colour.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = bp(&["plot", "--overlay", expert.to_str().unwrap(), "--level", &solver, "--out", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = bp(&["plot", "--overlay", expert.to_str().unwrap(), "--level", "solver", "--out", png.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("give LABEL:FILE"), "{}", text(&o));
     let o = bp(&["plot", "--overlay", expert.to_str().unwrap()]);
     assert!(!o.status.success() && text(&o).contains("--out"), "{}", text(&o));
     let o = bp(&["plot", "--overlay", "/nonexistent/run", "--out", png.to_str().unwrap()]);

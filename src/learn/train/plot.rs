@@ -30,6 +30,8 @@ struct Curve {
     label: String,
     colour: RGBColor,
     points: Vec<(f64, f64)>,
+    /// Drawn dashed (a reference level, not a run).
+    dashed: bool,
 }
 
 /// One chart of success-rate curves against `x_desc` on `area`.
@@ -52,8 +54,12 @@ where
     chart.configure_mesh().x_desc(x_desc).y_desc("success rate").draw().map_err(draw)?;
     for c in curves {
         let colour = c.colour;
-        chart
-            .draw_series(LineSeries::new(c.points.iter().copied(), colour.stroke_width(2)))
+        let drawn = if c.dashed {
+            chart.draw_series(DashedLineSeries::new(c.points.iter().copied(), 8, 6, colour.stroke_width(2)))
+        } else {
+            chart.draw_series(LineSeries::new(c.points.iter().copied(), colour.stroke_width(2)))
+        };
+        drawn
             .map_err(draw)?
             .label(c.label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
@@ -140,6 +146,7 @@ pub fn success_curves(path: &Path, title: &str, rows: &[EpochRow], max_level: us
             .map(|(i, (name, colour, f))| {
                 let scale = if i == 3 { 1.0 / max_level.max(1) as f64 } else { 1.0 };
                 Curve {
+                    dashed: false,
                     label: (*name).to_owned(),
                     colour: *colour,
                     points: rows.iter().map(|r| (x_of(r.epoch, r.env_steps, by_steps), f(r) * scale)).collect(),
@@ -181,11 +188,12 @@ pub fn read_finals(path: &Path) -> Result<Vec<FinalsPoint>> {
 }
 
 /// Finals success of several runs, one curve each, against the epoch and
-/// against env steps (the paper's training-plot figure), written to `path`.
+/// against env steps (the paper's training-plot figure), with `levels` (label, success) drawn as
+/// dashed lines across (e.g. the solver's score), written to `path`.
 ///
 /// # Errors
 /// A missing font or an unwritable file.
-pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)]) -> Result<()> {
+pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)], levels: &[(String, f64)]) -> Result<()> {
     const COLOURS: [RGBColor; 6] = [
         RGBColor(200, 40, 40),
         RGBColor(30, 90, 200),
@@ -195,14 +203,24 @@ pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)]) ->
         RGBColor(90, 90, 90),
     ];
     two_panels(path, title, |by_steps| {
-        runs.iter()
+        let curves = runs
+            .iter()
             .enumerate()
             .map(|(i, (label, rows))| Curve {
                 label: label.clone(),
                 colour: COLOURS[i % COLOURS.len()],
                 points: rows.iter().map(|r| (x_of(r.epoch, r.env_steps, by_steps), r.finals_success)).collect(),
+                dashed: false,
             })
-            .collect()
+            .collect::<Vec<_>>();
+        let x_max = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)).fold(0.0, f64::max);
+        let lines = levels.iter().enumerate().map(|(i, (label, v))| Curve {
+            label: label.clone(),
+            colour: [RGBColor(0, 0, 0), RGBColor(150, 150, 150)][i % 2],
+            points: vec![(0.0, *v), (x_max, *v)],
+            dashed: true,
+        });
+        curves.into_iter().chain(lines).collect()
     })
 }
 
