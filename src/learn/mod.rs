@@ -4,7 +4,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`agents`] | the algorithm interface, each algorithm (DDPG/TD3, SAC, PGGD, BC, DAgger), networks, replay |
-//! | [`train`] | the training loop generic over the algorithm, run directories, checkpoints, MPI |
+//! | [`train`] | the training loop generic over the algorithm, run directories, checkpoints, MPI, starting from a trained policy and demonstrations |
 //! | [`bench`] | the training benchmark (`blockpuzzle bench --ddpg`) |
 //! | [`blas`] | libtorch's numeric libraries and thread counts |
 //! | [`table`] | the paper's results table on BlocksChoose-v0 |

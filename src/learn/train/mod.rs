@@ -12,7 +12,8 @@
 //! deterministic episodes at the current level ("test") and at the maximum
 //! level ("finals"); when the test success reaches `success_threshold` the
 //! curriculum moves up a level. Under `mpirun` the workers are spread over
-//! ranks (`comm.rs`); the loop itself is `trainer.rs`.
+//! ranks (`comm.rs`); the loop itself is `trainer.rs`. A run may start from a trained policy, warm
+//! its critics up first and draw part of every batch from demonstrations (`finetune.rs`).
 //!
 //! The run directory holds `config.json`, `progress.csv` (one row per epoch),
 //! `checkpoint.bin` (everything but the replay buffers, every epoch),
