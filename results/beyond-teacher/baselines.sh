@@ -4,7 +4,7 @@
 # BP=target/release/blockpuzzle bash results/beyond-teacher/baselines.sh
 set -euo pipefail
 BP=${BP:-target/release/blockpuzzle}
-for t in ToppleTower-v0 BlocksStack-v0 BlocksChoose-v0; do
+for t in ToppleTower-v0 BlocksStack-v0 BlocksChoose-v0 clutter-20002-v0; do
   s=experiments/beyond-teacher/suites/$t.toml
   $BP eval --suite $s --baseline scripted --threads 1 --out results/beyond-teacher/$t.solver.json
   $BP eval --suite $s --checkpoint generalist-bc-entity --threads 1 --out results/beyond-teacher/$t.generalist.json
