@@ -109,6 +109,9 @@ pub struct NetLayout {
     /// A set network's layers as `[out, in]` (its inputs do not chain as an MLP's sizes do).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub layers: Vec<[usize; 2]>,
+    /// Every hidden layer's output layer-normalised before its ReLU (a critic of `train --critic-norm`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hidden_norm: bool,
 }
 
 /// One evaluation of the entry (a cell of the table, or a `blockpuzzle eval`).
@@ -430,7 +433,7 @@ fn layout(net: &PlainNet, n_in: usize) -> NetLayout {
         None => Vec::new(),
         Some(_) => net.layers.iter().map(|l| [l.b.len(), l.n_in]).collect(),
     };
-    NetLayout { sizes, tanh_out: net.tanh_out, set: net.set, layers }
+    NetLayout { sizes, tanh_out: net.tanh_out, set: net.set, layers, hidden_norm: net.hidden_norm }
 }
 
 fn le_bytes(v: &[f32]) -> Vec<u8> {
@@ -872,7 +875,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                 })
             })
             .collect::<Result<_, ZooError>>()?;
-        Ok(PlainNet { layers, tanh_out: l.tanh_out, set: l.set })
+        Ok(PlainNet { layers, tanh_out: l.tanh_out, set: l.set, hidden_norm: l.hidden_norm })
     };
     let net = read_net("actor", &meta.actor)?;
     let critic = meta.critic.as_ref().map(|l| read_net("critic", l)).transpose()?;

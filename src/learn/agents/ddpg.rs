@@ -255,14 +255,15 @@ impl Ddpg {
         let obs_dim = arch.obs_dim;
         let actor = arch.net(shape, 0, act_dim, true, rng).with_bf16(bf16);
         let critics = arch.critics(shared.flat_critic);
-        let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
+        let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16).with_hidden_norm(shared.critic_norm);
         let (actor_target, critic_target) = (actor.detached_copy(), critic.detached_copy());
         let actor_opt = Adam::new(&actor.params, shared.lr_actor);
         let critic_opt = Adam::new(&critic.params, shared.lr_critic);
         let norm = arch.normalizer(shared.norm_eps, shared.norm_clip);
         // Drawn after the first critic, so a DDPG agent's initial weights do not depend on TD3.
         let twin = config.td3.then(|| {
-            let critic = critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16);
+            let critic =
+                critics.net(shape, act_dim, 1, false, rng).with_bf16(bf16).with_hidden_norm(shared.critic_norm);
             let (target, opt) = (critic.detached_copy(), Adam::new(&critic.params, shared.lr_critic));
             Twin { critic, target, opt, noise_seed: rng.gen() }
         });

@@ -27,6 +27,8 @@ pub struct Net {
     bf16: bool,
     /// A set network's layout.
     set: Option<SetLayout>,
+    /// Layer normalisation of every hidden layer's output before its ReLU (see [`Net::with_hidden_norm`]).
+    hidden_norm: bool,
 }
 
 /// Glorot-uniform weights and zero biases for layers of these shapes, in order.
@@ -48,7 +50,15 @@ impl Net {
     pub fn new(sizes: &[usize], tanh_out: bool, rng: &mut impl Rng) -> Self {
         let shapes: Vec<(usize, usize)> = sizes.windows(2).map(|w| (w[0], w[1])).collect();
         let params = init(&shapes, rng);
-        Self { params, input: sizes.first().copied().unwrap_or(0), shapes, tanh_out, bf16: false, set: None }
+        Self {
+            params,
+            input: sizes.first().copied().unwrap_or(0),
+            shapes,
+            tanh_out,
+            bf16: false,
+            set: None,
+            hidden_norm: false,
+        }
     }
 
     /// A set network over observations of `layout` followed by `extra`
@@ -84,7 +94,15 @@ impl Net {
         let head = mlp_sizes(layout.head_input(width, extra), hidden, head_layers, out);
         shapes.extend(head.windows(2).map(|w| (w[0], w[1])));
         let params = init(&shapes, rng);
-        Self { params, input: layout.obs_dim() + extra, shapes, tanh_out, bf16: false, set: Some(layout) }
+        Self {
+            params,
+            input: layout.obs_dim() + extra,
+            shapes,
+            tanh_out,
+            bf16: false,
+            set: Some(layout),
+            hidden_norm: false,
+        }
     }
 
     /// The libtorch twin of a plain network (the inverse of [`Net::to_plain`]),
@@ -112,7 +130,32 @@ impl Net {
             params.push(Tensor::of_slice(&layer.b));
         }
         let shapes = mlp.layers.iter().map(|l| (l.n_in, l.b.len())).collect();
-        Ok(Self { params, input, shapes, tanh_out: mlp.tanh_out, bf16: false, set: mlp.set })
+        Ok(Self {
+            params,
+            input,
+            shapes,
+            tanh_out: mlp.tanh_out,
+            bf16: false,
+            set: mlp.set,
+            hidden_norm: mlp.hidden_norm,
+        })
+    }
+
+    /// Layer normalisation (no gain, no bias) of every hidden layer's output before its ReLU: an
+    /// MLP's, a set network's encoder's and head's (RLPD's critics, Ball et al. 2023; `--critic-norm`).
+    pub fn with_hidden_norm(mut self, on: bool) -> Self {
+        self.hidden_norm = on;
+        self
+    }
+
+    /// `h` layer-normalised over its last dimension (no gain, no bias) where the network has
+    /// [`Net::with_hidden_norm`]; else `h` itself.
+    fn hidden(&self, h: Tensor) -> Tensor {
+        if !self.hidden_norm {
+            return h;
+        }
+        let width = h.size().last().copied().unwrap_or(0);
+        h.layer_norm([width].as_slice(), None::<Tensor>, None::<Tensor>, NORM_EPS.into(), false)
     }
 
     /// Computes the matrix products whose inputs are hidden features (the
@@ -179,7 +222,7 @@ impl Net {
             rows
         };
         for l in 0..s.encoder_layers {
-            h = self.affine(&h, l, l > 0).relu();
+            h = self.hidden(self.affine(&h, l, l > 0)).relu();
         }
         let mut h = h.reshape(&[n, m, -1]);
         if s.attention {
@@ -248,7 +291,7 @@ impl Net {
         if extra.size()[1] > 0 {
             h += part(&extra, r + width, false);
         }
-        self.layers(h.relu(), first + 1, first + 1)
+        self.layers(self.hidden(h).relu(), first + 1, first + 1)
     }
 
     /// `h · wᵀ`, in bfloat16 with float accumulation where `hidden` (its
@@ -325,7 +368,7 @@ impl Net {
         for l in first..n_layers {
             h = self.affine(&h, l, l >= hidden && l + 1 < n_layers);
             if l + 1 < n_layers {
-                h = h.relu();
+                h = self.hidden(h).relu();
             }
         }
         h
@@ -387,7 +430,7 @@ impl Net {
                 n_in,
             })
             .collect();
-        PlainNet { layers, tanh_out: self.tanh_out, set: self.set }
+        PlainNet { layers, tanh_out: self.tanh_out, set: self.set, hidden_norm: self.hidden_norm }
     }
 
     /// Sets every parameter's gradient to zero.
@@ -548,6 +591,33 @@ mod tests {
         let mut broken = plain;
         broken.layers[1].n_in = 7;
         assert!(Net::from_plain(&broken).err().is_some_and(|e| e.contains("layer 1")));
+    }
+
+    /// Layer-normalised hidden layers (`--critic-norm`): the MLP's and a set critic's encoder and head
+    /// (in bfloat16 too), and the plain copy computes the same values.
+    #[test]
+    fn hidden_layer_norm_agrees_with_its_plain_copy() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let obs: Vec<f32> = (0..2 * 9).map(|_| rng.gen_range(-2.0..2.0)).collect();
+        let mlp = Net::new(&[9, 16, 16, 1], false, &mut rng);
+        let normed = mlp.detached_copy().with_hidden_norm(true);
+        let x = Tensor::of_slice(&obs).view([2, 9]);
+        let (a, b) = (tensor_to_vec(&mlp.forward(&x)), tensor_to_vec(&normed.forward(&x)));
+        assert_ne!(a, b, "the norm changes the values");
+        let plain = normed.to_plain();
+        assert!(plain.hidden_norm);
+        for (row, want) in obs.chunks(9).zip(&b) {
+            assert!((plain.forward(row)[0] - want).abs() < 1e-4, "{} vs {want}", plain.forward(row)[0]);
+        }
+        for bf16 in [false, true] {
+            let critic = Net::new_set(SET, 4, (16, 2, 2), 1, false, &mut rng).with_hidden_norm(true).with_bf16(bf16);
+            let x = set_obs(&mut rng, &[true, false, true, true], 7.0, 4);
+            let t = tensor_to_vec(&critic.forward(&Tensor::of_slice(&x).view([1, x.len() as i64])))[0];
+            let p = critic.to_plain().forward(&x)[0];
+            assert!((t - p).abs() < if bf16 { 5e-2 } else { 1e-4 }, "bf16 {bf16}: {t} vs {p}");
+            let twin = Net::from_plain(&critic.to_plain()).unwrap();
+            assert!(twin.hidden_norm, "from_plain keeps the norm");
+        }
     }
 
     /// A set network's layout: 3 robot features, 4 slots of 5 features, a mask.

@@ -158,7 +158,8 @@ impl Sac {
         };
         let actor = net(arch, rng, 0, 2 * a);
         let critics = arch.critics(c.flat_critic);
-        let (q1, q2) = (net(critics, rng, a, 1), net(critics, rng, a, 1));
+        let critic = |rng: &mut ChaCha8Rng| net(critics, rng, a, 1).with_hidden_norm(c.critic_norm);
+        let (q1, q2) = (critic(rng), critic(rng));
         let log_alpha =
             Tensor::full(&[1], own.alpha_init.ln(), (Kind::Float, tch::Device::Cpu)).set_requires_grad(true);
         Self {

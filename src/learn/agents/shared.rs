@@ -60,6 +60,12 @@ pub struct SharedConfig {
     /// critics serve training alone; the policy saved is the set actor).
     #[arg(long)]
     pub flat_critic: bool,
+    /// Layer normalisation (no gain, no bias) of every hidden layer of the critics before its ReLU,
+    /// as RLPD's critics (Ball et al. 2023): it bounds the values a critic extrapolates to actions
+    /// its data never took.
+    #[arg(long)]
+    #[serde(default)]
+    pub critic_norm: bool,
 }
 
 impl SharedConfig {
@@ -76,6 +82,7 @@ impl SharedConfig {
         "--precision",
         "--n-step",
         "--flat-critic",
+        "--critic-norm",
     ];
 
     /// The defaults.
@@ -91,6 +98,7 @@ impl SharedConfig {
         precision: Precision::F32,
         n_step: 1,
         flat_critic: false,
+        critic_norm: false,
     };
 
     /// Whether every setting is in range; the error names the flag.

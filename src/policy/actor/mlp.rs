@@ -276,6 +276,10 @@ pub struct PlainNet {
     /// A set network's layout (none: an MLP over the whole input).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub set: Option<SetLayout>,
+    /// Layer normalisation (no gain, no bias) of every hidden layer's output before its ReLU: the
+    /// MLP's, a set network's encoder's and head's (RLPD's critics, `train --critic-norm`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hidden_norm: bool,
 }
 
 impl PlainNet {
@@ -372,7 +376,7 @@ impl PlainNet {
     /// Output for one (already normalised) input.
     pub fn forward(&self, x: &[f32]) -> Vec<f32> {
         match &self.set {
-            None => run(&self.layers, x.to_vec(), self.tanh_out),
+            None => run(&self.layers, x.to_vec(), self.tanh_out, self.hidden_norm),
             Some(s) => self.forward_set(s, x),
         }
     }
@@ -392,7 +396,8 @@ impl PlainNet {
             .collect();
         let extra = x.get(rows_end + s.slots..).unwrap_or(&[]);
         let token = |row: &[f32]| if s.robot_tokens { [&x[..s.robot], row, extra].concat() } else { row.to_vec() };
-        let mut rows: Vec<Vec<f32>> = present.iter().map(|row| run_hidden(encoder, token(row))).collect();
+        let mut rows: Vec<Vec<f32>> =
+            present.iter().map(|row| run_hidden(encoder, token(row), self.hidden_norm)).collect();
         if let [q, k, v, o] = attention {
             rows = attend(&rows, (q, k, v, o));
         }
@@ -408,7 +413,7 @@ impl PlainNet {
             layer_norm(&mut input[s.robot..]);
         }
         input.extend_from_slice(extra);
-        run(head, input, self.tanh_out)
+        run(head, input, self.tanh_out, self.hidden_norm)
     }
 }
 
@@ -510,21 +515,25 @@ fn query_pool(h: &[Vec<f32>], score: &Dense, value: &Dense, width: usize) -> Vec
     out
 }
 
-/// `layers` on `x`, every output through ReLU.
-fn run_hidden(layers: &[Dense], x: Vec<f32>) -> Vec<f32> {
+/// `layers` on `x`, every output through ReLU (layer-normalised first where `norm`).
+fn run_hidden(layers: &[Dense], x: Vec<f32>, norm: bool) -> Vec<f32> {
     let (mut a, mut b) = (x, Vec::new());
     for layer in layers {
         layer.forward(&a, &mut b);
+        if norm {
+            layer_norm(&mut b);
+        }
         b.iter_mut().for_each(|v| *v = v.max(0.0));
         std::mem::swap(&mut a, &mut b);
     }
     a
 }
 
-/// `layers` on `x`: ReLU between them, tanh (or nothing) after the last.
-fn run(layers: &[Dense], x: Vec<f32>, tanh_out: bool) -> Vec<f32> {
+/// `layers` on `x`: ReLU between them (each hidden output layer-normalised first where `norm`),
+/// tanh (or nothing) after the last.
+fn run(layers: &[Dense], x: Vec<f32>, tanh_out: bool, norm: bool) -> Vec<f32> {
     let Some((last, hidden)) = layers.split_last() else { return x };
-    let a = run_hidden(hidden, x);
+    let a = run_hidden(hidden, x, norm);
     let mut out = Vec::new();
     last.forward(&a, &mut out);
     if tanh_out {
@@ -546,6 +555,7 @@ mod tests {
             ],
             tanh_out: true,
             set: None,
+            hidden_norm: false,
         };
         // hidden = relu([x0, -x1]) = [2, 0]; out = tanh(2 + 0 + 0.5)
         assert!((net.forward(&[2.0, 3.0])[0] - 2.5f32.tanh()).abs() < 1e-7);
