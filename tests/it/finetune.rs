@@ -76,6 +76,13 @@ fn a_run_starts_from_the_policy_and_its_critics_warm_up_first() {
     let (ok, text) = train(&free, &common);
     assert!(ok, "{text}");
     assert_ne!(snapshot(&free, 1).policy.net().layers, generalist.policy.net().layers);
+    // IBRL and the anchor run (their learner keeps the generalist beside it), and resume.
+    let ibrl = tmp.path().join("ibrl");
+    let (ok, text) = train(&ibrl, &[&common[..], &["--ibrl", "--anchor-alpha", "0.5"]].concat());
+    assert!(ok, "{text}");
+    let (ok, text) =
+        train(&ibrl, &[&common[..], &["--ibrl", "--anchor-alpha", "0.5", "--epochs", "3", "--resume"]].concat());
+    assert!(ok, "{text}");
     // SAC too: its saved policy (the mean action) is the generalist's after the warm-up.
     let sac = tmp.path().join("sac");
     let (ok, text) = train(&sac, &[&common[..], &["--algo", "sac", "--critic-warmup", "2"]].concat());
@@ -103,6 +110,10 @@ fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
     let corrupt = tmp.path().join("corrupt.json");
     std::fs::write(&corrupt, "{").unwrap();
     let corrupt = corrupt.to_str().unwrap();
+    // SAC from the generalist, with what only DDPG keeps of it.
+    let sac =
+        [&ENTITY[..], &["--env", "ToppleTower-v0", "--algo", "sac", "--init-from", "generalist-bc-entity"]].concat();
+    let (sac_ibrl, sac_anchor) = ([&sac[..], &["--ibrl"]].concat(), [&sac[..], &["--anchor-alpha", "1"]].concat());
     let cases: &[(&[&str], &[&str])] = &[
         (&["--env", "ToppleTower-v0", "--init-from", "/nonexistent/policy.json"], &["--init-from", "cannot load"]),
         (&["--env", "ToppleTower-v0", "--init-from", corrupt], &["--init-from", "corrupt.json"]),
@@ -136,6 +147,8 @@ fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
             &["--critic-warmup 4", "make 4 updates", "more --epochs"],
         ),
         (&["--env", "ToppleTower-v0", "--critic-warmup", "4"], &["--init-from"]),
+        (&sac_ibrl, &["--ibrl", "sac cannot"]),
+        (&sac_anchor, &["--anchor-alpha", "sac cannot"]),
     ];
     refused(tmp.path(), cases);
 }

@@ -274,6 +274,21 @@ pub trait Algorithm: AsAny + Send {
         ))
     }
 
+    /// IBRL's action proposal (Hu et al. 2023, `train --ibrl`): `policy` (the one the run started
+    /// from, frozen) proposes an action beside the actor's, wherever the learner picks one by its
+    /// critic: exploration takes whichever of the two the critic values more, and the critic's target
+    /// bootstraps from the better of the two at the next state. The saved policy stays the actor.
+    /// Not checkpointed: a resumed run calls it again.
+    ///
+    /// # Errors
+    /// An algorithm that cannot, or a policy that does not fit.
+    fn propose_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
+        Err(format!(
+            "--ibrl proposes a deterministic policy's actions beside the actor's (ddpg, with --td3 or not); {} cannot",
+            self.name()
+        ))
+    }
+
     /// Holds the actor still (`held`), or lets it learn again: while held, updates step the
     /// critics alone (the critic warm-up of `train --critic-warmup`).
     fn hold_actor(&mut self, _held: bool) {}

@@ -227,6 +227,9 @@ pub struct Ddpg {
     /// ([`Algorithm::init_from`]'s `anchor`); not checkpointed: a resumed run takes it from the
     /// policy it started from again.
     anchor: Option<(Net, f64)>,
+    /// IBRL's frozen imitation policy, proposing actions beside the actor's
+    /// ([`Algorithm::propose_from`]); not checkpointed.
+    proposer: Option<Net>,
 }
 
 /// TD3's second critic, its target and optimiser, and the seed of the
@@ -283,6 +286,7 @@ impl Ddpg {
             last_targets: Vec::new(),
             actor_held: false,
             anchor: None,
+            proposer: None,
         }
     }
 
@@ -350,6 +354,19 @@ impl Ddpg {
                     let next_act = self.smoothed(next_act, seed, k);
                     let q1 = self.critic_target.q(&next_obs, &next_act);
                     q1.minimum(&t.target.q(&next_obs, &next_act))
+                }
+            };
+            // IBRL: the better of the actor's and the proposer's action at the next state.
+            let next_q = match &self.proposer {
+                None => next_q,
+                Some(il) => {
+                    let a = il.forward(&next_obs);
+                    let q = self.critic_target.q(&next_obs, &a);
+                    let q = match &self.twin {
+                        None => q,
+                        Some(t) => q.minimum(&t.target.q(&next_obs, &a)),
+                    };
+                    next_q.maximum(&q)
                 }
             };
             let y: Tensor = rew + not_done * next_q * discount;
@@ -509,6 +526,14 @@ impl Algorithm for Ddpg {
         Ok(())
     }
 
+    fn propose_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+        let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
+        let mut il = self.actor.detached_copy();
+        il.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
+        self.proposer = Some(il);
+        Ok(())
+    }
+
     fn hold_actor(&mut self, held: bool) {
         self.actor_held = held;
     }
@@ -520,6 +545,7 @@ impl Algorithm for Ddpg {
             random_eps: c.random_eps,
             noise_eps: c.noise_eps,
             noise_correlation: c.noise_correlation,
+            proposal: self.proposer.as_ref().map(|il| (il.to_plain(), self.critic.to_plain())),
         })
     }
 
@@ -558,12 +584,23 @@ pub struct DdpgExplorer {
     pub noise_eps: f64,
     /// Correlation of the noise between consecutive steps.
     pub noise_correlation: f64,
+    /// IBRL: the imitation policy's network and the critic, which picks between its action and the
+    /// actor's before the noise ([`Algorithm::propose_from`]).
+    pub proposal: Option<(PlainNet, PlainNet)>,
 }
 
 impl Explorer for DdpgExplorer {
     fn explore(&self, obs: &[f32], noise: &mut Vec<f32>, rng: &mut ChaCha8Rng) -> Vec<f32> {
         let settings = (self.random_eps, self.noise_eps, self.noise_correlation);
-        self.policy.explore_correlated(obs, settings, noise, rng)
+        let Some((il, critic)) = &self.proposal else {
+            return self.policy.explore_correlated(obs, settings, noise, rng);
+        };
+        let mut x = obs.to_vec();
+        self.policy.norm.normalize_in_place(&mut x);
+        let (ours, theirs) = (self.policy.act(obs), il.forward(&x));
+        let q = |a: &[f32]| critic.forward(&[&x[..], a].concat())[0];
+        let a = if q(&theirs) > q(&ours) { theirs } else { ours };
+        DeterministicPolicy::perturb(a, settings, noise, rng)
     }
 }
 
@@ -585,7 +622,16 @@ impl DeterministicPolicy {
         noise: &mut Vec<f32>,
         rng: &mut impl Rng,
     ) -> Vec<f32> {
-        let a = self.act(obs);
+        Self::perturb(self.act(obs), (random_eps, noise_eps, rho), noise, rng)
+    }
+
+    /// The action `a` explored as [`DeterministicPolicy::explore_correlated`] explores π(s).
+    pub fn perturb(
+        a: Vec<f32>,
+        (random_eps, noise_eps, rho): (f64, f64, f64),
+        noise: &mut Vec<f32>,
+        rng: &mut impl Rng,
+    ) -> Vec<f32> {
         if rng.gen_bool(random_eps.clamp(0.0, 1.0)) {
             return a.iter().map(|_| rng.gen_range(-1.0..=1.0)).collect();
         }
@@ -639,6 +685,39 @@ mod tests {
 
     fn small() -> SharedConfig {
         SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() }
+    }
+
+    /// IBRL: the critic's target bootstraps from the better of the actor's and the proposer's action
+    /// (never below the actor's alone), TD3's twin included; exploration takes the proposer's action
+    /// where the critic values it more; the saved policy is the actor's.
+    #[test]
+    fn ibrl_targets_take_the_better_proposal() {
+        for td3 in [false, true] {
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            let config = DdpgConfig { td3, random_eps: 0.0, noise_eps: 0.0, ..DdpgConfig::default() };
+            let mut a = Ddpg::new(6, 4, small(), config.clone(), &mut rng);
+            let other = Ddpg::new(6, 4, small(), config, &mut rng).policy();
+            let b = batch(64, 6, &mut rng);
+            a.gradient(&b, 0);
+            let alone = a.last_targets().to_vec();
+            a.propose_from(&other).unwrap();
+            a.gradient(&b, 0);
+            let with = a.last_targets().to_vec();
+            assert!(with.iter().zip(&alone).all(|(w, o)| w >= o), "td3 {td3}");
+            assert!(with.iter().zip(&alone).any(|(w, o)| w > o), "td3 {td3}: the proposer is better somewhere");
+            assert_eq!(Algorithm::policy(&a), AnyPolicy::Deterministic(a.policy()), "the saved policy is the actor");
+            // Without noise, exploration is whichever action the critic values more.
+            let explorer = Algorithm::explorer(&a);
+            let critic = a.critic.to_plain();
+            for obs in b.obs.chunks(6).take(16) {
+                let mut x = obs.to_vec();
+                a.norm.normalize_in_place(&mut x);
+                let (ours, theirs) = (a.policy().act(obs), other.net.forward(&x));
+                let q = |act: &[f32]| critic.forward(&[&x[..], act].concat())[0];
+                let want = if q(&theirs) > q(&ours) { theirs } else { ours };
+                assert_eq!(explorer.explore(obs, &mut Vec::new(), &mut rng), want);
+            }
+        }
     }
 
     #[test]

@@ -47,6 +47,13 @@ pub struct FinetuneConfig {
     #[arg(long, default_value_t = 0.0, value_name = "ALPHA", requires = "init_from")]
     #[serde(skip_serializing_if = "is_zero_f64")]
     pub anchor_alpha: f64,
+    /// IBRL's action proposal (Hu et al. 2023): the policy the run started from, frozen, proposes
+    /// an action beside the actor's; exploration takes whichever the critic values more, and the
+    /// critic's target bootstraps from the better of the two. The saved policy is the actor alone.
+    /// DDPG and TD3.
+    #[arg(long, requires = "init_from")]
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub ibrl: bool,
     /// Begin every task's curriculum at its top level (the distribution a policy is tested on),
     /// not at level 0.
     #[arg(long)]
@@ -83,6 +90,7 @@ impl Default for FinetuneConfig {
             init_policy: None,
             critic_warmup: 0,
             anchor_alpha: 0.0,
+            ibrl: false,
             start_at_top: false,
             demos: None,
             demos_ratio: DEMOS_RATIO,
@@ -100,6 +108,12 @@ fn is_zero_f64(x: &f64) -> bool {
 }
 
 impl FinetuneConfig {
+    /// Whether the run keeps the policy it started from beside its learner (`--anchor-alpha`,
+    /// `--ibrl`): a resumed run loads it again.
+    pub fn keeps_policy(&self) -> bool {
+        self.anchor_alpha > 0.0 || self.ibrl
+    }
+
     /// Whether every setting is off (a run from scratch; its `config.json` then omits them).
     pub fn is_off(&self) -> bool {
         *self == Self::default()

@@ -293,9 +293,7 @@ fn fresh(
     let mut agent = config.algo.build(&spec, &config.algos, &mut rng);
     if let (Some(policy), Some(path)) = (init, &config.finetune.init_from) {
         agent.init_from(policy).map_err(|e| anyhow::anyhow!("--init-from {}: {e}", path.display()))?;
-        if config.finetune.anchor_alpha > 0.0 {
-            agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
-        }
+        keep_policy(&mut *agent, config, policy)?;
     }
     // The curriculum's start: level 0, or each task's top with --start-at-top.
     let levels: Vec<usize> = max_levels.iter().map(|&m| if config.finetune.start_at_top { m } else { 0 }).collect();
@@ -321,6 +319,18 @@ fn fresh(
     };
     let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
     Ok(StartingPoint { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
+}
+
+/// What the learner keeps of the policy the run started from: the anchor of `--anchor-alpha`, the
+/// proposer of `--ibrl` (neither is checkpointed).
+fn keep_policy(agent: &mut dyn Algorithm, config: &TrainConfig, policy: &DeterministicPolicy) -> Result<()> {
+    if config.finetune.anchor_alpha > 0.0 {
+        agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
+    }
+    if config.finetune.ibrl {
+        agent.propose_from(policy).map_err(anyhow::Error::msg)?;
+    }
+    Ok(())
 }
 
 /// A resumed run: this rank's checkpoint of the last epoch every rank
@@ -450,7 +460,7 @@ impl<'a> Trainer<'a> {
         // actor is in its checkpoint).
         let init = match resume {
             // A resumed run's actor is in its checkpoint; its anchor (`--anchor-alpha`) is not.
-            true if config.finetune.anchor_alpha == 0.0 => None,
+            true if !config.finetune.keeps_policy() => None,
             _ => config.finetune.load(config)?,
         };
         let demos = config.finetune.read_demos()?;
@@ -539,7 +549,7 @@ impl<'a> Trainer<'a> {
                     recorded.sha256.as_deref().unwrap_or("unrecorded")
                 );
             }
-            begun.agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
+            keep_policy(&mut *begun.agent, &config, policy)?;
         }
         begun.check(&config, &mine)?;
         // Demonstrations in a buffer of their own (their observations counted by a new run's
