@@ -317,7 +317,7 @@ impl Demos {
         });
         let meta = HashMap::from([(FORMAT.to_owned(), serde_json::to_string(&header)?)]);
         let data = safetensors::tensor::serialize(views, Some(meta))?;
-        crate::support::io::write_file(path, &data)
+        Ok(crate::support::io::write_file(path, &data)?)
     }
 
     /// Reads a demos file, checking its format, version and that the tensors agree with the episodes.

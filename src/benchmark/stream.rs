@@ -546,7 +546,7 @@ impl Cache {
             .parent()
             .map_or(Ok(()), std::fs::create_dir_all)
             .map_err(anyhow::Error::from)
-            .and_then(|()| crate::support::io::write_json(&path, self));
+            .and_then(|()| Ok(crate::support::io::write_json(&path, self)?));
         if let Err(e) = result {
             eprintln!("warning: cannot write the stream cache {}: {e:#}", path.display());
         }

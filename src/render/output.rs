@@ -89,7 +89,7 @@ pub fn filmstrip(path: &Path, frames: &[RgbImage], n: usize) -> Result<()> {
 }
 
 fn atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    crate::support::io::write_atomic_via(path, write)
+    Ok(crate::support::io::write_atomic_via(path, write)?)
 }
 
 #[cfg(test)]

@@ -118,10 +118,10 @@ impl Output {
     pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self> {
         let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
         match (ext.as_deref(), filmstrip) {
-            (Some("png"), Some(n)) if n > 0 => crate::support::io::check_output(out).map(|_| Self::Filmstrip(n)),
+            (Some("png"), Some(n)) if n > 0 => Ok(crate::support::io::check_output(out).map(|_| Self::Filmstrip(n))?),
             (_, Some(_)) => bail!("--filmstrip N writes a PNG: give --out FILE.png with N ≥ 1"),
             (Some("gif"), None) if fps == 0 => bail!("--fps must be at least 1 (frames per second of the GIF)"),
-            (Some("gif"), None) => crate::support::io::check_output(out).map(|_| Self::Gif { fps }),
+            (Some("gif"), None) => Ok(crate::support::io::check_output(out).map(|_| Self::Gif { fps })?),
             (Some("png"), None) => {
                 bail!("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", out.display())
             }

@@ -39,6 +39,40 @@ pub enum Target {
     Stream,
 }
 
+/// Why an output could not be written, naming it. The messages read as they
+/// did when they were built by hand: "cannot write PATH: REASON".
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The path is not ours to write ([`target`]), or the OS refused the write;
+    /// `reason` says which (it is part of the message, not a separate source).
+    #[error("cannot write {}: {reason}", path.display())]
+    Refused {
+        /// The output as given.
+        path: PathBuf,
+        /// Why, in the OS's words or [`target`]'s.
+        reason: std::io::Error,
+    },
+    /// The value to write could not be encoded as JSON.
+    #[error(transparent)]
+    Encode(#[from] serde_json::Error),
+    /// The library writing through a temporary path ([`write_atomic_via`])
+    /// failed, or putting its bytes in place did.
+    #[error("cannot write {}", path.display())]
+    Via {
+        /// The output as given.
+        path: PathBuf,
+        /// The library's error, or the I/O error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
+}
+
+impl WriteError {
+    fn refused(path: &Path) -> impl Fn(std::io::Error) -> Self + '_ {
+        move |reason| Self::Refused { path: path.to_owned(), reason }
+    }
+}
+
 /// An error saying why a path is refused ("it is a folder; ..."); the caller names the path.
 fn refuse(why: &str) -> std::io::Error {
     std::io::Error::other(format!("it {why}"))
@@ -102,8 +136,8 @@ pub fn target(path: &Path) -> std::io::Result<Target> {
 ///
 /// # Errors
 /// As [`target`], naming the path.
-pub fn check_output(path: &Path) -> anyhow::Result<Target> {
-    target(path).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
+pub fn check_output(path: &Path) -> Result<Target, WriteError> {
+    target(path).map_err(WriteError::refused(path))
 }
 
 /// Opens a character device or a pipe for writing in place. A FIFO that no
@@ -250,15 +284,15 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut Output) -> std::io::Res
 ///
 /// # Errors
 /// I/O errors, naming the path.
-pub fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    write_atomic(path, |f| f.write_all(bytes)).map_err(|e| anyhow::anyhow!("cannot write {}: {}", path.display(), e))
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    write_atomic(path, |f| f.write_all(bytes)).map_err(WriteError::refused(path))
 }
 
 /// Writes `value` to `path` as pretty JSON (see the module).
 ///
 /// # Errors
 /// Encoding or I/O errors, naming the path.
-pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), WriteError> {
     write_file(path, &serde_json::to_vec_pretty(value)?)
 }
 
@@ -269,10 +303,12 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<
 ///
 /// # Errors
 /// `write`'s error or an I/O error, naming `path`; `path` is then unchanged.
-pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result<()>) -> anyhow::Result<()> {
-    use anyhow::Context;
-    let name = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {}", path.display(), e);
-    let tmp = match target(path).map_err(name)? {
+pub fn write_atomic_via<E>(path: &Path, write: impl FnOnce(&Path) -> Result<(), E>) -> Result<(), WriteError>
+where
+    E: Into<Box<dyn std::error::Error + Send + Sync + 'static>>,
+{
+    let name = WriteError::refused(path);
+    let tmp = match target(path).map_err(&name)? {
         Target::File { path: real, .. } => temp_path(&real),
         Target::Stream => {
             let ext = path.extension().map(|e| format!(".{}", e.to_string_lossy())).unwrap_or_default();
@@ -281,13 +317,13 @@ pub fn write_atomic_via(path: &Path, write: impl FnOnce(&Path) -> anyhow::Result
     };
     // Whether the folder takes a file at all, in the OS's words, before the
     // library tries and reports it in its own.
-    File::create(&tmp).map_err(name)?;
-    let result = write(&tmp).and_then(|()| {
+    File::create(&tmp).map_err(&name)?;
+    let result: Result<(), Box<dyn std::error::Error + Send + Sync>> = write(&tmp).map_err(Into::into).and_then(|()| {
         let bytes = std::fs::read(&tmp)?;
-        write_atomic(path, |f| f.write_all(&bytes)).map_err(name)
+        write_atomic(path, |f| f.write_all(&bytes)).map_err(|e| name(e).into())
     });
     let _ = std::fs::remove_file(&tmp);
-    result.with_context(|| format!("cannot write {}", path.display()))
+    result.map_err(|source| WriteError::Via { path: path.to_owned(), source })
 }
 
 /// A number no other call in this process gets.
@@ -438,7 +474,10 @@ mod tests {
             std::fs::write(tmp, b"x")?;
             anyhow::bail!("encoder failed")
         });
-        assert!(format!("{:#}", err.unwrap_err()).contains("a.txt"));
+        assert_eq!(
+            format!("{:#}", anyhow::Error::from(err.unwrap_err())),
+            format!("cannot write {}: encoder failed", path.display())
+        );
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.txt")], "no temporary file is left");
     }

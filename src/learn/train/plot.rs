@@ -90,7 +90,8 @@ pub fn png_only(path: &Path) -> Result<()> {
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
         bail!("{}: plots are PNG images; give a path ending in .png", path.display());
     }
-    crate::support::io::check_output(path).map(drop)
+    crate::support::io::check_output(path)?;
+    Ok(())
 }
 
 /// Two panels of the same curves: against the epoch (left) and against
@@ -98,7 +99,7 @@ pub fn png_only(path: &Path) -> Result<()> {
 fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
     png_only(path)?;
     register_font()?;
-    crate::support::io::write_atomic_via(path, |tmp| two_panels_to(tmp, path, title, curves))
+    Ok(crate::support::io::write_atomic_via(path, |tmp| two_panels_to(tmp, path, title, curves))?)
 }
 
 /// [`two_panels`] drawn into the file `tmp`.
@@ -237,7 +238,7 @@ const DEVIATION_FLOOR: f64 = 1e-12;
 pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)], tolerance: f64) -> Result<()> {
     png_only(path)?;
     register_font()?;
-    crate::support::io::write_atomic_via(path, |tmp| {
+    Ok(crate::support::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
         let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
         root.fill(&WHITE).map_err(draw)?;
@@ -277,7 +278,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
             legend(&mut chart).map_err(draw)?;
         }
         root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
-    })
+    })?)
 }
 
 /// One point of a scaling figure: the x value (e.g. the number of distinct training tasks) and the
@@ -310,7 +311,7 @@ pub fn scaling(
         bail!("x = {} cannot stand on a logarithmic axis: give x above 0", p.x);
     }
     register_font()?;
-    crate::support::io::write_atomic_via(path, |tmp| {
+    Ok(crate::support::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (900, 560)).into_drawing_area();
         let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
         root.fill(&WHITE).map_err(draw)?;
@@ -368,5 +369,5 @@ pub fn scaling(
         }
         legend(&mut chart).map_err(draw)?;
         root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
-    })
+    })?)
 }

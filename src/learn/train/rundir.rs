@@ -82,7 +82,7 @@ impl RunDir {
             return Ok(());
         }
         spans.push(Span { from_epoch, build });
-        crate::support::io::write_json(&self.provenance(), &spans)
+        Ok(crate::support::io::write_json(&self.provenance(), &spans)?)
     }
     /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
     /// (a resumed run uses this copy, so the expert cannot change under it).
@@ -102,14 +102,14 @@ pub struct Span {
 }
 
 pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
-    crate::support::io::write_atomic_via(path, |tmp| {
+    Ok(crate::support::io::write_atomic_via(path, |tmp| -> Result<()> {
         let mut w = csv::Writer::from_path(tmp)?;
         for r in rows {
             w.serialize(r)?;
         }
         w.flush()?;
         Ok(())
-    })
+    })?)
 }
 
 /// The largest log read whole: a million epochs of about 400 bytes.
