@@ -493,7 +493,7 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     // Every output checked before any candidate is played, as `task generate` does.
     blockpuzzle::episode::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(format!("{e:#}")))?;
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
-        let results = blockpuzzle::episode::generate::generate(&fam, seed, count, threads)?;
+        let results = blockpuzzle::episode::generate::generate(&fam, seed, count, threads).map_err(|e| e.to_string())?;
         let build = blockpuzzle::benchmark::provenance::Build::current();
         blockpuzzle::episode::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| format!("{e:#}"))
     });

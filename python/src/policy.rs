@@ -91,10 +91,8 @@ pub(crate) fn evaluate_saved(
     let saved = match blockpuzzle::benchmark::load::resolve(&path) {
         Ok(blockpuzzle::benchmark::load::Named::Saved(_, saved)) => saved,
         Ok(_) => return Err(PyValueError::new_err(format!("{}: not a trained policy", path.display()))),
-        Err(e) => match e.downcast::<blockpuzzle::benchmark::zoo::ZooError>() {
-            Ok(z) => return Err(zoo_err(z)),
-            Err(e) => return Err(PyValueError::new_err(format!("{e:#}"))),
-        },
+        Err(blockpuzzle::benchmark::load::LoadError::Zoo(z)) => return Err(zoo_err(z)),
+        Err(e) => return Err(PyValueError::new_err(format!("{:#}", anyhow::Error::from(e)))),
     };
     let mut suite = blockpuzzle::benchmark::suite::load(suite).map_err(crate::suite_err)?;
     if let Some(n) = episodes {

@@ -7,8 +7,30 @@
 
 use crate::benchmark::evaluate::{Baseline, Subject};
 use crate::benchmark::saved::{SavedPolicy, BEST_POLICY_FILE, POLICY_FILE};
-use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
+
+/// Why a policy name stands for no usable trained policy.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// A zoo entry (by name or file) that is missing or not usable.
+    #[error(transparent)]
+    Zoo(#[from] crate::benchmark::zoo::ZooError),
+    /// A policy file (or a run directory's) that is missing or not usable.
+    #[error(transparent)]
+    Saved(#[from] crate::benchmark::saved::SavedError),
+    /// `random` where a trained policy is needed.
+    #[error("`random` is random actions, not a trained policy; give a policy file, run directory or zoo name")]
+    Random,
+    /// A baseline where a trained policy is needed.
+    #[error(
+        "`{name}` is a baseline that needs no training, not a trained policy; give a policy file, run directory or \
+         zoo name (suites evaluate baselines: `eval --suite S --baseline {name}`)"
+    )]
+    Baseline {
+        /// The baseline's name.
+        name: String,
+    },
+}
 
 /// What a policy name stands for.
 #[derive(Debug, Clone)]
@@ -39,7 +61,7 @@ impl Named {
 ///
 /// # Errors
 /// A clear message for a missing, malformed or damaged file, or an unknown zoo name.
-pub fn resolve(path: &Path) -> Result<Named> {
+pub fn resolve(path: &Path) -> Result<Named, LoadError> {
     if path.to_str() == Some("random") {
         return Ok(Named::Random);
     }
@@ -68,17 +90,10 @@ pub fn resolve(path: &Path) -> Result<Named> {
 ///
 /// # Errors
 /// As [`resolve`], and a name that is no trained policy.
-pub fn load_policy(path: &Path) -> Result<SavedPolicy> {
+pub fn load_policy(path: &Path) -> Result<SavedPolicy, LoadError> {
     match resolve(path)? {
         Named::Saved(_, saved) => Ok(saved),
-        Named::Random => {
-            bail!("`random` is random actions, not a trained policy; give a policy file, run directory or zoo name")
-        }
-        Named::Baseline(b) => bail!(
-            "`{}` is a baseline that needs no training, not a trained policy; give a policy file, run directory or \
-             zoo name (suites evaluate baselines: `eval --suite S --baseline {}`)",
-            b.name(),
-            b.name()
-        ),
+        Named::Random => Err(LoadError::Random),
+        Named::Baseline(b) => Err(LoadError::Baseline { name: b.name().to_owned() }),
     }
 }

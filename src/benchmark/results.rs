@@ -8,10 +8,140 @@
 use crate::benchmark::evaluate::SuiteResult;
 use crate::benchmark::provenance::Mismatch;
 use crate::episode::outcome::wilson95;
-use anyhow::{bail, Context, Result};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// Why result files cannot be read, compared or ranked, naming the files.
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    /// The file cannot be read (missing, a folder, too large, not text).
+    #[error("cannot read result file {}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not JSON.
+    #[error("{} is not JSON; give the JSON files written by `eval --suite`", path.display())]
+    NotJson {
+        /// The file.
+        path: PathBuf,
+        /// Where the JSON is wrong.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// JSON of another kind.
+    #[error("{} is not a suite result (no `suite` and `splits`); give files written by `eval --suite`", path.display())]
+    NotSuiteResult {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A result written before results carried their provenance.
+    #[error(
+        "{} records no provenance (written before results said which engine made them), so it cannot be \
+         compared; evaluate the policy again with `blockpuzzle eval --suite`",
+        path.display()
+    )]
+    NoProvenance {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A suite result whose fields do not decode.
+    #[error("{} is not a well-formed suite result", path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Where the JSON is wrong.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A shortened run, not the suite's score.
+    #[error(
+        "{}: a shortened run (at most {episodes} episodes per row), not the suite's score; evaluate the full \
+         suite (without --episodes-per-row / episodes=) to compare or rank it",
+        path.display()
+    )]
+    Shortened {
+        /// The file.
+        path: PathBuf,
+        /// Its episodes per row.
+        episodes: usize,
+    },
+    /// The provenance names another suite than the `suite` field.
+    #[error(
+        "{}: its provenance names another suite than its `suite` field (an edited or damaged file); evaluate again",
+        path.display()
+    )]
+    OtherSuite {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Numbers that do not hold together.
+    #[error(
+        "{}: {bad} (an edited or damaged file); evaluate the policy again with `blockpuzzle eval --suite {suite}`",
+        path.display()
+    )]
+    Edited {
+        /// The file.
+        path: PathBuf,
+        /// The field and what is wrong with it.
+        bad: crate::benchmark::evaluate::BadResult,
+        /// The suite's name.
+        suite: String,
+    },
+    /// A folder that cannot be listed.
+    #[error("cannot list {}", path.display())]
+    Unlistable {
+        /// The folder.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// No result file among the paths given.
+    #[error("no result files in {paths}")]
+    NoFiles {
+        /// The paths, joined by commas.
+        paths: String,
+    },
+    /// Nothing to compare.
+    #[error("give at least one result file")]
+    Empty,
+    /// Two files whose numbers may not stand in one column.
+    #[error(
+        "{} and {} cannot stand in one column: {mismatch}. Compare results of one engine, suite and task set \
+         (`blockpuzzle info` names a build's engine)",
+        first.display(),
+        other.display()
+    )]
+    NotComparable {
+        /// The first file.
+        first: PathBuf,
+        /// The file that differs from it.
+        other: PathBuf,
+        /// The field that differs.
+        mismatch: Mismatch,
+    },
+    /// The same policy's results on one table that are not comparable.
+    #[error(transparent)]
+    Mismatch(#[from] Mismatch),
+    /// The same policy with two different numbers on one suite and engine.
+    #[error(
+        "{} and {} are the same policy on the same suite and engine with different outcome counts; \
+         one of them was made by another blockpuzzle (see their provenance) or is damaged",
+        first.display(),
+        other.display()
+    )]
+    Conflicting {
+        /// One file.
+        first: PathBuf,
+        /// The other.
+        other: PathBuf,
+    },
+}
 
 /// The largest result file read (a suite result of the built-in suites is a few tens of kB).
 pub const MAX_RESULT_BYTES: u64 = 16 << 20;
@@ -30,51 +160,36 @@ pub struct ResultFile {
 /// # Errors
 /// A missing, oversized or malformed file, a file that is not a suite
 /// result, or one written before results carried their provenance.
-pub fn read(path: &Path) -> Result<ResultFile> {
+pub fn read(path: &Path) -> Result<ResultFile, ResultsError> {
+    let file = || path.to_owned();
     let text = crate::support::io::read_text(
         path,
         "suite result (the JSON written by `blockpuzzle eval --suite`)",
         MAX_RESULT_BYTES,
     )
-    .with_context(|| format!("cannot read result file {}", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("{} is not JSON; give the JSON files written by `eval --suite`", path.display()))?;
+    .map_err(|source| ResultsError::Unreadable { path: file(), source })?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|source| ResultsError::NotJson { path: file(), source })?;
     if value.get("splits").is_none() || value.get("suite").is_none() {
-        bail!(
-            "{} is not a suite result (no `suite` and `splits`); give files written by `eval --suite`",
-            path.display()
-        );
+        return Err(ResultsError::NotSuiteResult { path: file() });
     }
     if value.get("provenance").is_none() {
-        bail!(
-            "{} records no provenance (written before results said which engine made them), so it cannot be \
-             compared; evaluate the policy again with `blockpuzzle eval --suite`",
-            path.display()
-        );
+        return Err(ResultsError::NoProvenance { path: file() });
     }
-    let result: SuiteResult = serde_json::from_value(value)
-        .with_context(|| format!("{} is not a well-formed suite result", path.display()))?;
-    if let Some(n) = result.suite.episodes_per_row {
-        bail!(
-            "{}: a shortened run (at most {n} episodes per row), not the suite's score; evaluate the full \
-             suite (without --episodes-per-row / episodes=) to compare or rank it",
-            path.display()
-        );
+    let result: SuiteResult =
+        serde_json::from_value(value).map_err(|source| ResultsError::Malformed { path: file(), source })?;
+    if let Some(episodes) = result.suite.episodes_per_row {
+        return Err(ResultsError::Shortened { path: file(), episodes });
     }
     if result.provenance.suite.as_ref() != Some(&result.suite) {
-        bail!(
-            "{}: its provenance names another suite than its `suite` field (an edited or damaged file); evaluate again",
-            path.display()
-        );
+        return Err(ResultsError::OtherSuite { path: file() });
     }
     // Nothing shown is taken on trust: every derived number is recomputed from the outcome counts, and the
     // rows are the suite's own where this build has the suite with the same text.
-    let edited = |e: crate::benchmark::evaluate::BadResult| {
-        anyhow::anyhow!(
-            "{}: {e} (an edited or damaged file); evaluate the policy again with `blockpuzzle eval --suite {}`",
-            path.display(),
-            result.suite.name
-        )
+    let edited = |bad: crate::benchmark::evaluate::BadResult| ResultsError::Edited {
+        path: file(),
+        bad,
+        suite: result.suite.name.clone(),
     };
     result.verify().map_err(edited)?;
     if let Some(suite) = builtin_suite(&result.suite) {
@@ -102,12 +217,12 @@ fn builtin_suite(id: &crate::benchmark::suite::SuiteId) -> Option<std::sync::Arc
 ///
 /// # Errors
 /// A path that does not exist, an unreadable result file.
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<ResultFile>> {
+pub fn read_all(paths: &[PathBuf]) -> Result<Vec<ResultFile>, ResultsError> {
     let mut out = Vec::new();
     for p in paths {
         if p.is_dir() {
             let mut files: Vec<PathBuf> = std::fs::read_dir(p)
-                .with_context(|| format!("cannot list {}", p.display()))?
+                .map_err(|source| ResultsError::Unlistable { path: p.clone(), source })?
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|f| f.extension().is_some_and(|x| x == "json") && f.is_file())
                 .collect();
@@ -120,7 +235,8 @@ pub fn read_all(paths: &[PathBuf]) -> Result<Vec<ResultFile>> {
         }
     }
     if out.is_empty() {
-        bail!("no result files in {}", paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "));
+        let paths = paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ");
+        return Err(ResultsError::NoFiles { paths });
     }
     Ok(out)
 }
@@ -160,16 +276,13 @@ pub fn comparable(a: &SuiteResult, b: &SuiteResult) -> Result<(), Mismatch> {
 }
 
 /// Every file comparable with the first, or an error naming the two files and the field.
-fn check_all(files: &[ResultFile]) -> Result<()> {
+fn check_all(files: &[ResultFile]) -> Result<(), ResultsError> {
     let first = &files[0];
     for f in &files[1..] {
-        comparable(&first.result, &f.result).map_err(|m| {
-            anyhow::anyhow!(
-                "{} and {} cannot stand in one column: {m}. Compare results of one engine, suite and task set \
-                 (`blockpuzzle info` names a build's engine)",
-                first.path.display(),
-                f.path.display()
-            )
+        comparable(&first.result, &f.result).map_err(|mismatch| ResultsError::NotComparable {
+            first: first.path.clone(),
+            other: f.path.clone(),
+            mismatch,
         })?;
     }
     Ok(())
@@ -205,9 +318,9 @@ pub fn score_interval(r: &SuiteResult) -> Option<(f64, f64)> {
 ///
 /// # Errors
 /// Results that may not stand in one column (the field is named).
-pub fn compare(files: &[ResultFile]) -> Result<String> {
+pub fn compare(files: &[ResultFile]) -> Result<String, ResultsError> {
     if files.is_empty() {
-        bail!("give at least one result file");
+        return Err(ResultsError::Empty);
     }
     check_all(files)?;
     let first = &files[0].result;
@@ -267,7 +380,7 @@ type Board = (String, String, String, Vec<String>);
 ///
 /// # Errors
 /// One policy with two different numbers on one suite and engine.
-pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
+pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
     let mut boards: BTreeMap<Board, Vec<&ResultFile>> = BTreeMap::new();
     for f in files {
         let r = &f.result;
@@ -293,7 +406,7 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
         }
         for same in rows.values() {
             for f in &same[1..] {
-                comparable(&same[0].result, &f.result).map_err(anyhow::Error::msg)?;
+                comparable(&same[0].result, &f.result)?;
                 let numbers = |r: &SuiteResult| {
                     r.splits
                         .iter()
@@ -301,12 +414,7 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String> {
                         .collect::<Vec<_>>()
                 };
                 if numbers(&same[0].result) != numbers(&f.result) {
-                    bail!(
-                        "{} and {} are the same policy on the same suite and engine with different outcome counts; \
-                         one of them was made by another blockpuzzle (see their provenance) or is damaged",
-                        same[0].path.display(),
-                        f.path.display()
-                    );
+                    return Err(ResultsError::Conflicting { first: same[0].path.clone(), other: f.path.clone() });
                 }
             }
         }

@@ -6,9 +6,8 @@
 
 use crate::policy::actor::mlp::PlainNet;
 use crate::policy::actor::AnyPolicy;
-use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A run directory's configuration file: its presence makes a folder a run directory.
 pub const CONFIG_FILE: &str = "config.json";
@@ -16,6 +15,37 @@ pub const CONFIG_FILE: &str = "config.json";
 pub const POLICY_FILE: &str = "policy.json";
 /// A run's policy of the best finals success, in its run directory.
 pub const BEST_POLICY_FILE: &str = "best_policy.json";
+
+/// Why a policy file cannot be used ([`read`]), naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum SavedError {
+    /// The file cannot be read (missing, a folder, too large, not text).
+    #[error("cannot read policy {} (train one with `blockpuzzle train`)", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why, in the OS's words or the reader's.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not a policy file's JSON.
+    #[error("{} is not a blockpuzzle policy file", path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Where the JSON is wrong.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The policy does not pass [`SavedPolicy::check`].
+    #[error("policy {} is not usable: {reason}", path.display())]
+    Unusable {
+        /// The file.
+        path: PathBuf,
+        /// The first problem.
+        reason: String,
+    },
+}
 
 /// A saved policy: the actor, its normaliser and what it was trained on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -186,11 +216,12 @@ impl SavedPolicy {
 ///
 /// # Errors
 /// A missing, malformed or damaged file, named.
-pub fn read(file: &Path) -> Result<SavedPolicy> {
+pub fn read(file: &Path) -> Result<SavedPolicy, SavedError> {
+    let path = || file.to_owned();
     let text = crate::support::io::read_text(file, "policy file", crate::support::limits::POLICY_FILE_BYTES)
-        .with_context(|| format!("cannot read policy {} (train one with `blockpuzzle train`)", file.display()))?;
+        .map_err(|source| SavedError::Unreadable { path: path(), source })?;
     let saved: SavedPolicy =
-        serde_json::from_str(&text).with_context(|| format!("{} is not a blockpuzzle policy file", file.display()))?;
-    saved.check().map_err(|e| anyhow::anyhow!("policy {} is not usable: {e}", file.display()))?;
+        serde_json::from_str(&text).map_err(|source| SavedError::Malformed { path: path(), source })?;
+    saved.check().map_err(|reason| SavedError::Unusable { path: path(), reason })?;
     Ok(saved.with_record())
 }

@@ -545,10 +545,10 @@ impl Cache {
         let result = path
             .parent()
             .map_or(Ok(()), std::fs::create_dir_all)
-            .map_err(anyhow::Error::from)
-            .and_then(|()| Ok(crate::support::io::write_json(&path, self)?));
+            .map_err(|e| e.to_string())
+            .and_then(|()| crate::support::io::write_json(&path, self).map_err(|e| e.to_string()));
         if let Err(e) = result {
-            eprintln!("warning: cannot write the stream cache {}: {e:#}", path.display());
+            eprintln!("warning: cannot write the stream cache {}: {e}", path.display());
         }
     }
 }

@@ -385,7 +385,8 @@ fn generated_rows(
             .collect();
     }
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let results = crate::episode::generate::generate(family, first, (end - first) as usize, threads)?;
+    let results = crate::episode::generate::generate(family, first, (end - first) as usize, threads)
+        .map_err(|e| e.to_string())?;
     results
         .into_iter()
         .map(|g| {

@@ -32,7 +32,7 @@ pub(super) enum ResultsCommand {
 pub(super) fn run(c: ResultsCommand) -> Result<()> {
     match c {
         ResultsCommand::Compare { files } => {
-            let files = files.iter().map(|f| crate::benchmark::results::read(f)).collect::<Result<Vec<_>>>()?;
+            let files = files.iter().map(|f| crate::benchmark::results::read(f)).collect::<Result<Vec<_>, _>>()?;
             print!("{}", crate::benchmark::results::compare(&files)?);
         }
         ResultsCommand::Leaderboard { paths, out, check } => {

@@ -245,7 +245,7 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
                 );
             };
             let r = crate::benchmark::results::read(std::path::Path::new(file))
-                .map_err(|e| e.context(format!("--level {given}")))?
+                .map_err(|e| anyhow::Error::from(e).context(format!("--level {given}")))?
                 .result;
             let Some(test) = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success) else {
                 bail!("--level {given}: {file} has no `test` split evaluated");

@@ -60,6 +60,42 @@ fn reason(kind: &str, detail: &str) -> Rejection {
     Rejection { kind: kind.to_owned(), detail: detail.to_owned() }
 }
 
+/// Why generated tasks cannot be made or written, naming the path.
+#[derive(Debug, thiserror::Error)]
+pub enum GenerateError {
+    /// The thread pool cannot be made.
+    #[error("{0}")]
+    Threads(String),
+    /// The output exists and is not a folder.
+    #[error("{} is not a folder; give a folder for the task files", path.display())]
+    NotAFolder {
+        /// The output.
+        path: std::path::PathBuf,
+    },
+    /// The output folder cannot be made.
+    #[error("cannot make the folder {}: {reason}", path.display())]
+    CannotMakeFolder {
+        /// The folder.
+        path: std::path::PathBuf,
+        /// The OS's error.
+        reason: std::io::Error,
+    },
+    /// A file cannot be written.
+    #[error("cannot write {}: {reason}", path.display())]
+    CannotWrite {
+        /// The file.
+        path: std::path::PathBuf,
+        /// The OS's error.
+        reason: std::io::Error,
+    },
+    /// An output that cannot be written ([`check_outputs`]).
+    #[error(transparent)]
+    Output(#[from] crate::support::io::WriteError),
+    /// The manifest cannot be encoded.
+    #[error(transparent)]
+    Encode(#[from] serde_json::Error),
+}
+
 /// The checks of a candidate that play no episode to its end, and so give the same answer on every
 /// engine and build: its scene builds, its first check episode's layout can be drawn, and the solver
 /// can play it (it chooses its behaviour from that first observation). A pinned candidate
@@ -163,9 +199,9 @@ fn check_seed(family: &Family, seed: u64) -> SeedResult {
 ///
 /// # Errors
 /// A thread pool that cannot be made.
-pub fn generate(family: &Family, first: u64, count: usize, threads: usize) -> Result<Vec<SeedResult>, String> {
+pub fn generate(family: &Family, first: u64, count: usize, threads: usize) -> Result<Vec<SeedResult>, GenerateError> {
     use rayon::prelude::*;
-    let pool = crate::env::vector::model_threads(threads)?;
+    let pool = crate::env::vector::model_threads(threads).map_err(GenerateError::Threads)?;
     Ok(pool.install(|| (0..count as u64).into_par_iter().map(|k| generate_seed(family, first + k)).collect()))
 }
 
@@ -206,15 +242,15 @@ pub fn write_folder(
     first: u64,
     results: &[SeedResult],
     build: &impl Serialize,
-) -> anyhow::Result<serde_json::Value> {
+) -> Result<serde_json::Value, GenerateError> {
     use std::io::Write as _;
     // A folder made here goes again if anything fails.
     let created = match std::fs::metadata(out) {
-        Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
+        Ok(m) if !m.is_dir() => return Err(GenerateError::NotAFolder { path: out.to_owned() }),
         Ok(_) => None,
         Err(_) => Some(
             crate::support::io::CreatedDir::create(out)
-                .map_err(|e| anyhow::anyhow!("cannot make the folder {}: {e}", out.display()))?,
+                .map_err(|reason| GenerateError::CannotMakeFolder { path: out.to_owned(), reason })?,
         ),
     };
     let kept: Vec<&Generated> = results.iter().filter_map(|r| r.task.as_ref()).collect();
@@ -236,13 +272,13 @@ pub fn write_folder(
     let files = kept.iter().map(|t| (out.join(format!("{}.toml", t.id)), t.toml.as_bytes()));
     let mut outputs = Vec::new();
     for (path, bytes) in files.chain(std::iter::once((out.join(MANIFEST), &json[..]))) {
-        let cannot = |e: std::io::Error| anyhow::anyhow!("cannot write {}: {e}", path.display());
+        let cannot = |reason: std::io::Error| GenerateError::CannotWrite { path: path.clone(), reason };
         let mut output = crate::support::io::Output::create(&path).map_err(cannot)?;
         output.write_all(bytes).and_then(|()| output.flush()).map_err(cannot)?;
         outputs.push((path, output));
     }
     for (path, output) in outputs {
-        output.finish().map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+        output.finish().map_err(|reason| GenerateError::CannotWrite { path, reason })?;
     }
     created.into_iter().for_each(crate::support::io::CreatedDir::keep);
     Ok(manifest)
@@ -257,9 +293,9 @@ pub const MANIFEST: &str = "generated.json";
 /// # Errors
 /// `out` is not a folder, or the first output that cannot be written (a folder in its place, a read-only
 /// file), named.
-pub fn check_outputs(out: &std::path::Path, family: &Family, first: u64, count: usize) -> anyhow::Result<()> {
+pub fn check_outputs(out: &std::path::Path, family: &Family, first: u64, count: usize) -> Result<(), GenerateError> {
     match std::fs::metadata(out) {
-        Ok(m) if !m.is_dir() => anyhow::bail!("{} is not a folder; give a folder for the task files", out.display()),
+        Ok(m) if !m.is_dir() => return Err(GenerateError::NotAFolder { path: out.to_owned() }),
         Ok(_) => {}
         Err(_) => return Ok(()),
     }
