@@ -308,7 +308,7 @@ mod tests {
 
     #[test]
     fn every_shared_flag_an_algorithm_reads_exists_and_each_is_read() {
-        let shared = serde_json::to_value(SharedConfig::default()).unwrap();
+        let shared = serde_json::to_value(SharedConfig::ALL_WRITTEN).unwrap();
         let flags: Vec<String> = shared.as_object().unwrap().keys().map(|k| flag("", k)).collect();
         for r in ALGORITHMS {
             for f in r.info.reads {

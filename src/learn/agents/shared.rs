@@ -64,7 +64,7 @@ pub struct SharedConfig {
     /// as RLPD's critics (Ball et al. 2023): it bounds the values a critic extrapolates to actions
     /// its data never took.
     #[arg(long)]
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub critic_norm: bool,
 }
 
@@ -100,6 +100,11 @@ impl SharedConfig {
         flat_critic: false,
         critic_norm: false,
     };
+
+    /// The defaults with every setting a `config.json` omits at its default turned on, so that it
+    /// serialises every field (tests enumerate the fields from it).
+    #[cfg(test)]
+    pub(crate) const ALL_WRITTEN: Self = Self { critic_norm: true, ..Self::DEFAULT };
 
     /// Whether every setting is in range; the error names the flag.
     ///
@@ -212,7 +217,8 @@ mod tests {
         use clap::Parser;
         assert_eq!(Cli::parse_from(["x"]).shared, SharedConfig::default());
         assert_eq!(serde_json::from_str::<SharedConfig>("{}").unwrap(), SharedConfig::default());
-        let fields = serde_json::to_value(SharedConfig::default()).unwrap();
+        // Every field: those the files leave out at their default (critic_norm) set.
+        let fields = serde_json::to_value(SharedConfig::ALL_WRITTEN).unwrap();
         let flags: Vec<String> =
             fields.as_object().unwrap().keys().map(|k| format!("--{}", k.replace('_', "-"))).collect();
         let mut listed: Vec<String> = SharedConfig::FLAGS.iter().map(|f| f.to_string()).collect();
