@@ -303,8 +303,16 @@ pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Resu
 /// Unknown environment, bad level or challenge flag, a policy that does not
 /// fit the environment, environment failures.
 pub fn evaluate(path: &Path, saved: SavedPolicy, spec: &EvalSpec) -> Result<Evaluation> {
-    let env = make_env(spec, saved.obs_mode(), saved.slots()?)?;
-    let policy = Actor::Trained(trained_policy(path, saved, &env)?);
+    evaluate_subject(Subject::Saved(path, &saved), spec)
+}
+
+/// Plays `spec.episodes` deterministic episodes of `subject`: a saved policy or a baseline.
+///
+/// # Errors
+/// As [`evaluate`].
+pub fn evaluate_subject(subject: Subject, spec: &EvalSpec) -> Result<Evaluation> {
+    let env = make_env(spec, subject.obs_mode(), subject.slots()?)?;
+    let policy = Actor::fit(subject, &env)?;
     play(spec, env, policy)
 }
 

@@ -9,13 +9,14 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
 pub(super) struct EvalArgs {
-    /// A policy file, a run directory (uses best_policy.json, else policy.json) or a zoo name.
+    /// A policy file, a run directory (uses best_policy.json, else policy.json), a zoo name, or a
+    /// baseline's name (as --baseline).
     #[arg(long)]
     checkpoint: Option<PathBuf>,
-    /// Evaluate a policy that needs no training on the suite instead of a checkpoint: `scripted`
-    /// (each task's scripted controller) or `obs-hash` (pseudo-random actions from a hash of the
-    /// observation, the same as Python's `blockpuzzle.policies.obs_hash`).
-    #[arg(long, value_enum, requires = "suite", conflicts_with = "checkpoint")]
+    /// Evaluate a policy that needs no training instead of a checkpoint, on --suite or on --env:
+    /// `scripted` (each task's scripted controller) or `obs-hash` (pseudo-random actions from a hash
+    /// of the observation, the same as Python's `blockpuzzle.policies.obs_hash`).
+    #[arg(long, value_enum, conflicts_with = "checkpoint")]
     baseline: Option<crate::benchmark::evaluate::Baseline>,
     /// Evaluate on an evaluation suite instead: a built-in name or a suite file; writes
     /// eval-POLICY-suite-NAME.json and .md (docs/suites.md). The help lists the built-in names.
@@ -260,18 +261,34 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     if let Some(suite) = &a.suite {
         return eval_suite(&a, suite);
     }
-    let Some(checkpoint) = &a.checkpoint else {
-        bail!("give --checkpoint POLICY (a policy file, run directory or zoo name; --baseline needs --suite)")
+    use crate::benchmark::evaluate::Subject;
+    use crate::benchmark::load::Named;
+    // One resolver: a policy file, run directory or zoo name, or a baseline by --checkpoint or --baseline.
+    let named = match (&a.checkpoint, a.baseline) {
+        (Some(c), _) => crate::benchmark::load::resolve(c)?,
+        (None, Some(b)) => Named::Baseline(b),
+        (None, None) => bail!("give --checkpoint POLICY (a policy file, run directory or zoo name) or --baseline NAME"),
     };
-    let saved = crate::benchmark::load::load_policy(checkpoint)?;
-    let task = policy_task(a.env.as_deref(), &saved)?;
+    let Some(subject) = named.subject() else {
+        bail!("`random` is random actions, not a policy to evaluate; give a policy file, run directory, zoo name or baseline")
+    };
+    let (task, checkpoint, policy_epoch) = match subject {
+        Subject::Saved(path, saved) => (policy_task(a.env.as_deref(), saved)?, path.to_path_buf(), Some(saved.epoch)),
+        Subject::Baseline(b) => {
+            let Some(env) = a.env.as_deref() else {
+                bail!(
+                    "the baseline `{}` has no task of its own: give --env ID (or a task file), or evaluate a suite \
+                     with --suite S",
+                    b.name()
+                )
+            };
+            (crate::env::registry::task(env)?, PathBuf::from(format!("baseline-{}", b.name())), None)
+        }
+    };
+    let checkpoint = &checkpoint;
     let id = task.id().to_owned();
-    let policy_epoch = saved.epoch;
-    let provenance = crate::benchmark::provenance::Provenance::new(
-        crate::benchmark::provenance::Harness::Cli,
-        saved.policy_id(&checkpoint.display().to_string()),
-        None,
-    );
+    let provenance =
+        crate::benchmark::provenance::Provenance::new(crate::benchmark::provenance::Harness::Cli, subject.id(), None);
     let spec = crate::benchmark::evaluate::EvalSpec {
         task: &task,
         distribution: None,
@@ -288,11 +305,15 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     };
     let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
     crate::support::io::check_output(&out)?;
-    let r = crate::benchmark::evaluate::evaluate(checkpoint, saved, &spec)?;
+    let r = crate::benchmark::evaluate::evaluate_subject(subject, &spec)?;
+    let policy = match subject {
+        Subject::Saved(path, _) => path.display().to_string(),
+        Subject::Baseline(_) => subject.id().name,
+    };
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
-        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": checkpoint, "policy_epoch": policy_epoch,
+        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": policy, "policy_epoch": policy_epoch,
         "task_sha256": task.source.hash, "provenance": provenance,
     });
     crate::support::io::write_json(&out, &result)?;

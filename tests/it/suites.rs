@@ -148,7 +148,7 @@ fn eval_suite_writes_json_and_markdown_and_skips_rows_that_do_not_fit() {
 
 #[cfg(feature = "train")]
 #[test]
-fn baselines_run_on_every_row_and_need_a_suite() {
+fn baselines_run_on_every_row_and_on_one_task() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("counts.toml");
     let text = r#"
@@ -181,7 +181,7 @@ episodes = 6
     }
     let md = std::fs::read_to_string(out.with_extension("md")).unwrap();
     assert!(md.contains("A baseline (no training)"), "{md}");
-    // --baseline needs --suite, and cannot be given with --checkpoint; neither is an error naming both.
+    // --baseline needs a suite or a task, and cannot be given with --checkpoint; neither is an error naming both.
     let e = run(&["eval", "--baseline", "scripted"]);
     assert!(!e.status.success() && String::from_utf8_lossy(&e.stderr).contains("--suite"));
     let e = run(&["eval", "--suite", "count", "--baseline", "scripted", "--checkpoint", "x"]);
@@ -189,4 +189,23 @@ episodes = 6
     let e = run(&["eval", "--suite", "count"]);
     let stderr = String::from_utf8_lossy(&e.stderr);
     assert!(!e.status.success() && stderr.contains("--checkpoint") && stderr.contains("--baseline"), "{stderr}");
+    // On one task too (one resolver: --baseline NAME or --checkpoint NAME), the same episodes either way.
+    let tmp = tempfile::tempdir().unwrap();
+    let mut results = Vec::new();
+    for (k, how) in [["--baseline", "scripted"], ["--checkpoint", "scripted"]].iter().enumerate() {
+        let out = tmp.path().join(format!("one-{k}.json"));
+        let args =
+            ["eval", how[0], how[1], "--env", "BlocksTouch-v0", "--episodes", "3", "--out", out.to_str().unwrap()];
+        let o = run(&args);
+        assert!(o.status.success(), "{how:?}: {}", String::from_utf8_lossy(&o.stderr));
+        let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        assert_eq!(
+            (r["policy"].as_str(), r["provenance"]["policy"]["name"].as_str()),
+            (Some("baseline:scripted"), Some("baseline:scripted"))
+        );
+        results.push(r["successes"].clone());
+    }
+    assert_eq!(results[0], results[1]);
+    let e = run(&["eval", "--checkpoint", "random", "--env", "BlocksTouch-v0", "--episodes", "3"]);
+    assert!(!e.status.success() && String::from_utf8_lossy(&e.stderr).contains("random actions"));
 }
