@@ -1,12 +1,15 @@
-//! Starting a run from a trained policy (`train --init-from`): the actor and normaliser come from
-//! the policy (a zoo entry, a run directory or a policy file), the critics start fresh and may
-//! first warm up with the actor held still (`--critic-warmup`), and the curriculum may begin at
-//! its top (`--start-at-top`), where a competent policy has nothing left to learn below.
+//! Starting a run from a trained policy, and demonstrations (issue 62): `--init-from` takes the
+//! actor and normaliser from a policy (a zoo entry, a run directory or a policy file) and the
+//! critics start fresh; `--critic-warmup` holds the actor still while they fit; `--anchor-alpha`
+//! (TD3+BC) and `--ibrl` (IBRL's action proposal) keep the starting policy beside the learner;
+//! `--start-at-top` begins the curriculum at its top; `--demos` puts a demos file's transitions in
+//! a buffer of their own, from which every batch draws `--demos-ratio` (RLPD).
 //!
-//! The policy is loaded and checked before anything is written: its observation must be the
-//! run's, its actor deterministic, and (once the run's layout is known) its network the run's own
-//! ([`crate::learn::agents::algorithm::fit_actor`]). The run records which policy it started from,
-//! by name and hash, in `config.json`.
+//! Everything is loaded and checked before anything is written: the policy's observation must be
+//! the run's, its actor deterministic and (once the run's layout is known) its network the run's
+//! own ([`crate::learn::agents::algorithm::fit_actor`]); the demonstrations must be of the run's
+//! tasks and observation. The run records the policy (name and hash) and the demos file (hash) in
+//! `config.json`, and a resumed run refuses others.
 
 use super::rollouts::Episode;
 use super::{ConfigError, TrainConfig};
