@@ -272,7 +272,8 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
     let Some(subject) = named.subject() else {
         bail!("`random` is random actions, not a policy to evaluate; give a policy file, run directory, zoo name or baseline")
     };
-    let (task, checkpoint, policy_epoch) = match subject {
+    // Where a result goes by default: beside a run's policy, else `eval-NAME-...` here.
+    let (task, named_as, policy_epoch) = match subject {
         Subject::Saved(path, saved) => (policy_task(a.env.as_deref(), saved)?, path.to_path_buf(), Some(saved.epoch)),
         Subject::Baseline(b) => {
             let Some(env) = a.env.as_deref() else {
@@ -285,10 +286,10 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
             (crate::env::registry::task(env)?, PathBuf::from(format!("baseline-{}", b.name())), None)
         }
     };
-    let checkpoint = &checkpoint;
     let id = task.id().to_owned();
+    let policy = subject.id();
     let provenance =
-        crate::benchmark::provenance::Provenance::new(crate::benchmark::provenance::Harness::Cli, subject.id(), None);
+        crate::benchmark::provenance::Provenance::new(crate::benchmark::provenance::Harness::Cli, policy.clone(), None);
     let spec = crate::benchmark::evaluate::EvalSpec {
         task: &task,
         distribution: None,
@@ -303,17 +304,13 @@ pub(super) fn eval(a: EvalArgs) -> Result<()> {
         (false, Some(l)) if l < task.max_level() => format!("level{l}"),
         _ => "normal".to_owned(),
     };
-    let out = a.out.clone().unwrap_or_else(|| eval_out(checkpoint, &format!("{id}-{distribution}")));
+    let out = a.out.clone().unwrap_or_else(|| eval_out(&named_as, &format!("{id}-{distribution}")));
     crate::support::io::check_output(&out)?;
     let r = crate::benchmark::evaluate::evaluate_subject(subject, &spec)?;
-    let policy = match subject {
-        Subject::Saved(path, _) => path.display().to_string(),
-        Subject::Baseline(_) => subject.id().name,
-    };
     let result = serde_json::json!({
         "env": id, "challenge": a.challenge, "level": r.level, "episodes": a.episodes, "seed": a.seed,
         "successes": r.successes, "success_rate": r.success_rate, "ci95": [r.ci95.0, r.ci95.1],
-        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": policy, "policy_epoch": policy_epoch,
+        "grey_blind": r.grey_blind, "outcomes": r.outcomes, "policy": policy.name, "policy_epoch": policy_epoch,
         "task_sha256": task.source.hash, "provenance": provenance,
     });
     crate::support::io::write_json(&out, &result)?;

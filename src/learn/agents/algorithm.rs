@@ -261,30 +261,20 @@ pub trait Algorithm: AsAny + Send {
         Err(format!("{} cannot start from a trained policy (--init-from is for ddpg and sac)", self.name()))
     }
 
-    /// Keeps the actor near `policy` (the one it started from, `train --anchor-alpha`): its loss
-    /// becomes TD3+BC's (Fujimoto & Gu 2021) with the policy's action as the target,
-    /// −alpha·Q(s, π(s))/mean|Q| + mean ‖π(s) − π₀(s)‖². Not checkpointed: a resumed run calls it again.
+    /// Keeps `policy` (the one the run started from) beside the learner, frozen, for `uses`: the
+    /// anchor of `train --anchor-alpha` (the actor's loss becomes TD3+BC's, Fujimoto & Gu 2021, with
+    /// the policy's action as the target, −α·Q(s, π(s))/mean|Q| + mean ‖π(s) − π₀(s)‖²) and IBRL's
+    /// action proposal of `train --ibrl` (Hu et al. 2023: exploration takes whichever of its action
+    /// and the actor's the critic values more, and the critic's target bootstraps from the better of
+    /// the two at the next state; the saved policy stays the actor). Not checkpointed: a resumed
+    /// run calls it again.
     ///
     /// # Errors
     /// An algorithm that cannot, or a policy that does not fit.
-    fn keep_near(&mut self, _policy: &DeterministicPolicy, _alpha: f64) -> Result<(), String> {
+    fn keep_start(&mut self, _policy: &DeterministicPolicy, uses: StartUses) -> Result<(), String> {
         Err(format!(
-            "--anchor-alpha keeps a deterministic actor near its start (ddpg, with --td3 or not); {} cannot",
-            self.name()
-        ))
-    }
-
-    /// IBRL's action proposal (Hu et al. 2023, `train --ibrl`): `policy` (the one the run started
-    /// from, frozen) proposes an action beside the actor's, wherever the learner picks one by its
-    /// critic: exploration takes whichever of the two the critic values more, and the critic's target
-    /// bootstraps from the better of the two at the next state. The saved policy stays the actor.
-    /// Not checkpointed: a resumed run calls it again.
-    ///
-    /// # Errors
-    /// An algorithm that cannot, or a policy that does not fit.
-    fn propose_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
-        Err(format!(
-            "--ibrl proposes a deterministic policy's actions beside the actor's (ddpg, with --td3 or not); {} cannot",
+            "{} keeps a deterministic actor's starting policy beside it (ddpg, with --td3 or not); {} cannot",
+            uses.flags(),
             self.name()
         ))
     }
@@ -410,6 +400,28 @@ impl StateDict {
     /// When it is missing.
     pub fn counter(&self, name: &str) -> Result<u64, String> {
         self.counters.get(name).copied().ok_or_else(|| format!("the counter {name} is missing"))
+    }
+}
+
+/// What a learner does with the policy it started from ([`Algorithm::keep_start`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StartUses {
+    /// TD3+BC's α: the actor is kept near the policy (`--anchor-alpha`; 0: not).
+    pub anchor_alpha: f64,
+    /// The policy proposes actions beside the actor's (IBRL, `--ibrl`).
+    pub propose: bool,
+}
+
+impl StartUses {
+    /// Whether it is used at all.
+    pub fn any(self) -> bool {
+        self.anchor_alpha > 0.0 || self.propose
+    }
+
+    /// The flags that ask for these uses, for messages.
+    pub fn flags(self) -> String {
+        let on = [(self.anchor_alpha > 0.0, "--anchor-alpha"), (self.propose, "--ibrl")];
+        on.iter().filter(|(set, _)| *set).map(|(_, f)| *f).collect::<Vec<_>>().join(" and ")
     }
 }
 

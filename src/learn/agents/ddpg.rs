@@ -23,7 +23,9 @@
 //!   the target networks' schedule stay as above except that the actor is
 //!   updated on every `policy_delay`-th critic update only.
 
-use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, UpdateStats};
+use super::algorithm::{
+    param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, StartUses, UpdateStats,
+};
 use super::arch::Arch;
 use super::nets::{append_grads, Adam, Net};
 use super::replay::Batch;
@@ -223,13 +225,9 @@ pub struct Ddpg {
     last_targets: Vec<f32>,
     /// The actor is held still: updates step the critics alone (a critic warm-up).
     actor_held: bool,
-    /// The policy a fine-tuned actor is kept near and the critic's weight against it
-    /// ([`Algorithm::init_from`]'s `anchor`); not checkpointed: a resumed run takes it from the
-    /// policy it started from again.
-    anchor: Option<(Net, f64)>,
-    /// IBRL's frozen imitation policy, proposing actions beside the actor's
-    /// ([`Algorithm::propose_from`]); not checkpointed.
-    proposer: Option<Net>,
+    /// The policy the run started from, frozen, and what it is kept for ([`Algorithm::keep_start`]);
+    /// not checkpointed.
+    start: Option<(Net, StartUses)>,
 }
 
 /// TD3's second critic, its target and optimiser, and the seed of the
@@ -285,8 +283,7 @@ impl Ddpg {
             act_dim,
             last_targets: Vec::new(),
             actor_held: false,
-            anchor: None,
-            proposer: None,
+            start: None,
         }
     }
 
@@ -357,9 +354,8 @@ impl Ddpg {
                 }
             };
             // IBRL: the better of the actor's and the proposer's action at the next state.
-            let next_q = match &self.proposer {
-                None => next_q,
-                Some(il) => {
+            let next_q = match &self.start {
+                Some((il, uses)) if uses.propose => {
                     let a = il.forward(&next_obs);
                     let q = self.critic_target.q(&next_obs, &a);
                     let q = match &self.twin {
@@ -368,6 +364,7 @@ impl Ddpg {
                     };
                     next_q.maximum(&q)
                 }
+                _ => next_q,
             };
             let y: Tensor = rew + not_done * next_q * discount;
             y.clamp(-clip_return, 0.0)
@@ -387,14 +384,14 @@ impl Ddpg {
             let pi = u.tanh();
             let frozen_critic = self.critic.detached_view();
             let q_pi = frozen_critic.q(&obs, &pi);
-            let value = match &self.anchor {
-                None => -q_pi.mean(tch::Kind::Float),
-                Some((start, alpha)) => {
+            let value = match &self.start {
+                Some((start, uses)) if uses.anchor_alpha > 0.0 => {
                     // TD3+BC's balance: the critic's term scaled to mean |Q| = alpha.
                     let scale = q_pi.abs().mean(tch::Kind::Float).detach().clamp_min(1e-6);
                     let near = (&pi - tch::no_grad(|| start.forward(&obs))).square().mean(tch::Kind::Float);
-                    -q_pi.mean(tch::Kind::Float) * *alpha / scale + near
+                    -q_pi.mean(tch::Kind::Float) * uses.anchor_alpha / scale + near
                 }
+                _ => -q_pi.mean(tch::Kind::Float),
             };
             let loss = value + pi.square().mean(tch::Kind::Float) * self.config.action_l2;
             if self.config.preact_l2 == 0.0 {
@@ -518,19 +515,11 @@ impl Algorithm for Ddpg {
         Ok(())
     }
 
-    fn keep_near(&mut self, policy: &DeterministicPolicy, alpha: f64) -> Result<(), String> {
+    fn keep_start(&mut self, policy: &DeterministicPolicy, uses: StartUses) -> Result<(), String> {
         let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
         let mut start = self.actor.detached_copy();
         start.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
-        self.anchor = Some((start, alpha));
-        Ok(())
-    }
-
-    fn propose_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
-        let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
-        let mut il = self.actor.detached_copy();
-        il.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
-        self.proposer = Some(il);
+        self.start = Some((start, uses));
         Ok(())
     }
 
@@ -545,7 +534,10 @@ impl Algorithm for Ddpg {
             random_eps: c.random_eps,
             noise_eps: c.noise_eps,
             noise_correlation: c.noise_correlation,
-            proposal: self.proposer.as_ref().map(|il| (il.to_plain(), self.critic.to_plain())),
+            proposal: match &self.start {
+                Some((il, uses)) if uses.propose => Some((il.to_plain(), self.critic.to_plain())),
+                _ => None,
+            },
         })
     }
 
@@ -700,7 +692,7 @@ mod tests {
             let b = batch(64, 6, &mut rng);
             a.gradient(&b, 0);
             let alone = a.last_targets().to_vec();
-            a.propose_from(&other).unwrap();
+            a.keep_start(&other, StartUses { propose: true, ..StartUses::default() }).unwrap();
             a.gradient(&b, 0);
             let with = a.last_targets().to_vec();
             assert!(with.iter().zip(&alone).all(|(w, o)| w >= o), "td3 {td3}");

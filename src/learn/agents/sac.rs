@@ -318,13 +318,12 @@ impl Algorithm for Sac {
         let ours = self.mean_actor();
         let fitted = super::algorithm::fit_actor(&ours, &self.norm, policy)?;
         let mut vecs = super::algorithm::plain_vecs(&fitted.net);
-        let (n, a) = (vecs.len(), self.act_dim);
+        let a = self.act_dim;
         if let [.., w, b] = &mut vecs[..] {
             let n_in = w.len() / a;
             w.extend(std::iter::repeat(0.0).take(a * n_in));
             b.extend(std::iter::repeat(INIT_STD.ln() as f32).take(a));
         }
-        debug_assert_eq!(n, self.actor.params.len());
         self.actor.load_vecs(&vecs)?;
         self.norm = fitted.norm;
         Ok(())

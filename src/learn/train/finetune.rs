@@ -114,7 +114,12 @@ impl FinetuneConfig {
     /// Whether the run keeps the policy it started from beside its learner (`--anchor-alpha`,
     /// `--ibrl`): a resumed run loads it again.
     pub fn keeps_policy(&self) -> bool {
-        self.anchor_alpha > 0.0 || self.ibrl
+        self.start_uses().any()
+    }
+
+    /// What the learner keeps the starting policy for (`--anchor-alpha`, `--ibrl`).
+    pub fn start_uses(&self) -> crate::learn::agents::algorithm::StartUses {
+        crate::learn::agents::algorithm::StartUses { anchor_alpha: self.anchor_alpha, propose: self.ibrl }
     }
 
     /// Whether every setting is off (a run from scratch; its `config.json` then omits them).
@@ -272,15 +277,14 @@ pub(crate) fn demo_episodes(
         if blocks + fixtures > rows || blocks > slots {
             bail!("--demos {}: episode {i} ({}) does not fit this run's {slots} block rows", path.display(), e.task);
         }
+        // The demo row each of the run's rows takes (None: an absent block slot).
+        let ours: Vec<Option<usize>> =
+            (0..slots).map(|k| (k < blocks).then_some(k)).chain((0..fixtures).map(|j| Some(blocks + j))).collect();
         let obs = (obs_at..obs_at + e.steps + 1)
             .map(|o| {
                 let row = |k: usize| &d.tensors.entities[(o * rows + k) * f..(o * rows + k + 1) * f];
                 let mask = |k: usize| d.tensors.mask[o * rows + k];
                 let mut v = d.tensors.robot[o * r..(o + 1) * r].to_vec();
-                let ours: Vec<Option<usize>> = (0..slots)
-                    .map(|k| (k < blocks).then_some(k))
-                    .chain((0..fixtures).map(|j| Some(blocks + j)))
-                    .collect();
                 for k in &ours {
                     match k {
                         Some(k) => v.extend_from_slice(row(*k)),

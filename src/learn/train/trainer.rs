@@ -322,13 +322,11 @@ fn fresh(
 }
 
 /// What the learner keeps of the policy the run started from: the anchor of `--anchor-alpha`, the
-/// proposer of `--ibrl` (neither is checkpointed).
+/// proposer of `--ibrl` (not checkpointed).
 fn keep_policy(agent: &mut dyn Algorithm, config: &TrainConfig, policy: &DeterministicPolicy) -> Result<()> {
-    if config.finetune.anchor_alpha > 0.0 {
-        agent.keep_near(policy, config.finetune.anchor_alpha).map_err(anyhow::Error::msg)?;
-    }
-    if config.finetune.ibrl {
-        agent.propose_from(policy).map_err(anyhow::Error::msg)?;
+    let uses = config.finetune.start_uses();
+    if uses.any() {
+        agent.keep_start(policy, uses).map_err(anyhow::Error::msg)?;
     }
     Ok(())
 }
