@@ -577,7 +577,7 @@ pub struct DdpgExplorer {
     /// Correlation of the noise between consecutive steps.
     pub noise_correlation: f64,
     /// IBRL: the imitation policy's network and the critic, which picks between its action and the
-    /// actor's before the noise ([`Algorithm::propose_from`]).
+    /// actor's before the noise ([`Algorithm::keep_start`]).
     pub proposal: Option<(PlainNet, PlainNet)>,
 }
 
