@@ -113,7 +113,7 @@ pub(crate) fn evaluate_saved(
             });
             called.map_err(|e| {
                 failed = Some(e);
-                anyhow::anyhow!("stopped by the on_row callback")
+                "stopped by the on_row callback".into()
             })
         })
     };

@@ -20,7 +20,6 @@
 //! (feature names, rows) and `episodes` (per episode: task id and hash, row, seed, steps, return,
 //! outcome). The same episodes give the same bytes.
 
-use anyhow::{bail, Context, Result};
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -29,10 +28,14 @@ use std::path::Path;
 use crate::benchmark::evaluate::{make_env, EvalSpec};
 use crate::benchmark::provenance::{Harness, PolicyId, Provenance};
 use crate::benchmark::suite::Suite;
+use crate::benchmark::suite::SuiteError;
 use crate::env::vector::VectorEnv;
+use crate::env::EnvError;
 use crate::env::{ObsMode, ObsSpec};
 use crate::episode::outcome::Outcome;
+use crate::episode::rollout::RolloutError;
 use crate::policy::ScriptedPolicy;
+use crate::support::io::WriteError;
 
 /// The format name in a demos file's metadata.
 pub const FORMAT: &str = "blockpuzzle-demos";
@@ -118,6 +121,73 @@ impl DemoTensors {
     }
 }
 
+/// Why demonstrations could not be recorded, written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum DemosError {
+    /// The suite has no such split.
+    #[error("suite {suite} has no split {split:?} (it has {have})")]
+    NoSplit {
+        /// The suite's name.
+        suite: String,
+        /// The split asked for.
+        split: String,
+        /// The splits it has, comma-separated.
+        have: String,
+    },
+    /// Episodes, seeds or the file's size beyond their bounds (the message names the flag to lower).
+    #[error("{0}")]
+    Bounds(String),
+    /// The suite's pinned rows are not what its file says.
+    #[error(transparent)]
+    Suite(#[from] SuiteError),
+    /// A row's environment could not be made.
+    #[error(transparent)]
+    Env(#[from] EnvError),
+    /// A row's environment shows another layout than the split's.
+    #[error("{task}: the environment shows {shown} entity rows, not {rows}")]
+    Layout {
+        /// The row's task.
+        task: String,
+        /// The rows it shows.
+        shown: usize,
+        /// The split's rows.
+        rows: usize,
+    },
+    /// An episode failed in the simulator.
+    #[error("{task} episode seed {seed}")]
+    Episode {
+        /// The row's task.
+        task: String,
+        /// Its seed.
+        seed: u64,
+        /// What failed.
+        #[source]
+        source: RolloutError,
+    },
+    /// The tensors could not be laid out as safetensors.
+    #[error(transparent)]
+    Encode(#[from] safetensors::SafeTensorError),
+    /// The metadata could not be written as JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// The output path is refused or the write failed.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] std::io::Error),
+    /// The file is not a demos file this build reads.
+    #[error("{path} is not a usable demos file: {why}; record one with `blockpuzzle demos`")]
+    Unusable {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong with it.
+        why: String,
+    },
+}
+
+type Result<T, E = DemosError> = std::result::Result<T, E>;
+
 /// The most bytes a demos file may hold (the tensors are built in memory first): 10,000 episodes
 /// of 50 steps with 16 rows are about 0.9 GiB.
 pub const MAX_BYTES: u64 = crate::support::limits::DUMP_FILE_BYTES;
@@ -130,10 +200,10 @@ pub const MAX_BYTES: u64 = crate::support::limits::DUMP_FILE_BYTES;
 pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usize, harness: Harness) -> Result<Demos> {
     let Some(s) = suite.splits.iter().find(|s| s.name == split) else {
         let names: Vec<&str> = suite.splits.iter().map(|s| s.name.as_str()).collect();
-        bail!("suite {} has no split {split:?} (it has {})", suite.name, names.join(", "));
+        return Err(DemosError::NoSplit { suite: suite.name.clone(), split: split.to_owned(), have: names.join(", ") });
     };
     if let Some(n) = episodes {
-        crate::support::limits::EVAL_EPISODES.check_usize(n).map_err(anyhow::Error::msg)?;
+        crate::support::limits::EVAL_EPISODES.check_usize(n).map_err(DemosError::Bounds)?;
     }
     suite.check_pinned(Some(split), threads)?;
     // The layout: every row's environment shows the split's most block slots (`EnvConfig::slots`):
@@ -157,12 +227,12 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         .map(|r| episodes.unwrap_or(r.episodes) as u64 * (r.task.spec.max_episode_steps as u64 + 1) * (per_obs + 28))
         .sum();
     if bytes > MAX_BYTES {
-        bail!(
+        return Err(DemosError::Bounds(format!(
             "{} episodes per row of split {split} would make a demos file of up to {:.1} GiB, beyond {} GiB: lower --episodes",
             episodes.map_or("the suite's".to_owned(), |n| n.to_string()),
             bytes as f64 / (1u64 << 30) as f64,
             MAX_BYTES >> 30
-        );
+        )));
     }
     let mut played = Vec::new();
     // On a terminal only (indicatif draws nothing elsewhere).
@@ -170,7 +240,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         crate::support::progress::bar(s.rows.iter().map(|r| episodes.unwrap_or(r.episodes) as u64).sum(), "episode");
     for (i, row) in s.rows.iter().enumerate() {
         let n = episodes.unwrap_or(row.episodes);
-        crate::support::limits::seed_range(row.seed, n as u64).map_err(anyhow::Error::msg)?;
+        crate::support::limits::seed_range(row.seed, n as u64).map_err(DemosError::Bounds)?;
         let spec = EvalSpec {
             task: &row.task,
             challenge: false,
@@ -181,10 +251,10 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
             threads,
         };
         let k = threads.clamp(1, n).min(crate::support::limits::THREADS.max as usize);
-        let envs = (0..k).map(|_| make_env(&spec, ObsMode::Entities, slots)).collect::<Result<Vec<_>>>()?;
+        let envs = (0..k).map(|_| make_env(&spec, ObsMode::Entities, slots)).collect::<Result<Vec<_>, _>>()?;
         let mut envs = VectorEnv::from_envs(envs, k)?;
         if envs.obs_spec() != padded {
-            bail!("{}: the environment shows {} entity rows, not {rows}", row.task.id(), envs.obs_spec().rows());
+            return Err(DemosError::Layout { task: row.task.id().to_owned(), shown: envs.obs_spec().rows(), rows });
         }
         let by_thread: Vec<Result<Vec<Numbered>>> = envs.each(|t, env| {
             let mut out = Vec::new();
@@ -192,7 +262,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                 let seed = row.seed + e as u64;
                 let mut solver = ScriptedPolicy::solver(slots);
                 let (rec, obs) = crate::episode::rollout::run_episode_observed(env, &mut solver, seed)
-                    .with_context(|| format!("{} episode seed {seed}", row.task.id()))?;
+                    .map_err(|source| DemosError::Episode { task: row.task.id().to_owned(), seed, source })?;
                 let spec = env.obs_spec();
                 let episode = DemoEpisode {
                     task: row.task.id().to_owned(),
@@ -326,9 +396,7 @@ impl Demos {
     /// Not a demos file (naming what is wrong), another version, tensors of the wrong shape.
     pub fn read(path: &Path) -> Result<Demos> {
         let bytes = crate::support::io::read_bytes(path, "demos file", MAX_BYTES)?;
-        let bad = |why: String| {
-            anyhow::anyhow!("{} is not a usable demos file: {why}; record one with `blockpuzzle demos`", path.display())
-        };
+        let bad = |why: String| DemosError::Unusable { path: path.to_owned(), why };
         let (_, header) =
             SafeTensors::read_metadata(&bytes).map_err(|e| bad(format!("not a safetensors file ({e})")))?;
         let meta = header.metadata().clone().unwrap_or_default();

@@ -5,15 +5,18 @@
 
 use crate::benchmark::provenance::{Harness, PolicyId, Provenance};
 use crate::benchmark::saved::SavedPolicy;
+use crate::benchmark::suite::SuiteError;
 use crate::env::vector::VectorEnv;
+use crate::env::EnvError;
 use crate::env::{BlockEnv, EnvConfig, ObsMode, ACTION_DIM};
 use crate::episode::outcome::wilson95;
 use crate::episode::outcome::{Outcome, Outcomes};
 use crate::episode::rollout::run_episode;
+use crate::episode::rollout::RolloutError;
 use crate::policy::actor::{obs_dim_without_grey, without_grey, AnyPolicy};
 use crate::policy::{ObsHashPolicy, Policy, ScriptedPolicy};
 use crate::task::Task;
-use anyhow::{bail, Context, Result};
+use crate::task::TaskError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -21,6 +24,41 @@ use std::path::Path;
 /// `eval`, `table` and `render --policy`, and the seed of zoo evaluations.
 /// Validation (model selection) uses other seeds, e.g. 2,000,000 onwards.
 pub const TEST_SEED: u64 = 1_000_000;
+
+/// Why an evaluation could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    /// The environment could not be made or set as asked (an unknown level, no challenge distribution).
+    #[error(transparent)]
+    Env(#[from] EnvError),
+    /// The policy does not fit the environment's observation (what it reads, what the environment shows).
+    #[error("{0}")]
+    Misfit(String),
+    /// The episodes or their seeds are beyond `eval`'s bounds.
+    #[error("{0}")]
+    Bounds(String),
+    /// A recorded training task of the policy no longer compiles.
+    #[error(transparent)]
+    Task(#[from] TaskError),
+    /// The suite's pinned rows are not what its file says.
+    #[error(transparent)]
+    Suite(#[from] SuiteError),
+    /// An episode failed in the simulator.
+    #[error("episode seed {seed}")]
+    Episode {
+        /// Its seed.
+        seed: u64,
+        /// What failed.
+        #[source]
+        source: RolloutError,
+    },
+    /// The caller's `on_row` stopped a suite's evaluation (its error, as it gave it).
+    #[error(transparent)]
+    Stopped(Box<dyn std::error::Error + Send + Sync>),
+}
+
+/// This module's results.
+type Result<T, E = EvalError> = std::result::Result<T, E>;
 
 /// A trained policy as a [`Policy`]. A policy trained without the grey
 /// block (BlocksTouch) acting in an environment with one sees it removed
@@ -185,7 +223,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     if let Some(layout) = saved.policy.net().set {
         // A set network plays any number of objects with the same row features.
         if !spec.mode.is_set() || (spec.robot_dim(), spec.object_dim()) != (layout.robot, layout.object) {
-            bail!(
+            return Err(EvalError::Misfit(format!(
                 "policy {} is a set network over `{}` observations ({} robot and {} row features); {} \
                  gives `{}` observations with {} and {} (give the environment obs_mode {})",
                 path.display(),
@@ -197,7 +235,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
                 spec.robot_dim(),
                 spec.object_dim(),
                 saved.obs_mode()
-            );
+            )));
         }
         return Ok(Trained { policy: saved.policy.with_slots(spec.rows()), grey_blind: false });
     }
@@ -209,7 +247,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     if saved.is_multi_task() {
         // It reads its training tasks' layout (the environment shows it: `SavedPolicy::slots`).
         let slots = saved.slots()?;
-        bail!(
+        return Err(EvalError::Misfit(format!(
             "policy {} was trained on several tasks and reads their layout, {slots} block slots \
              ({wanted}-dimensional `{}` observations); {} has {} blocks ({dim}): a flat network plays no task \
              with more blocks than its training tasks had (a set network, `--net set`, plays any number)",
@@ -217,7 +255,7 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
             saved.obs_mode(),
             env.id(),
             env.config().task.object_count()
-        );
+        )));
     }
     let blind = obs_dim_without_grey(&env.config().blocks());
     // Without grey blocks the view keeps every other block, so its size is fixed only where
@@ -227,12 +265,12 @@ pub fn trained_policy(path: &Path, saved: SavedPolicy, env: &BlockEnv) -> Result
     if wanted == blind && fixed {
         return Ok(Trained { policy: saved.policy, grey_blind: true });
     }
-    bail!(
+    Err(EvalError::Misfit(format!(
         "policy {} expects {wanted}-dimensional observations ({}), {} has {dim} ({blind} without grey blocks)",
         path.display(),
         saved.env_id,
         env.id()
-    )
+    )))
 }
 
 /// An evaluation's outcome.
@@ -285,7 +323,7 @@ pub struct EvalSpec<'a> {
 
 /// The environment of `spec`, its observation presented as `obs_mode` (the policy's) with at least
 /// `slots` block slots ([`EnvConfig::slots`]).
-pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Result<BlockEnv> {
+pub(crate) fn make_env(spec: &EvalSpec, obs_mode: ObsMode, slots: usize) -> Result<BlockEnv, EnvError> {
     let mut env = BlockEnv::new(EnvConfig { obs_mode, slots, ..EnvConfig::new(spec.task.clone()) })?;
     if spec.challenge {
         env.set_challenge(true)?;
@@ -319,14 +357,14 @@ pub fn evaluate_subject(subject: Subject, spec: &EvalSpec) -> Result<Evaluation>
 /// Plays `spec.episodes` episodes of `policy`, which fits `env` (made by
 /// [`make_env`] from `spec`; it becomes the first of the threads' environments).
 fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
-    crate::support::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(anyhow::Error::msg)?;
-    crate::support::limits::seed_range(spec.seed, spec.episodes as u64).map_err(anyhow::Error::msg)?;
+    crate::support::limits::EVAL_EPISODES.check_usize(spec.episodes).map_err(EvalError::Bounds)?;
+    crate::support::limits::seed_range(spec.seed, spec.episodes as u64).map_err(EvalError::Bounds)?;
     // One environment per thread; environment t plays episodes t, t + threads, …. (A machine's
     // core count, the CLI's default, may pass the vector engine's thread bound: use the bound.)
     let threads = spec.threads.clamp(1, spec.episodes).min(crate::support::limits::THREADS.max as usize);
     let (mode, slots) = (env.obs_spec().mode, env.config().slots);
     let more = (1..threads).map(|_| make_env(spec, mode, slots));
-    let mut envs = VectorEnv::from_envs(std::iter::once(Ok(env)).chain(more).collect::<Result<_>>()?, threads)?;
+    let mut envs = VectorEnv::from_envs(std::iter::once(Ok(env)).chain(more).collect::<Result<_, _>>()?, threads)?;
     // On a terminal only (indicatif draws nothing elsewhere).
     let bar = crate::support::progress::bar(spec.episodes as u64, "episode");
     // Each thread's outcome counts and the summed length of its successful episodes.
@@ -335,7 +373,7 @@ fn play(spec: &EvalSpec, env: BlockEnv, policy: Actor) -> Result<Evaluation> {
         let (mut tally, mut success_steps) = (Outcomes::default(), 0);
         for k in (t..spec.episodes).step_by(threads) {
             let seed = spec.seed + k as u64;
-            let ep = run_episode(env, &mut policy, seed).with_context(|| format!("episode seed {seed}"))?;
+            let ep = run_episode(env, &mut policy, seed).map_err(|source| EvalError::Episode { seed, source })?;
             let outcome = Outcome::of(&ep);
             if outcome == Outcome::Success {
                 success_steps += ep.steps.len();
@@ -438,7 +476,7 @@ pub fn evaluate_suite(
     suite: &crate::benchmark::suite::Suite,
     threads: usize,
     harness: Harness,
-    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize) -> Result<()>,
+    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize) -> Result<(), Box<dyn std::error::Error + Send + Sync>>,
 ) -> Result<SuiteResult> {
     suite.check_pinned(None, threads)?;
     let total: usize = suite.splits.iter().map(|s| s.rows.len()).sum();
@@ -473,7 +511,8 @@ pub fn evaluate_suite(
                 skipped,
             });
             done += 1;
-            on_row(&split.name, rows.last().expect("a row was just pushed"), done, total)?;
+            on_row(&split.name, rows.last().expect("a row was just pushed"), done, total)
+                .map_err(EvalError::Stopped)?;
         }
         let mean_success = SplitResult::mean_of(&rows);
         splits.push(SplitResult { name: split.name.clone(), rows, mean_success });

@@ -106,7 +106,7 @@ fn a_shortened_run_says_so_and_is_never_ranked() {
     let mut rows = 0;
     let stopped = evaluate_suite(Subject::Baseline(Baseline::ObsHash), &short, 2, Harness::Cli, &mut |_, _, _, _| {
         rows += 1;
-        anyhow::bail!("stop")
+        Err("stop".into())
     });
     assert_eq!((stopped.unwrap_err().to_string(), rows), ("stop".to_owned(), 1));
     assert_eq!((r.suite.episodes_per_row, r.provenance.suite.as_ref().unwrap().episodes_per_row), (Some(2), Some(2)));
