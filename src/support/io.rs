@@ -470,12 +470,12 @@ mod tests {
         });
         assert!(err.is_err());
         assert_eq!(std::fs::read(&path).unwrap(), b"one", "a failed write keeps the old file");
-        let err = write_atomic_via(&path, |tmp| {
+        let err = write_atomic_via(&path, |tmp| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             std::fs::write(tmp, b"x")?;
-            anyhow::bail!("encoder failed")
+            Err("encoder failed".into())
         });
         assert_eq!(
-            format!("{:#}", anyhow::Error::from(err.unwrap_err())),
+            crate::support::error::chain(&err.unwrap_err()),
             format!("cannot write {}: encoder failed", path.display())
         );
         let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
