@@ -166,7 +166,7 @@ fn load_expert(name: &Path, flat_env: &BlockEnv) -> Result<Trained> {
     if saved.env_id != ENV_ID {
         eprintln!("note: --expert {} was trained on {}, not {ENV_ID}", name.display(), saved.env_id);
     }
-    blockpuzzle::benchmark::evaluate::trained_policy(name, saved, flat_env)
+    Ok(blockpuzzle::benchmark::evaluate::trained_policy(name, saved, flat_env)?)
 }
 
 /// The flat view of an `objects` observation laid out as `spec`: the robot features, then the
