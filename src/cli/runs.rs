@@ -160,7 +160,7 @@ fn branch_run(
     child: &Path,
     c: &crate::learn::train::TrainConfig,
 ) -> Result<()> {
-    comm.root_check(|| {
+    Ok(comm.root_check(|| {
         let b = crate::learn::train::branch(parent, child, c)?;
         eprintln!(
             "{}: branched from {} at epoch {} ({} env steps){}",
@@ -171,7 +171,7 @@ fn branch_run(
             if b.changed.is_empty() { String::new() } else { format!("; changed {}", b.changed.join(", ")) }
         );
         Ok(())
-    })
+    })?)
 }
 
 /// A run directory's config and progress rows.

@@ -3,11 +3,25 @@
 //! (Normal) and in the challenge distribution, with 95% intervals and the
 //! paper's numbers beside them. Rows without a trained policy say so.
 
-use crate::benchmark::evaluate::{evaluate, EvalSpec, Evaluation};
-use crate::benchmark::load::load_policy;
-use anyhow::Result;
+use crate::benchmark::evaluate::{evaluate, EvalError, EvalSpec, Evaluation};
+use crate::benchmark::load::{load_policy, LoadError};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+
+/// Why a row of the table has no numbers: its policy cannot be loaded, is not the row's kind, or
+/// cannot be evaluated (the table shows the message in the row's place).
+#[derive(Debug, thiserror::Error)]
+pub enum TableError {
+    /// The policy is not the kind the row stands for (the message names the row, the policy and the fix).
+    #[error("{0}")]
+    Misfit(String),
+    /// The policy could not be loaded.
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// The policy could not be evaluated.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+}
 
 /// The environment of the paper's table (the default of `table --env`).
 pub const ENV: &str = "BlocksChoose-v0";
@@ -41,7 +55,7 @@ impl Row {
     ///
     /// # Errors
     /// The mismatch, naming the row, the policy and the fix.
-    pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy) -> Result<()> {
+    pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy) -> Result<(), TableError> {
         let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
         let is_pggd = matches!(saved.policy, crate::policy::actor::AnyPolicy::Pggd(_));
         let wanted = match self.takes {
@@ -49,19 +63,18 @@ impl Row {
             Takes::Pggd => "a PGGD policy",
         };
         if is_pggd != (self.takes == Takes::Pggd) {
-            anyhow::bail!(
+            return Err(TableError::Misfit(format!(
                 "the row \"{}\" takes {wanted}, and {name} is a {} policy; give that row a policy of its kind",
                 self.method,
                 saved.policy.algo()
-            );
+            )));
         }
         if saved.is_multi_task() {
-            anyhow::bail!(
+            return Err(TableError::Misfit(format!(
                 "the row \"{}\" takes a single-task agent, and {name} was trained on several tasks ({}); give that \
                  row a policy trained on one task (the paper's rows are single-task agents)",
-                self.method,
-                saved.env_id
-            );
+                self.method, saved.env_id
+            )));
         }
         Ok(())
     }
@@ -167,7 +180,7 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
         return RowResult::Missing("not in the zoo yet (train it, then `blockpuzzle zoo export`)".into());
     }
     // The policy file is read once; each evaluation gets its own copy.
-    let run = || -> Result<RowResult> {
+    let run = || -> Result<RowResult, TableError> {
         let saved = load_policy(path)?;
         row.check(&saved)?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
@@ -179,7 +192,7 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
     };
     match run() {
         Ok(done) => done,
-        Err(e) => RowResult::Missing(format!("{e:#}")),
+        Err(e) => RowResult::Missing(crate::support::error::chain(&e)),
     }
 }
 

@@ -313,7 +313,7 @@ fn bad_settings_are_refused_before_anything_is_written() {
     for (flag, set) in bad {
         let mut c = tiny("BlocksTouch-v0", 1);
         set(&mut c);
-        let err = format!("{:#}", train(&c, &run, false, &mut quiet).unwrap_err());
+        let err = format!("{:#}", anyhow::Error::from(train(&c, &run, false, &mut quiet).unwrap_err()));
         assert!(err.contains(flag) || (flag == "--challenge-share" && err.contains("no challenge")), "{flag}: {err}");
         assert!(!run.join("config.json").exists(), "{flag}: nothing written");
     }
@@ -349,7 +349,7 @@ fn corrupt_and_mismatched_checkpoints_are_clear_errors() {
     let err = checkpoint::load(&ckpt, "GripperTouch-v0", 29, 4).err().unwrap();
     assert!(err.to_string().contains("corrupt"), "{err}");
     std::fs::write(&ckpt, b"hello").unwrap();
-    let err = train(&tiny("GripperTouch-v0", 2), dir.path(), true, &mut quiet).unwrap_err();
+    let err = anyhow::Error::from(train(&tiny("GripperTouch-v0", 2), dir.path(), true, &mut quiet).unwrap_err());
     assert!(format!("{err:#}").contains("not a blockpuzzle checkpoint"), "{err:#}");
 }
 
@@ -449,7 +449,9 @@ fn bad_expert_settings_are_clear_errors() {
     let err = train(&tiny_pggd("BlocksChoose-v0", 1, adv), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--expert"), "{err}");
     let missing = AggrevatedConfig { expert: Some("/nonexistent/expert".into()), ..Default::default() };
-    let err = train(&tiny_pggd("BlocksChoose-v0", 1, missing), dir.path(), false, &mut quiet).unwrap_err();
+    let err = anyhow::Error::from(
+        train(&tiny_pggd("BlocksChoose-v0", 1, missing), dir.path(), false, &mut quiet).unwrap_err(),
+    );
     assert!(format!("{err:#}").contains("/nonexistent/expert"), "{err:#}");
     // An expert whose observation does not fit even without grey blocks.
     let gt = tempfile::tempdir().unwrap();
@@ -547,11 +549,13 @@ fn expert_advantage_uses_the_critic_of_the_experts_epoch() {
     let err =
         train(&tiny_pggd("BlocksChoose-v0", 1, adv(&exp.path().join("policy.json"))), dir.path(), false, &mut quiet)
             .unwrap_err();
+    let err = anyhow::Error::from(err);
     assert!(format!("{err:#}").contains("another policy"), "{err:#}");
     std::fs::remove_file(exp.path().join("checkpoint.bin")).unwrap();
     let err =
         train(&tiny_pggd("BlocksChoose-v0", 1, adv(&exp.path().join("policy.json"))), dir.path(), false, &mut quiet)
             .unwrap_err();
+    let err = anyhow::Error::from(err);
     assert!(format!("{err:#}").contains("no ") && format!("{err:#}").contains("checkpoint.bin"), "{err:#}");
 }
 
@@ -600,7 +604,7 @@ fn a_task_file_run_records_its_task_refuses_a_changed_file_and_survives_a_moved_
         text.replace("GripperTouch-v0", "MyReach-v0").replace("max_episode_steps = 50", "max_episode_steps = 40"),
     )
     .unwrap();
-    let err = format!("{:#}", train(&tiny(env, 3), &run, true, &mut quiet).unwrap_err());
+    let err = format!("{:#}", anyhow::Error::from(train(&tiny(env, 3), &run, true, &mut quiet).unwrap_err()));
     assert!(err.contains("has changed since the run started") && err.contains("max_episode_steps"), "{err}");
 
     // Moved away: the run goes on with its recorded copy, and its policy still finds its task.
@@ -1000,7 +1004,8 @@ fn bc_and_dagger_learn_the_solvers_labels_resume_exactly_and_refuse_what_they_ca
     // What they cannot use is refused before anything is written.
     let refused = |c: TrainConfig, words: &[&str]| {
         let dir = tempfile::tempdir().unwrap();
-        let e = format!("{:#}", train(&c, &dir.path().join("run"), false, &mut quiet).unwrap_err());
+        let e =
+            format!("{:#}", anyhow::Error::from(train(&c, &dir.path().join("run"), false, &mut quiet).unwrap_err()));
         assert!(words.iter().all(|w| e.contains(w)), "{e}");
         assert!(!dir.path().join("run").exists(), "{e}");
     };
@@ -1078,7 +1083,7 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     assert_eq!(branch(split.path(), &child, &multi(3)).unwrap().epoch, 2);
     let elsewhere = TrainConfig { env: "BlocksTouch-v0,BlocksStack-v0".into(), ..multi(3) };
     let other = branch(split.path(), &root.path().join("other"), &elsewhere);
-    let e = format!("{:#}", other.unwrap_err());
+    let e = format!("{:#}", anyhow::Error::from(other.unwrap_err()));
     assert!(e.contains("BlocksTouch-v0+BlocksChoose-v0") && e.contains("--env"), "{e}");
     let branched = train(&multi(3), &child, true, &mut quiet).unwrap();
     let b = train(&multi(3), split.path(), true, &mut quiet).unwrap();
@@ -1183,7 +1188,7 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
     // Refused before anything is written: one-task settings, a split the suite lacks, and a
     // resume whose tasks are not the run's.
     let refused = |c: TrainConfig, dir: &Path, resume: bool, words: &[&str]| {
-        let e = format!("{:#}", train(&c, dir, resume, &mut quiet).unwrap_err());
+        let e = format!("{:#}", anyhow::Error::from(train(&c, dir, resume, &mut quiet).unwrap_err()));
         assert!(words.iter().all(|w| e.contains(w)), "{e}");
     };
     let nowhere = dir.path().join("nowhere");
@@ -1232,7 +1237,7 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     train(&stream(2), split.path(), false, &mut quiet).unwrap();
     // Another stream on resume is refused, naming both; nothing of the run changes.
     let other = TrainConfig { generator_seeds: Some("0..4".parse().unwrap()), ..stream(3) };
-    let e = format!("{:#}", train(&other, split.path(), true, &mut quiet).unwrap_err());
+    let e = format!("{:#}", anyhow::Error::from(train(&other, split.path(), true, &mut quiet).unwrap_err()));
     assert!(e.contains("--generator-seeds 0..3") && e.contains("--generator-seeds 0..4"), "{e}");
     let b = train(&stream(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
@@ -1297,13 +1302,15 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     // `--active-tasks` belongs to streams.
     let e = format!(
         "{:#}",
-        train(
-            &TrainConfig { active_tasks: 3, ..tiny("BlocksTouch-v0", 1) },
-            &straight.path().join("x"),
-            false,
-            &mut quiet
+        anyhow::Error::from(
+            train(
+                &TrainConfig { active_tasks: 3, ..tiny("BlocksTouch-v0", 1) },
+                &straight.path().join("x"),
+                false,
+                &mut quiet
+            )
+            .unwrap_err()
         )
-        .unwrap_err()
     );
     assert!(e.contains("--active-tasks") && e.contains("--families"), "{e}");
     assert!(!straight.path().join("x").exists());

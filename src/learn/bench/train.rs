@@ -22,13 +22,15 @@ use crate::learn::agents::arch::{Arch, NetConfig};
 use crate::learn::agents::registry::{Algo, AlgoConfigs};
 use crate::learn::agents::replay::ReplayBuffer;
 use crate::learn::agents::shared::{Precision, SharedConfig};
-use crate::learn::train::{play_all, stream_seed, Behaviour};
+use crate::learn::train::{play_all, stream_seed, Behaviour, TrainError};
 use crate::support::limits::Bound;
-use anyhow::{bail, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::time::Instant;
+
+/// This module's results: a refused setting, an environment or a rollout that failed.
+type Result<T, E = TrainError> = std::result::Result<T, E>;
 
 /// Gradient updates of `bench --ddpg`.
 pub const BENCH_UPDATES: Bound = Bound::new("--updates", 1, 1_000_000, "");
@@ -116,10 +118,10 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
     for (bound, v) in
         [(WORKERS, c.workers), (BENCH_STEPS, c.steps), (BENCH_UPDATES, c.updates), (BATCH_SIZE, c.batch_size)]
     {
-        bound.check_usize(v).map_err(anyhow::Error::msg)?;
+        bound.check_usize(v).map_err(TrainError::Refused)?;
     }
     if c.torch_threads == 0 {
-        bail!("--torch-threads must be at least 1");
+        return Err(TrainError::Refused("--torch-threads must be at least 1".into()));
     }
     let shared = SharedConfig { precision: c.precision, flat_critic: c.flat_critic, ..SharedConfig::default() };
     let algos = AlgoConfigs::default();
@@ -133,14 +135,14 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
         hindsight_colours: 0,
         hindsight_strategy_given: false,
     })
-    .map_err(anyhow::Error::msg)?;
-    tch::set_num_threads(crate::learn::blas::torch_threads(c.torch_threads).map_err(anyhow::Error::msg)?);
+    .map_err(TrainError::Refused)?;
+    tch::set_num_threads(crate::learn::blas::torch_threads(c.torch_threads).map_err(TrainError::Refused)?);
     let task = registry::task(&c.env)?;
     let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
     let mut envs = crate::env::vector::VectorEnv::new(&env_config, c.workers, c.workers)?;
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
-    let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(anyhow::Error::msg)?;
-    c.precision.check().map_err(anyhow::Error::msg)?;
+    let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(TrainError::Refused)?;
+    c.precision.check().map_err(TrainError::Refused)?;
     let gamma = shared.gamma;
     let spec = Spec { arch, act_dim, shared: &shared };
     let mut agent = c.algo.build(&spec, &algos, &mut ChaCha8Rng::seed_from_u64(c.seed));

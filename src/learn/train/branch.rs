@@ -12,8 +12,7 @@
 //! penalties), may change; the agent's other hyperparameters (network shape,
 //! learning rates, TD3, n-step, precision) live in its checkpoint and stay the parent's.
 
-use super::{checkpoint, differing_fields, RunDir, TrainConfig};
-use anyhow::{bail, Context, Result};
+use super::{checkpoint, differing_fields, Context, Result, RunDir, TrainConfig, TrainError};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -59,14 +58,14 @@ pub struct BranchedFrom {
 pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<BranchedFrom> {
     let from = RunDir { dir: parent.to_owned() };
     if !from.config().exists() || !from.checkpoint().exists() {
-        bail!(
+        refuse!(
             "--branch-from {}: not a run directory with a checkpoint (needs config.json and checkpoint.bin); \
              give a run directory that has finished at least one epoch",
             parent.display()
         );
     }
     if child.exists() {
-        bail!(
+        refuse!(
             "--run-dir {} already exists; a branch starts a new run directory (choose another --run-dir, \
              or continue that run with --resume)",
             child.display()
@@ -76,10 +75,10 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     for path in checkpoints(&from)? {
         if path.exists() {
             checkpoint::verify(&path).map_err(|e| {
-                anyhow::anyhow!(
+                TrainError::Refused(format!(
                     "--branch-from {}: nothing was created: the parent's {e}, or branch from another run",
                     parent.display()
-                )
+                ))
             })?;
         }
     }
@@ -96,7 +95,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     let branchable = branchable();
     let (allowed, refused): (Vec<String>, Vec<String>) = changed.into_iter().partition(|f| branchable.contains(f));
     if !refused.is_empty() {
-        bail!(
+        refuse!(
             "--branch-from {}: a branch may change only {} (and what --resume may); {} differ from {}; \
              pass the parent's values for those, or start a new run",
             parent.display(),
@@ -106,7 +105,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
         );
     }
     if saved.env != config.env && saved.task_id() != config.task_id() {
-        bail!(
+        refuse!(
             "--branch-from {}: the parent trained {}, this run asks for {}; pass --env {}",
             parent.display(),
             saved.task_id(),
@@ -140,7 +139,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
                 return Ok(record);
             }
         }
-        bail!(
+        refuse!(
             "--branch-from {}: the parent wrote new checkpoints while it was being copied (three tries); \
              branch it between two epochs or after stopping it",
             parent.display()

@@ -8,6 +8,8 @@
 //! workers + w` keys every random stream, so P ranks of W workers compute
 //! what one process of P × W workers computes.
 
+use super::TrainError;
+
 /// The job's communicator.
 pub struct Comm {
     inner: Inner,
@@ -163,11 +165,11 @@ impl Comm {
     ///
     /// # Errors
     /// Rank 0's error.
-    pub fn root_check(&self, check: impl FnOnce() -> anyhow::Result<()>) -> anyhow::Result<()> {
+    pub fn root_check(&self, check: impl FnOnce() -> Result<(), TrainError>) -> Result<(), TrainError> {
         let mut status = Vec::new();
         if self.is_root() {
             if let Err(e) = check() {
-                status = format!("{e:#}").into_bytes();
+                status = crate::support::error::chain(&e).into_bytes();
             }
         }
         if self.size() > 1 {
@@ -176,7 +178,7 @@ impl Comm {
         if status.is_empty() {
             Ok(())
         } else {
-            Err(anyhow::anyhow!("{}", String::from_utf8_lossy(&status)))
+            Err(TrainError::Rank0(String::from_utf8_lossy(&status).into_owned()))
         }
     }
 

@@ -12,14 +12,13 @@
 //! `config.json`, and a resumed run refuses others.
 
 use super::rollouts::Episode;
-use super::{ConfigError, TrainConfig};
+use super::{ConfigError, Context, Result, TrainConfig};
 use crate::benchmark::demos::Demos;
 use crate::benchmark::provenance::PolicyId;
 use crate::benchmark::saved::SavedPolicy;
 use crate::env::{ObsMode, ObsSpec};
 use crate::policy::actor::{AnyPolicy, DeterministicPolicy};
 use crate::task::Task;
-use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -190,7 +189,7 @@ impl FinetuneConfig {
         })?;
         let (theirs, ours) = (saved.obs_mode(), run.net.obs_mode());
         if theirs != ours {
-            bail!(
+            refuse!(
                 "--init-from {}: the policy reads the `{theirs}` observation, and this run's network (--net {}) reads \
                  `{ours}`; train with the policy's network (--net {})",
                 path.display(),
@@ -201,7 +200,7 @@ impl FinetuneConfig {
         let id = saved.policy_id(&path.display().to_string());
         match saved.policy {
             AnyPolicy::Deterministic(p) => Ok(Some((id, p))),
-            AnyPolicy::Pggd(_) => bail!(
+            AnyPolicy::Pggd(_) => refuse!(
                 "--init-from {}: a PGGD (Gaussian) policy; the actor of DDPG, TD3 and SAC starts from a deterministic \
                  one (trained by ddpg, td3, sac, bc or dagger)",
                 path.display()
@@ -248,7 +247,7 @@ pub(crate) fn demo_episodes(
     let d = &file.demos;
     let (r, f, rows) = (d.layout.robot.len(), d.layout.entity.len(), d.layout.rows);
     if spec.mode != ObsMode::Entities || r != spec.robot_dim() || f != spec.object_dim() {
-        bail!(
+        refuse!(
             "--demos {}: its observations have {r} robot features and rows of {f}, and this run's have {} and {} \
              (the `{}` observation); record the demos with this build",
             path.display(),
@@ -264,7 +263,7 @@ pub(crate) fn demo_episodes(
     for (i, e) in d.episodes.iter().enumerate() {
         let Some(task) = tasks.iter().find(|t| t.source.hash == e.task_sha256) else {
             let ours: Vec<&str> = tasks.iter().map(|t| t.id()).collect();
-            bail!(
+            refuse!(
                 "--demos {}: episode {i} is of task {} ({}), which this run does not train on ({}); record demos of \
                  the run's tasks (`blockpuzzle demos --suite S` with a suite whose rows are those tasks)",
                 path.display(),
@@ -275,7 +274,7 @@ pub(crate) fn demo_episodes(
         };
         let blocks = task.object_count();
         if blocks + fixtures > rows || blocks > slots {
-            bail!("--demos {}: episode {i} ({}) does not fit this run's {slots} block rows", path.display(), e.task);
+            refuse!("--demos {}: episode {i} ({}) does not fit this run's {slots} block rows", path.display(), e.task);
         }
         // The demo row each of the run's rows takes (None: an absent block slot).
         let ours: Vec<Option<usize>> =

@@ -1,7 +1,7 @@
 //! The learner being trained (any registered algorithm) and, for AggreVaTeD, the expert.
 
 use super::comm::Comm;
-use super::TrainConfig;
+use super::{Context, Result, TrainConfig, TrainError};
 use crate::benchmark::load::load_policy;
 use crate::benchmark::saved::SavedPolicy;
 use crate::learn::agents::algorithm::Algorithm;
@@ -12,7 +12,6 @@ use crate::policy::actor::mlp::PlainNet;
 use crate::policy::actor::without_grey;
 use crate::policy::actor::AnyPolicy;
 use crate::policy::actor::DeterministicPolicy;
-use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -69,7 +68,7 @@ impl Expert {
     pub(crate) fn load(config: &AggrevatedConfig, seen: usize, frozen: &Path, resume: bool) -> Result<Option<Self>> {
         let Some(path) = &config.expert else {
             if config.pg_weight == PgWeight::ExpertAdvantage {
-                bail!("--pg-weight expert-advantage needs an expert (--expert DIR)");
+                refuse!("--pg-weight expert-advantage needs an expert (--expert DIR)");
             }
             return Ok(None);
         };
@@ -81,14 +80,14 @@ impl Expert {
             load_policy(path).with_context(|| format!("loading the expert {}", path.display()))?
         };
         let AnyPolicy::Deterministic(policy) = saved.policy.clone() else {
-            bail!(
+            refuse!(
                 "expert {} is a {} policy; AggreVaTeD needs a deterministic (DDPG or SAC) expert",
                 path.display(),
                 saved.policy.algo()
             );
         };
         if policy.norm.dim() != seen {
-            bail!(
+            refuse!(
                 "expert {} expects {}-dimensional observations ({}), but this environment's observation without \
                  grey blocks has {seen}",
                 path.display(),
@@ -100,12 +99,13 @@ impl Expert {
             let plain = match saved.critic.take() {
                 Some(c) => c,
                 None if from_copy => {
-                    bail!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display())
+                    refuse!("this run's copy of the expert, {}, has no critic; start the run afresh", frozen.display())
                 }
                 None => critic_from_checkpoint(path, &saved, seen)?,
             };
-            let critic = ExpertCritic::new(&policy, &plain)
-                .map_err(|e| anyhow::anyhow!("the critic saved with expert {} does not fit it: {e}", path.display()))?;
+            let critic = ExpertCritic::new(&policy, &plain).map_err(|e| {
+                TrainError::Refused(format!("the critic saved with expert {} does not fit it: {e}", path.display()))
+            })?;
             saved.critic = Some(plain);
             Some(critic)
         } else {
@@ -136,12 +136,12 @@ fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Resu
         saved.epoch
     );
     if !ckpt.exists() {
-        bail!("{no_critic}, and there is no {} beside it", ckpt.display());
+        refuse!("{no_critic}, and there is no {} beside it", ckpt.display());
     }
     let loaded = super::checkpoint::load(&ckpt, &saved.env_id, seen, crate::env::ACTION_DIM)
         .with_context(|| format!("{no_critic}; reading the critic from {}", ckpt.display()))?;
     if loaded.state.epoch != saved.epoch {
-        bail!(
+        refuse!(
             "{no_critic}, and {} is at epoch {}, so its critic belongs to another policy; use the policy.json \
              written with that checkpoint, or a policy saved by this version (it carries its critic)",
             ckpt.display(),
@@ -150,7 +150,7 @@ fn critic_from_checkpoint(path: &Path, saved: &SavedPolicy, seen: usize) -> Resu
     }
     match loaded.agent.critic() {
         Some(critic) => Ok(critic),
-        None => bail!("{} is a {} checkpoint, which has no critic", ckpt.display(), loaded.agent.name()),
+        None => refuse!("{} is a {} checkpoint, which has no critic", ckpt.display(), loaded.agent.name()),
     }
 }
 

@@ -23,6 +23,13 @@
 //! `expert_policy.json` (the run's copy of its expert); with `--snapshot-every
 //! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
 
+/// Returns a [`TrainError::Refused`] with the formatted message: the problem and its fix.
+macro_rules! refuse {
+    ($($arg:tt)*) => {
+        return Err($crate::learn::train::TrainError::Refused(format!($($arg)*)))
+    };
+}
+
 mod branch;
 pub mod finetune;
 pub mod checkpoint;
@@ -40,7 +47,7 @@ use crate::learn::agents::registry::Algo;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{read_progress, RunDir, Span};
+pub use rundir::{read_progress, LogError, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch};
 
 use crate::env::registry;
@@ -49,7 +56,6 @@ use crate::learn::agents::registry::AlgoConfigs;
 use crate::learn::agents::shared::{Precision, SharedConfig};
 use crate::support::limits::Bound;
 use crate::task::Task;
-use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -301,6 +307,98 @@ pub enum ReplayLayout {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{0}")]
 pub struct ConfigError(pub String);
+
+/// Why a run could not start, continue or be branched, or a file of it could not be read or written.
+/// The messages name the problem and the fix; where a lower error has a context (the file being
+/// read), the chain reads "context: error", as the command line prints it.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    /// A setting that cannot run ([`TrainConfig::validate`]).
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A run, task or setting refused as given: the message names the problem and the fix.
+    #[error("{0}")]
+    Refused(String),
+    /// A lower error, led by what was being done ("cannot read PATH").
+    #[error("{what}")]
+    Context {
+        /// What was being done, naming the file or flag.
+        what: String,
+        /// What failed.
+        #[source]
+        source: Box<TrainError>,
+    },
+    /// Rank 0's error, as its text, on every rank of the job ([`comm::Comm::root_check`]).
+    #[error("{0}")]
+    Rank0(String),
+    /// An episode of a rollout plan that no environment played (a bug of the plan).
+    #[error("episode {0} of the plan names no environment")]
+    Unplayed(usize),
+    /// An environment could not be made, set or stepped.
+    #[error(transparent)]
+    Env(#[from] crate::env::EnvError),
+    /// A task does not compile (`--counts`, a recorded copy).
+    #[error(transparent)]
+    Task(#[from] crate::task::TaskError),
+    /// A suite or its split could not be loaded or checked (`--suite`).
+    #[error(transparent)]
+    Suite(#[from] crate::benchmark::suite::SuiteError),
+    /// A stream of generated tasks could not be made (`--families`; boxed, as the largest lower errors are).
+    #[error(transparent)]
+    Stream(Box<crate::benchmark::stream::StreamError>),
+    /// A trained policy could not be loaded (`--expert`, `--init-from`).
+    #[error(transparent)]
+    Load(#[from] crate::benchmark::load::LoadError),
+    /// Demonstrations could not be read (`--demos`; boxed).
+    #[error(transparent)]
+    Demos(Box<crate::benchmark::demos::DemosError>),
+    /// A checkpoint could not be read, written or used.
+    #[error(transparent)]
+    Checkpoint(#[from] checkpoint::CheckpointError),
+    /// A run's log could not be read.
+    #[error(transparent)]
+    Log(#[from] LogError),
+    /// The success curves could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] plot::PlotError),
+    /// An output is refused or its write failed.
+    #[error(transparent)]
+    Write(#[from] crate::support::io::WriteError),
+    /// A file or folder operation failed.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+    /// JSON could not be read or written (a run's files, what ranks exchange).
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
+impl From<crate::benchmark::stream::StreamError> for TrainError {
+    fn from(e: crate::benchmark::stream::StreamError) -> Self {
+        Self::Stream(Box::new(e))
+    }
+}
+
+impl From<crate::benchmark::demos::DemosError> for TrainError {
+    fn from(e: crate::benchmark::demos::DemosError) -> Self {
+        Self::Demos(Box::new(e))
+    }
+}
+
+/// The training layer's results.
+pub(crate) type Result<T, E = TrainError> = std::result::Result<T, E>;
+
+/// Leads an error with what was being done ([`TrainError::Context`]): its chain reads
+/// "context: error".
+pub(crate) trait Context<T> {
+    /// The error of `self`, led by `what()`.
+    fn with_context(self, what: impl FnOnce() -> String) -> Result<T>;
+}
+
+impl<T, E: Into<TrainError>> Context<T> for std::result::Result<T, E> {
+    fn with_context(self, what: impl FnOnce() -> String) -> Result<T> {
+        self.map_err(|e| TrainError::Context { what: what(), source: Box::new(e.into()) })
+    }
+}
 
 /// One row of `progress.csv`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -656,7 +754,7 @@ fn run_task(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> 
     }
     let current = registry::task(&config.env)?;
     if current.id() != source.id {
-        bail!(
+        refuse!(
             "--resume: {} was trained on {} (--env {}), this command asks for {}; pass --env {}",
             run.dir.display(),
             source.id,
@@ -668,7 +766,7 @@ fn run_task(config: &TrainConfig, run: &RunDir, saved: Option<&TrainConfig>) -> 
     if current.source.hash != source.hash {
         let copy = Task::parse(&source.toml, &format!("the copy in {}", run.config().display()), None)?;
         let changed = copy.differences(&current);
-        bail!(
+        refuse!(
             "--resume: the task {} has changed since the run started ({} differ from the copy in {}); \
              restore the file, or start a new run with another --run-dir",
             config.env,
@@ -690,5 +788,12 @@ mod tests {
         assert!(e.contains("whole number from 1 to 256"), "{e}");
         let e = WORKERS.parse::<usize>("100000").unwrap_err();
         assert!(e.contains("allowed are 1 to 256") && e.contains("MPI"), "{e}");
+    }
+
+    #[test]
+    fn a_context_leads_the_lower_error_in_the_chain() {
+        let e = Err::<(), _>(std::io::Error::other("gone")).with_context(|| "cannot read x".to_owned()).unwrap_err();
+        assert_eq!(e.to_string(), "cannot read x");
+        assert_eq!(crate::support::error::chain(&e), "cannot read x: gone");
     }
 }

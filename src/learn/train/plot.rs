@@ -1,26 +1,78 @@
 //! Success curves of a run as a PNG (plotters, headless bitmap backend).
 
+use super::rundir::LogError;
 use super::EpochRow;
-use anyhow::{anyhow, bail, Context, Result};
+use crate::support::io::WriteError;
 use plotters::prelude::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 /// Where the label font is looked for (Debian's fonts-dejavu-core, installed by `make setup`).
 pub const FONT: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 
+/// Why a plot could not be drawn or written, or its log read.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The label font could not be read (the OS's error is part of the message).
+    #[error("cannot read the plot font {FONT} ({0}); install fonts-dejavu-core (make setup)")]
+    NoFont(std::io::Error),
+    /// The label font is not one plotters can use.
+    #[error("{FONT} is not a usable TrueType font")]
+    BadFont,
+    /// The output's name does not end in `.png`.
+    #[error("{}: plots are PNG images; give a path ending in .png", .0.display())]
+    NotPng(PathBuf),
+    /// A scaling figure without points.
+    #[error("no point to draw: give at least one")]
+    NoPoints,
+    /// A scaling figure's x that a logarithmic axis cannot hold.
+    #[error("x = {0} cannot stand on a logarithmic axis: give x above 0")]
+    NotPositive(f64),
+    /// plotters could not draw (its error in words: its type is the backend's).
+    #[error("{0}")]
+    Draw(String),
+    /// A plot's drawing or writing failed: what was being done ("drawing", "writing") and to which file.
+    #[error("{doing} {}", path.display())]
+    At {
+        /// "drawing" or "writing".
+        doing: &'static str,
+        /// The plot.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: Box<PlotError>,
+    },
+    /// The output is refused or its write failed.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// A log to plot could not be read.
+    #[error(transparent)]
+    Log(#[from] LogError),
+}
+
+type Result<T, E = PlotError> = std::result::Result<T, E>;
+
+/// `doing` (drawing, writing) `path` failed with `e`.
+fn at<'a>(doing: &'static str, path: &'a Path) -> impl FnOnce(PlotError) -> PlotError + 'a {
+    move |e| PlotError::At { doing, path: path.to_owned(), source: Box::new(e) }
+}
+
+/// plotters' error drawing `path`, in words.
+fn drawing<E: std::error::Error + Send + Sync>(
+    path: &Path,
+) -> impl Fn(DrawingAreaErrorKind<E>) -> PlotError + Copy + '_ {
+    move |e| PlotError::Draw(format!("drawing {}: {e}", path.display()))
+}
+
 fn register_font() -> Result<()> {
     static ONCE: Once = Once::new();
     let mut result = Ok(());
     ONCE.call_once(|| {
-        result = std::fs::read(FONT)
-            .map_err(|e| anyhow!("cannot read the plot font {FONT} ({e}); install fonts-dejavu-core (make setup)"))
-            .and_then(|bytes| {
-                // plotters keeps the font for the life of the process.
-                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
-                    .map_err(|_| anyhow!("{FONT} is not a usable TrueType font"))
-            });
+        result = std::fs::read(FONT).map_err(PlotError::NoFont).and_then(|bytes| {
+            // plotters keeps the font for the life of the process.
+            let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+            plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).map_err(|_| PlotError::BadFont)
+        });
     });
     result
 }
@@ -43,7 +95,7 @@ fn panel<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let draw = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e}");
+    let draw = |e: DrawingAreaErrorKind<DB::ErrorType>| PlotError::Draw(format!("drawing: {e}"));
     let x_max = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)).fold(1e-9, f64::max);
     let mut chart = ChartBuilder::on(area)
         .margin(12)
@@ -88,7 +140,7 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
 /// Another extension, or a path not ours to write.
 pub fn png_only(path: &Path) -> Result<()> {
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-        bail!("{}: plots are PNG images; give a path ending in .png", path.display());
+        return Err(PlotError::NotPng(path.to_owned()));
     }
     crate::support::io::check_output(path)?;
     Ok(())
@@ -105,14 +157,13 @@ fn two_panels(path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> 
 /// [`two_panels`] drawn into the file `tmp`.
 fn two_panels_to(tmp: &Path, path: &Path, title: &str, curves: impl Fn(bool) -> Vec<Curve>) -> Result<()> {
     let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
-    let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
+    let draw = drawing(path);
     root.fill(&WHITE).map_err(draw)?;
     let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
     let (left, right) = root.split_horizontally(700);
-    panel(&left, "epoch", &curves(false)).with_context(|| format!("drawing {}", path.display()))?;
-    panel(&right, "environment steps (millions)", &curves(true))
-        .with_context(|| format!("drawing {}", path.display()))?;
-    root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
+    panel(&left, "epoch", &curves(false)).map_err(at("drawing", path))?;
+    panel(&right, "environment steps (millions)", &curves(true)).map_err(at("drawing", path))?;
+    root.present().map_err(draw).map_err(at("writing", path))
 }
 
 /// A column of `progress.csv` to draw: legend, colour, value of a row.
@@ -240,7 +291,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
     register_font()?;
     Ok(crate::support::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (1400, 540)).into_drawing_area();
-        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
+        let draw = drawing(path);
         root.fill(&WHITE).map_err(draw)?;
         let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
         let (left, right) = root.split_horizontally(700);
@@ -277,7 +328,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
             }
             legend(&mut chart).map_err(draw)?;
         }
-        root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
+        root.present().map_err(draw).map_err(at("writing", path))
     })?)
 }
 
@@ -305,15 +356,15 @@ pub fn scaling(
 ) -> Result<()> {
     png_only(path)?;
     if points.is_empty() {
-        bail!("no point to draw: give at least one");
+        return Err(PlotError::NoPoints);
     }
     if let Some(p) = points.iter().find(|p| !(p.x > 0.0 && p.x.is_finite())) {
-        bail!("x = {} cannot stand on a logarithmic axis: give x above 0", p.x);
+        return Err(PlotError::NotPositive(p.x));
     }
     register_font()?;
     Ok(crate::support::io::write_atomic_via(path, |tmp| {
         let root = BitMapBackend::new(tmp, (900, 560)).into_drawing_area();
-        let draw = |e: DrawingAreaErrorKind<_>| anyhow!("drawing {}: {e}", path.display());
+        let draw = drawing(path);
         root.fill(&WHITE).map_err(draw)?;
         let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
         let (lo, hi) = points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
@@ -368,6 +419,6 @@ pub fn scaling(
             }
         }
         legend(&mut chart).map_err(draw)?;
-        root.present().map_err(draw).with_context(|| format!("writing {}", path.display()))
+        root.present().map_err(draw).map_err(at("writing", path))
     })?)
 }

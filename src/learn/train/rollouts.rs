@@ -3,6 +3,7 @@
 //! learner, deterministic for tests), one episode, and all workers' episodes
 //! in parallel threads.
 
+use super::{Result, TrainError};
 use crate::env::hindsight;
 use crate::env::vector::VectorEnv;
 use crate::env::{BlockEnv, EnvError, ObsSpec, ACTION_DIM};
@@ -14,7 +15,6 @@ use crate::policy::actor::normalizer::Normalizer;
 use crate::policy::actor::AnyPolicy;
 use crate::policy::{Policy, ScriptedPolicy};
 use crate::sim::rules::{Colour, Touching};
-use anyhow::Result;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
@@ -368,10 +368,7 @@ pub(crate) fn play_plan(
             out[j] = Some(ep);
         }
     }
-    out.into_iter()
-        .enumerate()
-        .map(|(j, ep)| ep.ok_or_else(|| anyhow::anyhow!("episode {j} of the plan names no environment")))
-        .collect()
+    out.into_iter().enumerate().map(|(j, ep)| ep.ok_or(TrainError::Unplayed(j))).collect()
 }
 
 /// Runs `per_worker` episodes on every worker's environment in parallel (one task).

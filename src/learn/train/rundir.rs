@@ -1,8 +1,57 @@
 //! The run directory: its files and `progress.csv`.
 
-use super::{EpochRow, TrainConfig};
-use anyhow::{bail, Context, Result};
+use super::{Context, EpochRow, Result, TrainConfig};
 use std::path::{Path, PathBuf};
+
+/// Why a CSV log (a run's `progress.csv`, another trainer's log) could not be read; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// The file could not be read.
+    #[error("cannot read {}", path.display())]
+    Read {
+        /// The log.
+        path: PathBuf,
+        /// The OS's error, or the bound or kind refused.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Its rows are not the log's columns.
+    #[error("{} is not a {what} ({columns})", path.display())]
+    Malformed {
+        /// The log.
+        path: PathBuf,
+        /// What the log is ("progress log").
+        what: String,
+        /// The columns it must hold.
+        columns: String,
+        /// The CSV reader's error.
+        #[source]
+        source: csv::Error,
+    },
+    /// It has no rows.
+    #[error("{} has no rows: a {what} gains one per epoch (train the run for at least one epoch)", path.display())]
+    Empty {
+        /// The log.
+        path: PathBuf,
+        /// What the log is.
+        what: String,
+    },
+    /// A success column holds no rate from 0 to 1.
+    #[error(
+        "{}: epoch {epoch}: {column} is {value}, not a rate from 0 to 1; the log was edited or damaged",
+        path.display()
+    )]
+    NotRate {
+        /// The log.
+        path: PathBuf,
+        /// The row's epoch.
+        epoch: usize,
+        /// The column.
+        column: String,
+        /// What it holds.
+        value: f64,
+    },
+}
 
 /// Files of a run directory.
 pub struct RunDir {
@@ -101,15 +150,15 @@ pub struct Span {
     pub build: crate::benchmark::provenance::Build,
 }
 
-pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<()> {
-    Ok(crate::support::io::write_atomic_via(path, |tmp| -> Result<()> {
+pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<(), crate::support::io::WriteError> {
+    crate::support::io::write_atomic_via(path, |tmp| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         let mut w = csv::Writer::from_path(tmp)?;
         for r in rows {
             w.serialize(r)?;
         }
         w.flush()?;
         Ok(())
-    })?)
+    })
 }
 
 /// The largest log read whole: a million epochs of about 400 bytes.
@@ -120,15 +169,15 @@ const MAX_LOG_BYTES: u64 = 400 << 20;
 ///
 /// # Errors
 /// A missing, oversized, malformed or empty file, named.
-pub fn read_log<T: serde::de::DeserializeOwned>(path: &Path, what: &str, columns: &str) -> Result<Vec<T>> {
+pub fn read_log<T: serde::de::DeserializeOwned>(path: &Path, what: &str, columns: &str) -> Result<Vec<T>, LogError> {
     let text = crate::support::io::read_text(path, what, MAX_LOG_BYTES)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let rows = csv::Reader::from_reader(text.as_bytes())
-        .deserialize()
-        .collect::<Result<Vec<T>, _>>()
-        .with_context(|| format!("{} is not a {what} ({columns})", path.display()))?;
+        .map_err(|source| LogError::Read { path: path.to_owned(), source })?;
+    let rows =
+        csv::Reader::from_reader(text.as_bytes()).deserialize().collect::<Result<Vec<T>, _>>().map_err(|source| {
+            LogError::Malformed { path: path.to_owned(), what: what.to_owned(), columns: columns.to_owned(), source }
+        })?;
     if rows.is_empty() {
-        bail!("{} has no rows: a {what} gains one per epoch (train the run for at least one epoch)", path.display());
+        return Err(LogError::Empty { path: path.to_owned(), what: what.to_owned() });
     }
     Ok(rows)
 }
@@ -138,7 +187,7 @@ pub fn read_log<T: serde::de::DeserializeOwned>(path: &Path, what: &str, columns
 /// # Errors
 /// A message naming the file for a missing, malformed or empty file, or a
 /// success rate that is not a number from 0 to 1.
-pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
+pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>, LogError> {
     let rows: Vec<EpochRow> = read_log(path, "progress log", "a run's progress.csv, written by `blockpuzzle train`")?;
     for r in &rows {
         for (column, v) in
@@ -154,12 +203,9 @@ pub fn read_progress(path: &Path) -> Result<Vec<EpochRow>> {
 ///
 /// # Errors
 /// Anything else (NaN included), naming the file, epoch and column.
-pub fn check_rate(path: &Path, epoch: usize, column: &str, v: f64) -> Result<()> {
+pub fn check_rate(path: &Path, epoch: usize, column: &str, v: f64) -> Result<(), LogError> {
     if !(0.0..=1.0).contains(&v) {
-        bail!(
-            "{}: epoch {epoch}: {column} is {v}, not a rate from 0 to 1; the log was edited or damaged",
-            path.display()
-        );
+        return Err(LogError::NotRate { path: path.to_owned(), epoch, column: column.to_owned(), value: v });
     }
     Ok(())
 }

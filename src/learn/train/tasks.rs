@@ -4,10 +4,9 @@
 //! rows), draws a task per exploration episode, and keeps a curriculum level per task.
 
 use super::rundir::RunDir;
-use super::{run_task, TrainConfig};
+use super::{run_task, Result, TrainConfig};
 use crate::env::registry;
 use crate::task::{Task, TaskSource};
-use anyhow::{bail, Result};
 
 /// Whether `config` names more than one task (a list, or a suite split).
 pub(crate) fn is_multi(config: &TrainConfig) -> bool {
@@ -25,12 +24,12 @@ fn stream_tasks(
     saved: Option<&TrainConfig>,
 ) -> Result<(Vec<Task>, crate::benchmark::stream::StreamRecord)> {
     let (Some(list), Some(range)) = (&config.families, config.generator_seeds) else {
-        bail!("--families and --generator-seeds go together: give both");
+        refuse!("--families and --generator-seeds go together: give both");
     };
     if let Some(saved) = saved.filter(|s| s.families.is_some()) {
         if saved.families != config.families || saved.generator_seeds != config.generator_seeds {
             let (f, g) = (saved.families.as_deref().unwrap_or(""), saved.generator_seeds.map(|r| r.to_string()));
-            bail!(
+            refuse!(
                 "--resume: {} trains on the stream --families {f} --generator-seeds {}; this command asks for \
                  --families {list} --generator-seeds {range}; resume with the run's stream, or start a new run with \
                  another --run-dir",
@@ -63,7 +62,7 @@ fn stream_tasks(
     if let Some(recorded) = saved.and_then(|s| s.stream.as_ref()) {
         let changed = recorded.differences(&pool.record);
         if !changed.is_empty() {
-            bail!(
+            refuse!(
                 "--resume: the stream's pool differs from the one recorded in {} ({}); restore the families' files, \
                  or start a new run with another --run-dir",
                 run.config().display(),
@@ -84,7 +83,7 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
     let tasks = match &config.suite {
         Some(name) => {
             if config.split == "test" {
-                bail!(
+                refuse!(
                     "--split test: the test split is what a suite's score is measured on, so no policy trains on it \
                      (docs/suites.md); train on --split train (the default), or list the tasks you mean with --env \
                      A,B,... (its numbers on that suite are then no score to report)"
@@ -93,7 +92,7 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
             let suite = crate::benchmark::suite::load(name)?;
             let Some(split) = suite.splits.iter().find(|s| s.name == config.split) else {
                 let names: Vec<&str> = suite.splits.iter().map(|s| s.name.as_str()).collect();
-                bail!(
+                refuse!(
                     "--split {}: the suite {} has the splits {}; pass one of them",
                     config.split,
                     suite.name,
@@ -108,7 +107,7 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
             // A list means what it says: no empty item, no task twice (by id or by content).
             let items: Vec<&str> = config.env.split(',').map(str::trim).collect();
             if let Some(k) = items.iter().position(|s| s.is_empty()) {
-                bail!(
+                refuse!(
                     "--env {:?}: item {} of the list is empty; list task ids or files separated by single commas",
                     config.env,
                     k + 1
@@ -117,7 +116,7 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
             let tasks = items.iter().map(|e| registry::task(e)).collect::<Result<Vec<_>, _>>()?;
             for (i, t) in tasks.iter().enumerate() {
                 if let Some(j) = tasks[..i].iter().position(|u| u.source.hash == t.source.hash) {
-                    bail!(
+                    refuse!(
                         "--env lists one task twice: {} and {} ({}) have the same content; list each task once",
                         items[j],
                         items[i],
@@ -135,7 +134,7 @@ fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
         }
     }
     if unique.is_empty() {
-        bail!("--env {:?} names no task; give an id or task file (several comma-separated)", config.env);
+        refuse!("--env {:?} names no task; give an id or task file (several comma-separated)", config.env);
     }
     Ok(unique)
 }
@@ -155,10 +154,12 @@ pub(crate) fn run_tasks(
         return Ok((vec![run_task(config, run, saved)?], None));
     }
     if config.counts.is_some() {
-        bail!("--counts applies to one task; a multi-task run (--suite or an --env list) takes each task's own counts");
+        refuse!(
+            "--counts applies to one task; a multi-task run (--suite or an --env list) takes each task's own counts"
+        );
     }
     if config.aggrevated.expert.is_some() {
-        bail!("--expert: AggreVaTeD's expert plays one task; train it with one --env");
+        refuse!("--expert: AggreVaTeD's expert plays one task; train it with one --env");
     }
     if config.families.is_some() {
         let (tasks, record) = stream_tasks(config, run, saved)?;
@@ -174,7 +175,7 @@ pub(crate) fn run_tasks(
                 .map(|r| r.id.clone())
                 .chain(now.iter().filter(|n| !recorded.iter().any(|r| r.hash == n.hash)).map(|n| n.id.clone()))
                 .collect();
-            bail!(
+            refuse!(
                 "--resume: the tasks of {} differ from those recorded in {} ({}); resume with the run's tasks, or \
                  start a new run with another --run-dir",
                 config.task_id(),

@@ -10,7 +10,7 @@ use super::learner::{Expert, Learner};
 use super::rollouts::{play_plan, stream_seed, Behaviour, Draw, Episode, Planned};
 use super::rundir::{read_progress, write_progress, RunDir};
 use super::tasks::{draw_task, run_tasks, test_task};
-use super::{computation_differences, plot, EpochRow, ReplayLayout, TrainConfig};
+use super::{computation_differences, plot, Context, EpochRow, ReplayLayout, Result, TrainConfig, TrainError};
 use crate::benchmark::saved::SavedPolicy;
 use crate::env::vector::VectorEnv;
 use crate::env::{registry, EnvConfig};
@@ -23,7 +23,6 @@ use crate::policy::actor::AnyPolicy;
 use crate::policy::actor::DeterministicPolicy;
 use crate::support::io::write_json;
 use crate::task::Task;
-use anyhow::{bail, Context, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
@@ -87,7 +86,7 @@ fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
 fn build_envs(config: &TrainConfig, env_configs: &[EnvConfig], active: &[usize]) -> Result<VectorEnv> {
     use rayon::prelude::*;
     let wanted: Vec<&EnvConfig> = (0..config.workers).flat_map(|_| active.iter().map(|&t| &env_configs[t])).collect();
-    let pool = crate::env::vector::model_threads(config.workers).map_err(anyhow::Error::msg)?;
+    let pool = crate::env::vector::model_threads(config.workers).map_err(TrainError::Refused)?;
     let built = pool.install(|| {
         wanted.par_iter().map(|c| crate::env::BlockEnv::new((*c).clone())).collect::<Result<Vec<_>, _>>()
     })?;
@@ -104,7 +103,7 @@ fn solver_plays(envs: &mut VectorEnv, tasks: &[Task], seed: u64) -> Result<()> {
     for (env, task) in envs.envs_mut().iter_mut().zip(tasks) {
         let (obs, _) = env.reset(Some(seed))?;
         crate::policy::Script::from_observation(&env.obs_spec(), &obs).map_err(|why| {
-            anyhow::anyhow!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id())
+            TrainError::Refused(format!("the solver cannot play {} ({why}), so there is nothing to imitate", task.id()))
         })?;
     }
     Ok(())
@@ -146,7 +145,7 @@ fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episod
         return Ok(());
     };
     if need > have {
-        bail!(
+        refuse!(
             "this run would need {} of memory (--workers {} with --buffer-size {} and --batch-size {}: replay \
              buffers of {obs_dim}-dimensional observations, filled by {} epochs, the update batches, and networks \
              of --layers {} x --hidden {}), more than this machine's {}; lower --buffer-size, --batch-size, \
@@ -170,7 +169,7 @@ fn check_resume(comm: &Comm, run: &RunDir) -> Result<()> {
     comm.root_check(|| {
         let path = [run.checkpoint(), checkpoint::previous(&run.checkpoint())].into_iter().find(|p| p.exists());
         let Some(path) = path else {
-            bail!(
+            refuse!(
                 "--resume: {} holds no run (no {}); start a new run without --resume",
                 run.dir.display(),
                 run.checkpoint().display()
@@ -178,7 +177,7 @@ fn check_resume(comm: &Comm, run: &RunDir) -> Result<()> {
         };
         let ranks = checkpoint::peek_state(&path)?.ranks;
         if ranks != comm.size() {
-            bail!(
+            refuse!(
                 "{} was written by a job of {ranks} rank(s), this one has {}; resume with mpirun -np {ranks} (or \
                  without mpirun for 1)",
                 path.display(),
@@ -230,7 +229,7 @@ fn run_config(
     let recorded = saved.map(TrainConfig::replay_layout);
     config.replay = Some(config.replay.or(recorded).unwrap_or(ReplayLayout::PerWorker));
     if comm.size() > 1 && config.replay_layout() == ReplayLayout::Shared {
-        bail!(
+        refuse!(
             "{} shares replay per process (it predates per-worker replay); it cannot continue under mpirun",
             run.dir.display()
         );
@@ -252,13 +251,13 @@ impl StartingPoint {
     /// The agent and buffers fit the run's settings.
     fn check(&self, config: &TrainConfig, mine: &RunDir) -> Result<()> {
         if self.agent.name() != config.algo.name() {
-            let (file, held) = (mine.checkpoint(), Algo::named(self.agent.name()).map_err(anyhow::Error::msg)?);
-            bail!("{} holds a {held:?} agent, not {:?}; pass --algo {held}", file.display(), config.algo);
+            let (file, held) = (mine.checkpoint(), Algo::named(self.agent.name()).map_err(TrainError::Refused)?);
+            refuse!("{} holds a {held:?} agent, not {:?}; pass --algo {held}", file.display(), config.algo);
         }
         let layout = config.replay_layout();
         let expected = if layout == ReplayLayout::PerWorker { config.workers } else { 1 };
         if self.replays.len() != expected {
-            bail!(
+            refuse!(
                 "{} holds {} replay buffer(s), this run needs {expected} (--workers {}, --replay {:?})",
                 mine.checkpoint().display(),
                 self.replays.len(),
@@ -286,13 +285,13 @@ fn fresh(
     let (arch, act_dim) = dims;
     let obs_dim = arch.obs_dim;
     if mine.checkpoint().exists() || run.checkpoint().exists() {
-        bail!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
+        refuse!("{} already holds a run; pass --resume to continue it or choose another --run-dir", run.dir.display());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[0]));
     let spec = Spec { arch, act_dim, shared: &config.shared };
     let mut agent = config.algo.build(&spec, &config.algos, &mut rng);
     if let (Some(policy), Some(path)) = (init, &config.finetune.init_from) {
-        agent.init_from(policy).map_err(|e| anyhow::anyhow!("--init-from {}: {e}", path.display()))?;
+        agent.init_from(policy).map_err(|e| TrainError::Refused(format!("--init-from {}: {e}", path.display())))?;
         keep_policy(&mut *agent, config, policy)?;
     }
     // The curriculum's start: level 0, or each task's top with --start-at-top.
@@ -326,7 +325,7 @@ fn fresh(
 fn keep_policy(agent: &mut dyn Algorithm, config: &TrainConfig, policy: &DeterministicPolicy) -> Result<()> {
     let uses = config.finetune.start_uses();
     if uses.any() {
-        agent.keep_start(policy, uses).map_err(anyhow::Error::msg)?;
+        agent.keep_start(policy, uses).map_err(TrainError::Refused)?;
     }
     Ok(())
 }
@@ -353,7 +352,7 @@ fn resumed(
         saved.replay = Some(saved.replay_layout());
         let changed = computation_differences(&saved, config);
         if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
-            bail!(
+            refuse!(
                 "--resume with settings that differ from {} ({}); resume with the run's settings or start a new run with another --run-dir",
                 run.config().display(),
                 if changed.is_empty() { "--env".to_owned() } else { changed.join(", ") }
@@ -366,7 +365,7 @@ fn resumed(
         loaded.state.levels = vec![loaded.state.level];
     }
     if loaded.state.levels.len() != tasks {
-        bail!(
+        refuse!(
             "--resume: {} holds the levels of {} task(s), this run has {tasks}",
             path.display(),
             loaded.state.levels.len()
@@ -374,10 +373,10 @@ fn resumed(
     }
     loaded.state.tallies.resize(tasks, [0, 0]);
     if loaded.agent.norm().set_layout() != dims.0.set {
-        bail!("--resume: {} was saved with other networks than --net asks for", path.display());
+        refuse!("--resume: {} was saved with other networks than --net asks for", path.display());
     }
     // A resume has the checkpoint's settings; a branch's first epoch, its own.
-    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos).map_err(anyhow::Error::msg)?;
+    config.algo.take_branch_settings(&mut *loaded.agent, &config.algos).map_err(TrainError::Refused)?;
     let epoch = loaded.state.epoch;
     let rows = if comm.is_root() {
         read_progress(&run.progress())?.into_iter().filter(|r| r.epoch < epoch).collect()
@@ -468,7 +467,7 @@ impl<'a> Trainer<'a> {
             check_resume(comm, &run)?;
         }
         if std::fs::metadata(&run.dir).is_ok_and(|m| !m.is_dir()) {
-            bail!(
+            refuse!(
                 "--run-dir {} is a file, not a folder; give the path of a new folder (or of a run to --resume)",
                 run.dir.display()
             );
@@ -480,7 +479,7 @@ impl<'a> Trainer<'a> {
                     .with_context(|| format!("cannot create run directory {}", d.display()))
             })
             .collect::<Result<Vec<_>>>()?;
-        tch::set_num_threads(crate::learn::blas::torch_threads(config.torch_threads).map_err(anyhow::Error::msg)?);
+        tch::set_num_threads(crate::learn::blas::torch_threads(config.torch_threads).map_err(TrainError::Refused)?);
 
         let saved_config =
             if comm.is_root() && resume && run.config().exists() { Some(run.read_config()?) } else { None };
@@ -490,7 +489,7 @@ impl<'a> Trainer<'a> {
         }
         if let Some(file) = &demos {
             match (&config.finetune.demos_sha256, resume) {
-                (Some(recorded), true) if *recorded != file.sha256 => bail!(
+                (Some(recorded), true) if *recorded != file.sha256 => refuse!(
                     "--resume: --demos {} is not the file this run started with ({recorded}); restore that file",
                     config.finetune.demos.as_deref().unwrap_or(Path::new("")).display()
                 ),
@@ -511,7 +510,11 @@ impl<'a> Trainer<'a> {
         check_memory(&config, env_configs[0].obs_spec().dim(), crate::env::ACTION_DIM, max_steps)?;
         let active = active_set(&config, 0, tasks.len());
         crate::support::limits::NUM_ENVS.check_usize(config.workers * active.len()).map_err(|e| {
-            anyhow::anyhow!("{e}: {} workers × {} tasks; use fewer workers or tasks", config.workers, active.len())
+            TrainError::Refused(format!(
+                "{e}: {} workers × {} tasks; use fewer workers or tasks",
+                config.workers,
+                active.len()
+            ))
         })?;
         let mut envs = build_envs(&config, &env_configs, &active)?;
         // A stream's tasks passed the solver's check when they were generated.
@@ -520,12 +523,12 @@ impl<'a> Trainer<'a> {
         }
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
-        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(anyhow::Error::msg)?;
+        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(TrainError::Refused)?;
         let max_levels: Vec<usize> = tasks.iter().map(Task::max_level).collect();
         if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
             match &tasks[..] {
-                [task] => bail!("--challenge-share: the task {} has no challenge distribution", task.id()),
-                _ => bail!("--challenge-share: none of the run's tasks has a challenge distribution"),
+                [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
+                _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
             }
         }
 
@@ -541,7 +544,7 @@ impl<'a> Trainer<'a> {
         if let (true, Some((id, policy))) = (resume, &init) {
             // The policy the run started from, as recorded: its anchor again.
             if let Some(recorded) = config.finetune.init_policy.as_ref().filter(|r| r.sha256 != id.sha256) {
-                bail!(
+                refuse!(
                     "--resume: {} is not the policy this run started from ({}); restore that policy to resume the run",
                     id.name,
                     recorded.sha256.as_deref().unwrap_or("unrecorded")
@@ -988,7 +991,7 @@ fn shared_tasks(
         Some(t) => Ok(t),
         None => {
             let (sources, stream): (Vec<crate::task::TaskSource>, Option<crate::benchmark::stream::StreamRecord>) =
-                serde_json::from_slice(&bytes).context("the tasks sent by rank 0")?;
+                serde_json::from_slice(&bytes).with_context(|| "the tasks sent by rank 0".to_owned())?;
             Ok((sources.iter().map(registry::recorded).collect::<Result<_, _>>()?, stream))
         }
     }
@@ -1006,7 +1009,7 @@ fn resume_checkpoint(comm: &Comm, path: &Path, run: &RunDir) -> Result<PathBuf> 
         .map(|p| Ok((checkpoint::peek_state(&p)?.epoch as u64, p)))
         .collect::<Result<_, checkpoint::CheckpointError>>()?;
     let Some(latest) = candidates.iter().map(|c| c.0).max() else {
-        bail!(
+        refuse!(
             "--resume: no checkpoint for rank {} in {} ({}); start a new run without --resume",
             comm.rank(),
             run.dir.display(),
@@ -1016,7 +1019,7 @@ fn resume_checkpoint(comm: &Comm, path: &Path, run: &RunDir) -> Result<PathBuf> 
     let epoch = comm.gather_u64(latest).into_iter().min().unwrap_or(latest);
     match candidates.into_iter().find(|c| c.0 == epoch) {
         Some((_, p)) => Ok(p),
-        None => bail!(
+        None => refuse!(
             "--resume: rank {} has no checkpoint of epoch {epoch}, the last epoch every rank completed (its latest \
              is of epoch {latest}, in {}); the run cannot continue exactly",
             comm.rank(),
