@@ -491,11 +491,11 @@ fn generate_tasks(py: Python<'_>, family: &str, out: &str, seed: u64, count: usi
     let fam = blockpuzzle::task::family::Family::load(family, None).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let out = std::path::PathBuf::from(out);
     // Every output checked before any candidate is played, as `task generate` does.
-    blockpuzzle::episode::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(format!("{e:#}")))?;
+    blockpuzzle::episode::generate::check_outputs(&out, &fam, seed, count).map_err(|e| PyValueError::new_err(blockpuzzle::support::error::chain(&e)))?;
     let manifest = py.allow_threads(|| -> Result<serde_json::Value, String> {
         let results = blockpuzzle::episode::generate::generate(&fam, seed, count, threads).map_err(|e| e.to_string())?;
         let build = blockpuzzle::benchmark::provenance::Build::current();
-        blockpuzzle::episode::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| format!("{e:#}"))
+        blockpuzzle::episode::generate::write_folder(&out, &fam, family, seed, &results, &build).map_err(|e| blockpuzzle::support::error::chain(&e))
     });
     manifest.map(|m| m.to_string()).map_err(PyValueError::new_err)
 }
@@ -520,12 +520,12 @@ fn record_demos(
     THREADS.check_usize(threads).map_err(PyValueError::new_err)?;
     let s = blockpuzzle::benchmark::suite::load(suite).map_err(suite_err)?;
     let out = std::path::PathBuf::from(out);
-    let done = py.allow_threads(|| -> anyhow::Result<serde_json::Value> {
+    let done = py.allow_threads(|| -> Result<serde_json::Value, blockpuzzle::benchmark::demos::DemosError> {
         let harness = blockpuzzle::benchmark::provenance::Harness::Python;
         let d = blockpuzzle::benchmark::demos::record_to(&out, &s, split, episodes, threads, harness)?;
         Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps(), "successes": d.successes(), "rows": d.layout.rows}))
     });
-    done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(format!("{e:#}")))
+    done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(blockpuzzle::support::error::chain(&e)))
 }
 
 /// The commands only the Rust command line's training build has (`cli::TRAINING_COMMANDS`).

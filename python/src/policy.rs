@@ -92,7 +92,7 @@ pub(crate) fn evaluate_saved(
         Ok(blockpuzzle::benchmark::load::Named::Saved(_, saved)) => saved,
         Ok(_) => return Err(PyValueError::new_err(format!("{}: not a trained policy", path.display()))),
         Err(blockpuzzle::benchmark::load::LoadError::Zoo(z)) => return Err(zoo_err(z)),
-        Err(e) => return Err(PyValueError::new_err(format!("{:#}", anyhow::Error::from(e)))),
+        Err(e) => return Err(PyValueError::new_err(blockpuzzle::support::error::chain(&e))),
     };
     let mut suite = blockpuzzle::benchmark::suite::load(suite).map_err(crate::suite_err)?;
     if let Some(n) = episodes {
@@ -123,7 +123,7 @@ pub(crate) fn evaluate_saved(
     if let Some(e) = failed {
         return Err(e);
     }
-    let result = result.map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let result = result.map_err(|e| PyRuntimeError::new_err(blockpuzzle::support::error::chain(&e)))?;
     serde_json::to_string(&result).map_err(|e| PyRuntimeError::new_err(e.to_string()))
 }
 

@@ -497,7 +497,7 @@ pub fn evaluate_suite(
             // An environment error fails the suite; only a policy that does not fit skips the row.
             let env = make_env(&spec, subject.obs_mode(), subject.slots()?)?;
             let (evaluation, skipped) = match Actor::fit(subject, &env) {
-                Err(e) => (None, Some(format!("{e:#}"))),
+                Err(e) => (None, Some(crate::support::error::chain(&e))),
                 Ok(policy) => (Some(play(&spec, env, policy)?), None),
             };
             rows.push(RowResult {

@@ -739,7 +739,7 @@ fn rewrite<T>(
     let json = serde_json::to_vec_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
     crate::support::io::write_file(&json_path, &json)
-        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("{e:#}") })?;
+        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: crate::support::error::chain(&e) })?;
     Ok(out)
 }
 
