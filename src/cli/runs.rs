@@ -51,7 +51,7 @@ pub(super) struct PlotArgs {
     #[arg(long, num_args = 1.., requires = "out", conflicts_with = "overlay")]
     scaling: Vec<String>,
     /// With --overlay: suite results (JSON of `eval --suite`) as `LABEL:FILE`, each drawn as a dashed
-    /// line at its test score, e.g. `--level solver:results/beyond-teacher/ToppleTower-v0.solver.json`.
+    /// line at its test score, e.g. `--level solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json`.
     #[arg(long, num_args = 1.., requires = "overlay")]
     level: Vec<String>,
     /// With --scaling: a suite result (e.g. the solver's) drawn as dashed train and test lines.
@@ -241,7 +241,7 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
         for given in &a.level {
             let Some((label, file)) = given.split_once(':') else {
                 bail!(
-                    "--level {given}: give LABEL:FILE, e.g. solver:results/beyond-teacher/ToppleTower-v0.solver.json"
+                    "--level {given}: give LABEL:FILE, e.g. solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json"
                 );
             };
             let r = crate::benchmark::results::read(std::path::Path::new(file))
