@@ -93,6 +93,21 @@ pub struct SavedPolicy {
     /// policies saved before the critic was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub critic: Option<PlainNet>,
+    /// A policy interpolated between two (`blockpuzzle blend`, [`SavedPolicy::blend`]): where its
+    /// weights came from. Its other records are the tuned policy's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<BlendRecord>,
+}
+
+/// Where a blended policy's weights came from: (1 − `weight`)·`base` + `weight`·`tuned`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlendRecord {
+    /// The policy fine-tuned from (name as given, and hash).
+    pub base: crate::benchmark::provenance::PolicyId,
+    /// The fine-tuned policy.
+    pub tuned: crate::benchmark::provenance::PolicyId,
+    /// The tuned policy's share of each weight.
+    pub weight: f64,
 }
 
 impl SavedPolicy {
@@ -190,6 +205,40 @@ impl SavedPolicy {
     /// Whether it was trained on more than one task (a list, a suite split or a stream).
     pub fn is_multi_task(&self) -> bool {
         !self.tasks.is_empty() || self.stream.is_some()
+    }
+
+    /// `tuned` (named `tuned_name`) with its actor's weights interpolated towards `base`'s
+    /// ([`crate::policy::actor::DeterministicPolicy::blend`]), recorded in [`SavedPolicy::blend`]: the
+    /// tuned policy's task, epoch, algorithm, observation and normaliser, no critic.
+    ///
+    /// # Errors
+    /// Either policy not deterministic (a PGGD policy), another observation, another network, a weight
+    /// outside [0, 1]: the message names both sides.
+    pub fn blend(base: (&str, &SavedPolicy), tuned: (&str, &SavedPolicy), weight: f64) -> Result<SavedPolicy, String> {
+        let ((base_name, b), (tuned_name, t)) = (base, tuned);
+        let (AnyPolicy::Deterministic(bp), AnyPolicy::Deterministic(tp)) = (&b.policy, &t.policy) else {
+            return Err(format!(
+                "{base_name} is a {} policy and {tuned_name} a {} one: only deterministic actors (DDPG, TD3, SAC, BC, \
+                 DAgger) are blended",
+                b.policy.kind(),
+                t.policy.kind()
+            ));
+        };
+        if b.obs_mode() != t.obs_mode() {
+            return Err(format!(
+                "{base_name} reads `{}` observations and {tuned_name} `{}`: blend a policy with the one it was \
+                 fine-tuned from",
+                b.obs_mode(),
+                t.obs_mode()
+            ));
+        }
+        let policy = tp.blend(bp, weight).map_err(|e| format!("{base_name} and {tuned_name}: {e}"))?;
+        Ok(SavedPolicy {
+            policy: AnyPolicy::Deterministic(policy),
+            critic: None,
+            blend: Some(BlendRecord { base: b.policy_id(base_name), tuned: t.policy_id(tuned_name), weight }),
+            ..t.clone()
+        })
     }
 
     /// The policy as results name it: `name` as the user gave it and the

@@ -956,6 +956,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         fixtures: meta.fixtures.clone(),
         policy,
         critic,
+        blend: None,
     };
     saved.check().map_err(&corrupt)?;
     for (k, p) in meta.probes.iter().enumerate() {

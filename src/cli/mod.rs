@@ -10,6 +10,7 @@ use crate::env::registry;
 
 #[cfg(feature = "train")]
 mod bench;
+mod blend;
 mod episodes;
 mod eval;
 #[cfg(feature = "train")]
@@ -92,6 +93,9 @@ enum Command {
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),
+    /// Interpolate a fine-tuned policy towards the one it started from, weight by weight (WiSE-FT):
+    /// (1 - w) x BASE + w x TUNED, written as a policy file with the blend recorded.
+    Blend(blend::BlendArgs),
     #[cfg(feature = "train")]
     /// The paper's results table on BlocksChoose-v0 (Normal and Challenge), beside the paper's numbers.
     Table(TableArgs),
@@ -254,6 +258,7 @@ fn dispatch(command: Command) -> Result<()> {
         #[cfg(feature = "train")]
         Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval::eval(a),
+        Command::Blend(a) => blend::run(a),
         Command::Render(a) => episodes::render(a),
         Command::Zoo(c) => zoo::run(c),
         Command::Results(c) => results::run(c),

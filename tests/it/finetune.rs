@@ -202,3 +202,80 @@ fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
     let (ok, text) = train(&run, &[&args[..], &["--epochs", "3", "--resume"]].concat());
     assert!(!ok && text.contains("not the file this run started with"), "{text}");
 }
+
+#[test]
+fn a_blend_lies_between_a_fine_tuned_policy_and_its_start() {
+    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("tuned");
+    let (ok, text) =
+        train(&run, &[&ENTITY[..], &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity"]].concat());
+    assert!(ok, "{text}");
+    let tuned_file = run.join("snapshots/epoch-0002.json");
+    let tuned = snapshot(&run, 2);
+    assert_ne!(tuned.policy.net().layers, generalist.policy.net().layers, "the run moved the actor");
+    let blend = |weight: &str, base: &str, out: &std::path::Path| {
+        let o = crate::common::blockpuzzle(&["blend", "--base", base, "--weight", weight])
+            .arg("--tuned")
+            .arg(&tuned_file)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+    };
+    // Weight 0 is the starting policy's weights and 1 the tuned one's, exactly.
+    for (weight, expected) in [("0", &generalist), ("1", &tuned)] {
+        let out = tmp.path().join(format!("w{weight}.json"));
+        let (ok, text) = blend(weight, "generalist-bc-entity", &out);
+        assert!(ok, "{text}");
+        let b = blockpuzzle::benchmark::saved::read(&out).unwrap();
+        assert_eq!(b.policy.net().layers, expected.policy.net().layers, "weight {weight}");
+    }
+    // Between, each weight is (1 - w) x base + w x tuned; the rest is the tuned policy's, and the blend is recorded.
+    let out = tmp.path().join("w025.json");
+    let (ok, text) = blend("0.25", "generalist-bc-entity", &out);
+    assert!(ok, "{text}");
+    let b = blockpuzzle::benchmark::saved::read(&out).unwrap();
+    let layers = |p: &SavedPolicy| p.policy.net().layers.clone();
+    for ((q, g), t) in layers(&b).iter().zip(layers(&generalist)).zip(layers(&tuned)) {
+        for ((&q, &g), &t) in q.w.iter().chain(&q.b).zip(g.w.iter().chain(&g.b)).zip(t.w.iter().chain(&t.b)) {
+            assert!((q - (0.75 * g + 0.25 * t)).abs() <= 1e-6 * (1.0 + g.abs() + t.abs()), "{q} from {g} and {t}");
+        }
+    }
+    let record = b.blend.as_ref().expect("the blend is recorded");
+    assert_eq!(record.weight, 0.25);
+    assert_eq!(record.base, generalist.policy_id("generalist-bc-entity"));
+    assert_eq!(record.tuned, tuned.policy_id(&tuned_file.display().to_string()));
+    assert_eq!(
+        (b.env_id.as_str(), b.epoch, b.algo.as_deref()),
+        (tuned.env_id.as_str(), tuned.epoch, tuned.algo.as_deref())
+    );
+    assert!(b.critic.is_none());
+    assert_eq!(b.policy.act(&vec![0.1; b.policy.obs_dim()]).len(), 4);
+    // It plays as any policy file does.
+    let o = crate::common::blockpuzzle(&["eval", "--env", "ToppleTower-v0", "--episodes", "2", "--checkpoint"])
+        .arg(&out)
+        .arg("--out")
+        .arg(tmp.path().join("eval.json"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Refused, naming the problem, with nothing written: a weight outside [0, 1], a policy of another
+    // observation or network, a missing policy.
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("1.5", "generalist-bc-entity", &["--weight", "from 0 to 1"]),
+        ("0.5", "BlocksChoose-v0-ddpg", &["BlocksChoose-v0-ddpg reads `flat` observations", "entities"]),
+        ("0.5", "cross-task-v2-dagger-entity", &["the base policy's actor is", "one network"]),
+        ("0.5", "no-such-policy", &["no-such-policy"]),
+    ];
+    for (k, (weight, base, words)) in cases.iter().enumerate() {
+        let out = tmp.path().join(format!("refused-{k}.json"));
+        let (ok, text) = blend(weight, base, &out);
+        assert!(!ok, "{base} at {weight} was accepted: {text}");
+        for w in *words {
+            assert!(text.contains(w), "{base} at {weight}: no {w:?} in {text}");
+        }
+        assert!(!text.contains("panicked") && !out.exists(), "{text}");
+    }
+}

@@ -96,6 +96,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             fixtures: None,
             policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
+            blend: None,
         };
         let info = ExportInfo {
             name: format!("set-{k}"),

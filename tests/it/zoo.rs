@@ -47,6 +47,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         fixtures: None,
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
+        blend: None,
     }
 }
 

@@ -425,20 +425,6 @@ impl StartUses {
     }
 }
 
-/// A network in words, for messages that compare two: its kind, what it reads and its layers' widths.
-pub fn describe_net(net: &PlainNet) -> String {
-    let widths: Vec<usize> = net.layers.iter().map(|l| l.b.len()).collect();
-    match net.set {
-        None => {
-            format!("an MLP over {} observation features, layers {widths:?}", net.layers.first().map_or(0, |l| l.n_in))
-        }
-        Some(s) => format!(
-            "a set network over rows of {} features (robot features {}, encoder layers {}), layers {widths:?}",
-            s.object, s.robot, s.encoder_layers
-        ),
-    }
-}
-
 /// `policy` fitted to a learner whose actor is `ours` and normaliser `norm`: a set network's rows
 /// set to this layout's slots (its weights do not depend on them), and checked to be the same
 /// network (kind, layers, options) reading an observation of the same length.
@@ -463,8 +449,8 @@ pub fn fit_actor(
             "the policy's actor is {}, and this run's is {}: a flat policy reads its own task's layout (its \
              blocks' rows in order), so it starts only a run of a task with that layout; start from a policy of \
              this task, or from a set network's (--net set or entity), which reads any number of blocks",
-            describe_net(&fitted.net),
-            describe_net(ours)
+            fitted.net.describe(),
+            ours.describe()
         ));
     }
     let shape = |n: &PlainNet| n.layers.iter().map(|l| (l.n_in, l.b.len())).collect::<Vec<_>>();
@@ -472,8 +458,8 @@ pub fn fit_actor(
         return Err(format!(
             "the policy's actor is {}, and this run's is {}: train with the policy's network settings \
              (--net, --set-width, --hidden, --layers and the set options it was trained with)",
-            describe_net(&fitted.net),
-            describe_net(ours)
+            fitted.net.describe(),
+            ours.describe()
         ));
     }
     if fitted.norm.dim() != norm.dim() || fitted.norm.set_layout() != norm.set_layout() {

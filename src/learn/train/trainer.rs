@@ -942,6 +942,7 @@ impl<'a> Trainer<'a> {
                 fixtures: Some(self.config.net.obs_mode().fixtures().to_vec()),
                 policy,
                 critic: self.learner.agent.critic(),
+                blend: None,
             };
             write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {

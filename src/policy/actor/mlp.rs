@@ -283,6 +283,33 @@ pub struct PlainNet {
 }
 
 impl PlainNet {
+    /// The network in words, for messages that compare two: its kind, what it reads and its layers'
+    /// widths.
+    pub fn describe(&self) -> String {
+        let widths: Vec<usize> = self.layers.iter().map(|l| l.b.len()).collect();
+        match self.set {
+            None => format!(
+                "an MLP over {} observation features, layers {widths:?}",
+                self.layers.first().map_or(0, |l| l.n_in)
+            ),
+            Some(s) => format!(
+                "a set network over rows of {} features (robot features {}, encoder layers {}), layers {widths:?}",
+                s.object, s.robot, s.encoder_layers
+            ),
+        }
+    }
+
+    /// Whether `other` is the same network as this one: kind, layout, layers and options (a set
+    /// network's slots aside, which its weights do not depend on).
+    pub fn same_network(&self, other: &PlainNet) -> bool {
+        let shape = |n: &PlainNet| n.layers.iter().map(|l| (l.n_in, l.b.len(), l.w.len())).collect::<Vec<_>>();
+        let layout = |n: &PlainNet| n.set.map(|s| s.with_slots(0));
+        shape(self) == shape(other)
+            && layout(self) == layout(other)
+            && self.tanh_out == other.tanh_out
+            && self.hidden_norm == other.hidden_norm
+    }
+
     /// Whether the network is whole and sane: layers chain from `n_in`
     /// inputs to `n_out` outputs, every weight and bias is finite and at
     /// most `max_abs` in size.

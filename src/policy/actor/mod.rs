@@ -197,6 +197,37 @@ impl DeterministicPolicy {
         self.norm.normalize_in_place(&mut x);
         self.net.forward(&x)
     }
+
+    /// This policy's network interpolated towards `base`'s, weight by weight: (1 − `weight`)·base +
+    /// `weight`·self (WiSE-FT, Wortsman et al. 2022, for a policy fine-tuned from `base`). It keeps
+    /// this policy's normaliser and layout: a fine-tuned run's normaliser began as its starting
+    /// policy's and went on counting the run's observations. Each weight is computed in f64, so that
+    /// `weight` 0 gives `base`'s weights and 1 this policy's, exactly.
+    ///
+    /// # Errors
+    /// A `weight` outside [0, 1], or `base` another network (both named).
+    pub fn blend(&self, base: &DeterministicPolicy, weight: f64) -> Result<DeterministicPolicy, String> {
+        if !(0.0..=1.0).contains(&weight) {
+            return Err(format!("the weight {weight} is outside [0, 1] (0: the base policy, 1: the tuned one)"));
+        }
+        if !self.net.same_network(&base.net) {
+            return Err(format!(
+                "the base policy's actor is {}, and the tuned one's is {}: only a policy and the one it was \
+                 fine-tuned from (one network) can be blended",
+                base.net.describe(),
+                self.net.describe()
+            ));
+        }
+        let mix = |b: &[f32], t: &[f32]| -> Vec<f32> {
+            b.iter().zip(t).map(|(&b, &t)| ((1.0 - weight) * f64::from(b) + weight * f64::from(t)) as f32).collect()
+        };
+        let mut out = self.clone();
+        for ((o, b), t) in out.net.layers.iter_mut().zip(&base.net.layers).zip(&self.net.layers) {
+            o.w = mix(&b.w, &t.w);
+            o.b = mix(&b.b, &t.b);
+        }
+        Ok(out)
+    }
 }
 
 /// A frozen PGGD policy: plain Rust, `Send + Sync`.
