@@ -45,6 +45,9 @@ pub enum SavedError {
         /// The first problem.
         reason: String,
     },
+    /// Two policies that cannot be blended ([`SavedPolicy::blend`]): both named, and why.
+    #[error("{0}")]
+    Unblendable(String),
 }
 
 /// A saved policy: the actor, its normaliser and what it was trained on.
@@ -214,25 +217,30 @@ impl SavedPolicy {
     /// # Errors
     /// Either policy not deterministic (a PGGD policy), another observation, another network, a weight
     /// outside [0, 1]: the message names both sides.
-    pub fn blend(base: (&str, &SavedPolicy), tuned: (&str, &SavedPolicy), weight: f64) -> Result<SavedPolicy, String> {
+    pub fn blend(
+        base: (&str, &SavedPolicy),
+        tuned: (&str, &SavedPolicy),
+        weight: f64,
+    ) -> Result<SavedPolicy, SavedError> {
         let ((base_name, b), (tuned_name, t)) = (base, tuned);
         let (AnyPolicy::Deterministic(bp), AnyPolicy::Deterministic(tp)) = (&b.policy, &t.policy) else {
-            return Err(format!(
+            return Err(SavedError::Unblendable(format!(
                 "{base_name} is a {} policy and {tuned_name} a {} one: only deterministic actors (DDPG, TD3, SAC, BC, \
                  DAgger) are blended",
                 b.policy.kind(),
                 t.policy.kind()
-            ));
+            )));
         };
         if b.obs_mode() != t.obs_mode() {
-            return Err(format!(
+            return Err(SavedError::Unblendable(format!(
                 "{base_name} reads `{}` observations and {tuned_name} `{}`: blend a policy with the one it was \
                  fine-tuned from",
                 b.obs_mode(),
                 t.obs_mode()
-            ));
+            )));
         }
-        let policy = tp.blend(bp, weight).map_err(|e| format!("{base_name} and {tuned_name}: {e}"))?;
+        let policy =
+            tp.blend(bp, weight).map_err(|e| SavedError::Unblendable(format!("{base_name} and {tuned_name}: {e}")))?;
         Ok(SavedPolicy {
             policy: AnyPolicy::Deterministic(policy),
             critic: None,

@@ -29,8 +29,7 @@ pub fn run(a: BlendArgs) -> Result<()> {
     let tuned = crate::benchmark::load::load_policy(&a.tuned)?;
     let name = |p: &PathBuf| p.display().to_string();
     let blended =
-        crate::benchmark::saved::SavedPolicy::blend((&name(&a.base), &base), (&name(&a.tuned), &tuned), a.weight)
-            .map_err(anyhow::Error::msg)?;
+        crate::benchmark::saved::SavedPolicy::blend((&name(&a.base), &base), (&name(&a.tuned), &tuned), a.weight)?;
     crate::support::io::write_json(&a.out, &blended)?;
     println!(
         "wrote {}: {:.2} x {} + {:.2} x {} (policy {})",
