@@ -54,8 +54,16 @@ pub enum EvalError {
     },
     /// The caller's `on_row` stopped a suite's evaluation (its error, as it gave it).
     #[error(transparent)]
-    Stopped(Box<dyn std::error::Error + Send + Sync>),
+    Stopped(Stop),
 }
+
+/// The error with which a suite's `on_row` stops the evaluation ([`evaluate_suite`]), returned as
+/// [`EvalError::Stopped`].
+pub type Stop = Box<dyn std::error::Error + Send + Sync>;
+
+/// What hears of each row of a suite as it is done ([`evaluate_suite`]): the split's name, the row,
+/// rows done and rows in all; its error stops the evaluation there.
+pub type OnRow<'a> = dyn FnMut(&str, &RowResult, usize, usize) -> Result<(), Stop> + 'a;
 
 /// This module's results.
 type Result<T, E = EvalError> = std::result::Result<T, E>;
@@ -476,7 +484,7 @@ pub fn evaluate_suite(
     suite: &crate::benchmark::suite::Suite,
     threads: usize,
     harness: Harness,
-    on_row: &mut dyn FnMut(&str, &RowResult, usize, usize) -> Result<(), Box<dyn std::error::Error + Send + Sync>>,
+    on_row: &mut OnRow,
 ) -> Result<SuiteResult> {
     suite.check_pinned(None, threads)?;
     let total: usize = suite.splits.iter().map(|s| s.rows.len()).sum();
