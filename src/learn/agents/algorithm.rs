@@ -453,8 +453,7 @@ pub fn fit_actor(
             ours.describe()
         ));
     }
-    let shape = |n: &PlainNet| n.layers.iter().map(|l| (l.n_in, l.b.len())).collect::<Vec<_>>();
-    if shape(&fitted.net) != shape(ours) || fitted.net.set != ours.set || fitted.net.tanh_out != ours.tanh_out {
+    if !fitted.net.same_network(ours) {
         return Err(format!(
             "the policy's actor is {}, and this run's is {}: train with the policy's network settings \
              (--net, --set-width, --hidden, --layers and the set options it was trained with)",
