@@ -104,6 +104,32 @@ fn a_run_starts_from_the_policy_and_its_critics_warm_up_first() {
     assert_eq!(config["finetune"]["init_policy"]["sha256"].as_str(), id.sha256.as_deref());
 }
 
+/// The largest difference between two networks' weights and biases (of the same shape).
+fn largest_change(a: &blockpuzzle::policy::actor::mlp::PlainNet, b: &blockpuzzle::policy::actor::mlp::PlainNet) -> f32 {
+    assert_eq!(a.layers.len(), b.layers.len());
+    let pairs = a.layers.iter().zip(&b.layers).flat_map(|(x, y)| x.w.iter().zip(&y.w).chain(x.b.iter().zip(&y.b)));
+    pairs.map(|(x, y)| (x - y).abs()).fold(0.0, f32::max)
+}
+
+#[test]
+fn dagger_goes_on_from_the_generalist() {
+    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    // A learning rate so small that two updates leave every weight within 1e-6 of where it began.
+    let dagger = [&ENTITY[..], &["--env", "ToppleTower-v0", "--algo", "dagger", "--lr-actor", "1e-9"]].concat();
+    let from = tmp.path().join("from");
+    let (ok, text) = train(&from, &[&dagger[..], &["--init-from", "generalist-bc-entity"]].concat());
+    assert!(ok, "{text}");
+    let near = largest_change(snapshot(&from, 1).policy.net(), generalist.policy.net());
+    assert!(near < 1e-6, "DAgger from the generalist moved a weight by {near}");
+    // Without --init-from the same run starts from its own random weights, far from the generalist's.
+    let fresh = tmp.path().join("fresh");
+    let (ok, text) = train(&fresh, &dagger);
+    assert!(ok, "{text}");
+    let far = largest_change(snapshot(&fresh, 1).policy.net(), generalist.policy.net());
+    assert!(far > 0.01, "a fresh DAgger run is within {far} of the generalist");
+}
+
 #[test]
 fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
     let tmp = tempfile::tempdir().unwrap();
@@ -138,8 +164,26 @@ fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
         ),
         (&["--env", "BlocksChoose-v0", "--init-from", "BlocksChoose-v0-pggd"], &["PGGD", "deterministic"]),
         (
-            &["--env", "ToppleTower-v0", "--algo", "bc", "--init-from", "generalist-bc-entity", "--net", "entity"],
-            &["bc cannot start from a trained policy", "--algo sac"],
+            &["--env", "ToppleTower-v0", "--algo", "pggd", "--init-from", "generalist-bc-entity"],
+            &["pggd cannot start from a trained policy", "--algo ddpg, sac, bc, dagger"],
+        ),
+        // An imitation learner has no critic to warm up.
+        (
+            &[
+                "--env",
+                "ToppleTower-v0",
+                "--algo",
+                "dagger",
+                "--init-from",
+                "generalist-bc-entity",
+                "--net",
+                "entity",
+                "--set-width",
+                "64",
+                "--critic-warmup",
+                "1",
+            ],
+            &["--critic-warmup 1", "dagger imitates the solver and has no critic"],
         ),
         // Two epochs of one cycle of two updates: a warm-up of 4 leaves the actor nothing.
         (

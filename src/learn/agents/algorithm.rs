@@ -79,8 +79,8 @@ pub struct Info {
     /// Its own settings a branch (`train --branch-from`) may change, by field name.
     pub branchable: &'static [&'static str],
     /// Whether a run of it may start from a trained policy (`train --init-from`): its actor and
-    /// normaliser taken from the policy ([`Algorithm::init_from`]), its critics fresh, which a critic
-    /// warm-up ([`Algorithm::hold_actor`]) fits before the actor moves.
+    /// normaliser taken from the policy ([`Algorithm::init_from`]), its critics (where it has any)
+    /// fresh, which a critic warm-up ([`Algorithm::hold_actor`]) fits before the actor moves.
     pub starts_from_policy: bool,
 }
 
@@ -258,7 +258,7 @@ pub trait Algorithm: AsAny + Send {
     /// # Errors
     /// An algorithm that cannot, or a policy whose network does not fit.
     fn init_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
-        Err(format!("{} cannot start from a trained policy (--init-from is for ddpg and sac)", self.name()))
+        Err(format!("{} cannot start from a trained policy (--init-from is for ddpg, sac, bc and dagger)", self.name()))
     }
 
     /// Keeps `policy` (the one the run started from) beside the learner, frozen, for `uses`: the

@@ -17,7 +17,7 @@ pub const REGISTRATION: Registration<BcConfig> = Registration {
         reads: READS,
         flag_prefix: "bc-",
         branchable: &[],
-        starts_from_policy: false,
+        starts_from_policy: true,
     },
     new: |spec, own, rng| Box::new(Cloner::new("bc", spec, Schedule::Solver, own.noise, rng)),
     validate: |c| {

@@ -18,7 +18,7 @@ pub const REGISTRATION: Registration<DaggerConfig> = Registration {
         reads: READS,
         flag_prefix: "dagger-",
         branchable: &["beta0", "t0"],
-        starts_from_policy: false,
+        starts_from_policy: true,
     },
     new: |spec, own, rng| Box::new(Cloner::new("dagger", spec, own.schedule(), 0.0, rng)),
     validate: DaggerConfig::validate,

@@ -152,6 +152,15 @@ impl Algorithm for Cloner {
     fn parts(&mut self) -> Vec<(&'static str, Part<'_>)> {
         vec![("actor", Part::Net(&mut self.actor)), ("actor_adam", Part::Adam(&mut self.opt))]
     }
+
+    /// The actor and the normaliser from a trained policy: imitation then goes on from it (a
+    /// generalist specialised on one task by DAgger, say), with a fresh optimiser.
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+        let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
+        self.actor.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
+        self.norm = fitted.norm;
+        Ok(())
+    }
 }
 
 /// A deterministic policy as an [`Explorer`] that adds nothing.

@@ -28,9 +28,9 @@ use std::path::PathBuf;
 #[command(next_help_heading = "Starting from a trained policy, and demonstrations")]
 pub struct FinetuneConfig {
     /// Start the actor and the observation normaliser from this trained policy (a zoo name, a run
-    /// directory or a policy file) instead of random weights; the critics start fresh. DDPG/TD3
-    /// and SAC; the run's network settings must be the policy's (e.g. `--net entity --set-width 64`
-    /// for the zoo's `generalist-bc-entity`).
+    /// directory or a policy file) instead of random weights; the critics start fresh. DDPG/TD3,
+    /// SAC, BC and DAgger; the run's network settings must be the policy's (e.g. `--net entity
+    /// --set-width 64` for the zoo's `generalist-bc-entity`).
     #[arg(long, value_name = "POLICY")]
     #[serde(skip_serializing_if = "Option::is_none")]
     pub init_from: Option<PathBuf>,
@@ -134,9 +134,21 @@ impl FinetuneConfig {
     pub fn validate(&self, run: &TrainConfig) -> Result<(), ConfigError> {
         let algo = run.algo.registration().info;
         if self.init_from.is_some() && !algo.starts_from_policy {
+            let can: Vec<&str> = crate::learn::agents::registry::ALGORITHMS
+                .iter()
+                .filter(|e| e.info.starts_from_policy)
+                .map(|e| e.info.name)
+                .collect();
             return Err(ConfigError(format!(
-                "--init-from: {} cannot start from a trained policy; use --algo ddpg (with --td3 for TD3) or --algo sac",
-                algo.name
+                "--init-from: {} cannot start from a trained policy; use --algo {} (ddpg with --td3 for TD3)",
+                algo.name,
+                can.join(", ")
+            )));
+        }
+        if self.critic_warmup > 0 && algo.imitates {
+            return Err(ConfigError(format!(
+                "--critic-warmup {}: {} imitates the solver and has no critic to warm up; leave --critic-warmup out (or 0)",
+                self.critic_warmup, algo.name
             )));
         }
         if !self.anchor_alpha.is_finite() || self.anchor_alpha < 0.0 {
