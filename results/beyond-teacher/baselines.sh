@@ -9,7 +9,7 @@ set -euo pipefail
 BP=${BP:-target/release/blockpuzzle}
 ENGINE="$("$BP" info | sed -n 's/^MuJoCo \([0-9.]*\).*/\1/p')"
 OUT=results/generalization/mujoco-$ENGINE
-for t in ToppleTower-v0 BlocksStack-v0 BlocksChoose-v0 clutter-20002-v0; do
+for t in ToppleTower-v0 BlocksStack-v0 BlocksChoose-v0 clutter-20002-v0 topple-20003-v0; do
   s=experiments/beyond-teacher/suites/$t.toml
   $BP eval --suite $s --baseline scripted --threads 1 --out $OUT/baseline-scripted.beyond-$t.json
   $BP eval --suite $s --checkpoint generalist-bc-entity --threads 1 --out $OUT/generalist-bc-entity.beyond-$t.json
