@@ -16,17 +16,20 @@ fn recipe(path: &Path, extra: &[&str]) -> anyhow::Result<TrainConfig> {
     train_config(args)
 }
 
+/// Every `.toml` under `experiments/`, at any depth, but for the suite files in `suites/` folders.
 fn recipes() -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
-    let mut out = Vec::new();
-    for dir in [root.clone(), root.join("study"), root.join("generalization")] {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
         for e in std::fs::read_dir(dir).unwrap() {
             let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "toml") {
+            if p.is_dir() && !p.ends_with("suites") {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "toml") {
                 out.push(p);
             }
         }
     }
+    let mut out = Vec::new();
+    walk(&Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments"), &mut out);
     out.sort();
     out
 }
@@ -41,10 +44,15 @@ fn every_recipe_is_a_valid_train_command_line() {
         if blockpuzzle::task::Task::from_file(&path).is_ok() {
             continue;
         }
-        // ddpg-task takes its task from the command line (--env ID).
-        let env: &[&str] = if path.ends_with("ddpg-task.toml") { &["--env", "ReachAvoid-v0"] } else { &[] };
+        // A recipe that names no task (env, suite or families) takes it from the command line (--env ID).
+        let keys: toml::Table = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let names_task = ["env", "suite", "families"].iter().any(|k| keys.contains_key(*k));
+        let env: &[&str] = if names_task { &[] } else { &["--env", "ReachAvoid-v0"] };
         let c = recipe(&path, env).unwrap_or_else(|e| panic!("{}: {e:#}", path.display()));
-        let known = blockpuzzle::env::registry::ids().contains(&c.env.as_str()) || root.join(&c.env).is_file();
+        // A run of a suite's or a family stream's tasks names no single task.
+        let many = c.suite.is_some() || c.families.is_some();
+        let known = many
+            || c.env.split(',').all(|id| blockpuzzle::env::registry::ids().contains(&id) || root.join(id).is_file());
         assert!(known, "{}: {}", path.display(), c.env);
         // Counts name entries the task has, in range.
         if let Some(counts) = &c.counts {
