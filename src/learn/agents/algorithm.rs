@@ -258,7 +258,8 @@ pub trait Algorithm: AsAny + Send {
     /// # Errors
     /// An algorithm that cannot, or a policy whose network does not fit.
     fn init_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
-        Err(format!("{} cannot start from a trained policy (--init-from is for ddpg, sac, bc and dagger)", self.name()))
+        // The interface names no algorithm: `FinetuneConfig::validate` lists those that can, from the registry.
+        Err(format!("{} cannot start from a trained policy (its registration says so)", self.name()))
     }
 
     /// Keeps `policy` (the one the run started from) beside the learner, frozen, for `uses`: the
