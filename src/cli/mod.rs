@@ -212,7 +212,18 @@ fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
     let matches = cmd.try_get_matches_from(args).map_err(|e| experiment::name_recipe(e, &origins))?;
     #[cfg(not(feature = "train"))]
     let matches = cmd.try_get_matches_from(args)?;
-    Ok(<Cli as clap::FromArgMatches>::from_arg_matches(&matches)?)
+    #[allow(unused_mut)]
+    let mut cli = <Cli as clap::FromArgMatches>::from_arg_matches(&matches)?;
+    #[cfg(feature = "train")]
+    if let (Command::Train(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("train")) {
+        // What `train --resume` was given besides the run's directory (runs::bare_resume).
+        a.given = m
+            .ids()
+            .filter(|id| m.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
+            .map(|id| id.as_str().to_owned())
+            .collect();
+    }
+    Ok(cli)
 }
 
 /// Whether the command line `args` (from the program name on) parses, without running it: the

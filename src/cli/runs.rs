@@ -17,7 +17,9 @@ pub(super) struct TrainArgs {
     /// (e.g. runs/BlocksChoose-v0-pggd-aggrevated-s0; a task file's stem for TASK).
     #[arg(long)]
     run_dir: Option<PathBuf>,
-    /// Continue the run in --run-dir from its last checkpoint.
+    /// Continue the run in --run-dir from its last checkpoint. With no other flag but --epochs,
+    /// --torch-threads and --snapshot-every, the run's own settings (its config.json) are used;
+    /// with more (a recipe, say), they must match the run's.
     #[arg(long)]
     resume: bool,
     /// Start --run-dir (new) from this run directory's latest checkpoint, with
@@ -29,6 +31,57 @@ pub(super) struct TrainArgs {
     branch_from: Option<PathBuf>,
     #[command(flatten)]
     config: crate::learn::train::TrainConfig,
+    /// The ids of the flags given on the command line (a recipe's included), filled in by `parse`.
+    #[arg(skip)]
+    pub(super) given: Vec<String>,
+}
+
+/// The flags `train --resume --run-dir DIR` may be given without restating the run's recipe: with
+/// only these, the other settings come from the run's `config.json`.
+const BARE_RESUME: &[&str] = &["run_dir", "resume", "epochs", "torch_threads", "snapshot_every"];
+
+/// The settings of `train --resume --run-dir DIR` given nothing but [`BARE_RESUME`]'s flags: the
+/// run's recorded ones, with those flags' values. `None` for any other command line.
+///
+/// # Errors
+/// A directory without a `config.json` or one that cannot be read as a run's settings; a resume
+/// given other flags but not the run's task.
+fn bare_resume(a: &TrainArgs) -> Result<Option<crate::learn::train::TrainConfig>> {
+    let (true, Some(dir)) = (a.resume, &a.run_dir) else { return Ok(None) };
+    if a.given.iter().any(|g| !BARE_RESUME.contains(&g.as_str())) {
+        if !a.given.iter().any(|g| ["env", "suite", "families"].contains(&g.as_str())) {
+            bail!(
+                "train --resume given {} besides --run-dir must restate the run's settings, its task \
+                 included: give its --env, --suite or --families (or its recipe, --config), or leave out \
+                 every flag but --epochs, --torch-threads and --snapshot-every to take the run's own",
+                a.given
+                    .iter()
+                    .filter(|g| !BARE_RESUME.contains(&g.as_str()))
+                    .map(|g| format!("--{}", g.replace('_', "-")))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        return Ok(None);
+    }
+    let run = crate::learn::train::RunDir { dir: dir.clone() };
+    if !run.config().exists() {
+        bail!(
+            "--resume: {} holds no run (no {}); start a new run without --resume, with its task and settings",
+            dir.display(),
+            run.config().display()
+        );
+    }
+    let mut c = run.read_config()?;
+    for g in &a.given {
+        match g.as_str() {
+            "epochs" => c.epochs = a.config.epochs,
+            "torch_threads" => c.torch_threads = a.config.torch_threads,
+            "snapshot_every" => c.snapshot_every = a.config.snapshot_every,
+            _ => {}
+        }
+    }
+    Ok(Some(c))
 }
 
 #[derive(Debug, clap::Args)]
@@ -105,7 +158,8 @@ pub(super) fn train(a: TrainArgs) -> Result<()> {
 }
 
 fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> {
-    let c = &a.config;
+    let recorded = bare_resume(&a)?;
+    let c = recorded.as_ref().unwrap_or(&a.config);
     let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
     let bar =
         if comm.is_root() { indicatif::ProgressBar::new(c.epochs as u64) } else { indicatif::ProgressBar::hidden() };

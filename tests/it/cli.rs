@@ -519,6 +519,44 @@ fn train_branch_from_names_refused_changes_and_continues_the_parent() {
     assert_eq!(rows.lines().count(), 3, "the parent's epoch and the branch's own: {rows}");
 }
 
+/// `train --resume --run-dir DIR`, given no recipe: the run's own settings (its config.json) with
+/// the epochs given; any other flag still has to match the run's.
+#[test]
+fn train_resume_with_only_the_run_dir_takes_the_runs_own_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let r = run.to_str().unwrap();
+    let mut args = vec!["train", "--env", "GripperTouch-v0", "--run-dir", r, "--epochs", "1", "--gamma", "0.9"];
+    args.extend(["--cycles", "1", "--batches", "2", "--test-episodes", "1", "--hidden", "16", "--seed", "3"]);
+    let o = bp(&args);
+    assert!(o.status.success(), "{}", text(&o));
+    let config = std::fs::read_to_string(run.join("config.json")).unwrap();
+    // Without the run's flags: before, this compared the defaults with the run's settings and refused.
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "2", "--torch-threads", "1"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("GripperTouch-v0: 2 epochs"), "{}", text(&o));
+    let rows = std::fs::read_to_string(run.join("progress.csv")).unwrap();
+    assert_eq!(rows.lines().count(), 3, "the first epoch and the resumed one: {rows}");
+    let after: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("config.json")).unwrap()).unwrap();
+    let before: serde_json::Value = serde_json::from_str(&config).unwrap();
+    for key in ["env", "seed", "cycles", "batches", "shared", "net"] {
+        assert_eq!(after[key], before[key], "{key} kept");
+    }
+    assert_eq!(after["epochs"], 2);
+    // A flag beyond the epochs, threads and snapshots: compared with the run's, as before.
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3", "--env", "GripperTouch-v0", "--gamma", "0.99"]);
+    assert!(!o.status.success() && text(&o).contains("--gamma"), "{}", text(&o));
+    // ...and without the run's task, that is what the error asks for.
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3", "--gamma", "0.9"]);
+    assert!(!o.status.success() && text(&o).contains("given --gamma") && text(&o).contains("--env"), "{}", text(&o));
+    // No run there: refused, naming the fix.
+    let none = dir.path().join("none");
+    let o = bp(&["train", "--resume", "--run-dir", none.to_str().unwrap()]);
+    assert!(!o.status.success() && text(&o).contains("holds no run"), "{}", text(&o));
+    assert!(!none.exists(), "nothing written");
+}
+
 #[test]
 fn training_commands_are_named_once() {
     use blockpuzzle::cli::{check_args, training_command, TRAINING_COMMANDS};

@@ -112,7 +112,7 @@ pub struct TrainConfig {
     /// Environment id or task file (.toml); several, comma-separated (`BlocksTouch-v0,BlocksChoose-v0`),
     /// train one policy on all of them: a task drawn per exploration episode, each with its own
     /// curriculum level, every observation in one layout (the most block slots of any task).
-    #[arg(long, default_value = "", hide_default_value = true, required_unless_present_any = ["suite", "families"])]
+    #[arg(long, default_value = "", hide_default_value = true, required_unless_present_any = ["suite", "families", "resume"])]
     pub env: String,
     /// Train on the tasks of a suite's split instead of `--env` (a suite name or file, e.g.
     /// `procgen`; generated tasks included), as for an `--env` list.
