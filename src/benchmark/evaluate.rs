@@ -462,6 +462,11 @@ pub struct SuiteResult {
     /// The task it was trained on (none for a baseline).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub policy_task: Option<String>,
+    /// The env steps its training had taken when it was saved, as its file records them (none for
+    /// a baseline, a policy file that does not record them, and results written before this field):
+    /// the x of `plot --curve`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub policy_env_steps: Option<u64>,
     /// Per split.
     pub splits: Vec<SplitResult>,
     /// The suite's score: the test split's mean success.
@@ -540,6 +545,10 @@ pub fn evaluate_suite(
         },
         policy_task: match subject {
             Subject::Saved(_, saved) => Some(saved.env_id.clone()),
+            Subject::Baseline(_) => None,
+        },
+        policy_env_steps: match subject {
+            Subject::Saved(_, saved) => saved.env_steps,
             Subject::Baseline(_) => None,
         },
         splits,

@@ -223,6 +223,14 @@ fn parse(args: Vec<std::ffi::OsString>) -> Result<Cli> {
             .map(|id| id.as_str().to_owned())
             .collect();
     }
+    #[cfg(feature = "train")]
+    if let (Command::Plot(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("plot")) {
+        // `plot --curve LABEL FILE...`, each occurrence its own curve.
+        a.curves = m
+            .get_occurrences::<String>("curve")
+            .map(|o| o.map(|each| each.cloned().collect()).collect())
+            .unwrap_or_default();
+    }
     Ok(cli)
 }
 

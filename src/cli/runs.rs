@@ -85,7 +85,7 @@ fn bare_resume(a: &TrainArgs) -> Result<Option<crate::learn::train::TrainConfig>
 }
 
 #[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay", "scaling"])))]
+#[command(group(clap::ArgGroup::new("what").required(true).args(["run_dir", "overlay", "scaling", "curve"])))]
 pub(super) struct PlotArgs {
     /// Run directory whose success.png to redraw.
     #[arg(long)]
@@ -103,9 +103,25 @@ pub(super) struct PlotArgs {
     /// for success against the number of training tasks; a table of the points goes to stdout.
     #[arg(long, num_args = 1.., requires = "out", conflicts_with = "overlay")]
     scaling: Vec<String>,
-    /// With --overlay: suite results (JSON of `eval --suite`) as `LABEL:FILE`, each drawn as a dashed
-    /// line at its test score, e.g. `--level solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json`.
-    #[arg(long, num_args = 1.., requires = "overlay")]
+    /// Suite results (JSON of `eval --suite`, e.g. of a run's snapshots) as `--curve LABEL FILE...`,
+    /// drawn as one curve of test success against the env steps each policy had trained for, with
+    /// 95% Wilson intervals; repeat for more curves (needs --out). Every result and --level must be
+    /// of the same suite and engine.
+    #[arg(long, num_args = 2.., value_names = ["LABEL", "RESULT"], action = clap::ArgAction::Append,
+          requires = "out", conflicts_with_all = ["overlay", "scaling"])]
+    curve: Vec<String>,
+    /// --curve's values, one list per occurrence (LABEL, then its results), filled in by `parse`.
+    #[arg(skip)]
+    pub(super) curves: Vec<Vec<String>>,
+    /// With --curve: `LABEL:RESULT`, the policy the curve LABEL's run started from (`train
+    /// --init-from`), as its suite result: drawn as the curve's first point. Where that policy was
+    /// trained on the curve's task (e.g. DAgger's snapshot), its env steps are added to the curve's;
+    /// where not (the generalist, trained on other tasks), the curve starts at 0.
+    #[arg(long, num_args = 1.., requires = "curve")]
+    start: Vec<String>,
+    /// With --overlay or --curve: suite results (JSON of `eval --suite`) as `LABEL:FILE`, each drawn
+    /// as a dashed line at its test score, e.g. `--level solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json`.
+    #[arg(long, num_args = 1..)]
     level: Vec<String>,
     /// With --scaling: a suite result (e.g. the solver's) drawn as dashed train and test lines.
     #[arg(long, requires = "scaling")]
@@ -266,8 +282,14 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
         crate::learn::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());
     }
+    if !a.level.is_empty() && a.overlay.is_empty() && a.curve.is_empty() {
+        bail!("--level draws a reference line across curves: give it with --overlay or --curve");
+    }
     if let (Some(out), false) = (&a.out, a.scaling.is_empty()) {
         return scaling(&a, out);
+    }
+    if let (Some(out), false) = (&a.out, a.curve.is_empty()) {
+        return curves(&a, out);
     }
     if let Some(out) = a.out {
         if !a.labels.is_empty() && a.labels.len() != a.overlay.len() {
@@ -291,25 +313,165 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
             };
             runs.push((a.labels.get(i).cloned().unwrap_or(label), points));
         }
-        let mut levels = Vec::new();
-        for given in &a.level {
-            let Some((label, file)) = given.split_once(':') else {
-                bail!(
-                    "--level {given}: give LABEL:FILE, e.g. solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json"
-                );
-            };
-            let r = crate::benchmark::results::read(std::path::Path::new(file))
-                .map_err(|e| anyhow::Error::from(e).context(format!("--level {given}")))?
-                .result;
-            let Some(test) = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success) else {
-                bail!("--level {given}: {file} has no `test` split evaluated");
-            };
-            levels.push((format!("{label} ({test:.3})"), test));
-        }
+        let levels = levels(&a.level)?.into_iter().map(|(label, test, _)| (label, test)).collect::<Vec<_>>();
         let title = a.title.as_deref().unwrap_or("Finals success (maximum level)");
         crate::learn::train::plot::overlay(&out, title, &runs, &levels)?;
         println!("wrote {}", out.display());
     }
+    Ok(())
+}
+
+/// `plot --level LABEL:FILE...`: each result's test score, labelled with it, and its provenance.
+fn levels(given: &[String]) -> Result<Vec<(String, f64, crate::benchmark::provenance::Provenance)>> {
+    let mut levels = Vec::new();
+    for given in given {
+        let Some((label, file)) = given.split_once(':') else {
+            bail!(
+                "--level {given}: give LABEL:FILE, e.g. solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json"
+            );
+        };
+        let r = crate::benchmark::results::read(Path::new(file))
+            .map_err(|e| anyhow::Error::from(e).context(format!("--level {given}")))?
+            .result;
+        let Some(test) = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success) else {
+            bail!("--level {given}: {file} has no `test` split evaluated");
+        };
+        levels.push((format!("{label} ({test:.3})"), test, r.provenance));
+    }
+    Ok(levels)
+}
+
+/// The env steps the policy of `r` (read from `file`) had trained for: as the result records them,
+/// or, for a result written before results did, from the policy file it names, if that file is
+/// still the policy evaluated (the same policy hash).
+fn policy_env_steps(file: &Path, r: &crate::benchmark::evaluate::SuiteResult) -> Result<u64> {
+    if let Some(steps) = r.policy_env_steps {
+        return Ok(steps);
+    }
+    let again = format!(
+        "evaluate the policy again with this build (`blockpuzzle eval --suite ... --checkpoint POLICY --out {}`), \
+         which records them",
+        file.display()
+    );
+    let policy = Path::new(&r.policy);
+    if r.provenance.policy.sha256.is_none() || !policy.is_file() {
+        bail!(
+            "{}: records no env steps of its policy (`{}`, a baseline or a file not here); {again}",
+            file.display(),
+            r.policy
+        );
+    }
+    let saved = crate::benchmark::saved::read(policy)?;
+    if saved.policy_id(&r.policy).sha256 != r.provenance.policy.sha256 {
+        bail!(
+            "{}: records no env steps of its policy, and {} is no longer the policy it evaluated (another \
+             policy hash); {again}",
+            file.display(),
+            r.policy
+        );
+    }
+    saved.env_steps.ok_or_else(|| anyhow::anyhow!("{}: its policy {} records no env steps", file.display(), r.policy))
+}
+
+/// `plot --curve`: test success of evaluated policies against their env steps, and the points'
+/// table (Markdown) on stdout.
+fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
+    use crate::learn::train::plot::EvalPoint;
+    let mut first: Option<(String, crate::benchmark::provenance::Provenance)> = None;
+    let mut same = |what: &str, p: &crate::benchmark::provenance::Provenance| -> Result<()> {
+        match &first {
+            None => first = Some((what.to_owned(), p.clone())),
+            Some((name, q)) => q.comparable(p).map_err(|m| {
+                anyhow::anyhow!(
+                    "{what} and {name} cannot be drawn in one figure: {m}; plot each suite and engine apart"
+                )
+            })?,
+        }
+        Ok(())
+    };
+    let mut curves = Vec::new();
+    let mut table = String::from("| curve | env steps | test success [95% Wilson] | result |\n|---|---:|---|---|\n");
+    for given in &a.curves {
+        let Some((label, files)) = given.split_first() else { continue };
+        if label.ends_with(".json") && Path::new(label).is_file() {
+            bail!(
+                "--curve {label} ...: a curve starts with its label, then its results, e.g. \
+                 --curve \"fine-tuned s0\" run-epoch2.json run-epoch4.json"
+            );
+        }
+        let mut points = Vec::new();
+        let mut curve_task = None;
+        for file in files {
+            let path = Path::new(file);
+            let r = crate::benchmark::results::read(path)
+                .map_err(|e| anyhow::Error::from(e).context(format!("--curve {label}")))?
+                .result;
+            same(file, &r.provenance)?;
+            let Some(test) = r.splits.iter().find(|s| s.name == "test") else {
+                bail!("--curve {label}: {file} has no `test` split");
+            };
+            let Some(success) = test.mean_success else {
+                bail!("--curve {label}: {file}'s `test` split has no row evaluated");
+            };
+            let ci95 = match &test.rows[..] {
+                [one] => one.evaluation.as_ref().map(|e| e.ci95),
+                _ => None,
+            };
+            points.push(EvalPoint { env_steps: policy_env_steps(path, &r)?, success, ci95 });
+            curve_task = r.policy_task.clone();
+        }
+        let mut files = files.to_vec();
+        let starts: Vec<&String> =
+            a.start.iter().filter(|s| s.split_once(':').is_some_and(|(l, _)| l == label.as_str())).collect();
+        match starts[..] {
+            [] => {}
+            [given] => {
+                let file = given.split_once(':').map_or("", |(_, f)| f);
+                let r = crate::benchmark::results::read(Path::new(file))
+                    .map_err(|e| anyhow::Error::from(e).context(format!("--start {given}")))?
+                    .result;
+                same(file, &r.provenance)?;
+                let success = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success);
+                let Some(success) = success else { bail!("--start {given}: {file} has no `test` split evaluated") };
+                let ci95 = match &r.splits.iter().find(|s| s.name == "test").map_or(&[][..], |s| &s.rows[..]) {
+                    [one] => one.evaluation.as_ref().map(|e| e.ci95),
+                    _ => None,
+                };
+                // Env steps on this curve's own task count; a policy trained elsewhere starts it at 0.
+                let own = r.policy_task.is_some() && r.policy_task == curve_task;
+                let offset = if own { policy_env_steps(Path::new(file), &r)? } else { 0 };
+                for p in &mut points {
+                    p.env_steps += offset;
+                }
+                points.push(EvalPoint { env_steps: offset, success, ci95 });
+                files.push(file.to_owned());
+            }
+            _ => bail!("--start: {} starts given for the curve {label}; give one", starts.len()),
+        }
+        let mut order: Vec<usize> = (0..points.len()).collect();
+        order.sort_by_key(|&i| points[i].env_steps);
+        let (points, files): (Vec<EvalPoint>, Vec<String>) =
+            order.into_iter().map(|i| (points[i], files[i].clone())).unzip();
+        for (p, file) in points.iter().zip(&files) {
+            let ci = p.ci95.map_or(String::new(), |(lo, hi)| format!(" [{lo:.3}, {hi:.3}]"));
+            table.push_str(&format!("| {label} | {} | {:.3}{ci} | `{file}` |\n", p.env_steps, p.success));
+        }
+        curves.push((label.clone(), points));
+    }
+    if let Some(s) =
+        a.start.iter().find(|s| !s.split_once(':').is_some_and(|(l, _)| a.curves.iter().any(|c| c[0] == l)))
+    {
+        bail!("--start {s}: give LABEL:RESULT with the LABEL of a --curve");
+    }
+    let mut lines = Vec::new();
+    for (label, test, provenance) in levels(&a.level)? {
+        same(&format!("--level {label}"), &provenance)?;
+        lines.push((label, test));
+    }
+    let title = a.title.as_deref().unwrap_or("Test success against env steps");
+    crate::learn::train::plot::evaluated(out, title, &curves, &lines)?;
+    print!("{table}");
+    println!("wrote {}", out.display());
     Ok(())
 }
 

@@ -616,6 +616,103 @@ fn plot_scaling_draws_results_against_a_count_and_refuses_what_it_cannot_draw() 
     }
 }
 
+/// `plot --curve` (issue 62): a run's snapshots, each scored on a suite, drawn against the env steps
+/// each had trained for (recorded by the result; for an older result, read from its policy file if
+/// that is still the policy evaluated), with the policy it started from and the solver's level; what
+/// it cannot draw is refused, nothing written.
+#[test]
+fn plot_curve_draws_evaluated_snapshots_against_env_steps_and_refuses_what_it_cannot_draw() {
+    let dir = tempfile::tempdir().unwrap();
+    let (run, png) = (dir.path().join("run"), dir.path().join("curve.png"));
+    let suite = dir.path().join("tiny.toml");
+    std::fs::write(
+        &suite,
+        "version = 1\nname = \"tiny\"\nsummary = \"three episodes\"\n\n[[splits.train]]\ntask = \"GripperTouch-v0\"\n\
+         seed = 1\nepisodes = 1\n\n[[splits.test]]\ntask = \"GripperTouch-v0\"\nseed = 100\nepisodes = 3\n",
+    )
+    .unwrap();
+    let o = bp(&[
+        "train",
+        "--env",
+        "GripperTouch-v0",
+        "--run-dir",
+        run.to_str().unwrap(),
+        "--epochs",
+        "2",
+        "--cycles",
+        "1",
+        "--batches",
+        "2",
+        "--test-episodes",
+        "1",
+        "--hidden",
+        "16",
+        "--snapshot-every",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let eval = |policy: &str, out: &Path, extra: &[&str]| {
+        let mut a = vec!["eval", "--suite", suite.to_str().unwrap(), "--threads", "1", "--out", out.to_str().unwrap()];
+        a.extend(if policy.is_empty() { vec![] } else { vec!["--checkpoint", policy] });
+        a.extend(extra);
+        let o = bp(&a);
+        assert!(o.status.success(), "{}", text(&o));
+        out.to_str().unwrap().to_owned()
+    };
+    let snap = |e: usize| run.join(format!("snapshots/epoch-{e:04}.json"));
+    let (e1, e2) = (dir.path().join("e1.json"), dir.path().join("e2.json"));
+    let (e1, e2) = (eval(snap(1).to_str().unwrap(), &e1, &[]), eval(snap(2).to_str().unwrap(), &e2, &[]));
+    let solver = eval("", &dir.path().join("solver.json"), &["--baseline", "scripted"]);
+    let steps = |f: &str| {
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(f).unwrap()).unwrap()["env_steps"]
+            .as_u64()
+            .unwrap()
+    };
+    let (s1, s2) = (steps(snap(1).to_str().unwrap()), steps(snap(2).to_str().unwrap()));
+    assert!(0 < s1 && s1 < s2);
+    let plot = |extra: &[&str]| {
+        let mut a = vec!["plot", "--out", png.to_str().unwrap()];
+        a.extend(extra);
+        bp(&a)
+    };
+    // Given in any order, drawn by env steps; the start's point is first, at 0 (a baseline trained nowhere).
+    let level = format!("solver:{solver}");
+    let start = format!("run:{solver}");
+    let o = plot(&["--curve", "run", &e2, &e1, "--start", &start, "--level", &level]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
+    let table: Vec<String> = text(&o).lines().filter(|l| l.starts_with("| run |")).map(str::to_owned).collect();
+    assert_eq!(table.len(), 3, "{}", text(&o));
+    assert!(table[0].contains("| 0 |") && table[0].contains("solver.json"), "{table:?}");
+    assert!(table[1].contains(&format!("| {s1} |")) && table[2].contains(&format!("| {s2} |")), "{table:?}");
+    std::fs::remove_file(&png).unwrap();
+
+    // A result written before results recorded the env steps: read from its policy file, while that is the
+    // policy it evaluated; refused once it is not there.
+    let mut old: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&e1).unwrap()).unwrap();
+    assert_eq!(old["policy_env_steps"].as_u64(), Some(s1));
+    old.as_object_mut().unwrap().remove("policy_env_steps");
+    let older = dir.path().join("older.json");
+    std::fs::write(&older, old.to_string()).unwrap();
+    let o = plot(&["--curve", "run", older.to_str().unwrap()]);
+    assert!(o.status.success() && text(&o).contains(&format!("| run | {s1} |")), "{}", text(&o));
+    std::fs::remove_file(&png).unwrap();
+    std::fs::rename(snap(1), dir.path().join("moved.json")).unwrap();
+    let other_suite =
+        format!("{}/results/generalization/mujoco-2.2.2/baseline-scripted.colour.json", env!("CARGO_MANIFEST_DIR"));
+    for (args, wanted) in [
+        (vec!["--curve", "run", older.to_str().unwrap()], "records no env steps"),
+        (vec!["--curve", &e1, &e2], "a curve starts with its label"),
+        (vec!["--curve", "run", &e2, "--level", &format!("solver:{other_suite}")], "cannot be drawn in one figure"),
+        (vec!["--curve", "run", &e2, "--start", "other:x.json"], "the LABEL of a --curve"),
+        (vec!["--curve", "run", &e2, "--start", &start, "--start", &start], "give one"),
+    ] {
+        let o = plot(&args);
+        assert!(!o.status.success() && text(&o).contains(wanted), "{args:?}: {}", text(&o));
+        assert!(!png.exists(), "{args:?}");
+    }
+}
+
 /// The help of every command that takes `--suite` lists every built-in suite (issue 60: `eval --help`
 /// listed 5 of 8), from the one list the suites are loaded from.
 #[test]

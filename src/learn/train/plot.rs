@@ -246,14 +246,6 @@ pub fn read_finals(path: &Path) -> Result<Vec<FinalsPoint>> {
 /// # Errors
 /// A missing font or an unwritable file.
 pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)], levels: &[(String, f64)]) -> Result<()> {
-    const COLOURS: [RGBColor; 6] = [
-        RGBColor(200, 40, 40),
-        RGBColor(30, 90, 200),
-        RGBColor(40, 150, 60),
-        RGBColor(230, 140, 20),
-        RGBColor(130, 60, 170),
-        RGBColor(90, 90, 90),
-    ];
     two_panels(path, title, |by_steps| {
         let curves = runs
             .iter()
@@ -274,6 +266,90 @@ pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)], le
         });
         curves.into_iter().chain(lines).collect()
     })
+}
+
+/// One evaluated policy of a [`evaluated`] curve: the env steps its training had taken, its test
+/// success, and the 95% Wilson interval where there is one (a test split of one row).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EvalPoint {
+    pub env_steps: u64,
+    pub success: f64,
+    pub ci95: Option<(f64, f64)>,
+}
+
+/// The colours of a figure's curves, in order (then again).
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(200, 40, 40),
+    RGBColor(30, 90, 200),
+    RGBColor(40, 150, 60),
+    RGBColor(230, 140, 20),
+    RGBColor(130, 60, 170),
+    RGBColor(90, 90, 90),
+];
+
+/// Test success of evaluated policies (`eval --suite` results, e.g. a run's snapshots) against
+/// the env steps each had trained for: one curve per label, a marker and its 95% interval per
+/// policy, and `levels` (label, success) drawn as dashed lines across (e.g. the solver's), written
+/// to `path`.
+///
+/// # Errors
+/// No point, a missing font or an unwritable file.
+pub fn evaluated(
+    path: &Path,
+    title: &str,
+    curves: &[(String, Vec<EvalPoint>)],
+    levels: &[(String, f64)],
+) -> Result<()> {
+    png_only(path)?;
+    if curves.iter().all(|(_, p)| p.is_empty()) {
+        return Err(PlotError::NoPoints);
+    }
+    register_font()?;
+    Ok(crate::support::io::write_atomic_via(path, |tmp| {
+        let root = BitMapBackend::new(tmp, (1000, 600)).into_drawing_area();
+        let draw = drawing(path);
+        root.fill(&WHITE).map_err(draw)?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(draw)?;
+        let x = |p: &EvalPoint| p.env_steps as f64 / 1e3;
+        let x_max = curves.iter().flat_map(|(_, p)| p.iter().map(x)).fold(1e-9, f64::max) * 1.05;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(54)
+            .build_cartesian_2d(0f64..x_max, 0f64..1.02f64)
+            .map_err(draw)?;
+        chart
+            .configure_mesh()
+            .x_desc("environment steps (thousands)")
+            .y_desc("test success (95% Wilson interval)")
+            .draw()
+            .map_err(draw)?;
+        for (i, (label, points)) in curves.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            chart
+                .draw_series(LineSeries::new(points.iter().map(|p| (x(p), p.success)), colour.stroke_width(2)))
+                .map_err(draw)?
+                .label(label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            chart
+                .draw_series(points.iter().map(|p| Circle::new((x(p), p.success), 4, colour.filled())))
+                .map_err(draw)?;
+            let bars = points.iter().filter_map(|p| {
+                p.ci95.map(|(lo, hi)| ErrorBar::new_vertical(x(p), lo, p.success, hi, colour.stroke_width(1), 8))
+            });
+            chart.draw_series(bars).map_err(draw)?;
+        }
+        for (i, (label, v)) in levels.iter().enumerate() {
+            let colour = [RGBColor(0, 0, 0), RGBColor(150, 150, 150)][i % 2];
+            chart
+                .draw_series(DashedLineSeries::new([(0.0, *v), (x_max, *v)], 8, 6, colour.stroke_width(2)))
+                .map_err(draw)?
+                .label(label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        }
+        legend(&mut chart).map_err(draw)?;
+        root.present().map_err(draw).map_err(at("writing", path))
+    })?)
 }
 
 /// Smallest distance the deviation plot shows: exact agreement (0) is drawn here.
