@@ -224,6 +224,10 @@ pub struct ZooMeta {
     pub trained_with: String,
     /// The file it was exported from, for the record.
     pub exported_from: String,
+    /// For a blended policy (`blockpuzzle blend`): the two policies its weights came from, by name
+    /// and hash, and the weight; sealed with the rest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<crate::benchmark::saved::BlendRecord>,
     /// Its evaluations, best recorded with `zoo export --eval`.
     pub evaluations: Vec<ZooEvaluation>,
     /// The source policy's actions on a few observations (reset states of its
@@ -586,6 +590,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         sigma_min,
         trained_with: info.trained_with.clone(),
         exported_from: info.exported_from.clone(),
+        blend: saved.blend.clone(),
         evaluations: info.evaluations.clone(),
         probes: probes(saved)?,
         tensors_sha256: crate::benchmark::provenance::sha256(&bytes),
@@ -956,7 +961,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         fixtures: meta.fixtures.clone(),
         policy,
         critic,
-        blend: None,
+        blend: meta.blend.clone(),
     };
     saved.check().map_err(&corrupt)?;
     for (k, p) in meta.probes.iter().enumerate() {

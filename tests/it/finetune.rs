@@ -297,6 +297,28 @@ fn a_blend_lies_between_a_fine_tuned_policy_and_its_start() {
     );
     assert!(b.critic.is_none());
     assert_eq!(b.policy.act(&vec![0.1; b.policy.obs_dim()]).len(), 4);
+    // A zoo entry made from it keeps the record, sealed with the rest of its metadata.
+    let shelf = tmp.path().join("zoo");
+    let info = zoo::ExportInfo {
+        name: "blend".into(),
+        description: "a blend".into(),
+        trained_with: "blockpuzzle blend ...".into(),
+        exported_from: out.display().to_string(),
+        env_steps: None,
+        evaluations: Vec::new(),
+        keep_critic: false,
+        overwrite: false,
+        algo: None,
+    };
+    let entry = zoo::export(&shelf, &b, &info).unwrap();
+    let (meta, loaded) = zoo::load(&entry).unwrap();
+    assert_eq!((meta.blend.as_ref(), loaded.blend.as_ref()), (Some(record), Some(record)));
+    let json = entry.with_extension("json");
+    let edited = std::fs::read_to_string(&json).unwrap().replace("\"weight\": 0.25", "\"weight\": 0.5");
+    assert_ne!(edited, std::fs::read_to_string(&json).unwrap());
+    std::fs::write(&json, edited).unwrap();
+    let e = zoo::load(&entry).unwrap_err().to_string();
+    assert!(e.contains("meta_sha256"), "{e}");
     // It plays as any policy file does.
     let o = crate::common::blockpuzzle(&["eval", "--env", "ToppleTower-v0", "--episodes", "2", "--checkpoint"])
         .arg(&out)
