@@ -25,7 +25,7 @@ pub(super) struct TrainArgs {
     /// Start --run-dir (new) from this run directory's latest checkpoint, with
     /// the settings given here; only --level-replay, --challenge-share,
     /// --success-threshold, --batches, --random-eps, --noise-eps,
-    /// --noise-correlation, --action-l2, --preact-l2 and --preact-margin may differ
+    /// --noise-correlation, --action-l2, --preact-l2, --preact-margin, --anchor-alpha and --ibrl may differ
     /// from the parent's (and --epochs, the total to reach). The parent stays as it is.
     #[arg(long, value_name = "RUN_DIR", conflicts_with = "resume", requires = "run_dir")]
     branch_from: Option<PathBuf>,

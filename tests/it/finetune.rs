@@ -83,6 +83,32 @@ fn a_run_starts_from_the_policy_and_its_critics_warm_up_first() {
     let (ok, text) =
         train(&ibrl, &[&common[..], &["--ibrl", "--anchor-alpha", "0.5", "--epochs", "3", "--resume"]].concat());
     assert!(ok, "{text}");
+    // A branch of it may change what the learner does with the policy it started from (here a weaker
+    // anchor and no IBRL proposal), recorded with the parent's start; not the start itself.
+    let branch = |dir: &str, extra: &[&str]| {
+        let from = ["--epochs", "4", "--branch-from", ibrl.to_str().unwrap()];
+        train(&tmp.path().join(dir), &[&common[..], extra, &from[..]].concat())
+    };
+    let (ok, text) = branch("weaker", &["--anchor-alpha", "2.5"]);
+    assert!(ok, "{text}");
+    let config: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("weaker/config.json")).unwrap()).unwrap();
+    let changed = config["branched_from"]["changed"].as_array().unwrap();
+    assert_eq!(changed.len(), 2, "{changed:?}");
+    assert!(changed.contains(&"--anchor-alpha".into()) && changed.contains(&"--ibrl".into()), "{changed:?}");
+    let parent: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ibrl.join("config.json")).unwrap()).unwrap();
+    assert_eq!(config["finetune"]["init_policy"], parent["finetune"]["init_policy"]);
+    assert_eq!(blockpuzzle::learn::train::read_progress(&tmp.path().join("weaker/progress.csv")).unwrap().len(), 4);
+    let mut other = common.clone();
+    let at = other.iter().position(|a| *a == "generalist-bc-entity").unwrap();
+    other[at] = "ToppleTower-v0-td3-finetuned";
+    let (ok, text) = train(
+        &tmp.path().join("other"),
+        &[&other[..], &["--ibrl", "--anchor-alpha", "0.5", "--epochs", "4", "--branch-from", ibrl.to_str().unwrap()]]
+            .concat(),
+    );
+    assert!(!ok && text.contains("--init-from") && !tmp.path().join("other").exists(), "{text}");
     // SAC too: its saved policy (the mean action) is the generalist's after the warm-up.
     let sac = tmp.path().join("sac");
     let (ok, text) = train(&sac, &[&common[..], &["--algo", "sac", "--critic-warmup", "2"]].concat());

@@ -17,11 +17,15 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// Settings of the trainer a branch may change besides those a resume may
-/// change: how episodes are drawn, the curriculum's threshold and updates
-/// per cycle. Each algorithm adds its own that the learner takes over from
+/// change: how episodes are drawn, the curriculum's threshold, updates per
+/// cycle, and what a fine-tuning learner does with the policy it started from
+/// (`--anchor-alpha`, `--ibrl`: not in the checkpoint, given to the learner
+/// again on every resume), e.g. a weaker anchor once the critic has learned.
+/// Each algorithm adds its own that the learner takes over from
 /// the branch's settings ([`crate::learn::agents::algorithm::Registration::branchable`]:
 /// DDPG's exploration noise and action penalties).
-pub const BRANCHABLE_CHANGES: &[&str] = &["level_replay", "challenge_share", "success_threshold", "batches"];
+pub const BRANCHABLE_CHANGES: &[&str] =
+    &["level_replay", "challenge_share", "success_threshold", "batches", "anchor_alpha", "ibrl"];
 
 /// Every setting a branch may change, as flags.
 fn branchable() -> Vec<String> {
@@ -86,6 +90,9 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
     let mut wanted = config.clone();
     wanted.task = saved.task.clone();
     wanted.tasks = saved.tasks.clone();
+    // What the parent recorded when it started (the policy it started from, its demonstrations' hash).
+    wanted.finetune.init_policy = saved.finetune.init_policy.clone();
+    wanted.finetune.demos_sha256 = saved.finetune.demos_sha256.clone();
     wanted.replay = Some(config.replay.unwrap_or(saved.replay_layout()));
     let mut base = saved.clone();
     base.replay = Some(saved.replay_layout());
