@@ -278,13 +278,17 @@ pub struct EvalPoint {
 }
 
 /// The colours of a figure's curves, in order (then again).
-const COLOURS: [RGBColor; 6] = [
+const COLOURS: [RGBColor; 10] = [
     RGBColor(200, 40, 40),
     RGBColor(30, 90, 200),
     RGBColor(40, 150, 60),
     RGBColor(230, 140, 20),
     RGBColor(130, 60, 170),
     RGBColor(90, 90, 90),
+    RGBColor(0, 160, 170),
+    RGBColor(140, 90, 40),
+    RGBColor(230, 90, 170),
+    RGBColor(150, 160, 30),
 ];
 
 /// Test success of evaluated policies (`eval --suite` results, e.g. a run's snapshots) against
