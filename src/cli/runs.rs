@@ -47,9 +47,16 @@ const BARE_RESUME: &[&str] = &["run_dir", "resume", "epochs", "torch_threads", "
 /// A directory without a `config.json` or one that cannot be read as a run's settings; a resume
 /// given other flags but not the run's task.
 fn bare_resume(a: &TrainArgs) -> Result<Option<crate::learn::train::TrainConfig>> {
+    let names_task = a.given.iter().any(|g| ["env", "suite", "families"].contains(&g.as_str()));
+    if a.resume && a.run_dir.is_none() && !names_task {
+        bail!(
+            "train --resume continues the run in --run-dir: give --run-dir DIR (the run's settings then come \
+             from DIR/config.json), or the run's own settings, --env included, to resume its default directory"
+        );
+    }
     let (true, Some(dir)) = (a.resume, &a.run_dir) else { return Ok(None) };
     if a.given.iter().any(|g| !BARE_RESUME.contains(&g.as_str())) {
-        if !a.given.iter().any(|g| ["env", "suite", "families"].contains(&g.as_str())) {
+        if !names_task {
             bail!(
                 "train --resume given {} besides --run-dir must restate the run's settings, its task \
                  included: give its --env, --suite or --families (or its recipe, --config), or leave out \

@@ -550,6 +550,9 @@ fn train_resume_with_only_the_run_dir_takes_the_runs_own_settings() {
     // ...and without the run's task, that is what the error asks for.
     let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3", "--gamma", "0.9"]);
     assert!(!o.status.success() && text(&o).contains("given --gamma") && text(&o).contains("--env"), "{}", text(&o));
+    // No run directory: refused, naming the fix.
+    let o = bp(&["train", "--resume", "--epochs", "3"]);
+    assert!(!o.status.success() && text(&o).contains("give --run-dir DIR"), "{}", text(&o));
     // No run there: refused, naming the fix.
     let none = dir.path().join("none");
     let o = bp(&["train", "--resume", "--run-dir", none.to_str().unwrap()]);
