@@ -1,7 +1,7 @@
 //! Runs: `blockpuzzle train` (one process or an MPI rank; resume and branch),
 //! and `plot` and `report`, which read a run directory's files.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
 use crate::env::registry;
@@ -279,6 +279,9 @@ fn read_run(dir: &Path) -> Result<(crate::learn::train::TrainConfig, Vec<crate::
 
 /// `blockpuzzle plot`: a run's success.png, or an overlay of several runs.
 pub(super) fn plot(a: PlotArgs) -> Result<()> {
+    if !a.level.is_empty() && a.overlay.is_empty() && a.curve.is_empty() {
+        bail!("--level draws a reference line across curves: give it with --overlay or --curve");
+    }
     if let Some(out) = &a.out {
         crate::learn::train::plot::png_only(out)?;
     }
@@ -288,9 +291,6 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
         let run = crate::learn::train::RunDir { dir };
         crate::learn::train::plot::success_curves(&run.plot(), &config.title(), &rows, max_level)?;
         println!("wrote {}", run.plot().display());
-    }
-    if !a.level.is_empty() && a.overlay.is_empty() && a.curve.is_empty() {
-        bail!("--level draws a reference line across curves: give it with --overlay or --curve");
     }
     if let (Some(out), false) = (&a.out, a.scaling.is_empty()) {
         return scaling(&a, out);
@@ -380,6 +380,19 @@ fn policy_env_steps(file: &Path, r: &crate::benchmark::evaluate::SuiteResult) ->
     saved.env_steps.ok_or_else(|| anyhow::anyhow!("{}: its policy {} records no env steps", file.display(), r.policy))
 }
 
+/// A suite result's test score, and its 95% Wilson interval where the test split is one row.
+fn test_score(r: &crate::benchmark::evaluate::SuiteResult) -> Result<(f64, Option<(f64, f64)>)> {
+    let test = r.splits.iter().find(|s| s.name == "test");
+    let Some((test, Some(success))) = test.map(|t| (t, t.mean_success)) else {
+        bail!("no `test` split evaluated");
+    };
+    let ci95 = match &test.rows[..] {
+        [one] => one.evaluation.as_ref().map(|e| e.ci95),
+        _ => None,
+    };
+    Ok((success, ci95))
+}
+
 /// `plot --curve`: test success of evaluated policies against their env steps, and the points'
 /// table (Markdown) on stdout.
 fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
@@ -414,16 +427,7 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
                 .map_err(|e| anyhow::Error::from(e).context(format!("--curve {label}")))?
                 .result;
             same(file, &r.provenance)?;
-            let Some(test) = r.splits.iter().find(|s| s.name == "test") else {
-                bail!("--curve {label}: {file} has no `test` split");
-            };
-            let Some(success) = test.mean_success else {
-                bail!("--curve {label}: {file}'s `test` split has no row evaluated");
-            };
-            let ci95 = match &test.rows[..] {
-                [one] => one.evaluation.as_ref().map(|e| e.ci95),
-                _ => None,
-            };
+            let (success, ci95) = test_score(&r).with_context(|| format!("--curve {label}: {file}"))?;
             points.push(EvalPoint { env_steps: policy_env_steps(path, &r)?, success, ci95 });
             curve_task = r.policy_task.clone();
         }
@@ -438,12 +442,7 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
                     .map_err(|e| anyhow::Error::from(e).context(format!("--start {given}")))?
                     .result;
                 same(file, &r.provenance)?;
-                let success = r.splits.iter().find(|s| s.name == "test").and_then(|s| s.mean_success);
-                let Some(success) = success else { bail!("--start {given}: {file} has no `test` split evaluated") };
-                let ci95 = match &r.splits.iter().find(|s| s.name == "test").map_or(&[][..], |s| &s.rows[..]) {
-                    [one] => one.evaluation.as_ref().map(|e| e.ci95),
-                    _ => None,
-                };
+                let (success, ci95) = test_score(&r).with_context(|| format!("--start {given}"))?;
                 // Env steps on this curve's own task count; a policy trained elsewhere starts it at 0.
                 let own = r.policy_task.is_some() && r.policy_task == curve_task;
                 let offset = if own { policy_env_steps(Path::new(file), &r)? } else { 0 };
