@@ -111,14 +111,19 @@ where
         } else {
             chart.draw_series(LineSeries::new(c.points.iter().copied(), colour.stroke_width(2)))
         };
-        drawn
-            .map_err(draw)?
-            .label(c.label.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        drawn.map_err(draw)?.label(c.label.clone()).legend(key(colour.stroke_width(2)));
     }
     legend(&mut chart).map_err(draw)?;
     Ok(())
 }
+
+/// A series' mark in a legend: a short line in its style.
+fn key(style: ShapeStyle) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style)
+}
+
+/// The colours of reference levels (dashed lines across a figure), in order (then again).
+const LEVEL_COLOURS: [RGBColor; 2] = [RGBColor(0, 0, 0), RGBColor(150, 150, 150)];
 
 /// The legend box of every chart here: lower right, on a light background.
 fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
@@ -260,7 +265,7 @@ pub fn overlay(path: &Path, title: &str, runs: &[(String, Vec<FinalsPoint>)], le
         let x_max = curves.iter().flat_map(|c| c.points.iter().map(|p| p.0)).fold(0.0, f64::max);
         let lines = levels.iter().enumerate().map(|(i, (label, v))| Curve {
             label: label.clone(),
-            colour: [RGBColor(0, 0, 0), RGBColor(150, 150, 150)][i % 2],
+            colour: LEVEL_COLOURS[i % LEVEL_COLOURS.len()],
             points: vec![(0.0, *v), (x_max, *v)],
             dashed: true,
         });
@@ -334,7 +339,7 @@ pub fn evaluated(
                 .draw_series(LineSeries::new(points.iter().map(|p| (x(p), p.success)), colour.stroke_width(2)))
                 .map_err(draw)?
                 .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                .legend(key(colour.stroke_width(2)));
             chart
                 .draw_series(points.iter().map(|p| Circle::new((x(p), p.success), 4, colour.filled())))
                 .map_err(draw)?;
@@ -344,12 +349,12 @@ pub fn evaluated(
             chart.draw_series(bars).map_err(draw)?;
         }
         for (i, (label, v)) in levels.iter().enumerate() {
-            let colour = [RGBColor(0, 0, 0), RGBColor(150, 150, 150)][i % 2];
+            let colour = LEVEL_COLOURS[i % LEVEL_COLOURS.len()];
             chart
                 .draw_series(DashedLineSeries::new([(0.0, *v), (x_max, *v)], 8, 6, colour.stroke_width(2)))
                 .map_err(draw)?
                 .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                .legend(key(colour.stroke_width(2)));
         }
         legend(&mut chart).map_err(draw)?;
         root.present().map_err(draw).map_err(at("writing", path))
@@ -396,7 +401,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
                 .draw_series(LineSeries::new([(0.0, tolerance), (steps, tolerance)], tol.stroke_width(1)))
                 .map_err(draw)?
                 .label(format!("tolerance {tolerance:.0e} m"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], tol.stroke_width(1)));
+                .legend(key(tol.stroke_width(1)));
             for (i, (label, d)) in episodes.iter().enumerate() {
                 let colour = Palette99::pick(i).to_rgba();
                 let points = d.iter().enumerate().map(|(t, v)| (t as f64, v[which].max(DEVIATION_FLOOR)));
@@ -404,7 +409,7 @@ pub fn deviations(path: &Path, title: &str, episodes: &[(String, Vec<[f64; 2]>)]
                     .draw_series(LineSeries::new(points, colour.stroke_width(2)))
                     .map_err(draw)?
                     .label(label.clone())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                    .legend(key(colour.stroke_width(2)));
             }
             legend(&mut chart).map_err(draw)?;
         }
@@ -478,7 +483,7 @@ pub fn scaling(
                 .draw_series(LineSeries::new(means, colour.stroke_width(2)))
                 .map_err(draw)?
                 .label(format!("{label} (mean over seeds)"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+                .legend(key(colour.stroke_width(2)));
             chart.draw_series(points.iter().map(|p| Circle::new((p.x, of(p)), 4, colour.filled()))).map_err(draw)?;
         }
         if let Some((name, train, test)) = reference {
@@ -495,7 +500,7 @@ pub fn scaling(
                     .draw_series(dashes)
                     .map_err(draw)?
                     .label(format!("{name}, {which}"))
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.mix(0.6).stroke_width(1)));
+                    .legend(key(colour.mix(0.6).stroke_width(1)));
             }
         }
         legend(&mut chart).map_err(draw)?;
