@@ -409,6 +409,15 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
         }
         Ok(())
     };
+    // A result of the figure: read, checked against the others, and its test score.
+    let mut read = |file: &str, what: &str| -> Result<(crate::benchmark::evaluate::SuiteResult, EvalPoint)> {
+        let r = crate::benchmark::results::read(Path::new(file))
+            .map_err(|e| anyhow::Error::from(e).context(what.to_owned()))?
+            .result;
+        same(file, &r.provenance)?;
+        let (success, ci95) = test_score(&r).with_context(|| format!("{what}: {file}"))?;
+        Ok((r, EvalPoint { env_steps: 0, success, ci95 }))
+    };
     let mut curves = Vec::new();
     let mut table = String::from("| curve | env steps | test success [95% Wilson] | result |\n|---|---:|---|---|\n");
     for given in &a.curves {
@@ -419,50 +428,37 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
                  --curve \"fine-tuned s0\" run-epoch2.json run-epoch4.json"
             );
         }
-        let mut points = Vec::new();
+        // Each point with the file it came from, for the table.
+        let mut points: Vec<(EvalPoint, &str)> = Vec::new();
         let mut curve_task = None;
         for file in files {
-            let path = Path::new(file);
-            let r = crate::benchmark::results::read(path)
-                .map_err(|e| anyhow::Error::from(e).context(format!("--curve {label}")))?
-                .result;
-            same(file, &r.provenance)?;
-            let (success, ci95) = test_score(&r).with_context(|| format!("--curve {label}: {file}"))?;
-            points.push(EvalPoint { env_steps: policy_env_steps(path, &r)?, success, ci95 });
-            curve_task = r.policy_task.clone();
+            let (r, point) = read(file, &format!("--curve {label}"))?;
+            points.push((EvalPoint { env_steps: policy_env_steps(Path::new(file), &r)?, ..point }, file));
+            curve_task = r.policy_task;
         }
-        let mut files = files.to_vec();
         let starts: Vec<&String> =
             a.start.iter().filter(|s| s.split_once(':').is_some_and(|(l, _)| l == label.as_str())).collect();
         match starts[..] {
             [] => {}
             [given] => {
                 let file = given.split_once(':').map_or("", |(_, f)| f);
-                let r = crate::benchmark::results::read(Path::new(file))
-                    .map_err(|e| anyhow::Error::from(e).context(format!("--start {given}")))?
-                    .result;
-                same(file, &r.provenance)?;
-                let (success, ci95) = test_score(&r).with_context(|| format!("--start {given}"))?;
+                let (r, point) = read(file, &format!("--start {given}"))?;
                 // Env steps on this curve's own task count; a policy trained elsewhere starts it at 0.
                 let own = r.policy_task.is_some() && r.policy_task == curve_task;
                 let offset = if own { policy_env_steps(Path::new(file), &r)? } else { 0 };
-                for p in &mut points {
+                for (p, _) in &mut points {
                     p.env_steps += offset;
                 }
-                points.push(EvalPoint { env_steps: offset, success, ci95 });
-                files.push(file.to_owned());
+                points.push((EvalPoint { env_steps: offset, ..point }, file));
             }
             _ => bail!("--start: {} starts given for the curve {label}; give one", starts.len()),
         }
-        let mut order: Vec<usize> = (0..points.len()).collect();
-        order.sort_by_key(|&i| points[i].env_steps);
-        let (points, files): (Vec<EvalPoint>, Vec<String>) =
-            order.into_iter().map(|i| (points[i], files[i].clone())).unzip();
-        for (p, file) in points.iter().zip(&files) {
+        points.sort_by_key(|(p, _)| p.env_steps);
+        for (p, file) in &points {
             let ci = p.ci95.map_or(String::new(), |(lo, hi)| format!(" [{lo:.3}, {hi:.3}]"));
             table.push_str(&format!("| {label} | {} | {:.3}{ci} | `{file}` |\n", p.env_steps, p.success));
         }
-        curves.push((label.clone(), points));
+        curves.push((label.clone(), points.into_iter().map(|(p, _)| p).collect()));
     }
     if let Some(s) =
         a.start.iter().find(|s| !s.split_once(':').is_some_and(|(l, _)| a.curves.iter().any(|c| c[0] == l)))
