@@ -121,13 +121,14 @@ pub(super) struct PlotArgs {
     #[arg(skip)]
     pub(super) curves: Vec<Vec<String>>,
     /// With --curve: `LABEL:RESULT`, the policy the curve LABEL's run started from (`train
-    /// --init-from`), as its suite result: drawn as the curve's first point. Where that policy was
+    /// --init-from`), as its suite result: drawn as the curve's first point (split at the last colon:
+    /// the label may hold colons, the file name may not). Where that policy was
     /// trained on the curve's task (e.g. DAgger's snapshot), its env steps are added to the curve's;
     /// where not (the generalist, trained on other tasks), the curve starts at 0.
     #[arg(long, num_args = 1.., requires = "curve")]
     start: Vec<String>,
-    /// With --overlay or --curve: suite results (JSON of `eval --suite`) as `LABEL:FILE`, each drawn
-    /// as a dashed line at its test score, e.g. `--level solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json`.
+    /// With --overlay or --curve: suite results (JSON of `eval --suite`) as `LABEL:FILE` (split at
+    /// the last colon), each drawn as a dashed line at its test score, e.g. `--level solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json`.
     #[arg(long, num_args = 1..)]
     level: Vec<String>,
     /// With --scaling: a suite result (e.g. the solver's) drawn as dashed train and test lines.
@@ -328,11 +329,17 @@ pub(super) fn plot(a: PlotArgs) -> Result<()> {
     Ok(())
 }
 
+/// `LABEL:FILE` of `--level` and `--start`, split at the last colon: a label may hold colons
+/// ("TD3: from DAgger"), a file name may not.
+fn label_file(given: &str) -> Option<(&str, &str)> {
+    given.rsplit_once(':')
+}
+
 /// `plot --level LABEL:FILE...`: each result's test score, labelled with it, and its provenance.
 fn levels(given: &[String]) -> Result<Vec<(String, f64, crate::benchmark::provenance::Provenance)>> {
     let mut levels = Vec::new();
     for given in given {
-        let Some((label, file)) = given.split_once(':') else {
+        let Some((label, file)) = label_file(given) else {
             bail!(
                 "--level {given}: give LABEL:FILE, e.g. solver:results/generalization/mujoco-2.2.2/baseline-scripted.beyond-ToppleTower-v0.json"
             );
@@ -437,11 +444,11 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
             curve_task = r.policy_task;
         }
         let starts: Vec<&String> =
-            a.start.iter().filter(|s| s.split_once(':').is_some_and(|(l, _)| l == label.as_str())).collect();
+            a.start.iter().filter(|s| label_file(s).is_some_and(|(l, _)| l == label.as_str())).collect();
         match starts[..] {
             [] => {}
             [given] => {
-                let file = given.split_once(':').map_or("", |(_, f)| f);
+                let file = label_file(given).map_or("", |(_, f)| f);
                 let (r, point) = read(file, &format!("--start {given}"))?;
                 // Env steps on this curve's own task count; a policy trained elsewhere starts it at 0.
                 let own = r.policy_task.is_some() && r.policy_task == curve_task;
@@ -460,9 +467,7 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
         }
         curves.push((label.clone(), points.into_iter().map(|(p, _)| p).collect()));
     }
-    if let Some(s) =
-        a.start.iter().find(|s| !s.split_once(':').is_some_and(|(l, _)| a.curves.iter().any(|c| c[0] == l)))
-    {
+    if let Some(s) = a.start.iter().find(|s| !label_file(s).is_some_and(|(l, _)| a.curves.iter().any(|c| c[0] == l))) {
         bail!("--start {s}: give LABEL:RESULT with the LABEL of a --curve");
     }
     let mut lines = Vec::new();

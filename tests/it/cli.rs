@@ -679,12 +679,13 @@ fn plot_curve_draws_evaluated_snapshots_against_env_steps_and_refuses_what_it_ca
         bp(&a)
     };
     // Given in any order, drawn by env steps; the start's point is first, at 0 (a baseline trained nowhere).
-    let level = format!("solver:{solver}");
-    let start = format!("run:{solver}");
-    let o = plot(&["--curve", "run", &e2, &e1, "--start", &start, "--level", &level]);
+    // Labels may hold colons: LABEL:FILE splits at the last one.
+    let level = format!("solver: scripted:{solver}");
+    let start = format!("run: s0:{solver}");
+    let o = plot(&["--curve", "run: s0", &e2, &e1, "--start", &start, "--level", &level]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
-    let table: Vec<String> = text(&o).lines().filter(|l| l.starts_with("| run |")).map(str::to_owned).collect();
+    let table: Vec<String> = text(&o).lines().filter(|l| l.starts_with("| run: s0 |")).map(str::to_owned).collect();
     assert_eq!(table.len(), 3, "{}", text(&o));
     assert!(table[0].contains("| 0 |") && table[0].contains("solver.json"), "{table:?}");
     assert!(table[1].contains(&format!("| {s1} |")) && table[2].contains(&format!("| {s2} |")), "{table:?}");
@@ -708,7 +709,7 @@ fn plot_curve_draws_evaluated_snapshots_against_env_steps_and_refuses_what_it_ca
         (vec!["--curve", &e1, &e2], "a curve starts with its label"),
         (vec!["--curve", "run", &e2, "--level", &format!("solver:{other_suite}")], "cannot be drawn in one figure"),
         (vec!["--curve", "run", &e2, "--start", "other:x.json"], "the LABEL of a --curve"),
-        (vec!["--curve", "run", &e2, "--start", &start, "--start", &start], "give one"),
+        (vec!["--curve", "run: s0", &e2, "--start", &start, "--start", &start], "give one"),
     ] {
         let o = plot(&args);
         assert!(!o.status.success() && text(&o).contains(wanted), "{args:?}: {}", text(&o));
