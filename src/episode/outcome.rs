@@ -11,7 +11,7 @@
 //! | `unstable` | the simulation went unstable (the episode was cut short) |
 //! | `no_contact` | the gripper touched no block (only the table or floor, if anything): the arm never reached an object |
 //! | `off_table` | a blue or green block that started on the table ended below its top: knocked off, the task usually lost |
-//! | `blue_met_grey` | a blue object touched a grey block (not the table, floor or gripper), e.g. pushed into the distractor |
+//! | `blue_met_grey` | a blue object touched a grey block (not the table, floor or gripper) at some step, e.g. pushed into the distractor; a blue block resting on a grey one (BlocksStack-v0's pedestal) always has |
 //! | `timeout` | anything else: objects moved, blue did not reach green in time |
 
 use crate::episode::rollout::EpisodeRecord;
