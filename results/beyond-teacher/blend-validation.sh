@@ -5,7 +5,7 @@
 # tasks at generator seeds 30000-30004). The rule, fixed before any of these numbers was seen: the
 # largest W whose validation-procgen score is at least 0.8x the generalist's there.
 # BP=target/release/blockpuzzle TAG=s1-epoch4 TUNED=runs/beyond/ToppleTower-v0-finetune-s1/snapshots/epoch-0004.json bash results/beyond-teacher/blend-validation.sh 0.4 0.5 0.6 0.7 0.8 1
-# BP=target/release/blockpuzzle TASK=BlocksStack-v0 TAG=dagger25-s0-epoch30 TUNED=runs/beyond/BlocksStack-v0-dagger25-finetune-s0/snapshots/epoch-0030.json bash results/beyond-teacher/blend-validation.sh 0.2 0.4 0.6 1
+# BP=target/release/blockpuzzle TASK=BlocksStack-v0 TAG=dagger25-s0-epoch30 TUNED=runs/beyond/BlocksStack-v0-dagger25-finetune-s0/snapshots/epoch-0030.json bash results/beyond-teacher/blend-validation.sh 0.2 0.4 0.5 0.6 0.8 1
 set -euo pipefail
 BP=${BP:-target/release/blockpuzzle}
 : "${TAG:?TAG names the fine-tuned policy in the file names, e.g. s1-epoch4}"
