@@ -443,12 +443,15 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
             points.push((EvalPoint { env_steps: policy_env_steps(Path::new(file), &r)?, ..point }, file));
             curve_task = r.policy_task;
         }
-        let starts: Vec<&String> =
-            a.start.iter().filter(|s| label_file(s).is_some_and(|(l, _)| l == label.as_str())).collect();
+        // This curve's starts, each as given (for messages) and its file.
+        let starts: Vec<(&String, &str)> = a
+            .start
+            .iter()
+            .filter_map(|s| label_file(s).filter(|(l, _)| *l == label.as_str()).map(|(_, f)| (s, f)))
+            .collect();
         match starts[..] {
             [] => {}
-            [given] => {
-                let file = label_file(given).map_or("", |(_, f)| f);
+            [(given, file)] => {
                 let (r, point) = read(file, &format!("--start {given}"))?;
                 // Env steps on this curve's own task count; a policy trained elsewhere starts it at 0.
                 let own = r.policy_task.is_some() && r.policy_task == curve_task;
