@@ -286,7 +286,8 @@ def to_minari(path: str | os.PathLike[str], dataset_id: str, *, author: str | No
     p = demos.provenance
     suite = p.get("suite") or {}
     made = (f"the BlockPuzzle solver's episodes on suite {suite.get('name')} (sha256 {suite.get('sha256')}), "
-            f"split {demos.split}; blockpuzzle {p.get('blockpuzzle')} ({p.get('commit')}), MuJoCo {p.get('mujoco')}; "
+            f"split {demos.split}; blockpuzzle {p.get('blockpuzzle')} ({p.get('commit')}), MuJoCo {p.get('mujoco')}, "
+            f"solver version {p.get('solver', 1)}; "
             "observations: the entities layout padded to the split's largest row count (mask 0)")
     # HDF5 lists a group's members by name unless the group tracks their creation order: with it,
     # an episode's observations come back robot, entities, mask, as written (the documented order).
@@ -296,7 +297,8 @@ def to_minari(path: str | os.PathLike[str], dataset_id: str, *, author: str | No
     spec = env_spec(demos)
     try:
         return minari.create_dataset_from_buffers(
-            dataset_id, buffers, env=spec, eval_env=spec, algorithm_name="blockpuzzle-solver", author=author,
+            dataset_id, buffers, env=spec, eval_env=spec,
+            algorithm_name=f"blockpuzzle-solver-v{p.get('solver', 1)}", author=author,
             author_email=author_email, code_permalink=code_permalink,
             observation_space=observation_space(demos), action_space=spaces.Box(-1.0, 1.0, (4,), np.float32),
             description=description or made, data_format="hdf5",

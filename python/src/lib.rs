@@ -602,6 +602,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<policy::ZooActor>()?;
     m.add_function(wrap_pyfunction!(policy::evaluate_saved, m)?)?;
     m.add_function(wrap_pyfunction!(policy::build_info, m)?)?;
+    m.add_function(wrap_pyfunction!(policy::solver_act, m)?)?;
+    m.add_function(wrap_pyfunction!(policy::solver_version, m)?)?;
     m.add_function(wrap_pyfunction!(env_ids, m)?)?;
     m.add_function(wrap_pyfunction!(max_episode_steps, m)?)?;
     m.add_function(wrap_pyfunction!(task_sha256, m)?)?;

@@ -138,3 +138,37 @@ pub(crate) fn build_info(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("mujoco", b.mujoco)?;
     Ok(d)
 }
+
+/// The solver's actions for a batch of flat `entities` observations (`(n, dim)` float32: robot |
+/// entity rows | mask, any number of block rows): `(n, 4)` float32. The solver is a function of one
+/// observation ([`blockpuzzle::policy::ScriptedPolicy::decide`]), so the rows are independent and
+/// their order does not matter.
+#[pyfunction]
+pub(crate) fn solver_act<'py>(py: Python<'py>, obs: PyReadonlyArray2<'py, f32>) -> PyResult<Bound<'py, PyArray2<f32>>> {
+    use blockpuzzle::env::{ObsMode, ObsSpec};
+    let (n, dim) = (obs.shape()[0], obs.shape()[1]);
+    let probe = ObsSpec::new(ObsMode::Entities, 0);
+    let (robot, row, fixtures) = (probe.robot_dim(), probe.object_dim() + 1, ObsMode::Entities.fixtures().len());
+    let blocks = dim
+        .checked_sub(robot)
+        .filter(|r| r % row == 0)
+        .and_then(|r| (r / row).checked_sub(fixtures))
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "the solver reads the `entities` observation ({robot} robot features, then rows of {} features \
+                 and a mask entry each, the gripper's, table's and floor's rows included); observations of {dim} \
+                 values do not split so: make the environment with obs_mode=\"entities\"",
+                row - 1
+            ))
+        })?;
+    let solver = blockpuzzle::policy::ScriptedPolicy::solver(blocks);
+    let x = obs.as_slice().map_err(|e| PyValueError::new_err(e.to_string()))?.to_vec();
+    let flat: Vec<f32> = py.allow_threads(|| x.chunks_exact(dim.max(1)).flat_map(|o| solver.decide(o).0).collect());
+    PyArray1::from_vec(py, flat).reshape([n, 4])
+}
+
+/// The solver's version (`blockpuzzle::policy::SOLVER_VERSION`).
+#[pyfunction]
+pub(crate) fn solver_version() -> u32 {
+    blockpuzzle::policy::SOLVER_VERSION
+}

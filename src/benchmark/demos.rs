@@ -298,7 +298,7 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
         played.extend(row_played.into_iter().map(|(_, p)| p));
     }
     bar.finish_and_clear();
-    let policy = PolicyId { name: "baseline:scripted".to_owned(), sha256: None };
+    let policy = PolicyId { name: crate::benchmark::provenance::SOLVER_POLICY.to_owned(), sha256: None };
     let mut d = Demos {
         layout,
         provenance: Provenance::new(harness, policy, Some(suite.id())),

@@ -55,12 +55,27 @@ pub struct Build {
     pub commit: Option<String>,
     /// The MuJoCo that ran the episodes (the loaded library's version).
     pub mujoco: String,
+    /// The solver's version ([`crate::policy::SOLVER_VERSION`]) in this build: what
+    /// `baseline:scripted`, the generator's check and recorded demonstrations ran. None in what
+    /// was written before it was recorded (the version-1 solver, which kept a plan).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<u32>,
 }
 
 impl Build {
     /// This build, with the engine it has loaded.
     pub fn current() -> Self {
-        Self { blockpuzzle: version().to_owned(), commit: commit(), mujoco: crate::sim::mj::version() }
+        Self {
+            blockpuzzle: version().to_owned(),
+            commit: commit(),
+            mujoco: crate::sim::mj::version(),
+            solver: Some(crate::policy::SOLVER_VERSION),
+        }
+    }
+
+    /// The solver version that made it (1 where none is recorded).
+    pub fn solver_version(&self) -> u32 {
+        self.solver.unwrap_or(1)
     }
 
     /// "MuJoCo M by blockpuzzle V (commit `C`)".
@@ -98,7 +113,8 @@ impl Provenance {
     }
 
     /// Whether numbers of `self` and `other` may stand in one column: the same
-    /// engine and the same suite (name and hash). The package, commit, harness
+    /// engine and the same suite (name and hash), and where both are the solver's
+    /// (`baseline:scripted`), the same solver version. The package, commit, harness
     /// and policy may differ (a column compares policies; harnesses give the
     /// same numbers for the same policy and engine).
     ///
@@ -114,10 +130,23 @@ impl Provenance {
                 Err(Mismatch::new("provenance.suite.sha256 (the suite file's text)", &a.sha256, &b.sha256))
             }
             (Some(a), None) | (None, Some(a)) => Err(Mismatch::new("provenance.suite", &a.name, "none")),
+            _ if self.policy.name == SOLVER_POLICY
+                && other.policy.name == SOLVER_POLICY
+                && self.build.solver_version() != other.build.solver_version() =>
+            {
+                Err(Mismatch::new(
+                    "provenance.solver (the solver's version)",
+                    &self.build.solver_version().to_string(),
+                    &other.build.solver_version().to_string(),
+                ))
+            }
             _ => Ok(()),
         }
     }
 }
+
+/// How results name the solver as a policy.
+pub const SOLVER_POLICY: &str = "baseline:scripted";
 
 /// A field two results differ in, which keeps them out of one column.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -159,6 +188,9 @@ impl Provenance {
     pub fn markdown(&self) -> String {
         let policy = match &self.policy.sha256 {
             Some(h) => format!("`{}` ({h})", self.policy.name),
+            None if self.policy.name == SOLVER_POLICY => {
+                format!("`{}` (solver version {})", self.policy.name, self.build.solver_version())
+            }
             None => format!("`{}`", self.policy.name),
         };
         let suite =

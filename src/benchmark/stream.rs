@@ -495,13 +495,21 @@ struct Pinned {
     hash: String,
 }
 
-/// One family's cache file: each worked-out seed's kept candidate (null: no task).
+/// One family's cache file: each worked-out seed's kept candidate (null: no task). Which candidate a
+/// seed keeps depends on the family, the engine and the solver that checks it, so all three key it.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Cache {
     family: String,
     hash: String,
     engine: String,
+    /// The solver's version ([`crate::policy::SOLVER_VERSION`]; files without it: version 1).
+    #[serde(default = "solver_v1")]
+    solver: u32,
     seeds: BTreeMap<u64, Option<Pinned>>,
+}
+
+fn solver_v1() -> u32 {
+    1
 }
 
 /// The cache folder: `$BLOCKPUZZLE_CACHE_DIR`, else `$XDG_CACHE_HOME/blockpuzzle`, else
@@ -516,7 +524,12 @@ pub fn cache_dir() -> Option<PathBuf> {
 impl Cache {
     fn path(dir: Option<&Path>, family: &Family, engine: &str) -> Option<PathBuf> {
         let hex = family.hash.trim_start_matches("sha256:");
-        let name = format!("{}-{}-mujoco-{engine}.json", family.spec.family, &hex[..hex.len().min(16)]);
+        let name = format!(
+            "{}-{}-mujoco-{engine}-solver{}.json",
+            family.spec.family,
+            &hex[..hex.len().min(16)],
+            crate::policy::SOLVER_VERSION
+        );
         Some(dir?.join("generated").join(name))
     }
 
@@ -526,6 +539,7 @@ impl Cache {
             family: family.spec.family.clone(),
             hash: family.hash.clone(),
             engine: engine.to_owned(),
+            solver: crate::policy::SOLVER_VERSION,
             ..Default::default()
         };
         let Some(path) = Self::path(dir, family, engine) else { return empty };
@@ -534,7 +548,7 @@ impl Cache {
             return empty;
         };
         match serde_json::from_str::<Cache>(&text) {
-            Ok(c) if c.hash == family.hash && c.engine == engine => c,
+            Ok(c) if c.hash == family.hash && c.engine == engine && c.solver == crate::policy::SOLVER_VERSION => c,
             _ => empty,
         }
     }

@@ -3,7 +3,8 @@
 //! reaching green with a blue gripper (over any red wall), toppling a tower
 //! with a red gripper, and picking blue up and putting it on green.
 //!
-//! Both read only the observation. The scripted controller as a solver
+//! Both read only the observation, and the scripted controller nothing else: it keeps no state
+//! from step to step ([`SOLVER_VERSION`] 2). The scripted controller as a solver
 //! ([`ScriptedPolicy::solver`], the `scripted` baseline) decides what to do
 //! from the `entities` observation alone: which blocks are blue, green, red,
 //! and whether the gripper or the table takes part in the rules.
@@ -222,6 +223,13 @@ fn colour_of(row: &[f32]) -> Colour {
     Colour::ALL[(0..hot.len()).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3)]
 }
 
+/// The version of the solver's behaviours: bumped on any change to what it does, recorded in every
+/// result, demonstrations file and dataset it makes ([`crate::benchmark::provenance::Build`]).
+/// Version 1 kept a plan from step to step (the behaviour chosen at the first step, the route
+/// around red, the steps spent closing, the swipe, letting go and rising); version 2 is a function
+/// of one observation.
+pub const SOLVER_VERSION: u32 = 2;
+
 /// The scripted controller: for block tasks, get behind the blue block and
 /// push it towards the green one (or push the green one onto the blue one if
 /// that path is clearer of grey blocks); for a blue-gripper task, move the
@@ -229,94 +237,60 @@ fn colour_of(row: &[f32]) -> Colour {
 /// it; for a red-gripper tower, push the grey blocks out from under the blue
 /// one; with the gripper action, pick blue up and put it on green (each
 /// blue in turn, side by side, when there are several). With red blocks on
-/// the table, the push goes around them: through a waypoint chosen at the
-/// start of the episode so that blue's path stays clear of every red block.
+/// the table, the push goes around them, through a waypoint beside them.
 ///
-/// Each behaviour is its own small type (push.rs, reach.rs, topple.rs,
-/// pick.rs) holding its episode's state; this one picks it and starts it
-/// afresh at every reset.
+/// It keeps no state from one step to the next: every action is a function of the observation
+/// alone ([`ScriptedPolicy::decide`]). Each phase (which behaviour, which block, the way around
+/// red, whether a block is held or being let go, whether the swipe is under way) is read afresh
+/// from what the observation shows, so the solver labels any state the way it would act there,
+/// whatever came before: an expert for DAgger whose labels are consistent (tests/it/entities.rs
+/// replays recorded observations in shuffled order). Each behaviour is a function in its own file
+/// (push.rs, reach.rs, topple.rs, pick.rs).
 #[derive(Debug, Clone)]
 pub struct ScriptedPolicy {
     /// How the behaviour is chosen.
     choice: Choice,
     /// Where the observation holds what.
     spec: ObsSpec,
-    /// Each slot's half extents: the task's ([`ScriptedPolicy::for_env`]), or read off the
-    /// observation's rows at the start of each episode (the solver).
-    sizes: Vec<[f64; 3]>,
-    /// The behaviour and its state in this episode; `None` until the solver has chosen.
-    running: Option<Running>,
-    /// Why the solver could not play this episode, if it could not.
-    unsolvable: Option<Unsolvable>,
+    /// What the last observation it acted on called for: the behaviour, or why it cannot play
+    /// (a report for callers; no action depends on it).
+    last: Option<Result<Script, Unsolvable>>,
 }
 
 /// Where the behaviour comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 enum Choice {
-    /// The task's configuration named it.
-    Fixed(Script),
-    /// The observation at the start of each episode decides it ([`Script::from_observation`]).
+    /// The task's configuration named it, and each slot's half extents.
+    Fixed(Script, Vec<[f64; 3]>),
+    /// Each observation decides it ([`Script::from_observation`]), and shows the sizes.
     Observed,
 }
 
-/// A behaviour with its episode's state.
-#[derive(Debug, Clone)]
-enum Running {
-    Push(push::Push),
-    Reach(reach::Reach),
-    Topple(topple::Topple),
-    PickPlace(pick::PickPlace),
-    Gather(pick::Gather),
-}
-
-impl Running {
-    /// `script`'s behaviour at the start of an episode.
-    fn start(script: Script) -> Self {
-        match script {
-            Script::Push => Self::Push(Default::default()),
-            Script::PushGreen => Self::Push(push::Push::green_onto_blue()),
-            Script::Reach => Self::Reach(Default::default()),
-            Script::Topple => Self::Topple(Default::default()),
-            Script::PickPlace => Self::PickPlace(Default::default()),
-            Script::Gather => Self::Gather(Default::default()),
-        }
-    }
-
-    fn script(&self) -> Script {
-        match self {
-            Self::Push(p) if p.pushes_green() => Script::PushGreen,
-            Self::Push(_) => Script::Push,
-            Self::Reach(_) => Script::Reach,
-            Self::Topple(_) => Script::Topple,
-            Self::PickPlace(_) => Script::PickPlace,
-            Self::Gather(_) => Script::Gather,
-        }
-    }
-
-    fn behaviour(&mut self) -> &mut dyn Behaviour {
-        match self {
-            Self::Push(b) => b,
-            Self::Reach(b) => b,
-            Self::Topple(b) => b,
-            Self::PickPlace(b) => b,
-            Self::Gather(b) => b,
-        }
-    }
-}
-
-/// What a behaviour reads at a step: the grip site, the fingers, the blocks
+/// What a behaviour reads at a step: the grip site, the fingers and their velocities, the blocks
 /// present and each slot's size.
 struct Seen<'a> {
     grip: [f64; 3],
+    /// The grip site's travel in the last step (the observation's velocity × dt).
+    grip_vel: [f64; 3],
     fingers: [f64; 2],
+    /// The fingers' joint travel in the last step (the observation's velocity × dt).
+    finger_vel: [f64; 2],
     blocks: &'a [SeenBlock],
     sizes: &'a [[f64; 3]],
 }
 
-/// One scripted behaviour: its action at a step, from what the observation shows (and its own
-/// state in the episode).
-trait Behaviour {
-    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM];
+impl Script {
+    /// Its action for what `seen` shows.
+    fn act(self, seen: &Seen) -> [f32; ACTION_DIM] {
+        match self {
+            Script::Push => push::push(seen, false),
+            Script::PushGreen => push::push(seen, true),
+            Script::Reach => reach::reach(seen),
+            Script::Topple => topple::topple(seen),
+            Script::PickPlace => pick::pick_place(seen),
+            Script::Gather => pick::gather(seen),
+        }
+    }
 }
 
 impl ScriptedPolicy {
@@ -343,38 +317,61 @@ impl ScriptedPolicy {
         let spec = config.obs_spec();
         // As the observation holds them (f32), so that the solver, which reads them there, acts alike.
         let sizes = config.task.objects().map(|o| o.half_extents.map(|v| v as f32 as f64)).collect();
-        Self { choice: Choice::Fixed(script), spec, sizes, running: Some(Running::start(script)), unsolvable: None }
+        Self { choice: Choice::Fixed(script, sizes), spec, last: Some(Ok(script)) }
     }
 
     /// The solver: a controller that reads nothing but the `entities` observation with `blocks`
-    /// block slots, and at the start of each episode chooses its behaviour from the rules the
-    /// observation shows ([`Script::from_observation`]); where it cannot play a task it stands
-    /// still and [`ScriptedPolicy::unsolvable`] says why. It asks the episode loop for that
-    /// layout ([`Policy::reads`]) whatever the environment presents.
+    /// block slots and decides every action from it alone ([`ScriptedPolicy::decide`]): the
+    /// behaviour the rules shown call for ([`Script::from_observation`]) and what that behaviour
+    /// does in the state shown. Where it cannot play a task it stands still and
+    /// [`ScriptedPolicy::unsolvable`] says why. It asks the episode loop for that layout
+    /// ([`Policy::reads`]) whatever the environment presents.
     pub fn solver(blocks: usize) -> Self {
         let spec = ObsSpec::new(ObsMode::Entities, blocks);
-        Self { choice: Choice::Observed, spec, sizes: Vec::new(), running: None, unsolvable: None }
+        Self { choice: Choice::Observed, spec, last: None }
     }
 
-    /// The behaviour in use: the one the task names, or the solver's choice this episode (`None`
-    /// before its first step, or where it cannot play the task).
+    /// The behaviour in use: the one the task names, or the one the solver chose for the last
+    /// observation it acted on (`None` before its first, or where it cannot play the task).
     pub fn script(&self) -> Option<Script> {
-        self.running.as_ref().map(Running::script)
+        self.last.as_ref().and_then(|r| r.as_ref().ok().copied())
     }
 
-    /// Why the solver cannot play this episode's task, where it cannot.
+    /// Why the solver cannot play the task of the last observation it acted on, where it cannot.
     pub fn unsolvable(&self) -> Option<&Unsolvable> {
-        self.unsolvable.as_ref()
+        self.last.as_ref().and_then(|r| r.as_ref().err())
     }
 
-    /// The solver's start of an episode: the behaviour and each block slot's size, from `obs`.
-    fn choose(&mut self, obs: &[f32]) {
-        let size_at = OBJECT_FEATURES_LEN;
-        self.sizes = self.spec.objects(obs).map(|r| std::array::from_fn(|k| r[size_at + k] as f64)).collect();
-        match Script::from_observation(&self.spec, obs) {
-            Ok(script) => self.running = Some(Running::start(script)),
-            Err(why) => self.unsolvable = Some(why),
+    /// The action for `obs` and the behaviour it came from (or why there is none: then the action
+    /// stands still), from `obs` alone: the same observation gives the same action, bit for bit,
+    /// whatever was seen before.
+    pub fn decide(&self, obs: &[f32]) -> ([f32; ACTION_DIM], Result<Script, Unsolvable>) {
+        if obs.len() < ROBOT_OBS {
+            // Not a BlockPuzzle observation: stand still.
+            return ([0.0; ACTION_DIM], Err(Unsolvable("not a BlockPuzzle observation".into())));
         }
+        let (script, sizes) = match &self.choice {
+            Choice::Fixed(script, sizes) => (Ok(*script), std::borrow::Cow::Borrowed(sizes)),
+            Choice::Observed => {
+                let size_at = OBJECT_FEATURES_LEN;
+                let sizes: Vec<[f64; 3]> =
+                    self.spec.objects(obs).map(|r| std::array::from_fn(|k| r[size_at + k] as f64)).collect();
+                (Script::from_observation(&self.spec, obs), std::borrow::Cow::Owned(sizes))
+            }
+        };
+        let Ok(script) = script else {
+            return ([0.0; ACTION_DIM], script); // a task the solver cannot play: stand still
+        };
+        let blocks = read_blocks(&self.spec, obs);
+        let seen = Seen {
+            grip: [obs[0] as f64, obs[1] as f64, obs[2] as f64],
+            grip_vel: [obs[5] as f64, obs[6] as f64, obs[7] as f64],
+            fingers: [obs[3] as f64, obs[4] as f64],
+            finger_vel: [obs[8] as f64, obs[9] as f64],
+            blocks: &blocks,
+            sizes: &sizes,
+        };
+        (script.act(&seen), Ok(script))
     }
 }
 
@@ -402,29 +399,10 @@ fn seg_dist(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 impl Policy for ScriptedPolicy {
-    fn reset(&mut self) {
-        self.unsolvable = None;
-        self.running = match self.choice {
-            Choice::Fixed(script) => Some(Running::start(script)),
-            Choice::Observed => None,
-        };
-    }
-
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
-        if obs.len() < ROBOT_OBS {
-            return [0.0; ACTION_DIM]; // not a BlockPuzzle observation: stand still
-        }
-        if self.running.is_none() && self.unsolvable.is_none() && self.choice == Choice::Observed {
-            self.choose(obs);
-        }
-        let Some(running) = self.running.as_mut() else {
-            return [0.0; ACTION_DIM]; // a task the solver cannot play: stand still
-        };
-        let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
-        let fingers = [obs[3] as f64, obs[4] as f64];
-        let blocks = read_blocks(&self.spec, obs);
-        let seen = Seen { grip, fingers, blocks: &blocks, sizes: &self.sizes };
-        running.behaviour().act(&seen)
+        let (action, why) = self.decide(obs);
+        self.last = Some(why);
+        action
     }
 
     fn reads(&self) -> Option<ObsMode> {

@@ -1,165 +1,127 @@
 //! The behaviours with the gripper action on: pick blue up and put it on green, or, with several
-//! blue blocks, put each on green side by side.
+//! blue blocks, put each on green side by side. Both are functions of one observation: whether a
+//! block is held is read off the fingers (closed on something and at rest, around the block), and
+//! whether a block is being let go off the blocks on green and the fingers' aperture.
 
-use super::{toward, xy_dist, Behaviour, Seen, SeenBlock, ACTION_DIM};
+use super::{toward, xy_dist, Seen, SeenBlock, ACTION_DIM};
 use crate::sim::rules::Colour;
 
-/// A grasp in progress: whether the block is held, and the steps spent closing the fingers.
-#[derive(Debug, Clone, Default)]
-struct Grasp {
-    /// The block has been grasped.
-    grasped: bool,
-    /// Steps spent closing the fingers.
-    closing: usize,
+/// Finger aperture (the two finger joints' sum) above which the fingers count as open.
+const OPEN: f64 = 0.07;
+/// Aperture below which closed fingers hold nothing (a block is 4 cm or more wide).
+const EMPTY: f64 = 0.02;
+/// Finger speed (joint travel per step, both fingers together) below which the fingers are at rest:
+/// closing they travel 0.014 or more a step, and closed on a block they bounce back about 0.005.
+const AT_REST: f64 = 0.008;
+
+/// `action` with the gripper command `g` (1 opens, -1 closes).
+fn with(mut action: [f32; ACTION_DIM], g: f32) -> [f32; ACTION_DIM] {
+    action[3] = g;
+    action
 }
 
-impl Grasp {
-    /// Open above the block at `at`, come down around it and close (sets
-    /// `grasped` once the fingers have closed for a few steps).
-    fn grasp(&mut self, grip: [f64; 3], fingers: [f64; 2], at: [f64; 3]) -> [f32; ACTION_DIM] {
-        let with = |mut a: [f32; ACTION_DIM], g: f32| {
-            a[3] = g;
-            a
-        };
-        let open = fingers[0] + fingers[1] > 0.07;
-        if xy_dist(grip, at) > 0.008 {
-            // Above the block, fingers opening.
-            let z = (at[2] + 0.06).max(grip[2].min(at[2] + 0.08));
-            return with(toward(grip, [at[0], at[1], z]), 1.0);
-        }
-        if !open && self.closing == 0 {
-            return with([0.0; ACTION_DIM], 1.0);
-        }
-        if grip[2] > at[2] + 0.005 && self.closing == 0 {
-            return with(toward(grip, at), 1.0);
-        }
-        // Close for a few steps until the fingers stop on the block.
-        self.closing += 1;
-        if self.closing >= 3 {
-            self.grasped = true;
-        }
-        with([0.0; ACTION_DIM], -1.0)
+/// The fingers' aperture.
+fn aperture(seen: &Seen) -> f64 {
+    seen.fingers[0] + seen.fingers[1]
+}
+
+/// The grip site is at the block at `at`: centred on it, at its height.
+fn around(seen: &Seen, at: [f64; 3]) -> bool {
+    xy_dist(seen.grip, at) < 0.02 && (seen.grip[2] - at[2]).abs() < 0.02
+}
+
+/// The fingers hold the block at `at`: around it, closed on something and at rest.
+fn holds(seen: &Seen, at: [f64; 3]) -> bool {
+    let a = aperture(seen);
+    let still = seen.finger_vel[0].abs() + seen.finger_vel[1].abs() < AT_REST;
+    around(seen, at) && (EMPTY..OPEN).contains(&a) && still
+}
+
+/// Open above the block at `at` (travelling no lower than `travel_z`), come down around it and
+/// close. Whether it is held is [`holds`]'s to say, from what the fingers show.
+fn grasp(seen: &Seen, at: [f64; 3], travel_z: f64) -> [f32; ACTION_DIM] {
+    let grip = seen.grip;
+    let open = aperture(seen) > OPEN;
+    if xy_dist(grip, at) > 0.008 {
+        // Above the block, fingers opening.
+        let z = (at[2] + 0.06).max(grip[2].min(at[2] + 0.08)).max(travel_z);
+        return with(toward(grip, [at[0], at[1], z]), 1.0);
     }
-}
-
-/// Open, come down around blue, close, lift, carry above green, lower
-/// onto it (success ends the episode at the touch). Gripper action on.
-#[derive(Debug, Clone, Default)]
-pub(super) struct PickPlace {
-    grasp: Grasp,
-}
-
-impl Behaviour for PickPlace {
-    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM] {
-        let (grip, fingers, blocks) = (seen.grip, seen.fingers, seen.blocks);
-        let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
-        let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
-            return [0.0; ACTION_DIM];
-        };
-        let with = |mut a: [f32; ACTION_DIM], g: f32| {
-            a[3] = g;
-            a
-        };
-        let held = xy_dist(grip, blue) < 0.02 && (grip[2] - blue[2]).abs() < 0.02;
-        if !self.grasp.grasped {
-            return self.grasp.grasp(grip, fingers, blue);
-        }
-        if !held {
-            // Dropped: start over.
-            self.grasp = Grasp::default();
-            return with([0.0; ACTION_DIM], 1.0);
-        }
-        // Carry: above green with blue's bottom clear of green's top by 3 cm, then down.
-        let carry = green[2] + 0.05 + 0.03;
-        if xy_dist(blue, green) > 0.006 {
-            let z = if blue[2] < carry - 0.01 { carry + 0.01 } else { carry.max(blue[2]) };
-            let up_first = blue[2] < carry - 0.01;
-            let target = if up_first {
-                [grip[0], grip[1], z]
-            } else {
-                [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z]
-            };
-            return with(toward(grip, target), -1.0);
-        }
-        with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
+    if grip[2] > at[2] + 0.005 {
+        // Over it: open, then come down.
+        return if open { with(toward(grip, at), 1.0) } else { with([0.0; ACTION_DIM], 1.0) };
     }
+    // Down around it: close until the fingers rest on the block. Fingers that closed on nothing,
+    // or are opening again after that, open all the way first.
+    let opening = seen.finger_vel[0] + seen.finger_vel[1] > AT_REST;
+    let empty = aperture(seen) < EMPTY;
+    if (empty || opening) && !open {
+        return with([0.0; ACTION_DIM], 1.0);
+    }
+    with([0.0; ACTION_DIM], -1.0)
 }
 
-/// Each blue block in turn (the first not yet on green, in observation
-/// order): pick it up, carry it above green high enough to pass over the
-/// blocks already there, set it down on a free corner of green's top,
-/// open the fingers and rise straight up clear of it. Gripper action on,
-/// several blue blocks.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Gather {
-    grasp: Grasp,
-    /// Steps left opening the fingers over a block just set down.
-    releasing: usize,
-    /// Rising clear of the blocks set down before moving on.
-    rising: bool,
+/// Open, come down around blue, close, lift, carry above green, lower onto it (success ends the
+/// episode at the touch). Gripper action on.
+pub(super) fn pick_place(seen: &Seen) -> [f32; ACTION_DIM] {
+    let (grip, blocks) = (seen.grip, seen.blocks);
+    let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
+    let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
+        return [0.0; ACTION_DIM];
+    };
+    if !holds(seen, blue) {
+        return grasp(seen, blue, 0.0);
+    }
+    // Carry: above green with blue's bottom clear of green's top by 3 cm, then down.
+    let carry = green[2] + 0.05 + 0.03;
+    if xy_dist(blue, green) > 0.006 {
+        let z = if blue[2] < carry - 0.01 { carry + 0.01 } else { carry.max(blue[2]) };
+        let up_first = blue[2] < carry - 0.01;
+        let target =
+            if up_first { [grip[0], grip[1], z] } else { [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z] };
+        return with(toward(grip, target), -1.0);
+    }
+    with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
 }
 
-impl Behaviour for Gather {
-    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM] {
-        let (grip, fingers, blocks) = (seen.grip, seen.fingers, seen.blocks);
-        let with = |mut a: [f32; ACTION_DIM], g: f32| {
-            a[3] = g;
-            a
-        };
-        let size = |b: &SeenBlock| seen.sizes.get(b.slot).copied().unwrap_or([0.025; 3]);
-        let Some(green) = blocks.iter().find(|b| b.colour == Colour::Green) else {
-            return [0.0; ACTION_DIM];
-        };
-        let (g, gs) = (green.pos, size(green));
-        let top = g[2] + gs[2];
-        let on_green = |b: &SeenBlock| {
-            (b.pos[0] - g[0]).abs() < gs[0]
-                && (b.pos[1] - g[1]).abs() < gs[1]
-                && (b.pos[2] - top - size(b)[2]).abs() < 0.006
-        };
-        if self.releasing > 0 {
-            self.releasing -= 1;
-            return with([0.0; ACTION_DIM], 1.0);
-        }
-        if self.rising {
-            if grip[2] < top + 0.09 {
-                return with(toward(grip, [grip[0], grip[1], top + 0.10]), 1.0);
-            }
-            self.rising = false;
-        }
-        let blues: Vec<&SeenBlock> = blocks.iter().filter(|b| b.colour == Colour::Blue).collect();
-        if !self.grasp.grasped {
-            // The first blue block not on green yet.
-            let Some(blue) = blues.iter().find(|b| !on_green(b)) else {
-                return with([0.0; ACTION_DIM], 1.0); // all there (success ends the episode)
-            };
-            return self.grasp.grasp(grip, fingers, blue.pos);
-        }
-        let in_hand = blues.iter().find(|b| xy_dist(grip, b.pos) < 0.02 && (grip[2] - b.pos[2]).abs() < 0.02);
-        let Some(&blue) = in_hand else {
-            // Dropped: up, and start over.
-            self.grasp = Grasp::default();
-            self.rising = true;
-            return with([0.0; ACTION_DIM], 1.0);
-        };
+/// Each blue block in turn: the one held, else the first not on green yet in observation order.
+/// Pick it up, carry it above green high enough to pass over the blocks already there, set it down
+/// on a free corner of green's top, open the fingers and rise straight up clear of it. Gripper
+/// action on, several blue blocks.
+pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
+    let (grip, blocks) = (seen.grip, seen.blocks);
+    let size = |b: &SeenBlock| seen.sizes.get(b.slot).copied().unwrap_or([0.025; 3]);
+    let Some(green) = blocks.iter().find(|b| b.colour == Colour::Green) else {
+        return [0.0; ACTION_DIM];
+    };
+    let (g, gs) = (green.pos, size(green));
+    let top = g[2] + gs[2];
+    let on_green = |b: &SeenBlock| {
+        (b.pos[0] - g[0]).abs() < gs[0] && (b.pos[1] - g[1]).abs() < gs[1] && (b.pos[2] - top - size(b)[2]).abs() < 0.006
+    };
+    let blues: Vec<&SeenBlock> = blocks.iter().filter(|b| b.colour == Colour::Blue).collect();
+    // Where `blue` goes: a free corner of green's top (a block's width in from the edges), away
+    // from the blue blocks already there.
+    let spot = |blue: &SeenBlock| {
         let bh = size(blue)[2];
-        // A free corner of green's top (a block's width in from the edges).
         let inset = [(gs[0] - bh - 0.01).max(0.0), (gs[1] - bh - 0.01).max(0.0)];
         let placed: Vec<[f64; 3]> =
             blues.iter().filter(|b| b.slot != blue.slot && on_green(b)).map(|b| b.pos).collect();
-        let spot = [[-1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [1.0, -1.0]]
+        [[-1.0, -1.0], [1.0, 1.0], [-1.0, 1.0], [1.0, -1.0]]
             .iter()
             .map(|c| [g[0] + c[0] * inset[0], g[1] + c[1] * inset[1], 0.0])
             .find(|p| placed.iter().all(|&q| xy_dist(*p, q) > 2.0 * bh))
-            .unwrap_or([g[0], g[1], 0.0]);
-        if on_green(blue) || (xy_dist(blue.pos, spot) <= 0.006 && blue.pos[2] < top + bh + 0.003) {
-            // Set down: let go, then straight up.
-            self.grasp = Grasp::default();
-            self.releasing = 2;
-            self.rising = true;
-            return with([0.0; ACTION_DIM], 1.0);
-        }
+            .unwrap_or([g[0], g[1], 0.0])
+    };
+    let set_down =
+        |b: &SeenBlock| on_green(b) || (xy_dist(b.pos, spot(b)) <= 0.006 && b.pos[2] < top + size(b)[2] + 0.003);
+    // Letting go: around a blue block that is set down, fingers not open yet.
+    if aperture(seen) <= OPEN && blues.iter().any(|b| around(seen, b.pos) && set_down(b)) {
+        return with([0.0; ACTION_DIM], 1.0);
+    }
+    if let Some(&blue) = blues.iter().find(|b| holds(seen, b.pos)) {
         // Carry with blue's bottom 3 cm above the tops of the blocks already on green.
+        let (bh, spot) = (size(blue)[2], spot(blue));
         let carry = top + 3.0 * bh + 0.03;
         if xy_dist(blue.pos, spot) > 0.006 {
             let up_first = blue.pos[2] < carry - 0.01;
@@ -170,6 +132,17 @@ impl Behaviour for Gather {
             };
             return with(toward(grip, target), -1.0);
         }
-        with(toward(grip, [grip[0], grip[1], top + bh - 0.01]), -1.0)
+        return with(toward(grip, [grip[0], grip[1], top + bh - 0.01]), -1.0);
     }
+    let Some(next) = blues.iter().find(|b| !on_green(b)) else {
+        return with([0.0; ACTION_DIM], 1.0); // all there (success ends the episode)
+    };
+    // Over green (and the blocks set down there) and not at the next block: pass above them,
+    // rising straight up first where the grip is low.
+    let over_green = (grip[0] - g[0]).abs() < gs[0] + 0.03 && (grip[1] - g[1]).abs() < gs[1] + 0.03;
+    let clear_of_blocks = over_green && xy_dist(grip, next.pos) > 0.02;
+    if clear_of_blocks && grip[2] < top + 0.09 {
+        return with(toward(grip, [grip[0], grip[1], top + 0.10]), 1.0);
+    }
+    grasp(seen, next.pos, if clear_of_blocks { top + 0.095 } else { 0.0 })
 }

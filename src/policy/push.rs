@@ -1,84 +1,37 @@
 //! The pushing behaviour: get behind the blue block and push it towards the green one (or the
-//! green one onto blue, where that path is clearer of grey blocks), around red blocks through a
-//! waypoint planned at the episode's first step; with a red gripper, always green onto blue.
+//! green one onto blue, where that path is clearer of grey blocks); around red blocks through a
+//! waypoint chosen afresh at every step from where the blocks are; with a red gripper, always green
+//! onto blue.
 
-use super::{seg_dist, toward, xy_dist, Behaviour, Seen, ACTION_DIM, PUSH_Z, SAFE_Z, STANDOFF};
+use super::{seg_dist, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, SAFE_Z, STANDOFF};
 use crate::sim::rules::Colour;
 
-/// Push blue against green (grey gripper, blocked fingers); around red blocks through a waypoint
-/// planned at the episode's first step.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Push {
-    /// The route planned at the episode's first step (with red blocks on the table).
-    route: Option<Route>,
-    /// Never touch blue (a red gripper): always push green onto blue.
-    green_onto_blue: bool,
-}
-
-/// A push's route around red blocks: the waypoint and where blue started
-/// (none: straight), and whether blue has passed the waypoint.
-type Route = (Option<([f64; 3], [f64; 3])>, bool);
-
-impl Behaviour for Push {
-    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM] {
-        let (grip, blocks) = (seen.grip, seen.blocks);
-        let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
-        let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
-            return [0.0; ACTION_DIM];
-        };
-        if self.green_onto_blue {
-            return push_line(grip, green, blue);
-        }
-        let reds: Vec<[f64; 3]> = blocks.iter().filter(|b| b.colour == Colour::Red).map(|b| b.pos).collect();
-        if !reds.is_empty() {
-            return self.push_around(grip, blue, green, &reds);
-        }
-        // Every other block (grey or red) is an obstacle.
-        let obstacles: Vec<[f64; 3]> =
-            blocks.iter().filter(|b| b.colour != Colour::Blue && b.colour != Colour::Green).map(|b| b.pos).collect();
-        // Push whichever block has the clearer path (an obstacle in the way
-        // would be shoved into the target instead).
-        let clearance = |mover: [f64; 3], target: [f64; 3]| {
-            obstacles.iter().map(|&g| seg_dist(g, mover, target)).fold(f64::INFINITY, f64::min)
-        };
-        let (mover, target) =
-            if clearance(green, blue) > clearance(blue, green) + 0.02 { (green, blue) } else { (blue, green) };
-        push_line(grip, mover, target)
+/// Push blue against green (grey gripper, blocked fingers), around red blocks; or, where
+/// `green_onto_blue` (a red gripper, which must never touch blue), green onto blue, straight.
+pub(super) fn push(seen: &Seen, green_onto_blue: bool) -> [f32; ACTION_DIM] {
+    let (grip, blocks) = (seen.grip, seen.blocks);
+    let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
+    let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
+        return [0.0; ACTION_DIM];
+    };
+    if green_onto_blue {
+        return push_line(grip, green, blue);
     }
-}
-
-impl Push {
-    /// Whether it pushes green onto blue whatever the layout.
-    pub(super) fn pushes_green(&self) -> bool {
-        self.green_onto_blue
+    let reds: Vec<[f64; 3]> = blocks.iter().filter(|b| b.colour == Colour::Red).map(|b| b.pos).collect();
+    if !reds.is_empty() {
+        return push_line(grip, blue, waypoint(blue, green, &reds).unwrap_or(green));
     }
-
-    /// The push of a red gripper, which must never touch blue: green onto blue, straight.
-    pub(super) fn green_onto_blue() -> Self {
-        Self { route: None, green_onto_blue: true }
-    }
-
-    /// Push blue to green along the route planned at the episode's first
-    /// step: straight, or through a waypoint, whichever clears the red blocks.
-    fn push_around(&mut self, grip: [f64; 3], blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> [f32; ACTION_DIM] {
-        let (waypoint, passed) =
-            self.route.get_or_insert_with(|| (plan_route(blue, green, reds).map(|w| (w, blue)), false));
-        let target = match *waypoint {
-            Some((w, start)) if !*passed => {
-                // Passed: close to the waypoint, or beyond it on the way from the start.
-                let ahead = [w[0] - blue[0], w[1] - blue[1]];
-                let leg = [w[0] - start[0], w[1] - start[1]];
-                if xy_dist(blue, w) < 0.03 || ahead[0] * leg[0] + ahead[1] * leg[1] <= 0.0 {
-                    *passed = true;
-                    green
-                } else {
-                    w
-                }
-            }
-            _ => green,
-        };
-        push_line(grip, blue, target)
-    }
+    // Every other block (grey or red) is an obstacle.
+    let obstacles: Vec<[f64; 3]> =
+        blocks.iter().filter(|b| b.colour != Colour::Blue && b.colour != Colour::Green).map(|b| b.pos).collect();
+    // Push whichever block has the clearer path (an obstacle in the way
+    // would be shoved into the target instead).
+    let clearance = |mover: [f64; 3], target: [f64; 3]| {
+        obstacles.iter().map(|&g| seg_dist(g, mover, target)).fold(f64::INFINITY, f64::min)
+    };
+    let (mover, target) =
+        if clearance(green, blue) > clearance(blue, green) + 0.02 { (green, blue) } else { (blue, green) };
+    push_line(grip, mover, target)
 }
 
 /// Least distance from the centre of a pushed block to a red block's centre
@@ -90,12 +43,24 @@ const STANDOFF_CLEARANCE: f64 = 0.065;
 /// Waypoints stay this far inside the table's edges.
 const ROUTE_MARGIN: f64 = 0.06;
 
-/// A waypoint for pushing `blue` to `green` clear of `reds`: none when the
-/// straight push is clear; otherwise the shortest route through a point
-/// beside the straight line whose two legs, and the places where the
-/// gripper comes down behind blue for each, keep their distance from every
-/// red block (the clearest such route if none does).
-fn plan_route(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64; 3]> {
+/// How much more than clear a waypoint's last leg must be (as a share of the clearance needed):
+/// pushed along the first leg, blue finds the straight way to green clear before it reaches the
+/// waypoint, and goes straight on.
+const LAST_LEG_MARGIN: f64 = 1.1;
+/// Distances from a red block's centre at which waypoints are tried, and how many directions.
+const WAYPOINT_RADII: [f64; 4] = [0.10, 0.13, 0.16, 0.20];
+const WAYPOINT_DIRECTIONS: usize = 16;
+/// Within this distance of a waypoint blue has reached it, and it is not tried.
+const REACHED: f64 = 0.03;
+
+/// Where to push `blue` next on its way to `green` clear of `reds`, from where they are now: none
+/// (straight to green) when the straight push is clear; otherwise the waypoint of the shortest
+/// route whose two legs, and the places where the gripper comes down behind blue for each, keep
+/// their distance from every red block (the clearest route if none does). The waypoints tried
+/// stand around the red blocks, at fixed distances and directions, so they do not move as blue
+/// does: pushed towards the chosen one, blue keeps choosing it (no other route gets shorter
+/// faster), and one it has come within 3 cm of is not tried.
+fn waypoint(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64; 3]> {
     use crate::sim::scene::xml::{TABLE_CENTER, TABLE_HALF};
     let unit = |a: [f64; 3], b: [f64; 3]| {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -120,28 +85,33 @@ fn plan_route(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64
     if direct >= 1.0 {
         return None;
     }
-    let n = unit(blue, green);
-    let side = [-n[1], n[0]];
     let on_table = |p: [f64; 3]| (0..2).all(|k| (p[k] - TABLE_CENTER[k]).abs() <= TABLE_HALF[k] - ROUTE_MARGIN);
-    let mut best: Option<(bool, f64, [f64; 3])> = None;
-    for t in [-0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0, 1.25] {
-        for s in [0.06, -0.06, 0.09, -0.09, 0.12, -0.12, 0.15, -0.15, 0.18, -0.18, 0.22, -0.22] {
-            let base = [blue[0] + (green[0] - blue[0]) * t, blue[1] + (green[1] - blue[1]) * t];
-            let w = [base[0] + side[0] * s, base[1] + side[1] * s, blue[2]];
-            if !on_table(w) {
-                continue;
-            }
-            let clear = leg(blue, w, false).min(leg(w, green, true));
-            let length = xy_dist(blue, w) + xy_dist(w, green);
-            // Clear routes first, shortest among them; otherwise the clearest.
-            let key = (clear >= 1.0, if clear >= 1.0 { -length } else { clear });
-            if best.map_or(true, |(ok, v, _)| (key.0, key.1) > (ok, v)) {
-                best = Some((key.0, key.1, w));
+    // Blue has reached `w`.
+    let passed = |w: [f64; 3]| xy_dist(blue, w) < REACHED;
+    let mut best: Option<(bool, f64, f64, [f64; 3])> = None;
+    for r in reds {
+        for radius in WAYPOINT_RADII {
+            for k in 0..WAYPOINT_DIRECTIONS {
+                let angle = std::f64::consts::TAU * k as f64 / WAYPOINT_DIRECTIONS as f64;
+                let w = [r[0] + radius * angle.cos(), r[1] + radius * angle.sin(), blue[2]];
+                if !on_table(w) || passed(w) {
+                    continue;
+                }
+                let (first, last) = (leg(blue, w, false), leg(w, green, true));
+                let ok = first >= 1.0 && last >= LAST_LEG_MARGIN;
+                let length = xy_dist(blue, w) + xy_dist(w, green);
+                // Clear routes first, shortest among them; otherwise the clearest, in steps of a
+                // hundredth, then the shortest: routes that tie (their clearance set by the same
+                // red block) must not trade places on the blocks' jitter from one step to the next.
+                let key = if ok { (true, 0.0, -length) } else { (false, (first.min(last) * 100.0).floor(), -length) };
+                if best.map_or(true, |(o, c, l, _)| key > (o, c, l)) {
+                    best = Some((key.0, key.1, key.2, w));
+                }
             }
         }
     }
     match best {
-        Some((ok, v, w)) if ok || v > direct => Some(w),
+        Some((ok, clear, _, w)) if ok || clear > (direct * 100.0).floor() => Some(w),
         _ => None,
     }
 }
@@ -163,7 +133,11 @@ fn push_line(grip: [f64; 3], mover: [f64; 3], target: [f64; 3]) -> [f32; ACTION_
     if lined_up {
         // Push: aim through the mover towards the target, steering back onto the line.
         let aim = [target[0] - across * -d[1] * 2.0, target[1] - across * d[0] * 2.0, PUSH_Z];
-        return toward(grip, aim);
+        // At most a full action's length ahead, so that the push keeps its direction (each
+        // component clamped alone would bend a far aim towards the diagonal).
+        let (dx, dy) = (aim[0] - grip[0], aim[1] - grip[1]);
+        let scale = (1.0 / GAIN / dx.hypot(dy).max(1e-9)).min(1.0);
+        return toward(grip, [grip[0] + dx * scale, grip[1] + dy * scale, PUSH_Z]);
     }
     if xy_dist(grip, behind) > 0.015 {
         // Travel to the standoff point, above the blocks unless already behind.

@@ -1,6 +1,6 @@
 //! The reaching behaviour: a blue gripper onto the green block, over any red block in the way.
 
-use super::{toward, xy_dist, Behaviour, Seen, ACTION_DIM};
+use super::{toward, xy_dist, Seen, ACTION_DIM};
 use crate::sim::rules::Colour;
 
 /// Height of the table top.
@@ -9,12 +9,9 @@ const TABLE_TOP: f64 = 0.4;
 const FINGERTIP_BELOW: f64 = 0.0185;
 
 /// Onto the green block (blue gripper); while red blocks stand around, first above the
-/// highest red top (a block's top is read from its centre height). No state.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Reach;
-
-impl Behaviour for Reach {
-    fn act(&mut self, seen: &Seen) -> [f32; ACTION_DIM] {
+/// highest red top (a block's top is read from its centre height).
+pub(super) fn reach(seen: &Seen) -> [f32; ACTION_DIM] {
+    {
         let (grip, blocks) = (seen.grip, seen.blocks);
         let Some(g) = blocks.iter().find(|b| b.colour == Colour::Green) else {
             return [0.0; ACTION_DIM];

@@ -252,6 +252,23 @@ fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
         ),
     ];
     refused(tmp.path(), cases);
+    // The same file as the solver of version 1 made it (no solver version in its provenance, the
+    // header's length kept): its actions are not this solver's labels, so training refuses it.
+    let bytes = std::fs::read(&demos).unwrap();
+    let field = format!(",\\\"solver\\\":{}", blockpuzzle::policy::SOLVER_VERSION);
+    let at = bytes.windows(field.len()).position(|w| w == field.as_bytes()).expect("the demos record the solver version");
+    let mut older = bytes.clone();
+    older[at..at + field.len()].fill(b' ');
+    let old_demos = tmp.path().join("solver-v1.safetensors");
+    std::fs::write(&old_demos, older).unwrap();
+    let od = old_demos.to_str().unwrap();
+    refused(
+        tmp.path(),
+        &[(
+            &["--env", "ToppleTower-v0", "--net", "entity", "--demos", od],
+            &["recorded by solver version 1", "record the demos again", "blockpuzzle demos --suite"],
+        )],
+    );
     let run = tmp.path().join("run");
     let args = ["--env", "ToppleTower-v0", "--net", "entity", "--demos", d, "--demos-ratio", "1"];
     let (ok, text) = train(&run, &args);

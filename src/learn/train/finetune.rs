@@ -240,6 +240,18 @@ impl FinetuneConfig {
             format!("--demos {}: cannot read it (record one with `blockpuzzle demos`)", path.display())
         })?;
         let demos = Demos::read(path).with_context(|| format!("--demos {}", path.display()))?;
+        let made_by = demos.provenance.build.solver_version();
+        if made_by != crate::policy::SOLVER_VERSION {
+            refuse!(
+                "--demos {}: recorded by solver version {made_by}, and this build's solver is version {}: its actions \
+                 are not the labels this build's solver gives; record the demos again with this build \
+                 (`blockpuzzle demos --suite {} --split {}`)",
+                path.display(),
+                crate::policy::SOLVER_VERSION,
+                demos.provenance.suite.as_ref().map_or("SUITE", |s| s.name.as_str()),
+                demos.split
+            );
+        }
         Ok(Some(DemoFile { sha256: crate::benchmark::provenance::sha256(&bytes), demos }))
     }
 }
