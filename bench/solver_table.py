@@ -35,24 +35,19 @@ def verdict(a: tuple[int, int], b: tuple[int, int]) -> str:
     return "within noise"
 
 
-def steps(ev: dict) -> str:
-    m = ev.get("mean_steps_to_success")
-    return f"{m:.1f}" if isinstance(m, (int, float)) else "-"
-
-
 def main(out: pathlib.Path) -> None:
     builds = {}
     for side in ("old", "new"):
         p = json.loads((out / side / "procgen-v2.json").read_text())["provenance"]
         builds[side] = f"commit `{p.get('commit')}`, MuJoCo {p['mujoco']}, solver version {p.get('solver', 1)}"
     print(f"Old: {builds['old']}. New: {builds['new']}.\n")
-    print("| built-in task | old solver | new solver | | mean steps to success, old / new |")
-    print("|---|---|---|---|---|")
+    print("| built-in task | old solver | new solver | |")
+    print("|---|---|---|---|")
     for f in sorted((out / "new").glob("*-v0.*.json")):
         old, new = (json.loads((out / s / f.name).read_text()) for s in ("old", "new"))
         a, b = (old["successes"], old["episodes"]), (new["successes"], new["episodes"])
         name = f.name.removesuffix(".json").replace(".normal", "").replace(".", ", ")
-        print(f"| {name} | {cell(*a)} | {cell(*b)} | {verdict(a, b)} | {steps(old)} / {steps(new)} |")
+        print(f"| {name} | {cell(*a)} | {cell(*b)} | {verdict(a, b)} |")
     print("\n| procgen-v2 family, split | old solver | new solver | |")
     print("|---|---|---|---|")
     counts = {s: defaultdict(lambda: [0, 0]) for s in ("old", "new")}
