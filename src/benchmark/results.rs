@@ -458,7 +458,13 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
             );
             let files: Vec<String> = same.iter().map(|f| format!("`{}`", f.path.display())).collect();
             let p = &r.provenance;
-            let hash = p.policy.sha256.as_deref().map_or_else(|| "a baseline".to_owned(), |h| format!("policy {h}"));
+            let hash = match p.policy.sha256.as_deref() {
+                Some(h) => format!("policy {h}"),
+                None if p.policy.name == crate::benchmark::provenance::SOLVER_POLICY => {
+                    format!("a baseline, solver version {}", p.build.solver_version())
+                }
+                None => "a baseline".to_owned(),
+            };
             notes.push(format!("[^{label}-{}]: {hash}; made by {}; {}.", rank + 1, p.build.maker(), files.join(", ")));
         }
         md += "\n";

@@ -57,12 +57,18 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
     let [vx, vy] = [seen.grip_vel[0], seen.grip_vel[1]];
     if low && vy.abs() >= SWIPING && vx.abs() < SWIPING / 2.0 {
         let d = vy.signum();
-        let pushing = blocks.iter().any(|b| {
-            let ahead = (b.pos[1] - grip[1]) * d;
-            b.colour != Colour::Blue && (b.pos[0] - grip[0]).abs() < 2.0 * LINE && (0.0..BASE_AHEAD).contains(&ahead)
-        });
-        if pushing {
-            return swipe(d);
+        let ahead = |b: &&super::SeenBlock| (b.pos[1] - grip[1]) * d;
+        let pushed = blocks
+            .iter()
+            .filter(|b| {
+                b.colour != Colour::Blue && (b.pos[0] - grip[0]).abs() < 2.0 * LINE && (0.0..BASE_AHEAD).contains(&ahead(b))
+            })
+            .min_by(|a, b| ahead(a).total_cmp(&ahead(b)));
+        if let Some(pushed) = pushed {
+            // Holding the line of the block it pushes.
+            let mut a = swipe(d);
+            a[0] = hold(pushed.pos[0] - grip[0]) as f32;
+            return a;
         }
     }
     // The swipe goes towards the centre line, from the base's side farther from it.

@@ -392,3 +392,27 @@ fn the_leaderboard_ranks_only_policies_that_play_every_row() {
     assert!(rows[1].starts_with("| 2 | `baseline:obs-hash`"), "{md}");
     assert!(rows[2].starts_with("| – | `BlocksChoose-v0-ddpg-ours`") && rows[2].contains("| 12/32 |"), "{md}");
 }
+
+/// Results of the solver made by two solver versions are never put in one column; a policy's result
+/// beside either solver's is (the policy's numbers are its own), and the footnote names the version.
+#[test]
+fn two_solver_versions_are_not_compared() {
+    use blockpuzzle::benchmark::provenance::{PolicyId, Provenance, SOLVER_POLICY};
+    let solver = |version: Option<u32>| {
+        let mut p = Provenance::new(Harness::Cli, PolicyId { name: SOLVER_POLICY.to_owned(), sha256: None }, None);
+        p.build.solver = version;
+        p
+    };
+    assert_eq!(solver(None).build.solver_version(), 1, "a result without a solver version is version 1's");
+    let now = solver(Some(blockpuzzle::policy::SOLVER_VERSION));
+    let m = now.comparable(&solver(None)).unwrap_err();
+    assert!(m.field.contains("solver") && m.left == "2" && m.right == "1", "{m}");
+    assert!(now.comparable(&now.clone()).is_ok());
+    let mut policy = solver(None);
+    policy.policy = PolicyId { name: "generalist-bc-entity".to_owned(), sha256: Some("sha256:00".to_owned()) };
+    assert!(now.comparable(&policy).is_ok(), "a policy's result stands beside the solver of any version");
+    assert!(now.markdown().contains("solver version 2"), "{}", now.markdown());
+    // What this build writes records its solver.
+    let json = serde_json::to_value(&now).unwrap();
+    assert_eq!(json["solver"], serde_json::json!(blockpuzzle::policy::SOLVER_VERSION));
+}
