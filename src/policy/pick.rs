@@ -77,8 +77,11 @@ pub(super) fn pick_place(seen: &Seen) -> [f32; ACTION_DIM] {
     if xy_dist(blue, green) > 0.006 {
         let z = if blue[2] < carry - 0.01 { carry + 0.01 } else { carry.max(blue[2]) };
         let up_first = blue[2] < carry - 0.01;
-        let target =
-            if up_first { [grip[0], grip[1], z] } else { [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z] };
+        let target = if up_first {
+            [grip[0], grip[1], z]
+        } else {
+            [green[0] + grip[0] - blue[0], green[1] + grip[1] - blue[1], z]
+        };
         return with(toward(grip, target), -1.0);
     }
     with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
@@ -97,7 +100,9 @@ pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
     let (g, gs) = (green.pos, size(green));
     let top = g[2] + gs[2];
     let on_green = |b: &SeenBlock| {
-        (b.pos[0] - g[0]).abs() < gs[0] && (b.pos[1] - g[1]).abs() < gs[1] && (b.pos[2] - top - size(b)[2]).abs() < 0.006
+        (b.pos[0] - g[0]).abs() < gs[0]
+            && (b.pos[1] - g[1]).abs() < gs[1]
+            && (b.pos[2] - top - size(b)[2]).abs() < 0.006
     };
     let blues: Vec<&SeenBlock> = blocks.iter().filter(|b| b.colour == Colour::Blue).collect();
     // Where `blue` goes: a free corner of green's top (a block's width in from the edges), away

@@ -33,7 +33,7 @@ const CONTACT: f64 = 0.08;
 /// Every phase is read off the observation: the swipe is under way wherever the grip is low, on
 /// the line along y through the base and behind it within the swipe's start; it goes on the way
 /// it points (towards the base); then, moving fast and straight along y with a block ahead on the
-/// line, it goes on as the tower falls, and stops short of blue once blue lies low ahead.
+/// line (whose line it holds), it goes on as the tower falls, until no block stands under blue.
 pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
     let Some(blue) = blocks.iter().find(|b| b.colour == Colour::Blue).map(|b| b.pos) else {
@@ -42,7 +42,6 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
     let low = grip[2] < TOPPLE_Z + 0.01;
     let hold = |e: f64| (e * GAIN).clamp(-1.0, 1.0);
     let swipe = |dy: f64| [0.0, (dy * TOPPLE_SPEED) as f32, hold(TOPPLE_Z - grip[2]) as f32, 0.0];
-    // The tower's base: the lowest non-blue block under blue.
     // The tower's base: the lowest non-blue block under blue.
     let base = blocks
         .iter()
@@ -61,7 +60,9 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
         let pushed = blocks
             .iter()
             .filter(|b| {
-                b.colour != Colour::Blue && (b.pos[0] - grip[0]).abs() < 2.0 * LINE && (0.0..BASE_AHEAD).contains(&ahead(b))
+                b.colour != Colour::Blue
+                    && (b.pos[0] - grip[0]).abs() < 2.0 * LINE
+                    && (0.0..BASE_AHEAD).contains(&ahead(b))
             })
             .min_by(|a, b| ahead(a).total_cmp(&ahead(b)));
         if let Some(pushed) = pushed {

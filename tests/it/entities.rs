@@ -266,7 +266,8 @@ fn the_solver_is_a_function_of_the_observation_alone() {
     use blockpuzzle::task::family::{Family, BUILTIN_FAMILIES};
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
-    let mut tasks: Vec<(String, Task)> = registry::ids().iter().map(|id| (id.to_string(), registry::task(id).unwrap())).collect();
+    let mut tasks: Vec<(String, Task)> =
+        registry::ids().iter().map(|id| (id.to_string(), registry::task(id).unwrap())).collect();
     for (name, _) in BUILTIN_FAMILIES {
         let family = Family::load(name, None).unwrap();
         let drawn = (0..40)

@@ -256,7 +256,8 @@ fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
     // header's length kept): its actions are not this solver's labels, so training refuses it.
     let bytes = std::fs::read(&demos).unwrap();
     let field = format!(",\\\"solver\\\":{}", blockpuzzle::policy::SOLVER_VERSION);
-    let at = bytes.windows(field.len()).position(|w| w == field.as_bytes()).expect("the demos record the solver version");
+    let at =
+        bytes.windows(field.len()).position(|w| w == field.as_bytes()).expect("the demos record the solver version");
     let mut older = bytes.clone();
     older[at..at + field.len()].fill(b' ');
     let old_demos = tmp.path().join("solver-v1.safetensors");
