@@ -41,7 +41,10 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
     };
     let low = grip[2] < TOPPLE_Z + 0.01;
     let hold = |e: f64| (e * GAIN).clamp(-1.0, 1.0);
-    let swipe = |dy: f64| [0.0, (dy * TOPPLE_SPEED) as f32, hold(TOPPLE_Z - grip[2]) as f32, 0.0];
+    // Full speed along y, holding the height and the line x = `line`.
+    let swipe = |dy: f64, line: f64| {
+        [hold(line - grip[0]) as f32, (dy * TOPPLE_SPEED) as f32, hold(TOPPLE_Z - grip[2]) as f32, 0.0]
+    };
     // The tower's base: the lowest non-blue block under blue.
     let base = blocks
         .iter()
@@ -66,10 +69,7 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
             })
             .min_by(|a, b| ahead(a).total_cmp(&ahead(b)));
         if let Some(pushed) = pushed {
-            // Holding the line of the block it pushes.
-            let mut a = swipe(d);
-            a[0] = hold(pushed.pos[0] - grip[0]) as f32;
-            return a;
+            return swipe(d, pushed.pos[0]); // on the line of the block it pushes
         }
     }
     // The swipe goes towards the centre line, from the base's side farther from it.
@@ -84,10 +84,7 @@ pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
         && (behind.signum() == inwards || behind.abs() < CONTACT);
     let d = [0.0, if swiping { behind.signum() } else { inwards }];
     if swiping {
-        // Full speed along the line, holding the height and the line.
-        let mut a = swipe(d[1]);
-        a[0] = hold(base[0] - grip[0]) as f32;
-        return a;
+        return swipe(d[1], base[0]);
     }
     let rel = [grip[0] - base[0], grip[1] - base[1]];
     let along = rel[0] * d[0] + rel[1] * d[1];
