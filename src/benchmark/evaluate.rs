@@ -469,9 +469,9 @@ pub struct SuiteResult {
     pub policy_env_steps: Option<u64>,
     /// Per split.
     pub splits: Vec<SplitResult>,
-    /// The suite's score: the test split's mean success.
+    /// The suite's score: the test split's mean success (a validation suite's: the validation split's).
     pub score: Option<f64>,
-    /// The generalisation gap: train's mean success − test's.
+    /// The generalisation gap: train's mean success − test's (validation's).
     pub gap: Option<f64>,
 }
 
@@ -582,12 +582,18 @@ fn same_number(stored: f64, derived: f64) -> bool {
 }
 
 impl SuiteResult {
-    /// The score and the gap of `splits` (docs/suites.md): the test split's mean success, and the train
-    /// split's mean minus the test split's.
+    /// The score and the gap of `splits` (docs/suites.md): the test split's mean success (a validation
+    /// suite's: the validation split's), and the train split's mean minus that.
     pub fn score_and_gap(splits: &[SplitResult]) -> (Option<f64>, Option<f64>) {
         let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
-        let (train, test) = (mean("train"), mean("test"));
+        let scored = crate::benchmark::suite::SuiteKind::of(|n| splits.iter().any(|s| s.name == n)).scored_split();
+        let (train, test) = (mean("train"), mean(scored));
         (test, train.zip(test).map(|(a, b)| a - b))
+    }
+
+    /// The split the score is read from: `test`, or a validation suite's `validation`.
+    pub fn scored_split(&self) -> &'static str {
+        crate::benchmark::suite::SuiteKind::of(|n| self.splits.iter().any(|s| s.name == n)).scored_split()
     }
 
     /// Rows evaluated and rows in all.
@@ -612,9 +618,13 @@ impl SuiteResult {
         let differs = |field: String, stored: String, derived: String| {
             bad(field, format!("stored {stored}, but its outcome counts give {derived}"))
         };
-        for required in ["train", "test"] {
+        let scored = self.scored_split();
+        for required in ["train", scored] {
             if !self.splits.iter().any(|s| s.name == required && !s.rows.is_empty()) {
-                return bad("splits".into(), format!("no {required} split with rows; every suite has one"));
+                return bad(
+                    "splits".into(),
+                    format!("no {required} split with rows; every suite has one (a validation suite: train and validation)"),
+                );
             }
         }
         for (k, split) in self.splits.iter().enumerate() {
@@ -794,8 +804,9 @@ impl SuiteResult {
             }
             md += "\n";
         }
+        let scored = self.scored_split();
         md += &format!(
-            "Score (test mean success): {}; generalisation gap (train − test): {}.\n\n",
+            "Score ({scored} mean success): {}; generalisation gap (train − {scored}): {}.\n\n",
             pct(self.score),
             pct(self.gap)
         );

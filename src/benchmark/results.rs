@@ -295,9 +295,10 @@ fn rate(v: Option<f64>) -> String {
 /// The score's 95% interval: the Wilson interval of the test split's pooled
 /// episodes when its rows have equal episode counts (the score is then their
 /// pooled rate), else the normal approximation of the mean of independent
-/// binomial rates. None when no test row was evaluated.
+/// binomial rates. None when no test row was evaluated. (A validation suite's: its validation split's.)
 pub fn score_interval(r: &SuiteResult) -> Option<(f64, f64)> {
-    let test = r.splits.iter().find(|s| s.name == "test")?;
+    let scored = r.scored_split();
+    let test = r.splits.iter().find(|s| s.name == scored)?;
     let evals: Vec<_> = test.rows.iter().filter_map(|row| row.evaluation.as_ref()).collect();
     if evals.is_empty() {
         return None;

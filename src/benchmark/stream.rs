@@ -110,6 +110,12 @@ pub struct StreamRecord {
     pub tasks: Vec<PoolTask>,
     /// Seeds (over all families) whose candidates all failed: they give no task.
     pub seeds_without_task: usize,
+    /// Seeds (over all families) left out because their task is, by content, one a built-in suite
+    /// holds out ([`crate::benchmark::suite::held_out_tasks`]): a family whose draws repeat (gather's
+    /// are 36 tasks in all) gives some suite's test task under another seed. Records written before
+    /// this field left out none.
+    #[serde(default)]
+    pub seeds_held_out: usize,
     /// The most blocks any of the families can draw (the sum of its groups' largest counts): a stream
     /// run's observation layout has so many block slots, whichever seeds its pool holds, so that runs
     /// over pools of the same families read the same layout.
@@ -338,7 +344,8 @@ pub fn check_held_out(families: &[(String, Family)], range: SeedRange) -> Result
 /// draws a bar on a terminal.
 ///
 /// # Errors
-/// Held-out seeds, no task at all, a thread pool that cannot be made.
+/// Held-out seeds, no task at all, a thread pool that cannot be made. A seed whose task is, by
+/// content, one a built-in suite holds out is left out and counted ([`StreamRecord::seeds_held_out`]).
 pub fn pool(
     families: &[(String, Family)],
     range: SeedRange,
@@ -348,6 +355,11 @@ pub fn pool(
 ) -> Result<Pool, StreamError> {
     use rayon::prelude::*;
     check_held_out(families, range)?;
+    let held_out: std::collections::BTreeSet<String> = crate::benchmark::suite::held_out_tasks()
+        .map_err(|e| StreamError::Family(e.to_string()))?
+        .into_iter()
+        .map(|h| h.content)
+        .collect();
     let engine = crate::sim::mj::version();
     let mut record = StreamRecord {
         families: families
@@ -362,6 +374,7 @@ pub fn pool(
         generator_seeds: range.0,
         tasks: Vec::new(),
         seeds_without_task: 0,
+        seeds_held_out: 0,
         max_blocks: families.iter().map(|(_, f)| max_blocks(f)).max().unwrap_or(0),
     };
     let (mut tasks, mut cached, mut checked) = (Vec::new(), 0, 0);
@@ -425,6 +438,7 @@ pub fn pool(
                 None => cached += 1,
             }
             match kept {
+                Some((_, task)) if held_out.contains(&task.content_hash()) => record.seeds_held_out += 1,
                 Some((candidate, task)) => {
                     record.tasks.push(PoolTask {
                         id: task.id().to_owned(),
@@ -444,7 +458,12 @@ pub fn pool(
     }
     bar.finish_and_clear();
     if tasks.is_empty() {
-        let reasons = if rejected.is_empty() {
+        let reasons = if record.seeds_held_out > 0 {
+            format!(
+                "{} of them draw a task a built-in suite holds out (by content, whatever the family is called)",
+                record.seeds_held_out
+            )
+        } else if rejected.is_empty() {
             "the cache records no task for any of them".to_owned()
         } else {
             let example = |why: &String| examples.get(why).map_or(String::new(), |e| format!(", first: {e}"));

@@ -4,7 +4,11 @@
 //! A suite has at least a `train` and a `test` split; each split is a list
 //! of rows (task, distribution, curriculum level, first seed, episodes).
 //! The seeds of the train rows and the test rows never overlap (an overlap
-//! is an error). A suite is identified by its name and the SHA-256 of its
+//! is an error). A *validation suite* has a `train` and a `validation` split
+//! instead of a test split: what recipes, epochs and blend weights are chosen
+//! on. No task of its validation split may be one a built-in suite holds out
+//! (compared by content, not by name), so that choosing on it never reads a
+//! test split. A suite is identified by its name and the SHA-256 of its
 //! text, which every result carries, so numbers from different versions of
 //! a suite are never mixed. The evaluator is `crate::benchmark::evaluate::evaluate_suite`.
 //!
@@ -273,13 +277,17 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
             crate::support::limits::cut_long_lines(&spec.name)
         )));
     }
-    for required in ["train", "test"] {
+    let kind = SuiteKind::of(|n| spec.splits.contains_key(n));
+    for required in ["train", kind.scored_split()] {
         if !spec.splits.contains_key(required) {
-            return Err(invalid(format!("it has no {required} split: add [[splits.{required}]] rows")));
+            return Err(invalid(format!(
+                "it has no {required} split: add [[splits.{required}]] rows (a suite has train and test splits, a \
+                 validation suite train and validation splits)"
+            )));
         }
     }
     let mut names: Vec<&String> = spec.splits.keys().collect();
-    names.sort_by_key(|n| (n.as_str() != "train", n.as_str() != "test", n.as_str().to_owned()));
+    names.sort_by_key(|n| (n.as_str() != "train", n.as_str() != kind.scored_split(), n.as_str().to_owned()));
     let mut splits = Vec::new();
     let mut families = Vec::new();
     for name in names {
@@ -323,6 +331,9 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
     }
     check_disjoint(&splits).map_err(invalid)?;
     check_no_repeats(&splits).map_err(invalid)?;
+    if splits.iter().any(|s| s.name == "validation") {
+        check_validation_held_out(&splits).map_err(invalid)?;
+    }
     // The suite's identity covers the families its rows draw from.
     let mut h = Sha256::new();
     h.update(text.as_bytes());
@@ -450,17 +461,103 @@ fn row_of(task: Task, id: String, r: &RowSpec) -> Result<Row, String> {
     })
 }
 
-/// The seeds of every train row and every test row must not overlap.
+/// What a suite measures, by its splits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SuiteKind {
+    /// A benchmark suite: `train` and `test`; its score is the test split's.
+    Benchmark,
+    /// A validation suite: `train` and `validation`, no `test`; what recipes are chosen on.
+    Validation,
+}
+
+impl SuiteKind {
+    /// The kind of a suite whose split names `has` says it has: a validation split and no test
+    /// split make a validation suite.
+    pub fn of(has: impl Fn(&str) -> bool) -> SuiteKind {
+        if has("validation") && !has("test") {
+            SuiteKind::Validation
+        } else {
+            SuiteKind::Benchmark
+        }
+    }
+
+    /// The split its score is read from: `test`, or `validation`.
+    pub fn scored_split(self) -> &'static str {
+        match self {
+            SuiteKind::Benchmark => "test",
+            SuiteKind::Validation => "validation",
+        }
+    }
+}
+
+/// The seeds of every train row and every test or validation row must not overlap.
 fn check_disjoint(splits: &[Split]) -> Result<(), String> {
     let rows =
         |name: &'static str| splits.iter().filter(move |s| s.name == name).flat_map(|s| s.rows.iter().enumerate());
-    for (i, a) in rows("train") {
-        for (j, b) in rows("test") {
-            if let Some((a_end, b_end)) = seeds_overlap(a, b) {
+    for held in ["test", "validation"] {
+        for (i, a) in rows("train") {
+            for (j, b) in rows(held) {
+                if let Some((a_end, b_end)) = seeds_overlap(a, b) {
+                    return Err(format!(
+                        "the seeds of splits.train[{i}] ({}..{a_end}) and splits.{held}[{j}] ({}..{b_end}) overlap; \
+                         train and {held} seeds must be disjoint",
+                        a.seed, b.seed
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A task a built-in suite holds out: a row of a split other than `train`.
+#[derive(Debug, Clone)]
+pub struct HeldOutTask {
+    /// The suite.
+    pub suite: String,
+    /// The split.
+    pub split: String,
+    /// The task's id, as the suite's row gives it.
+    pub id: String,
+    /// The task's content hash, id and summary set aside ([`Task::content_hash`]).
+    pub content: String,
+}
+
+/// Every task a built-in suite holds out (its rows in every split but `train`), by content.
+///
+/// # Errors
+/// A built-in suite that does not load (a test loads every one).
+pub fn held_out_tasks() -> Result<Vec<HeldOutTask>, SuiteError> {
+    let mut out = Vec::new();
+    for (name, text) in BUILTIN {
+        let suite = parse(text, name, None)?;
+        for split in suite.splits.iter().filter(|s| s.name != "train") {
+            out.extend(split.rows.iter().map(|r| HeldOutTask {
+                suite: suite.name.clone(),
+                split: split.name.clone(),
+                id: r.task.id().to_owned(),
+                content: r.task.content_hash(),
+            }));
+        }
+    }
+    Ok(out)
+}
+
+/// No row of a validation split may be a task a built-in suite holds out: choosing a recipe on it
+/// would read that suite's test split. Compared by content, so a family copied under another name,
+/// or a task file copied from a built-in one, is caught.
+fn check_validation_held_out(splits: &[Split]) -> Result<(), String> {
+    let held = held_out_tasks().map_err(|e| e.to_string())?;
+    for split in splits.iter().filter(|s| s.name == "validation") {
+        for (i, row) in split.rows.iter().enumerate() {
+            let content = row.task.content_hash();
+            if let Some(h) = held.iter().find(|h| h.content == content) {
                 return Err(format!(
-                    "the seeds of splits.train[{i}] ({}..{a_end}) and splits.test[{j}] ({}..{b_end}) overlap; \
-                     train and test seeds must be disjoint",
-                    a.seed, b.seed
+                    "splits.validation[{i}] ({}) is {}, a task the built-in suite {} holds out in its {} split: \
+                     choosing a recipe on it would read that split. Validate on tasks no suite holds out (for a \
+                     family, generator seeds outside every suite's; procgen-v2 holds out 20000-20009, compose \
+                     100-103 of push and gripper)",
+                    row.source, h.id, h.suite, h.split
                 ));
             }
         }

@@ -247,8 +247,9 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     let show = |v: Option<f64>| v.map_or_else(|| "none".to_owned(), |v| format!("{v:.3}"));
     let md = md.map_or_else(|| " (no Markdown beside a device or pipe)".to_owned(), |md| format!(", {}", md.display()));
     println!(
-        "suite {}: score {} (test mean success), gap {} -> {}{md}",
+        "suite {}: score {} ({} mean success), gap {} -> {}{md}",
         suite.name,
+        r.scored_split(),
         show(r.score),
         show(r.gap),
         out.display(),

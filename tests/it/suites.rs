@@ -90,6 +90,46 @@ fn malformed_suites_are_clear_errors() {
     assert!(e.contains("colour, layout, cross-task") && e.contains("suite file"), "{e}");
 }
 
+/// A validation suite (train and validation splits, no test) loads, scores on its validation split,
+/// and is refused a task any built-in suite holds out, compared by content: a copy of a shipped
+/// family under another name, drawing procgen-v2's test seeds, is caught.
+#[test]
+fn validation_suites_never_read_a_test_split() {
+    let shipped = suite::load(concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/validation.toml")).unwrap();
+    let names: Vec<&str> = shipped.splits.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["train", "validation"]);
+    assert_eq!(shipped.splits[1].rows.len(), 35);
+    let held = suite::held_out_tasks().unwrap();
+    assert!(held.iter().any(|h| h.suite == "procgen-v2" && h.split == "test" && h.id == "push-20003-v0"));
+    for row in shipped.splits.iter().flat_map(|s| &s.rows) {
+        assert!(!held.iter().any(|h| h.content == row.task.content_hash()), "{}", row.source);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let family = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/families/push.toml")).unwrap();
+    let renamed = family.replacen("family = \"push\"", "family = \"my-pushes\"", 1);
+    assert_ne!(renamed, family, "the family names itself");
+    std::fs::write(dir.path().join("my-pushes.toml"), renamed).unwrap();
+    let text = |family: &str, seeds: &str| {
+        format!(
+            "version = 1\nname = \"v\"\nsummary = \"s\"\n[[splits.train]]\nfamily = \"push\"\ngenerator_seeds = [300, 301]\n\
+             candidates = [0]\nseed = 2000000\nepisodes = 5\n[[splits.validation]]\nfamily = \"{family}\"\n\
+             generator_seeds = {seeds}\ncandidates = [0, 0]\nseed = 2000100\nepisodes = 5\n"
+        )
+    };
+    let path = dir.path().join("v.toml");
+    for family in ["push", "my-pushes.toml"] {
+        std::fs::write(&path, text(family, "[20003, 20005]")).unwrap();
+        let e = suite::load(path.to_str().unwrap()).unwrap_err().to_string();
+        assert!(e.contains("procgen-v2 holds out in its test split") && e.contains("generator seeds outside"), "{e}");
+    }
+    std::fs::write(&path, text("my-pushes.toml", "[30000, 30002]")).unwrap();
+    let ok = suite::load(path.to_str().unwrap()).unwrap();
+    assert_eq!(ok.splits[1].name, "validation");
+    // Without a validation split it is an ordinary suite, which needs its test split.
+    let e = parse(&text("push", "[30000, 30002]").replace("validation", "check")).unwrap_err();
+    assert!(e.contains("no test split") && e.contains("validation suite"), "{e}");
+}
+
 #[cfg(feature = "train")]
 #[test]
 fn eval_suite_writes_json_and_markdown_and_skips_rows_that_do_not_fit() {

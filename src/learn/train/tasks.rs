@@ -50,13 +50,14 @@ fn stream_tasks(
     )?;
     eprintln!(
         "stream: {} tasks from {} famil{} × seeds {range} ({} seeds from the cache, {} checked by the solver, {} \
-         without a task) in {:.1} s",
+         without a task, {} left out as a suite's held-out task by content) in {:.1} s",
         pool.tasks.len(),
         families.len(),
         if families.len() == 1 { "y" } else { "ies" },
         pool.cached,
         pool.checked,
         pool.record.seeds_without_task,
+        pool.record.seeds_held_out,
         started.elapsed().as_secs_f64()
     );
     if let Some(recorded) = saved.and_then(|s| s.stream.as_ref()) {
@@ -82,11 +83,12 @@ fn env_list(env: &str) -> Vec<&str> {
 fn resolve(config: &TrainConfig) -> Result<Vec<Task>> {
     let tasks = match &config.suite {
         Some(name) => {
-            if config.split == "test" {
+            if config.split == "test" || config.split == "validation" {
                 refuse!(
-                    "--split test: the test split is what a suite's score is measured on, so no policy trains on it \
-                     (docs/suites.md); train on --split train (the default), or list the tasks you mean with --env \
-                     A,B,... (its numbers on that suite are then no score to report)"
+                    "--split {0}: the {0} split is what a suite's score (a validation suite's: the choice of recipe) \
+                     is measured on, so no policy trains on it (docs/suites.md); train on --split train (the default), \
+                     or list the tasks you mean with --env A,B,... (its numbers on that suite are then no score to report)",
+                    config.split
                 );
             }
             let suite = crate::benchmark::suite::load(name)?;
