@@ -332,7 +332,7 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
     check_disjoint(&splits).map_err(invalid)?;
     check_no_repeats(&splits).map_err(invalid)?;
     if splits.iter().any(|s| s.name == "validation") {
-        check_validation_held_out(&splits).map_err(invalid)?;
+        check_validation_held_out(&splits, kind).map_err(invalid)?;
     }
     // The suite's identity covers the families its rows draw from.
     let mut h = Sha256::new();
@@ -544,20 +544,22 @@ pub fn held_out_tasks() -> Result<Vec<HeldOutTask>, SuiteError> {
 }
 
 /// No row of a validation split may be a task a built-in suite holds out: choosing a recipe on it
-/// would read that suite's test split. Compared by content, so a family copied under another name,
-/// or a task file copied from a built-in one, is caught.
-fn check_validation_held_out(splits: &[Split]) -> Result<(), String> {
+/// would read that suite's test split. In a validation suite this holds for every split (its train
+/// rows are chosen on too). Compared by content, so a family copied under another name, or a task
+/// file copied from a built-in one, is caught.
+fn check_validation_held_out(splits: &[Split], kind: SuiteKind) -> Result<(), String> {
     let held = held_out_tasks().map_err(|e| e.to_string())?;
-    for split in splits.iter().filter(|s| s.name == "validation") {
+    let checked = |s: &&Split| s.name == "validation" || kind == SuiteKind::Validation;
+    for split in splits.iter().filter(checked) {
         for (i, row) in split.rows.iter().enumerate() {
             let content = row.task.content_hash();
             if let Some(h) = held.iter().find(|h| h.content == content) {
                 return Err(format!(
-                    "splits.validation[{i}] ({}) is {}, a task the built-in suite {} holds out in its {} split: \
+                    "splits.{}[{i}] ({}) is {}, a task the built-in suite {} holds out in its {} split: \
                      choosing a recipe on it would read that split. Validate on tasks no suite holds out (for a \
                      family, generator seeds outside every suite's; procgen-v2 holds out 20000-20009, compose \
                      100-103 of push and gripper)",
-                    row.source, h.id, h.suite, h.split
+                    split.name, row.source, h.id, h.suite, h.split
                 ));
             }
         }

@@ -249,8 +249,8 @@ fn eval_suite(a: &EvalArgs, name: &str) -> Result<()> {
     println!(
         "suite {}: score {} ({} mean success), gap {} -> {}{md}",
         suite.name,
-        r.scored_split(),
         show(r.score),
+        r.scored_split(),
         show(r.gap),
         out.display(),
     );
