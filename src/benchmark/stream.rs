@@ -113,8 +113,9 @@ pub struct StreamRecord {
     /// Seeds (over all families) left out because their task is, by content, one a built-in suite
     /// holds out ([`crate::benchmark::suite::held_out_tasks`]): a family whose draws repeat (gather's
     /// are 36 tasks in all) gives some suite's test task under another seed. Records written before
-    /// this field left out none.
-    #[serde(default)]
+    /// this field left out none, and a record that left out none is written without it (so that
+    /// zoo entries sealed before it read and seal the same).
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub seeds_held_out: usize,
     /// The most blocks any of the families can draw (the sum of its groups' largest counts): a stream
     /// run's observation layout has so many block slots, whichever seeds its pool holds, so that runs
@@ -222,6 +223,10 @@ impl StreamRecord {
             })
             .collect()
     }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 fn short(hash: &str) -> &str {

@@ -1347,7 +1347,7 @@ fn bad_streams_are_refused_before_anything_is_written() {
     refused(&["--families", "push"], &["--generator-seeds"]);
     // Nor does any run train on a suite's test split (issue 60).
     refused(&["--suite", "procgen", "--split", "test"], &["--split test", "score", "--split train"]);
-    let validation = concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/validation.toml");
+    let validation = concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/suites/validation.toml");
     refused(&["--suite", validation, "--split", "validation"], &["--split validation", "--split train"]);
     // An --env list means what it says: no empty item, no task twice by id or by content (issue 60).
     refused(&["--env", "BlocksTouch-v0,,BlocksChoose-v0"], &["item 2 of the list is empty"]);
