@@ -623,7 +623,9 @@ impl SuiteResult {
             if !self.splits.iter().any(|s| s.name == required && !s.rows.is_empty()) {
                 return bad(
                     "splits".into(),
-                    format!("no {required} split with rows; every suite has one (a validation suite: train and validation)"),
+                    format!(
+                        "no {required} split with rows; every suite has one (a validation suite: train and validation)"
+                    ),
                 );
             }
         }

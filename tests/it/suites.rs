@@ -95,7 +95,8 @@ fn malformed_suites_are_clear_errors() {
 /// family under another name, drawing procgen-v2's test seeds, is caught.
 #[test]
 fn validation_suites_never_read_a_test_split() {
-    let shipped = suite::load(concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/suites/validation.toml")).unwrap();
+    let shipped =
+        suite::load(concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/suites/validation.toml")).unwrap();
     let names: Vec<&str> = shipped.splits.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["train", "validation"]);
     assert_eq!(shipped.splits[1].rows.len(), 35);

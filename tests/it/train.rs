@@ -1199,10 +1199,10 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
         &["--counts applies to one task"],
     );
     refused(
-        TrainConfig { split: "validation".into(), ..from_suite.clone() },
+        TrainConfig { split: "check".into(), ..from_suite.clone() },
         &nowhere,
         false,
-        &["--split validation", "train, test"],
+        &["--split check", "train, test"],
     );
     refused(
         TrainConfig { split: "test".into(), ..multi(1) },
