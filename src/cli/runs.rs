@@ -22,6 +22,13 @@ pub(super) struct TrainArgs {
     /// with more (a recipe, say), they must match the run's.
     #[arg(long)]
     resume: bool,
+    /// With --resume: continue a run whose replay log is not there (a run carried to another
+    /// machine with its checkpoint, config.json and progress.csv). Where the solver played every
+    /// stored transition at level 0 (behaviour cloning), the buffers are collected again from the
+    /// run's seeds and the run continues exactly; otherwise they start empty and refill, and
+    /// provenance.json records it.
+    #[arg(long, requires = "resume")]
+    rebuild_replay: bool,
     /// Start --run-dir (new) from this run directory's latest checkpoint, with
     /// the settings given here; only --level-replay, --challenge-share,
     /// --success-threshold, --batches, --random-eps, --noise-eps,
@@ -38,7 +45,7 @@ pub(super) struct TrainArgs {
 
 /// The flags `train --resume --run-dir DIR` may be given without restating the run's recipe: with
 /// only these, the other settings come from the run's `config.json`.
-const BARE_RESUME: &[&str] = &["run_dir", "resume", "epochs", "torch_threads", "snapshot_every"];
+const BARE_RESUME: &[&str] = &["run_dir", "resume", "rebuild_replay", "epochs", "torch_threads", "snapshot_every"];
 
 /// The settings of `train --resume --run-dir DIR` given nothing but [`BARE_RESUME`]'s flags: the
 /// run's recorded ones, with those flags' values. `None` for any other command line.
@@ -60,7 +67,7 @@ fn bare_resume(a: &TrainArgs) -> Result<Option<crate::learn::train::TrainConfig>
             bail!(
                 "train --resume given {} besides --run-dir must restate the run's settings, its task \
                  included: give its --env, --suite or --families (or its recipe, --config), or leave out \
-                 every flag but --epochs, --torch-threads and --snapshot-every to take the run's own",
+                 every flag but --epochs, --torch-threads, --snapshot-every and --rebuild-replay to take the run's own",
                 a.given
                     .iter()
                     .filter(|g| !BARE_RESUME.contains(&g.as_str()))
@@ -213,8 +220,13 @@ fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> 
     if let Some(parent) = &a.branch_from {
         branch_run(comm, parent, &run_dir, c)?;
     }
-    let resume = a.resume || a.branch_from.is_some();
-    let rows = crate::learn::train::train_ranks(comm, c, &run_dir, resume, &mut on_epoch)?;
+    use crate::learn::train::Start;
+    let start = match (a.resume, a.rebuild_replay, a.branch_from.is_some()) {
+        (true, true, _) => Start::ResumeRebuildingReplay,
+        (true, false, _) | (false, _, true) => Start::Resume,
+        (false, _, false) => Start::New,
+    };
+    let rows = crate::learn::train::train_ranks(comm, c, &run_dir, start, &mut on_epoch)?;
     bar.finish();
     if let Some(r) = rows.last() {
         println!(
@@ -557,7 +569,8 @@ pub(super) fn report(run_dirs: &[PathBuf], target: f64) -> Result<()> {
             println!("  made by: not recorded (the run started before runs recorded their engine)");
         }
         for s in &spans {
-            println!("  made by: from epoch {} on, {}", s.from_epoch + 1, s.build.describe());
+            let replay = s.replay.map(|r| format!("; {}", r.describe())).unwrap_or_default();
+            println!("  made by: from epoch {} on, {}{replay}", s.from_epoch + 1, s.build.describe());
         }
     }
     Ok(())

@@ -1438,3 +1438,59 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
         assert!(text.contains(want), "{want:?} missing from: {text}");
     }
 }
+
+/// A run carried to another machine with its checkpoint but not its replay log
+/// (`--resume --rebuild-replay`): behaviour cloning, whose every stored transition the solver
+/// played, collects its buffers again from the run's seeds and continues exactly as if never
+/// stopped; DAgger, whose transitions came from learners the run no longer has, refills them from
+/// empty. Both say so in provenance.json; without the flag, the missing log is refused naming it.
+#[test]
+fn a_resume_without_the_replay_log_regenerates_bc_exactly_and_refills_dagger() {
+    use blockpuzzle::learn::train::{ReplayRebuilt, RunDir, Start};
+    let bc = |epochs| {
+        let mut c = TrainConfig {
+            env: String::new(),
+            families: Some("gripper,push".into()),
+            generator_seeds: Some("0..3".parse().unwrap()),
+            active_tasks: 2,
+            algo: Algo::named("bc").unwrap(),
+            net: NetConfig { net: NetKind::Entity, ..NetConfig::default() },
+            ..tiny("", epochs)
+        };
+        c.algos.bc.noise = 0.1;
+        c
+    };
+    let spans = |d: &Path| RunDir { dir: d.to_owned() }.read_provenance().unwrap();
+    let (straight, carried) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let a = train(&bc(3), straight.path(), Start::New, &mut quiet).unwrap();
+    train(&bc(2), carried.path(), Start::New, &mut quiet).unwrap();
+    std::fs::remove_dir_all(carried.path().join("replay")).unwrap();
+    let e = format!("{:#}", anyhow::Error::from(train(&bc(3), carried.path(), Start::Resume, &mut quiet).unwrap_err()));
+    assert!(e.contains("is missing") && e.contains("--rebuild-replay"), "{e}");
+    let b = train(&bc(3), carried.path(), Start::ResumeRebuildingReplay, &mut quiet).unwrap();
+    assert_eq!(comparable(&a), comparable(&b));
+    let (pa, pb) = (
+        load_policy(&straight.path().join("policy.json")).unwrap(),
+        load_policy(&carried.path().join("policy.json")).unwrap(),
+    );
+    assert_eq!(pa.policy, pb.policy, "the same weights and normaliser as the run never stopped");
+    let recorded: Vec<_> = spans(carried.path()).iter().map(|s| (s.from_epoch, s.replay)).collect();
+    assert_eq!(recorded, [(0, None), (2, Some(ReplayRebuilt::Regenerated))]);
+    // Its buffers were logged again: a plain resume from here reads them back.
+    train(&bc(4), carried.path(), Start::Resume, &mut quiet).unwrap();
+
+    // DAgger: refilled, and the run goes on from its checkpoint.
+    let mut dagger = tiny("BlocksTouch-v0", 2);
+    dagger.algo = Algo::named("dagger").unwrap();
+    dagger.net = NetConfig { net: NetKind::Entity, ..NetConfig::default() };
+    let run = tempfile::tempdir().unwrap();
+    train(&dagger, run.path(), Start::New, &mut quiet).unwrap();
+    std::fs::remove_dir_all(run.path().join("replay")).unwrap();
+    let rows =
+        train(&TrainConfig { epochs: 3, ..dagger.clone() }, run.path(), Start::ResumeRebuildingReplay, &mut quiet)
+            .unwrap();
+    assert_eq!(rows.iter().map(|r| r.epoch).collect::<Vec<_>>(), [0, 1, 2]);
+    assert_eq!(rows[2].updates, 3 * 3 * 5, "the updates of the epoch after the resume ran on refilled buffers");
+    let recorded: Vec<_> = spans(run.path()).iter().map(|s| (s.from_epoch, s.replay)).collect();
+    assert_eq!(recorded, [(0, None), (2, Some(ReplayRebuilt::Refilled))]);
+}

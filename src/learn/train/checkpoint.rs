@@ -250,7 +250,8 @@ fn read_log(
             let path = dir.join("replay").join(&g.file);
             let bytes = std::fs::read(&path).map_err(|e| match e.kind() {
                 std::io::ErrorKind::NotFound => corrupt(&format!(
-                    "its replay segment {} is missing: restore that file from a backup of the run",
+                    "its replay segment {} is missing: restore that file from a backup of the run, or resume \
+                     with --rebuild-replay to collect the buffers again from the run's seeds",
                     path.display()
                 )),
                 _ => io(&path)(e),
@@ -435,6 +436,9 @@ pub struct Loaded {
     pub replays: Vec<ReplayBuffer>,
     /// Their log, for the next [`save`].
     pub log: ReplayLog,
+    /// How many transitions each buffer had received when the checkpoint was written (its history
+    /// length, [`ReplayBuffer::pushed`]), also where the buffers are not read back.
+    pub pushed: Vec<u64>,
 }
 
 /// Loads a checkpoint and checks it against the expected environment and sizes.
@@ -443,6 +447,31 @@ pub struct Loaded {
 /// [`CheckpointError::Corrupt`] for a damaged file, [`CheckpointError::Mismatch`]
 /// for another environment or other dimensions.
 pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result<Loaded, CheckpointError> {
+    load_with(path, env_id, obs_dim, act_dim, true)
+}
+
+/// As [`load`], but without the replay buffers: they come back empty, at their recorded capacities,
+/// and their log is not read (it need not exist). For a run carried to another machine with its
+/// weights and optimiser state but not its replay log (`train --resume --rebuild-replay`).
+///
+/// # Errors
+/// As [`load`], less the replay log's.
+pub fn load_without_replay(
+    path: &Path,
+    env_id: &str,
+    obs_dim: usize,
+    act_dim: usize,
+) -> Result<Loaded, CheckpointError> {
+    load_with(path, env_id, obs_dim, act_dim, false)
+}
+
+fn load_with(
+    path: &Path,
+    env_id: &str,
+    obs_dim: usize,
+    act_dim: usize,
+    replay: bool,
+) -> Result<Loaded, CheckpointError> {
     let bytes = std::fs::read(path).map_err(io(path))?;
     let (header, payload) = parse(path, &bytes)?;
     let mismatch = |reason: String| CheckpointError::Mismatch { path: path.to_owned(), reason };
@@ -460,8 +489,21 @@ pub fn load(path: &Path, env_id: &str, obs_dim: usize, act_dim: usize) -> Result
     let (replay_blobs, agent_blobs): (HashMap<_, _>, HashMap<_, _>) =
         blobs(&header, payload).into_iter().partition(|(name, _)| name.starts_with("replay"));
     let agent = load_agent(path, &header, agent_blobs, obs_dim, act_dim)?;
-    let replays = load_replays(path, &header, &replay_blobs, obs_dim, act_dim)?;
-    Ok(Loaded { state: header.state, agent, replays: replays.0, log: replays.1 })
+    if !replay {
+        if header.replay_log.is_empty() {
+            return Err(mismatch(
+                "it holds its replay buffers itself (a checkpoint from before replay logs): resume without \
+                 --rebuild-replay"
+                    .into(),
+            ));
+        }
+        let pushed = header.replay_log.iter().map(|s| s.pushed).collect();
+        let replays = header.replay_log.iter().map(|s| ReplayBuffer::new(obs_dim, act_dim, s.capacity)).collect();
+        return Ok(Loaded { state: header.state, agent, replays, log: ReplayLog::default(), pushed });
+    }
+    let (replays, log) = load_replays(path, &header, &replay_blobs, obs_dim, act_dim)?;
+    let pushed = replays.iter().map(ReplayBuffer::pushed).collect();
+    Ok(Loaded { state: header.state, agent, replays, log, pushed })
 }
 
 /// The header and payload of a checkpoint file's bytes, checked (magic, sizes, checksum).

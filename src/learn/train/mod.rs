@@ -47,8 +47,8 @@ use crate::learn::agents::registry::Algo;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{read_progress, LogError, RunDir, Span};
-pub use trainer::{train, train_ranks, OnEpoch};
+pub use rundir::{read_progress, LogError, ReplayRebuilt, RunDir, Span};
+pub use trainer::{train, train_ranks, OnEpoch, Start};
 
 use crate::env::registry;
 use crate::learn::agents::arch::{NetConfig, NetKind, Pooling};

@@ -120,17 +120,17 @@ impl RunDir {
         serde_json::from_str(&text).with_context(|| format!("{} is not a run's provenance", path.display()))
     }
     /// Records that the epochs from `from_epoch` on run on this build (rank 0; nothing is written when the
-    /// last recorded build is this one).
+    /// last recorded build is this one and the replay buffers were not rebuilt).
     ///
     /// # Errors
     /// The file cannot be read or written.
-    pub fn record_provenance(&self, from_epoch: usize) -> Result<()> {
+    pub fn record_provenance(&self, from_epoch: usize, replay: Option<ReplayRebuilt>) -> Result<()> {
         let mut spans = self.read_provenance()?;
         let build = crate::benchmark::provenance::Build::current();
-        if spans.last().is_some_and(|s| s.build == build) {
+        if replay.is_none() && spans.last().is_some_and(|s| s.build == build) {
             return Ok(());
         }
-        spans.push(Span { from_epoch, build });
+        spans.push(Span { from_epoch, build, replay });
         Ok(crate::support::io::write_json(&self.provenance(), &spans)?)
     }
     /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
@@ -148,6 +148,33 @@ pub struct Span {
     /// Package, commit and engine.
     #[serde(flatten)]
     pub build: crate::benchmark::provenance::Build,
+    /// How the replay buffers were rebuilt when the run resumed here without its replay log
+    /// (`train --resume --rebuild-replay`); absent when they were read back as saved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayRebuilt>,
+}
+
+/// How a run resumed without its replay log rebuilt its buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ReplayRebuilt {
+    /// Collected again from the run's seeds, transition for transition: every stored transition was
+    /// the solver's (behaviour cloning at level 0), so the resumed run is the uninterrupted one.
+    Regenerated,
+    /// Started empty and refilled by the epochs that follow: the past transitions depended on
+    /// policies the run no longer has (DAgger's learner, DDPG's actor), so the resumed run is a
+    /// new computation from this epoch on.
+    Refilled,
+}
+
+impl ReplayRebuilt {
+    /// In words, for the run's log and `report`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Regenerated => "replay regenerated from the run's seeds (exactly the transitions it had)",
+            Self::Refilled => "replay refilled from empty (the earlier transitions were not recoverable)",
+        }
+    }
 }
 
 pub(super) fn write_progress(path: &Path, rows: &[EpochRow]) -> Result<(), crate::support::io::WriteError> {

@@ -8,7 +8,7 @@ use super::checkpoint::{self, RunState};
 use super::comm::Comm;
 use super::learner::{Expert, Learner};
 use super::rollouts::{play_plan, stream_seed, Behaviour, Draw, Episode, Planned};
-use super::rundir::{read_progress, write_progress, RunDir};
+use super::rundir::{read_progress, write_progress, ReplayRebuilt, RunDir};
 use super::tasks::{draw_task, run_tasks, test_task};
 use super::{computation_differences, plot, Context, EpochRow, ReplayLayout, Result, TrainConfig, TrainError};
 use crate::benchmark::saved::SavedPolicy;
@@ -31,12 +31,42 @@ use std::time::Instant;
 /// Per-epoch callback for progress reporting (called on rank 0 only).
 pub type OnEpoch<'a> = &'a mut dyn FnMut(&EpochRow, &TrainConfig);
 
+/// How a run begins.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Start {
+    /// A new run in a new directory.
+    New,
+    /// The run in the directory, from its checkpoint and replay log.
+    Resume,
+    /// The run in the directory, from its checkpoint (weights, optimiser state, normaliser, counters)
+    /// without its replay log, as a run carried to a new machine is (`--rebuild-replay`): the
+    /// buffers are collected again from the run's seeds where every stored transition was the
+    /// solver's, else refilled from empty ([`ReplayRebuilt`]).
+    ResumeRebuildingReplay,
+}
+
+impl From<bool> for Start {
+    /// `true`: resume; `false`: a new run.
+    fn from(resume: bool) -> Self {
+        if resume {
+            Start::Resume
+        } else {
+            Start::New
+        }
+    }
+}
+
 /// Trains in this process; with `resume`, continues from the run directory's checkpoint.
 ///
 /// # Errors
 /// Bad configuration, environment errors, I/O and checkpoint errors.
-pub fn train(config: &TrainConfig, run_dir: &Path, resume: bool, on_epoch: OnEpoch) -> Result<Vec<EpochRow>> {
-    train_ranks(&Comm::local(), config, run_dir, resume, on_epoch)
+pub fn train(
+    config: &TrainConfig,
+    run_dir: &Path,
+    start: impl Into<Start>,
+    on_epoch: OnEpoch,
+) -> Result<Vec<EpochRow>> {
+    train_ranks(&Comm::local(), config, run_dir, start, on_epoch)
 }
 
 /// Trains as one rank of `comm`'s job (every rank calls it with the same
@@ -48,10 +78,10 @@ pub fn train_ranks(
     comm: &Comm,
     config: &TrainConfig,
     run_dir: &Path,
-    resume: bool,
+    start: impl Into<Start>,
     on_epoch: OnEpoch,
 ) -> Result<Vec<EpochRow>> {
-    let mut trainer = Trainer::start(comm, config, run_dir, resume)?;
+    let mut trainer = Trainer::start(comm, config, run_dir, start.into())?;
     while trainer.state.epoch < trainer.config.epochs {
         let row = trainer.epoch()?;
         if comm.is_root() {
@@ -242,6 +272,8 @@ struct StartingPoint {
     agent: Box<dyn Algorithm>,
     replays: Vec<ReplayBuffer>,
     replay_log: checkpoint::ReplayLog,
+    /// How many transitions each buffer had received at the checkpoint (a fresh run's: none).
+    pushed: Vec<u64>,
     state: RunState,
     /// progress.csv's rows so far (rank 0).
     rows: Vec<EpochRow>,
@@ -317,7 +349,8 @@ fn fresh(
         ReplayLayout::Shared => 1,
     };
     let replays = (0..shards).map(|_| ReplayBuffer::new(obs_dim, act_dim, config.buffer_size)).collect();
-    Ok(StartingPoint { agent, replays, replay_log: checkpoint::ReplayLog::default(), state, rows: Vec::new() })
+    let pushed = vec![0; shards];
+    Ok(StartingPoint { agent, replays, replay_log: checkpoint::ReplayLog::default(), pushed, state, rows: Vec::new() })
 }
 
 /// What the learner keeps of the policy the run started from: the anchor of `--anchor-alpha`, the
@@ -342,6 +375,7 @@ fn resumed(
     mine: &RunDir,
     saved_config: Option<TrainConfig>,
     dims: (Arch, usize),
+    with_replay: bool,
 ) -> Result<StartingPoint> {
     let path = resume_checkpoint(comm, &mine.checkpoint(), run)?;
     if comm.is_root() {
@@ -359,7 +393,10 @@ fn resumed(
             );
         }
     }
-    let mut loaded = checkpoint::load(&path, run_id, dims.0.obs_dim, dims.1)?;
+    let mut loaded = match with_replay {
+        true => checkpoint::load(&path, run_id, dims.0.obs_dim, dims.1)?,
+        false => checkpoint::load_without_replay(&path, run_id, dims.0.obs_dim, dims.1)?,
+    };
     // One-task checkpoints written before per-task levels hold the level alone.
     if loaded.state.levels.is_empty() && tasks == 1 {
         loaded.state.levels = vec![loaded.state.level];
@@ -387,6 +424,7 @@ fn resumed(
         agent: loaded.agent,
         replays: loaded.replays,
         replay_log: loaded.log,
+        pushed: loaded.pushed,
         state: loaded.state,
         rows,
     })
@@ -451,8 +489,9 @@ struct EpochTally {
 impl<'a> Trainer<'a> {
     /// Validates, resolves the task, builds environments and the agent
     /// (fresh, or from this rank's checkpoint).
-    fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, resume: bool) -> Result<Self> {
+    fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, start: Start) -> Result<Self> {
         config.validate(comm.size())?;
+        let resume = start != Start::New;
         // The policy a new run starts from, checked before anything is written (a resumed run's
         // actor is in its checkpoint).
         let init = match resume {
@@ -535,7 +574,8 @@ impl<'a> Trainer<'a> {
         let dims = (arch, act_dim);
         let run_id = config.task_id();
         let begun = if resume {
-            resumed(comm, &config, &run_id, tasks.len(), &run, &mine, saved_config, dims)?
+            let with_replay = start != Start::ResumeRebuildingReplay;
+            resumed(comm, &config, &run_id, tasks.len(), &run, &mine, saved_config, dims, with_replay)?
         } else {
             let policy = init.as_ref().map(|(_, p)| p);
             fresh(comm, &config, &run_id, &max_levels, &run, &mine, dims, policy)?
@@ -572,9 +612,25 @@ impl<'a> Trainer<'a> {
         };
         let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
+        let rebuilt = (start == Start::ResumeRebuildingReplay).then(|| {
+            let solver_only = (0..begun.state.epoch).all(|e| begun.agent.solver_share(e) == Some(1.0));
+            let level_zero = begun.state.levels.iter().all(|&l| l == 0);
+            match solver_only && level_zero && expert.is_none() && config.branched_from.is_none() {
+                true => ReplayRebuilt::Regenerated,
+                false => ReplayRebuilt::Refilled,
+            }
+        });
         if comm.is_root() {
             write_json(&run.config(), &config)?;
-            run.record_provenance(begun.state.epoch)?;
+            run.record_provenance(begun.state.epoch, rebuilt)?;
+            if let Some(r) = rebuilt {
+                eprintln!(
+                    "{}: resumed at epoch {} without its replay log; {}",
+                    run.dir.display(),
+                    begun.state.epoch,
+                    r.describe()
+                );
+            }
         }
         if comm.is_root() && comm.size() > 1 {
             let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
@@ -586,7 +642,8 @@ impl<'a> Trainer<'a> {
                 2 * (p - 1) * w * bytes / p / 1024
             );
         }
-        Ok(Self {
+        let pushed = begun.pushed;
+        let mut trainer = Self {
             comm,
             config,
             run,
@@ -606,7 +663,37 @@ impl<'a> Trainer<'a> {
             obs_dim,
             persist_seconds: 0.0,
             created,
-        })
+        };
+        if rebuilt == Some(ReplayRebuilt::Regenerated) {
+            trainer.regenerate_replay(&pushed)?;
+        }
+        Ok(trainer)
+    }
+
+    /// Collects every exploration episode of the epochs done again, from the run's seeds, into the
+    /// (empty) buffers: the transitions the run had, where the solver played every one of them at
+    /// level 0 ([`ReplayRebuilt::Regenerated`]). The normaliser is the checkpoint's, which already
+    /// counted them. Checked against the history lengths the checkpoint recorded.
+    fn regenerate_replay(&mut self, pushed: &[u64]) -> Result<()> {
+        let (epochs, rollouts) = (self.state.epoch, self.config.rollouts as u64);
+        let mut tally = EpochTally::default();
+        let mut base = 0;
+        for epoch in 0..epochs {
+            self.activate(epoch)?;
+            self.set_levels(false)?;
+            for _ in 0..self.config.cycles {
+                self.play_into_replay(epoch, base, &mut tally)?;
+                base += rollouts;
+            }
+        }
+        let now: Vec<u64> = self.replays.iter().map(ReplayBuffer::pushed).collect();
+        if base != self.state.episodes_per_worker || now != pushed {
+            refuse!(
+                "--rebuild-replay: collecting the run's {epochs} epochs again gave {base} episodes per worker and {now:?}                  transitions per buffer, where the checkpoint records {} and {pushed:?} (were --cycles or --rollouts                  changed during the run?); resume with its replay log, or start a new run",
+                self.state.episodes_per_worker
+            );
+        }
+        Ok(())
     }
 
     /// The global index of this rank's worker `w` (it keys the worker's random streams).
@@ -686,6 +773,16 @@ impl<'a> Trainer<'a> {
     /// go to the worker's buffer, and every rank's observations (in global
     /// shard order) to the normaliser.
     fn collect(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
+        let rows = self.play_into_replay(epoch, self.state.episodes_per_worker, tally)?;
+        self.state.episodes_per_worker += self.config.rollouts as u64;
+        let all = self.comm.gather_f32(&rows);
+        self.learner.agent.norm_mut().update(&all);
+        Ok(())
+    }
+
+    /// Every worker plays `rollouts` exploration episodes of `epoch`, the first of them its
+    /// `base`-th; their transitions go to the worker's buffer. Returns their observations.
+    fn play_into_replay(&mut self, epoch: usize, base: u64, tally: &mut EpochTally) -> Result<Vec<f32>> {
         let t = Instant::now();
         let config = &self.config;
         let explorer = self.learner.agent.explorer();
@@ -694,7 +791,6 @@ impl<'a> Trainer<'a> {
             Some(m) => Behaviour::Mixture(m),
             None => Behaviour::exploring(&*self.learner.agent, &*explorer, epoch),
         };
-        let base = self.state.episodes_per_worker;
         let draws = (config.level_replay > 0.0 || config.challenge_share > 0.0).then(|| {
             self.tasks
                 .iter()
@@ -722,7 +818,6 @@ impl<'a> Trainer<'a> {
             })
             .collect();
         let eps = play_plan(&mut self.envs, active, &behaviour, &plan)?;
-        self.state.episodes_per_worker += config.rollouts as u64;
         tally.env_seconds += t.elapsed().as_secs_f64();
         let mut rows = Vec::new();
         for (ep, planned) in eps.iter().zip(&plan) {
@@ -748,9 +843,7 @@ impl<'a> Trainer<'a> {
                 rows.extend(other.obs.iter().flatten());
             }
         }
-        let all = self.comm.gather_f32(&rows);
-        self.learner.agent.norm_mut().update(&all);
-        Ok(())
+        Ok(rows)
     }
 
     /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
