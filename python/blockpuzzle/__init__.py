@@ -105,7 +105,7 @@ def env_ids() -> list[str]:
 def generate_tasks(family: str | _os.PathLike[str], out: str | _os.PathLike[str], seed: int = 0, count: int = 10,
                    threads: int | None = None) -> dict[str, _Any]:
     """Task files drawn from a task family (a shipped one by name, "push", "gripper", "stack",
-    "gather", "topple", "avoid" or "clutter", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
+    "gather", "topple", "avoid", "clutter" or "choose", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
     ``blockpuzzle task generate``'s code.
     Writes ``out/ID.toml`` per task and ``out/generated.json``, and returns that record (the family's
     hash, each task's id, hash and the solver's success, the rejections by reason). Deterministic

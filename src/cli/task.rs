@@ -24,7 +24,7 @@ pub(super) enum TaskCommand {
 
 #[derive(Debug, clap::Args)]
 pub(super) struct TaskGenerateArgs {
-    /// A shipped family by name (push, gripper, stack, gather, topple, avoid, clutter: `families/`) or a family file (.toml).
+    /// A shipped family by name (push, gripper, stack, gather, topple, avoid, clutter, choose: `families/`) or a family file (.toml).
     family: String,
     /// The first generator seed (task k comes from seed + k, the same whatever --count).
     #[arg(long, default_value_t = 0, value_parser = crate::support::limits::SEED.parser::<u64>())]

@@ -32,6 +32,7 @@ pub const BUILTIN_FAMILIES: &[(&str, &str)] = &[
     ("topple", include_str!("../../families/topple.toml")),
     ("avoid", include_str!("../../families/avoid.toml")),
     ("clutter", include_str!("../../families/clutter.toml")),
+    ("choose", include_str!("../../families/choose.toml")),
 ];
 
 /// A floor choice: no rule object, or one of the four colours.
@@ -93,6 +94,12 @@ pub struct FamilySpec {
     /// whose blocks start on others sets `settle_seconds`, as BlocksStack-v0 does.
     #[serde(default)]
     pub placement: PlacementSpec,
+    /// Groups of block groups whose roles (colour and start) are dealt to the observation's slots
+    /// at random every episode, as BlocksChooseShuffled-v0's are: each generated task's `shuffle`.
+    /// A shuffled group is one block in every task (`count = [1, 1]`), and the groups of one
+    /// shuffle have the same size range (one size is drawn for all of them), shape and mass.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shuffle: Vec<Vec<String>>,
     /// The block groups, placed in this order.
     pub blocks: Vec<Spanned<BlockGroup>>,
 }
@@ -169,6 +176,51 @@ fn default_size() -> [f64; 2] {
 }
 fn default_mass() -> f64 {
     2.0
+}
+
+/// The family's `shuffle` can be dealt in every task it draws: each name a group, in one shuffle at
+/// most, each group one block always there, and the groups of a shuffle alike in all but their
+/// roles. The error says what to change.
+fn check_shuffle(spec: &FamilySpec) -> Result<(), String> {
+    let groups: Vec<&BlockGroup> = spec.blocks.iter().map(Spanned::get_ref).collect();
+    let mut seen: Vec<&str> = Vec::new();
+    for shuffle in &spec.shuffle {
+        if shuffle.len() < 2 {
+            return Err(format!("shuffle {shuffle:?}: a shuffle deals roles among at least two block groups"));
+        }
+        let mut members = Vec::new();
+        for name in shuffle {
+            let Some(g) = groups.iter().find(|g| &g.name == name) else {
+                let names: Vec<&str> = groups.iter().map(|g| g.name.as_str()).collect();
+                return Err(format!(
+                    "shuffle names {name:?}, which is not a block group (the groups: {})",
+                    names.join(", ")
+                ));
+            };
+            if seen.contains(&name.as_str()) {
+                return Err(format!("block group {name:?} is in two shuffles (or twice in one): name it once"));
+            }
+            seen.push(name);
+            if g.count != [1, 1] {
+                return Err(format!(
+                    "shuffle: group {name:?} has count [{}, {}], so its roles cannot be dealt in every episode; a \
+                     shuffled group is one block in every task: give it count = [1, 1], or leave it out of the shuffle",
+                    g.count[0], g.count[1]
+                ));
+            }
+            members.push(*g);
+        }
+        let first = members[0];
+        let alike = |g: &BlockGroup| (g.size, g.half_extents, g.mass) == (first.size, first.half_extents, first.mass);
+        if let Some(g) = members.iter().find(|g| !alike(g)) {
+            return Err(format!(
+                "shuffle {shuffle:?}: groups {:?} and {:?} differ in size, half_extents or mass, so their roles cannot \
+                 be swapped (a shuffle moves colours and starts, not bodies): give them the same",
+                first.name, g.name
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A narrowing of a family (a suite row's `choose`): fewer choices for the gripper, the table,
@@ -347,6 +399,7 @@ impl Family {
         if most > MAX_FAMILY_BLOCKS {
             return Err(err(format!("the groups may draw {most} blocks; a family draws at most {MAX_FAMILY_BLOCKS}")));
         }
+        check_shuffle(&spec).map_err(err)?;
         let hash = super::compile::sha256_id(text.as_bytes());
         Ok(Family { spec, hash, origin: origin.to_owned(), text: Some(text.to_owned()) })
     }
@@ -457,10 +510,23 @@ impl Family {
         let floor = s.floor[pick(&mut rng, s.floor.len())].colour();
         let mut objects = Vec::new();
         let mut summary = Vec::new();
-        for g in &s.blocks {
+        let drawn: Vec<(usize, f64)> = s
+            .blocks
+            .iter()
+            .map(|g| {
+                let g = g.get_ref();
+                let n = rng.gen_range(g.count[0]..=g.count[1]);
+                (n, (rng.gen_range(g.size[0]..=g.size[1]) * 1000.0).round() / 1000.0)
+            })
+            .collect();
+        // The groups of a shuffle take the size drawn for its first group (their ranges are one).
+        let size_of = |name: &str| {
+            let group = s.shuffle.iter().find(|sh| sh.iter().any(|n| n == name)).map_or(name, |sh| sh[0].as_str());
+            s.blocks.iter().position(|g| g.get_ref().name == group).map(|i| drawn[i].1)
+        };
+        for (g, &(n, size)) in s.blocks.iter().zip(&drawn) {
             let g = g.get_ref();
-            let n = rng.gen_range(g.count[0]..=g.count[1]);
-            let size = (rng.gen_range(g.size[0]..=g.size[1]) * 1000.0).round() / 1000.0;
+            let size = size_of(&g.name).unwrap_or(size);
             if n == 0 {
                 continue;
             }
@@ -493,7 +559,7 @@ impl Family {
                 summary.join(", ")
             ),
             max_episode_steps: s.max_episode_steps,
-            shuffle: Vec::new(),
+            shuffle: s.shuffle.clone(),
             robot: RobotSpec { gripper, gripper_action: action, ..RobotSpec::default() },
             table: SurfaceSpec { colour: table },
             floor: floor.map(|colour| SurfaceSpec { colour }),

@@ -18,7 +18,9 @@ fn quick(name: &str) -> Family {
 
 #[test]
 fn the_shipped_families_read() {
-    for name in ["push", "gripper", "stack", "gather", "topple", "avoid", "clutter"] {
+    let names: Vec<&str> = blockpuzzle::task::family::BUILTIN_FAMILIES.iter().map(|f| f.0).collect();
+    assert_eq!(names, ["push", "gripper", "stack", "gather", "topple", "avoid", "clutter", "choose"]);
+    for name in names {
         let f = Family::from_toml(&shipped(name), name).unwrap();
         assert_eq!(f.spec.family, name);
         assert!(f.hash.starts_with("sha256:"));
@@ -64,6 +66,43 @@ fn family_errors_name_the_problem_and_the_line() {
         &base.replacen("size = [0.02, 0.03]", "size = [0.02, 0.03]\nhalf_extents = [0.02, 0.02, 0.04]", 1),
         &["group blue gives both `size`", "give one"],
     );
+}
+
+/// A family's `shuffle` becomes every drawn task's: the roles of single blocks alike in size,
+/// shape and mass, one size drawn for all of them. What cannot be shuffled in every episode is
+/// refused at load, naming the group and the fix (issue 73's bad input).
+#[test]
+fn a_family_shuffles_alike_single_blocks_and_refuses_what_cannot_be_shuffled() {
+    let base = shipped("choose");
+    let family = Family::from_toml(&base, "choose").unwrap();
+    assert_eq!(family.spec.shuffle, [["blue", "green", "grey"]]);
+    let mut sizes = Vec::new();
+    for seed in 0..8 {
+        let d = family.draw(seed, 0).unwrap();
+        assert!(d.toml.contains("shuffle = [[\"blue\", \"green\", \"grey\"]]"), "{}", d.toml);
+        let spec: blockpuzzle::task::spec::TaskSpec = toml::from_str(&d.toml).unwrap();
+        let size = |n: &str| spec.objects.iter().find(|o| o.get_ref().name == n).unwrap().get_ref().half_extents;
+        assert!(size("blue") == size("green") && size("green") == size("grey"), "seed {seed}: {}", d.toml);
+        sizes.push(size("blue")[0]);
+    }
+    sizes.dedup();
+    assert!(sizes.len() > 1, "one size per task, drawn: {sizes:?}");
+    // Without the shuffle the three draw sizes of their own, from the same stream.
+    let unshuffled =
+        Family::from_toml(&base.replace("shuffle = [[\"blue\", \"green\", \"grey\"]]\n", ""), "c").unwrap();
+    assert!(unshuffled.draw(0, 0).unwrap().toml.lines().all(|l| !l.starts_with("shuffle")));
+    let refused = |text: String, want: &[&str]| {
+        assert_ne!(text, base);
+        let e = Family::from_toml(&text, "f.toml").expect_err("refused").to_string();
+        assert!(want.iter().all(|w| e.contains(w)), "{want:?} missing from: {e}");
+    };
+    let with = |shuffle: &str| base.replace("shuffle = [[\"blue\", \"green\", \"grey\"]]", shuffle);
+    refused(with("shuffle = [[\"blue\", \"purple\"]]"), &["\"purple\", which is not a block group", "grey2"]);
+    refused(with("shuffle = [[\"blue\"]]"), &["at least two block groups"]);
+    refused(with("shuffle = [[\"blue\", \"green\"], [\"green\", \"grey\"]]"), &["\"green\" is in two shuffles"]);
+    refused(with("shuffle = [[\"blue\", \"grey2\"]]"), &["\"grey2\" has count [0, 1]", "count = [1, 1]"]);
+    let bigger = base.replacen("size = [0.02, 0.03]", "size = [0.02, 0.04]", 1);
+    refused(bigger, &["groups \"blue\" and \"green\" differ in size", "give them the same"]);
 }
 
 /// The same seed gives the same task whatever the range it is generated in and the thread count;
