@@ -581,19 +581,23 @@ fn same_number(stored: f64, derived: f64) -> bool {
     stored.is_finite() && (stored - derived).abs() <= 1e-9 * derived.abs().max(1.0)
 }
 
+/// The split a result of these splits is scored on (the suite's kind, from the splits it has).
+fn scored_split_of(splits: &[SplitResult]) -> &'static str {
+    crate::benchmark::suite::SuiteKind::of(|n| splits.iter().any(|s| s.name == n)).scored_split()
+}
+
 impl SuiteResult {
     /// The score and the gap of `splits` (docs/suites.md): the test split's mean success (a validation
     /// suite's: the validation split's), and the train split's mean minus that.
     pub fn score_and_gap(splits: &[SplitResult]) -> (Option<f64>, Option<f64>) {
         let mean = |name: &str| splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success);
-        let scored = crate::benchmark::suite::SuiteKind::of(|n| splits.iter().any(|s| s.name == n)).scored_split();
-        let (train, test) = (mean("train"), mean(scored));
+        let (train, test) = (mean("train"), mean(scored_split_of(splits)));
         (test, train.zip(test).map(|(a, b)| a - b))
     }
 
     /// The split the score is read from: `test`, or a validation suite's `validation`.
     pub fn scored_split(&self) -> &'static str {
-        crate::benchmark::suite::SuiteKind::of(|n| self.splits.iter().any(|s| s.name == n)).scored_split()
+        scored_split_of(&self.splits)
     }
 
     /// Rows evaluated and rows in all.

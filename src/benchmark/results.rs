@@ -436,6 +436,14 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
         let label = format!("{suite}-{mujoco}").replace(|c: char| !c.is_ascii_alphanumeric(), "-");
         let _ = writeln!(md, "\n## `{suite}` on MuJoCo {mujoco}\n");
         let _ = writeln!(md, "Suite sha256 {sha}: {}\n", group[0].result.summary);
+        if group[0].result.scored_split() != "test" {
+            let _ = writeln!(
+                md,
+                "A validation suite: the score is the `{}` split's mean and the gap train minus it \
+                 (recipes are chosen on it; docs/suites.md).\n",
+                group[0].result.scored_split()
+            );
+        }
         md += "| # | policy | score [95% CI] | train | gap | rows evaluated | harness |\n|---:|---|---|---:|---:|---:|---|\n";
         let mut notes = Vec::new();
         for (rank, same) in ranked.iter().enumerate() {

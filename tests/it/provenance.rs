@@ -301,6 +301,19 @@ fn the_committed_leaderboard_is_what_its_result_files_give() {
     }
 }
 
+/// A validation suite's table says what its score is (the validation split's mean), and only a
+/// validation suite's does.
+#[test]
+fn the_leaderboard_names_a_validation_suites_scored_split() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let files = results::read_all(&[root.join("results/generalist/validation")]).unwrap();
+    assert!(files.len() >= 2 && files.iter().all(|f| f.result.scored_split() == "validation"));
+    let md = results::leaderboard(&files).unwrap();
+    assert!(md.contains("A validation suite: the score is the `validation` split's mean"), "{md}");
+    let tests = results::read_all(&[root.join("results/generalization/mujoco-2.2.2")]).unwrap();
+    assert!(!results::leaderboard(&tests).unwrap().contains("A validation suite"));
+}
+
 /// Issue 60: the readers recompute every derived number from the outcome counts and refuse a file whose
 /// stored numbers disagree, naming the file and the field; rows must be the suite's own.
 #[test]
