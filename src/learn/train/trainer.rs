@@ -710,9 +710,13 @@ impl<'a> Trainer<'a> {
         self.set_levels(false)?;
         let mut tally = EpochTally::default();
         self.learner.reduce_seconds = 0.0;
-        for cycle in 0..self.config.cycles {
-            self.collect(epoch, &mut tally)?;
-            self.learn(epoch, cycle, &mut tally);
+        if self.solver_collects(epoch) && self.config.cycles > 1 {
+            self.overlapped_cycles(epoch, &mut tally)?;
+        } else {
+            for cycle in 0..self.config.cycles {
+                self.collect(epoch, &mut tally)?;
+                self.learn(epoch, cycle, &mut tally);
+            }
         }
         let eval_started = Instant::now();
         let (policy, test, test_tasks, finals) = self.evaluate(epoch)?;
@@ -774,23 +778,43 @@ impl<'a> Trainer<'a> {
     /// shard order) to the normaliser.
     fn collect(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
         let rows = self.play_into_replay(epoch, self.state.episodes_per_worker, tally)?;
-        self.state.episodes_per_worker += self.config.rollouts as u64;
-        let all = self.comm.gather_f32(&rows);
-        self.learner.agent.norm_mut().update(&all);
+        self.count_collected(&rows);
         Ok(())
+    }
+
+    /// The end of a cycle's collection: the episode counter moves on, and every rank's
+    /// observations (in global shard order) go to the normaliser.
+    fn count_collected(&mut self, rows: &[f32]) {
+        self.state.episodes_per_worker += self.config.rollouts as u64;
+        let all = self.comm.gather_f32(rows);
+        self.learner.agent.norm_mut().update(&all);
+    }
+
+    /// Whether the solver plays every step of `epoch`'s exploration episodes (behaviour cloning):
+    /// they then depend on the run's seeds alone, not on the learner.
+    fn solver_collects(&self, epoch: usize) -> bool {
+        self.learner.expert.is_none() && self.learner.agent.solver_share(epoch) == Some(1.0)
     }
 
     /// Every worker plays `rollouts` exploration episodes of `epoch`, the first of them its
     /// `base`-th; their transitions go to the worker's buffer. Returns their observations.
     fn play_into_replay(&mut self, epoch: usize, base: u64, tally: &mut EpochTally) -> Result<Vec<f32>> {
         let t = Instant::now();
-        let config = &self.config;
+        let plan = self.plan_cycle(base);
         let explorer = self.learner.agent.explorer();
-        let mixture = self.learner.mixture(&*explorer, epoch, config);
+        let mixture = self.learner.mixture(&*explorer, epoch, &self.config);
         let behaviour = match &mixture {
             Some(m) => Behaviour::Mixture(m),
             None => Behaviour::exploring(&*self.learner.agent, &*explorer, epoch),
         };
+        let eps = play_plan(&mut self.envs, &self.active, &behaviour, &plan)?;
+        tally.env_seconds += t.elapsed().as_secs_f64();
+        Ok(self.store_episodes(&eps, &plan, tally))
+    }
+
+    /// What every worker plays in a cycle of exploration episodes whose first is its `base`-th.
+    fn plan_cycle(&self, base: u64) -> Vec<Planned> {
+        let config = &self.config;
         let draws = (config.level_replay > 0.0 || config.challenge_share > 0.0).then(|| {
             self.tasks
                 .iter()
@@ -809,18 +833,22 @@ impl<'a> Trainer<'a> {
                 .collect::<Vec<_>>()
         });
         let active = &self.active;
-        let plan: Vec<Planned> = (0..config.workers)
+        (0..config.workers)
             .flat_map(|w| (0..config.rollouts).map(move |k| (w, k)))
             .map(|(w, k)| {
                 let seed = stream_seed(config.seed, &[1, self.shard(w) as u64, base + k as u64]);
                 let task = active[draw_task(seed, active.len())];
                 Planned { worker: w, task, seed, draw: draws.as_ref().map(|d| d[task]) }
             })
-            .collect();
-        let eps = play_plan(&mut self.envs, active, &behaviour, &plan)?;
-        tally.env_seconds += t.elapsed().as_secs_f64();
+            .collect()
+    }
+
+    /// Stores a cycle's episodes (and their hindsight relabellings) in the workers' buffers and
+    /// counts them; returns their observations.
+    fn store_episodes(&mut self, eps: &[Episode], plan: &[Planned], tally: &mut EpochTally) -> Vec<f32> {
+        let config = &self.config;
         let mut rows = Vec::new();
-        for (ep, planned) in eps.iter().zip(&plan) {
+        for (ep, planned) in eps.iter().zip(plan) {
             let max_steps = self.tasks[planned.task].spec.max_episode_steps;
             tally.episodes += 1;
             tally.wins += ep.success as usize;
@@ -843,49 +871,63 @@ impl<'a> Trainer<'a> {
                 rows.extend(other.obs.iter().flatten());
             }
         }
-        Ok(rows)
+        rows
+    }
+
+    /// An epoch's cycles where the solver plays every exploration episode: each cycle's updates
+    /// run while the environments play the next cycle's episodes on their own threads, which the
+    /// updates do not wait for. The next cycle's episodes do not depend on the learner, and they
+    /// reach the buffers and the normaliser after the updates, as they would one after the other:
+    /// the run is the same, transition for transition and weight for weight (tested). Its
+    /// `time/env_seconds` then overlap its `time/update_seconds`.
+    fn overlapped_cycles(&mut self, epoch: usize, tally: &mut EpochTally) -> Result<()> {
+        self.collect(epoch, tally)?;
+        for cycle in 0..self.config.cycles {
+            if cycle + 1 == self.config.cycles {
+                self.learn(epoch, cycle, tally);
+                break;
+            }
+            let plan = self.plan_cycle(self.state.episodes_per_worker);
+            let explorer = self.learner.agent.explorer();
+            let behaviour = Behaviour::exploring(&*self.learner.agent, &*explorer, epoch);
+            let (envs, active) = (&mut self.envs, &self.active);
+            let learning = Learning {
+                config: &self.config,
+                comm: self.comm,
+                learner: &mut self.learner,
+                replays: &self.replays,
+                demos: self.demo_replay.as_ref(),
+                updates: &mut self.state.updates,
+                obs_dim: self.obs_dim,
+            };
+            let (played, env_seconds) = std::thread::scope(|scope| {
+                let plan = &plan;
+                let collecting = scope.spawn(move || {
+                    let t = Instant::now();
+                    (play_plan(envs, active, &behaviour, plan), t.elapsed().as_secs_f64())
+                });
+                learning.cycle(epoch, cycle, tally);
+                collecting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            });
+            tally.env_seconds += env_seconds;
+            let rows = self.store_episodes(&played?, &plan, tally);
+            self.count_collected(&rows);
+        }
+        Ok(())
     }
 
     /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
     fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut EpochTally) {
-        let t = Instant::now();
-        let config = &self.config;
-        let (e, c) = (epoch as u64, cycle as u64);
-        let first = self.shard(0);
-        match config.replay_layout() {
-            // One batch of batch_size × workers from the process's buffer.
-            ReplayLayout::Shared => {
-                let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
-                for _ in 0..config.batches {
-                    self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
-                    let n = config.batch_size * config.workers;
-                    let batch =
-                        draw(&self.replays[0], self.demo_replay.as_ref(), n, config.finetune.demos_ratio, &mut rng);
-                    tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
-                    self.state.updates += 1;
-                }
-            }
-            // One batch per worker, each from its own buffer and stream.
-            ReplayLayout::PerWorker => {
-                let mut rngs: Vec<ChaCha8Rng> = (0..config.workers)
-                    .map(|w| ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[5, e, c, (first + w) as u64])))
-                    .collect();
-                for _ in 0..config.batches {
-                    self.learner.agent.hold_actor(self.state.updates < config.finetune.critic_warmup);
-                    let (demos, ratio) = (self.demo_replay.as_ref(), config.finetune.demos_ratio);
-                    let batches: Vec<Batch> = self
-                        .replays
-                        .iter()
-                        .zip(&mut rngs)
-                        .map(|(r, rng)| draw(r, demos, config.batch_size, ratio, rng))
-                        .collect();
-                    tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));
-                    self.state.updates += 1;
-                }
-            }
-        }
-        self.learner.end_cycle();
-        tally.update_seconds += t.elapsed().as_secs_f64();
+        let learning = Learning {
+            config: &self.config,
+            comm: self.comm,
+            learner: &mut self.learner,
+            replays: &self.replays,
+            demos: self.demo_replay.as_ref(),
+            updates: &mut self.state.updates,
+            obs_dim: self.obs_dim,
+        };
+        learning.cycle(epoch, cycle, tally);
     }
 
     /// The deterministic policy's test episodes at the current level and
@@ -1056,6 +1098,61 @@ impl<'a> Trainer<'a> {
         self.persist_seconds = started.elapsed().as_secs_f64();
         self.state.wall_seconds += self.persist_seconds;
         Ok(())
+    }
+}
+
+/// What a cycle's updates use: the learner, the buffers and the update count, apart from the
+/// environments (which may be playing the next cycle meanwhile, [`Trainer::overlapped_cycles`]).
+struct Learning<'t, 'c> {
+    config: &'t TrainConfig,
+    comm: &'c Comm,
+    learner: &'t mut Learner,
+    replays: &'t [ReplayBuffer],
+    demos: Option<&'t ReplayBuffer>,
+    updates: &'t mut u64,
+    obs_dim: usize,
+}
+
+impl Learning<'_, '_> {
+    /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
+    fn cycle(self, epoch: usize, cycle: usize, tally: &mut EpochTally) {
+        let t = Instant::now();
+        let config = self.config;
+        let (e, c) = (epoch as u64, cycle as u64);
+        let first = self.comm.rank() * config.workers;
+        match config.replay_layout() {
+            // One batch of batch_size × workers from the process's buffer.
+            ReplayLayout::Shared => {
+                let mut rng = ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[2, e, c]));
+                for _ in 0..config.batches {
+                    self.learner.agent.hold_actor(*self.updates < config.finetune.critic_warmup);
+                    let n = config.batch_size * config.workers;
+                    let batch = draw(&self.replays[0], self.demos, n, config.finetune.demos_ratio, &mut rng);
+                    tally.stats.extend(self.learner.update(&[batch], first, self.comm, self.obs_dim));
+                    *self.updates += 1;
+                }
+            }
+            // One batch per worker, each from its own buffer and stream.
+            ReplayLayout::PerWorker => {
+                let mut rngs: Vec<ChaCha8Rng> = (0..config.workers)
+                    .map(|w| ChaCha8Rng::seed_from_u64(stream_seed(config.seed, &[5, e, c, (first + w) as u64])))
+                    .collect();
+                for _ in 0..config.batches {
+                    self.learner.agent.hold_actor(*self.updates < config.finetune.critic_warmup);
+                    let (demos, ratio) = (self.demos, config.finetune.demos_ratio);
+                    let batches: Vec<Batch> = self
+                        .replays
+                        .iter()
+                        .zip(&mut rngs)
+                        .map(|(r, rng)| draw(r, demos, config.batch_size, ratio, rng))
+                        .collect();
+                    tally.stats.extend(self.learner.update(&batches, first, self.comm, self.obs_dim));
+                    *self.updates += 1;
+                }
+            }
+        }
+        self.learner.end_cycle();
+        tally.update_seconds += t.elapsed().as_secs_f64();
     }
 }
 
