@@ -890,16 +890,7 @@ impl<'a> Trainer<'a> {
             let plan = self.plan_cycle(self.state.episodes_per_worker);
             let explorer = self.learner.agent.explorer();
             let behaviour = Behaviour::exploring(&*self.learner.agent, &*explorer, epoch);
-            let (envs, active) = (&mut self.envs, &self.active);
-            let learning = Learning {
-                config: &self.config,
-                comm: self.comm,
-                learner: &mut self.learner,
-                replays: &self.replays,
-                demos: self.demo_replay.as_ref(),
-                updates: &mut self.state.updates,
-                obs_dim: self.obs_dim,
-            };
+            let (envs, active, learning) = self.split();
             let (played, env_seconds) = std::thread::scope(|scope| {
                 let plan = &plan;
                 let collecting = scope.spawn(move || {
@@ -918,6 +909,12 @@ impl<'a> Trainer<'a> {
 
     /// `batches` gradient steps, then the end of the cycle (DDPG's targets follow).
     fn learn(&mut self, epoch: usize, cycle: usize, tally: &mut EpochTally) {
+        self.split().2.cycle(epoch, cycle, tally);
+    }
+
+    /// The environments (and the active tasks they hold) apart from what the updates use, so that
+    /// the two can run side by side.
+    fn split(&mut self) -> (&mut VectorEnv, &[usize], Learning<'_, 'a>) {
         let learning = Learning {
             config: &self.config,
             comm: self.comm,
@@ -927,7 +924,7 @@ impl<'a> Trainer<'a> {
             updates: &mut self.state.updates,
             obs_dim: self.obs_dim,
         };
-        learning.cycle(epoch, cycle, tally);
+        (&mut self.envs, &self.active, learning)
     }
 
     /// The deterministic policy's test episodes at the current level and
