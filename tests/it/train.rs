@@ -1494,3 +1494,37 @@ fn a_resume_without_the_replay_log_regenerates_bc_exactly_and_refills_dagger() {
     let recorded: Vec<_> = spans(run.path()).iter().map(|s| (s.from_epoch, s.replay)).collect();
     assert_eq!(recorded, [(0, None), (2, Some(ReplayRebuilt::Refilled))]);
 }
+
+/// The run state committed for runs that outlive a machine (`experiments/*/state/RUN/`: checkpoint,
+/// config, progress and provenance, no replay log) is whole: the checkpoint loads without its replay
+/// log as the config's run, at the epoch progress.csv has reached, and every epoch it ran was made
+/// by a recorded clean build.
+#[test]
+fn the_committed_run_states_load_as_their_runs() {
+    use blockpuzzle::learn::train::RunDir;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut found = 0;
+    for experiment in std::fs::read_dir(&root).unwrap().flatten() {
+        let Ok(runs) = std::fs::read_dir(experiment.path().join("state")) else { continue };
+        for run in runs.flatten().filter(|r| r.path().is_dir()) {
+            let dir = RunDir { dir: run.path() };
+            let config = dir.read_config().unwrap();
+            let ckpt = dir.dir.join("checkpoint.bin");
+            let state = checkpoint::peek_state(&ckpt).unwrap();
+            let loaded = checkpoint::load_without_replay(&ckpt, &config.task_id(), state.obs_dim, state.act_dim)
+                .unwrap_or_else(|e| panic!("{}: {e}", ckpt.display()));
+            assert_eq!(loaded.agent.name(), config.algo.name(), "{}", ckpt.display());
+            assert!(!dir.dir.join("replay").exists(), "{}: no replay log in the repository", dir.dir.display());
+            let rows = read_progress(&dir.dir.join("progress.csv")).unwrap();
+            assert_eq!(rows.len(), state.epoch, "{}: progress.csv and the checkpoint", dir.dir.display());
+            let spans = dir.read_provenance().unwrap();
+            assert!(
+                !spans.is_empty()
+                    && spans.iter().all(|s| s.build.commit.as_ref().is_some_and(|c| !c.ends_with("-dirty"))),
+                "{spans:?}"
+            );
+            found += 1;
+        }
+    }
+    assert!(found >= 1, "no committed run state under {}", root.display());
+}
