@@ -620,18 +620,6 @@ impl<'a> Trainer<'a> {
                 false => ReplayRebuilt::Refilled,
             }
         });
-        if comm.is_root() {
-            write_json(&run.config(), &config)?;
-            run.record_provenance(begun.state.epoch, rebuilt)?;
-            if let Some(r) = rebuilt {
-                eprintln!(
-                    "{}: resumed at epoch {} without its replay log; {}",
-                    run.dir.display(),
-                    begun.state.epoch,
-                    r.describe()
-                );
-            }
-        }
         if comm.is_root() && comm.size() > 1 {
             let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
             eprintln!(
@@ -664,8 +652,17 @@ impl<'a> Trainer<'a> {
             persist_seconds: 0.0,
             created,
         };
+        // The buffers are whole before the run's files say so.
         if rebuilt == Some(ReplayRebuilt::Regenerated) {
             trainer.regenerate_replay(&pushed)?;
+        }
+        if comm.is_root() {
+            let (run, epoch) = (&trainer.run, trainer.state.epoch);
+            write_json(&run.config(), &trainer.config)?;
+            run.record_provenance(epoch, rebuilt)?;
+            if let Some(r) = rebuilt {
+                eprintln!("{}: resumed at epoch {epoch} without its replay log; {}", run.dir.display(), r.describe());
+            }
         }
         Ok(trainer)
     }
