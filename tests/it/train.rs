@@ -52,6 +52,20 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
     }
 }
 
+/// A small stream run of `algo` with the entity network: gripper and push tasks of generator seeds
+/// 0-2, two of them with environments each epoch.
+fn stream_run(algo: &str, epochs: usize) -> TrainConfig {
+    TrainConfig {
+        env: String::new(),
+        families: Some("gripper,push".into()),
+        generator_seeds: Some("0..3".parse().unwrap()),
+        active_tasks: 2,
+        algo: Algo::named(algo).unwrap(),
+        net: NetConfig { net: NetKind::Entity, ..NetConfig::default() },
+        ..tiny("", epochs)
+    }
+}
+
 fn tiny_pggd(env: &str, epochs: usize, aggrevated: AggrevatedConfig) -> TrainConfig {
     TrainConfig { algo: Algo::PGGD, aggrevated, ..tiny(env, epochs) }
 }
@@ -1221,15 +1235,7 @@ fn a_multi_task_run_draws_its_tasks_keeps_a_level_each_and_resumes_exactly() {
 /// another stream on resume, and its policy names the pool's tasks.
 #[test]
 fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly() {
-    let stream = |epochs| TrainConfig {
-        env: String::new(),
-        families: Some("gripper,push".into()),
-        generator_seeds: Some("0..3".parse().unwrap()),
-        active_tasks: 2,
-        algo: Algo::named("dagger").unwrap(),
-        net: NetConfig { net: NetKind::Entity, ..NetConfig::default() },
-        ..tiny("", epochs)
-    };
+    let stream = |epochs| stream_run("dagger", epochs);
     assert_eq!(stream(1).task_id(), "gripper+push-0-3");
     assert!(stream(1).default_run_dir().to_string_lossy().starts_with("runs/gripper+push-0-3-dagger-entity"));
     let (straight, split) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
@@ -1448,15 +1454,7 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
 fn a_resume_without_the_replay_log_regenerates_bc_exactly_and_refills_dagger() {
     use blockpuzzle::learn::train::{ReplayRebuilt, RunDir, Start};
     let bc = |epochs| {
-        let mut c = TrainConfig {
-            env: String::new(),
-            families: Some("gripper,push".into()),
-            generator_seeds: Some("0..3".parse().unwrap()),
-            active_tasks: 2,
-            algo: Algo::named("bc").unwrap(),
-            net: NetConfig { net: NetKind::Entity, ..NetConfig::default() },
-            ..tiny("", epochs)
-        };
+        let mut c = stream_run("bc", epochs);
         c.algos.bc.noise = 0.1;
         c
     };

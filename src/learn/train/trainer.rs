@@ -612,14 +612,6 @@ impl<'a> Trainer<'a> {
         };
         let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
-        let rebuilt = (start == Start::ResumeRebuildingReplay).then(|| {
-            let solver_only = (0..begun.state.epoch).all(|e| begun.agent.solver_share(e) == Some(1.0));
-            let level_zero = begun.state.levels.iter().all(|&l| l == 0);
-            match solver_only && level_zero && expert.is_none() && config.branched_from.is_none() {
-                true => ReplayRebuilt::Regenerated,
-                false => ReplayRebuilt::Refilled,
-            }
-        });
         if comm.is_root() && comm.size() > 1 {
             let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
             eprintln!(
@@ -652,6 +644,16 @@ impl<'a> Trainer<'a> {
             persist_seconds: 0.0,
             created,
         };
+        // Exact where the solver collected every stored transition at level 0 in this run itself.
+        let rebuilt = (start == Start::ResumeRebuildingReplay).then(|| {
+            let epochs = trainer.state.epoch;
+            let solver_only = (0..epochs).all(|e| trainer.solver_collects(e));
+            let level_zero = trainer.state.levels.iter().all(|&l| l == 0);
+            match solver_only && level_zero && trainer.config.branched_from.is_none() {
+                true => ReplayRebuilt::Regenerated,
+                false => ReplayRebuilt::Refilled,
+            }
+        });
         // The buffers are whole before the run's files say so.
         if rebuilt == Some(ReplayRebuilt::Regenerated) {
             trainer.regenerate_replay(&pushed)?;
@@ -686,7 +688,9 @@ impl<'a> Trainer<'a> {
         let now: Vec<u64> = self.replays.iter().map(ReplayBuffer::pushed).collect();
         if base != self.state.episodes_per_worker || now != pushed {
             refuse!(
-                "--rebuild-replay: collecting the run's {epochs} epochs again gave {base} episodes per worker and {now:?}                  transitions per buffer, where the checkpoint records {} and {pushed:?} (were --cycles or --rollouts                  changed during the run?); resume with its replay log, or start a new run",
+                "--rebuild-replay: collecting the run's {epochs} epochs again gave {base} episodes per worker and {now:?} \
+                 transitions per buffer, where the checkpoint records {} and {pushed:?} (were --cycles or --rollouts \
+                 changed during the run?); resume with its replay log, or start a new run",
                 self.state.episodes_per_worker
             );
         }
