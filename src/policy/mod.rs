@@ -4,7 +4,7 @@
 //! with a red gripper, and picking blue up and putting it on green.
 //!
 //! Both read only the observation, and the scripted controller nothing else: it keeps no state
-//! from step to step ([`SOLVER_VERSION`] 2). The scripted controller as a solver
+//! from step to step, and it does not read the order of the block rows ([`SOLVER_VERSION`] 3). The scripted controller as a solver
 //! ([`ScriptedPolicy::solver`], the `scripted` baseline) decides what to do
 //! from the `entities` observation alone: which blocks are blue, green, red,
 //! and whether the gripper or the table takes part in the rules.
@@ -227,8 +227,10 @@ fn colour_of(row: &[f32]) -> Colour {
 /// result, demonstrations file and dataset it makes ([`crate::benchmark::provenance::Build`]).
 /// Version 1 kept a plan from step to step (the behaviour chosen at the first step, the route
 /// around red, the steps spent closing, the swipe, letting go and rising); version 2 is a function
-/// of one observation.
-pub const SOLVER_VERSION: u32 = 2;
+/// of one observation; version 3 chooses among blocks of one colour by where they are (the
+/// nearest, [`nearest`]), never by their slot in the observation, so that its action does not
+/// depend on the order of the block rows and a policy that reads them as a set can copy it.
+pub const SOLVER_VERSION: u32 = 3;
 
 /// The scripted controller: for block tasks, get behind the blue block and
 /// push it towards the green one (or push the green one onto the blue one if
@@ -388,6 +390,22 @@ fn toward(from: [f64; 3], to: [f64; 3]) -> [f32; ACTION_DIM] {
 
 fn xy_dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// The block of `colour` nearest to `to` in the plane among those `keep` admits: a choice among
+/// alike blocks by where they are, never by their slot, so that the solver's action is the same
+/// whatever the order of the block rows. Blocks at one distance go to the lower x, then y, then z.
+fn nearest<'a>(
+    blocks: &'a [SeenBlock],
+    colour: Colour,
+    to: [f64; 3],
+    keep: impl Fn(&SeenBlock) -> bool,
+) -> Option<&'a SeenBlock> {
+    let key = |b: &SeenBlock| [xy_dist(b.pos, to), b.pos[0], b.pos[1], b.pos[2]];
+    blocks.iter().filter(|b| b.colour == colour && keep(b)).min_by(|a, b| {
+        let (ka, kb) = (key(a), key(b));
+        (0..4).map(|k| ka[k].total_cmp(&kb[k])).find(|o| o.is_ne()).unwrap_or(std::cmp::Ordering::Equal)
+    })
 }
 
 /// Distance from `p` to the segment `a`–`b` in the plane.

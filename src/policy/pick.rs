@@ -3,7 +3,7 @@
 //! block is held is read off the fingers (closed on something and at rest, around the block), and
 //! whether a block is being let go off the blocks on green and the fingers' aperture.
 
-use super::{toward, xy_dist, Seen, SeenBlock, ACTION_DIM};
+use super::{nearest, toward, xy_dist, Seen, SeenBlock, ACTION_DIM};
 use crate::sim::rules::Colour;
 
 /// Finger aperture (the two finger joints' sum) above which the fingers count as open.
@@ -65,8 +65,11 @@ fn grasp(seen: &Seen, at: [f64; 3], travel_z: f64) -> [f32; ACTION_DIM] {
 /// episode at the touch). Gripper action on.
 pub(super) fn pick_place(seen: &Seen) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
-    let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
-    let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
+    // Blue nearest the gripper, and the green block nearest to it.
+    let Some(blue) = nearest(blocks, Colour::Blue, grip, |_| true).map(|b| b.pos) else {
+        return [0.0; ACTION_DIM];
+    };
+    let Some(green) = nearest(blocks, Colour::Green, blue, |_| true).map(|b| b.pos) else {
         return [0.0; ACTION_DIM];
     };
     if !holds(seen, blue) {
@@ -87,14 +90,16 @@ pub(super) fn pick_place(seen: &Seen) -> [f32; ACTION_DIM] {
     with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
 }
 
-/// Each blue block in turn: the one held, else the first not on green yet in observation order.
+/// Each blue block in turn: the one held, else the one nearest the gripper of those not on green yet
+/// (by where the blocks are, not by their order in the observation).
 /// Pick it up, carry it above green high enough to pass over the blocks already there, set it down
 /// on a free corner of green's top, open the fingers and rise straight up clear of it. Gripper
 /// action on, several blue blocks.
 pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
     let size = |b: &SeenBlock| seen.sizes.get(b.slot).copied().unwrap_or([0.025; 3]);
-    let Some(green) = blocks.iter().find(|b| b.colour == Colour::Green) else {
+    // The green block nearest the gripper (a tray, as the family draws it).
+    let Some(green) = nearest(blocks, Colour::Green, grip, |_| true) else {
         return [0.0; ACTION_DIM];
     };
     let (g, gs) = (green.pos, size(green));
@@ -124,7 +129,7 @@ pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
     if aperture(seen) <= OPEN && blues.iter().any(|b| around(seen, b.pos) && set_down(b)) {
         return with([0.0; ACTION_DIM], 1.0);
     }
-    if let Some(&blue) = blues.iter().find(|b| holds(seen, b.pos)) {
+    if let Some(blue) = nearest(blocks, Colour::Blue, grip, |b| holds(seen, b.pos)) {
         // Carry with blue's bottom 3 cm above the tops of the blocks already on green.
         let (bh, spot) = (size(blue)[2], spot(blue));
         let carry = top + 3.0 * bh + 0.03;
@@ -139,7 +144,7 @@ pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
         }
         return with(toward(grip, [grip[0], grip[1], top + bh - 0.01]), -1.0);
     }
-    let Some(next) = blues.iter().find(|b| !on_green(b)) else {
+    let Some(next) = nearest(blocks, Colour::Blue, grip, |b| !on_green(b)) else {
         return with([0.0; ACTION_DIM], 1.0); // all there (success ends the episode)
     };
     // Over green (and the blocks set down there) and not at the next block: pass above them,

@@ -3,15 +3,19 @@
 //! waypoint chosen afresh at every step from where the blocks are; with a red gripper, always green
 //! onto blue.
 
-use super::{seg_dist, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, SAFE_Z, STANDOFF};
+use super::{nearest, seg_dist, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, SAFE_Z, STANDOFF};
 use crate::sim::rules::Colour;
 
-/// Push blue against green (grey gripper, blocked fingers), around red blocks; or, where
+/// Push blue against green (grey gripper, blocked fingers; the green block nearest blue), around
+/// red blocks; or, where
 /// `green_onto_blue` (a red gripper, which must never touch blue), green onto blue, straight.
 pub(super) fn push(seen: &Seen, green_onto_blue: bool) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
-    let find = |c: Colour| blocks.iter().find(|b| b.colour == c).map(|b| b.pos);
-    let (Some(blue), Some(green)) = (find(Colour::Blue), find(Colour::Green)) else {
+    // Blue nearest the gripper, and the green block nearest to it.
+    let Some(blue) = nearest(blocks, Colour::Blue, grip, |_| true).map(|b| b.pos) else {
+        return [0.0; ACTION_DIM];
+    };
+    let Some(green) = nearest(blocks, Colour::Green, blue, |_| true).map(|b| b.pos) else {
         return [0.0; ACTION_DIM];
     };
     if green_onto_blue {

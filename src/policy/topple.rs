@@ -36,7 +36,8 @@ const CONTACT: f64 = 0.08;
 /// line (whose line it holds), it goes on as the tower falls, until no block stands under blue.
 pub(super) fn topple(seen: &Seen) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
-    let Some(blue) = blocks.iter().find(|b| b.colour == Colour::Blue).map(|b| b.pos) else {
+    // The blue block nearest the gripper (a tower has one).
+    let Some(blue) = super::nearest(blocks, Colour::Blue, grip, |_| true).map(|b| b.pos) else {
         return [0.0; ACTION_DIM];
     };
     let low = grip[2] < TOPPLE_Z + 0.01;

@@ -1450,6 +1450,7 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
 /// played, collects its buffers again from the run's seeds and continues exactly as if never
 /// stopped; DAgger, whose transitions came from learners the run no longer has, refills them from
 /// empty. Both say so in provenance.json; without the flag, the missing log is refused naming it.
+/// A run whose labels came from another solver version is refused either way.
 #[test]
 fn a_resume_without_the_replay_log_regenerates_bc_exactly_and_refills_dagger() {
     use blockpuzzle::learn::train::{ReplayRebuilt, RunDir, Start};
@@ -1476,6 +1477,19 @@ fn a_resume_without_the_replay_log_regenerates_bc_exactly_and_refills_dagger() {
     assert_eq!(recorded, [(0, None), (2, Some(ReplayRebuilt::Regenerated))]);
     // Its buffers were logged again: a plain resume from here reads them back.
     train(&bc(4), carried.path(), Start::Resume, &mut quiet).unwrap();
+    // Labelled by another solver version: refused, naming both versions, and nothing written.
+    let provenance = carried.path().join("provenance.json");
+    let mut spans_json: serde_json::Value = serde_json::from_slice(&std::fs::read(&provenance).unwrap()).unwrap();
+    let older = blockpuzzle::policy::SOLVER_VERSION - 1;
+    spans_json.as_array_mut().unwrap().last_mut().unwrap()["solver"] = older.into();
+    std::fs::write(&provenance, serde_json::to_vec_pretty(&spans_json).unwrap()).unwrap();
+    let before = std::fs::read(carried.path().join("checkpoint.bin")).unwrap();
+    for start in [Start::Resume, Start::ResumeRebuildingReplay] {
+        let e = format!("{:#}", anyhow::Error::from(train(&bc(5), carried.path(), start, &mut quiet).unwrap_err()));
+        assert!(e.contains(&format!("labelled by solver version {older}")) && e.contains("another --run-dir"), "{e}");
+    }
+    assert_eq!(std::fs::read(carried.path().join("checkpoint.bin")).unwrap(), before);
+    assert_eq!(serde_json::from_slice::<serde_json::Value>(&std::fs::read(&provenance).unwrap()).unwrap(), spans_json);
 
     // DAgger: refilled, and the run goes on from its checkpoint.
     let mut dagger = tiny("BlocksTouch-v0", 2);

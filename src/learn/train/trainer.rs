@@ -21,6 +21,7 @@ use crate::learn::agents::registry::Algo;
 use crate::learn::agents::replay::{Batch, ReplayBuffer};
 use crate::policy::actor::AnyPolicy;
 use crate::policy::actor::DeterministicPolicy;
+use crate::policy::SOLVER_VERSION;
 use crate::support::io::write_json;
 use crate::task::Task;
 use rand::SeedableRng;
@@ -195,8 +196,22 @@ fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episod
 
 /// Before anything is created on a resume: the run exists and was written by
 /// a job of this job's size (rank 0's checkpoint says; every rank learns it).
-fn check_resume(comm: &Comm, run: &RunDir) -> Result<()> {
+fn check_resume(comm: &Comm, run: &RunDir, imitates: bool) -> Result<()> {
     comm.root_check(|| {
+        // An imitation run's labels are its solver's: another solver version would label the rest
+        // of the run otherwise, and its regenerated buffers would not be the ones it had.
+        let last = run.read_provenance()?.pop();
+        if let Some(made_by) = last.map(|s| s.build).filter(|b| imitates && b.solver_version() != SOLVER_VERSION) {
+            refuse!(
+                "--resume: {} imitates the solver, and its epochs so far were labelled by solver version {}; this \
+                 build's solver is version {SOLVER_VERSION}, whose labels differ; resume it with a build of solver \
+                 version {} ({}), or start a new run with another --run-dir",
+                run.dir.display(),
+                made_by.solver_version(),
+                made_by.solver_version(),
+                made_by.maker()
+            );
+        }
         let path = [run.checkpoint(), checkpoint::previous(&run.checkpoint())].into_iter().find(|p| p.exists());
         let Some(path) = path else {
             refuse!(
@@ -503,7 +518,7 @@ impl<'a> Trainer<'a> {
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
         if resume {
-            check_resume(comm, &run)?;
+            check_resume(comm, &run, config.algo.registration().info.imitates)?;
         }
         if std::fs::metadata(&run.dir).is_ok_and(|m| !m.is_dir()) {
             refuse!(
