@@ -7,8 +7,8 @@ use super::{nearest, seg_dist, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, 
 use crate::sim::rules::Colour;
 
 /// Push blue against green (grey gripper, blocked fingers; the green block nearest blue), around
-/// red blocks; or, where
-/// `green_onto_blue` (a red gripper, which must never touch blue), green onto blue, straight.
+/// red blocks; or, where `green_onto_blue` (a red gripper, which must never touch blue), green onto
+/// blue, straight.
 pub(super) fn push(seen: &Seen, green_onto_blue: bool) -> [f32; ACTION_DIM] {
     let (grip, blocks) = (seen.grip, seen.blocks);
     // Blue nearest the gripper, and the green block nearest to it.
