@@ -133,6 +133,12 @@ fn check(command: &str, makefile: &str) -> Option<String> {
             .find(|t| !makefile.lines().any(|l| l.starts_with(&format!("{t}:"))))
             .map(|t| format!("no make target {t}")),
         ["bash" | "python3", script, ..] => (!root().join(script).is_file()).then(|| format!("no file {script}")),
+        // A diagnostic built by `cargo build --release --example NAME`: its source must exist.
+        [bin, ..] if bin.starts_with("./target/release/examples/") => {
+            let name = bin.trim_start_matches("./target/release/examples/");
+            let source = format!("examples/{name}.rs");
+            (!root().join(&source).is_file()).then(|| format!("no example {source}"))
+        }
         // Installing and building: what they run is the package's and cargo's business.
         ["pip", "install", ..] | ["cargo", "build", ..] => None,
         _ => Some("a command this test does not know: check it here, or mark the block as a fragment".into()),
@@ -152,6 +158,8 @@ fn every_command_line_in_the_docs_parses() {
     // The check can fail: an unknown flag and an out-of-range value are caught.
     assert!(check("blockpuzzle eval --suite layout --no-such-flag", &makefile).is_some());
     assert!(check("blockpuzzle rollout --env BlocksTouch-v0 --episodes 0 --out x.jsonl", &makefile).is_some());
+    assert!(check("./target/release/examples/no_such_probe --steps 1", &makefile).is_some());
+    assert!(check("./target/release/examples/solver_probe --steps 1", &makefile).is_none());
     assert!(check("make no-such-target", &makefile).is_some());
 }
 
