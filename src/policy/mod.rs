@@ -4,7 +4,8 @@
 //! with a red gripper, and picking blue up and putting it on green.
 //!
 //! Both read only the observation, and the scripted controller nothing else: it keeps no state
-//! from step to step, and it does not read the order of the block rows ([`SOLVER_VERSION`] 3). The scripted controller as a solver
+//! from step to step, and it does not read the order of the block rows ([`SOLVER_VERSION`] 3).
+//! The scripted controller as a solver
 //! ([`ScriptedPolicy::solver`], the `scripted` baseline) decides what to do
 //! from the `entities` observation alone: which blocks are blue, green, red,
 //! and whether the gripper or the table takes part in the rules.

@@ -195,7 +195,8 @@ fn check_memory(config: &TrainConfig, obs_dim: usize, act_dim: usize, max_episod
 }
 
 /// Before anything is created on a resume: the run exists and was written by
-/// a job of this job's size (rank 0's checkpoint says; every rank learns it).
+/// a job of this job's size (rank 0's checkpoint says; every rank learns it), and an imitation
+/// run (`imitates`) was labelled by this build's solver version (its `provenance.json` says).
 fn check_resume(comm: &Comm, run: &RunDir, imitates: bool) -> Result<()> {
     comm.root_check(|| {
         // An imitation run's labels are its solver's: another solver version would label the rest
