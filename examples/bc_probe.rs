@@ -27,7 +27,7 @@ use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind};
 use blockpuzzle::learn::agents::nets::{append_grads, Adam, Net};
 use blockpuzzle::learn::agents::shared::SharedConfig;
-use blockpuzzle::policy::actor::DeterministicPolicy;
+use blockpuzzle::policy::actor::{AnyPolicy, DeterministicPolicy};
 use blockpuzzle::policy::Policy;
 use blockpuzzle::BlockEnv;
 use clap::Parser;
@@ -207,17 +207,6 @@ impl<P: Policy> Policy for Viewed<P> {
     }
 }
 
-/// A trained student as a policy: the plain-Rust copy of its network and its normaliser
-/// (what a training run saves and rolls out).
-struct Frozen(DeterministicPolicy);
-
-impl Policy for Frozen {
-    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
-        let a = self.0.act(obs);
-        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
-    }
-}
-
 /// Checks [`flat_view`] against the flat environment: the expert plays the episode of `seed`
 /// in both environments, and every observation it acts on in the flat one must equal, bit for
 /// bit, the flat view of the `objects` one. Returns the number of observations compared.
@@ -394,7 +383,8 @@ impl Student {
 
     /// The student as a policy in the `objects` environment of layout `spec`.
     fn policy(&self, spec: ObsSpec) -> Box<dyn Policy> {
-        let frozen = Frozen(DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() });
+        let frozen =
+            AnyPolicy::Deterministic(DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() });
         Box::new(Viewed { policy: frozen, flat_of: self.flat.then_some(spec) })
     }
 }

@@ -32,7 +32,7 @@ use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind, Pooling};
 use blockpuzzle::learn::agents::nets::{append_grads, Adam, Net};
 use blockpuzzle::policy::actor::normalizer::Normalizer;
-use blockpuzzle::policy::actor::DeterministicPolicy;
+use blockpuzzle::policy::actor::{AnyPolicy, DeterministicPolicy};
 use blockpuzzle::policy::{Policy, ScriptedPolicy};
 use blockpuzzle::task::Task;
 use blockpuzzle::BlockEnv;
@@ -188,7 +188,7 @@ fn main() -> Result<()> {
                 .map(|t| {
                     let mut p: Box<dyn Policy> = match player {
                         0 => Box::new(ScriptedPolicy::solver(slots)),
-                        k => Box::new(Frozen(policies[k - 1].clone())),
+                        k => Box::new(AnyPolicy::Deterministic(policies[k - 1].clone())),
                     };
                     evaluate(t, slots, p.as_mut(), args.eval_episodes)
                 })
@@ -402,16 +402,6 @@ impl Student {
 
     fn frozen(&self) -> DeterministicPolicy {
         DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() }
-    }
-}
-
-/// A trained student as a policy.
-struct Frozen(DeterministicPolicy);
-
-impl Policy for Frozen {
-    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
-        let a = self.0.act(obs);
-        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
     }
 }
 

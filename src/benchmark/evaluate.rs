@@ -86,8 +86,11 @@ impl Trained {
 
 impl Policy for Trained {
     fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
-        let a = if self.grey_blind { self.policy.act(&without_grey(obs)) } else { self.policy.act(obs) };
-        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+        if self.grey_blind {
+            Policy::act(&mut self.policy, &without_grey(obs))
+        } else {
+            Policy::act(&mut self.policy, obs)
+        }
     }
 }
 

@@ -396,12 +396,12 @@ fn xy_dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// The block of `colour` nearest to `to` in the plane among those `keep` admits: a choice among
 /// alike blocks by where they are, never by their slot, so that the solver's action is the same
 /// whatever the order of the block rows. Blocks at one distance go to the lower x, then y, then z.
-fn nearest<'a>(
-    blocks: &'a [SeenBlock],
+fn nearest(
+    blocks: &[SeenBlock],
     colour: Colour,
     to: [f64; 3],
     keep: impl Fn(&SeenBlock) -> bool,
-) -> Option<&'a SeenBlock> {
+) -> Option<&SeenBlock> {
     let key = |b: &SeenBlock| [xy_dist(b.pos, to), b.pos[0], b.pos[1], b.pos[2]];
     blocks.iter().filter(|b| b.colour == colour && keep(b)).min_by(|a, b| {
         let (ka, kb) = (key(a), key(b));

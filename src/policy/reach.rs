@@ -8,8 +8,8 @@ const TABLE_TOP: f64 = 0.4;
 /// How far the fingertips reach below the grip site.
 const FINGERTIP_BELOW: f64 = 0.0185;
 
-/// Onto the green block nearest the gripper (blue gripper); while red blocks stand around, first above the
-/// highest red top (a block's top is read from its centre height).
+/// Onto the green block nearest the gripper (blue gripper); while red blocks stand around, first
+/// above the highest red top (a block's top is read from its centre height).
 pub(super) fn reach(seen: &Seen) -> [f32; ACTION_DIM] {
     {
         let (grip, blocks) = (seen.grip, seen.blocks);

@@ -203,13 +203,12 @@ fn check_resume(comm: &Comm, run: &RunDir, imitates: bool) -> Result<()> {
         // of the run otherwise, and its regenerated buffers would not be the ones it had.
         let last = run.read_provenance()?.pop();
         if let Some(made_by) = last.map(|s| s.build).filter(|b| imitates && b.solver_version() != SOLVER_VERSION) {
+            let version = made_by.solver_version();
             refuse!(
-                "--resume: {} imitates the solver, and its epochs so far were labelled by solver version {}; this \
-                 build's solver is version {SOLVER_VERSION}, whose labels differ; resume it with a build of solver \
-                 version {} ({}), or start a new run with another --run-dir",
+                "--resume: {} imitates the solver, and its epochs so far were labelled by solver version {version}; \
+                 this build's solver is version {SOLVER_VERSION}, whose labels differ; resume it with a build of \
+                 solver version {version} ({}), or start a new run with another --run-dir",
                 run.dir.display(),
-                made_by.solver_version(),
-                made_by.solver_version(),
                 made_by.maker()
             );
         }

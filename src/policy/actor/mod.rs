@@ -31,6 +31,15 @@ pub enum AnyPolicy {
     Deterministic(DeterministicPolicy),
 }
 
+/// A trained policy in the episode loop: its deterministic action, padded with zeros to the
+/// environment's [`crate::env::ACTION_DIM`] components where its network has fewer.
+impl crate::policy::Policy for AnyPolicy {
+    fn act(&mut self, obs: &[f32]) -> [f32; crate::env::ACTION_DIM] {
+        let a = AnyPolicy::act(self, obs);
+        std::array::from_fn(|k| a.get(k).copied().unwrap_or(0.0))
+    }
+}
+
 impl AnyPolicy {
     /// The deterministic action (DDPG: π(s); PGGD: clip(μ(s), ±1)).
     pub fn act(&self, obs: &[f32]) -> Vec<f32> {
