@@ -391,7 +391,11 @@ pub fn pool(
     } else {
         indicatif::ProgressBar::hidden()
     };
+    // Off a terminal the bar draws nothing: a line per family says how far a long pool has come.
+    let lines = progress && !std::io::IsTerminal::is_terminal(&std::io::stderr());
     for (index, (_, family)) in families.iter().enumerate() {
+        let family_started = std::time::Instant::now();
+        let checked_before = checked;
         let mut cache_file = Cache::read(cache, family, &engine);
         let seeds: Vec<u64> = (range.0[0]..range.0[1]).collect();
         // Cached seeds are drawn again (cheap) and kept where the hash still matches.
@@ -459,6 +463,17 @@ pub fn pool(
         }
         if changed {
             cache_file.write(cache, family, &engine);
+        }
+        if lines {
+            eprintln!(
+                "stream pool: family {} ({} of {}): {} generator seeds, {} checked by the solver, in {:.1} s",
+                family.spec.family,
+                index + 1,
+                families.len(),
+                range.len(),
+                checked - checked_before,
+                family_started.elapsed().as_secs_f64()
+            );
         }
     }
     bar.finish_and_clear();

@@ -399,7 +399,7 @@ impl Family {
         if most > MAX_FAMILY_BLOCKS {
             return Err(err(format!("the groups may draw {most} blocks; a family draws at most {MAX_FAMILY_BLOCKS}")));
         }
-        check_shuffle(&spec).map_err(err)?;
+        check_shuffle(&spec).map_err(|m| at(super::diagnostics::field_span(text, "shuffle"), m))?;
         let hash = super::compile::sha256_id(text.as_bytes());
         Ok(Family { spec, hash, origin: origin.to_owned(), text: Some(text.to_owned()) })
     }

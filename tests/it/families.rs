@@ -97,7 +97,10 @@ fn a_family_shuffles_alike_single_blocks_and_refuses_what_cannot_be_shuffled() {
         assert!(want.iter().all(|w| e.contains(w)), "{want:?} missing from: {e}");
     };
     let with = |shuffle: &str| base.replace("shuffle = [[\"blue\", \"green\", \"grey\"]]", shuffle);
-    refused(with("shuffle = [[\"blue\", \"purple\"]]"), &["\"purple\", which is not a block group", "grey2"]);
+    // The error names the file and the line of `shuffle`.
+    let line = base.lines().position(|l| l.starts_with("shuffle =")).unwrap() + 1;
+    let at_line = format!("f.toml:{line}: ");
+    refused(with("shuffle = [[\"blue\", \"purple\"]]"), &[&at_line, "\"purple\", which is not a block group", "grey2"]);
     refused(with("shuffle = [[\"blue\"]]"), &["at least two block groups"]);
     refused(with("shuffle = [[\"blue\", \"green\"], [\"green\", \"grey\"]]"), &["\"green\" is in two shuffles"]);
     refused(with("shuffle = [[\"blue\", \"grey2\"]]"), &["\"grey2\" has count [0, 1]", "count = [1, 1]"]);

@@ -115,7 +115,12 @@ fn a_stream_over_two_ranks_learns_exactly_what_one_process_of_two_workers_learns
         s.split_whitespace().map(str::to_owned).chain([run.display().to_string()]).collect::<Vec<_>>()
     };
     let cache = dir.path().join("cache");
-    ok(Command::new(BP).args(stream(&threads, 2)).env("BLOCKPUZZLE_CACHE_DIR", &cache).output().unwrap());
+    let out = ok(Command::new(BP).args(stream(&threads, 2)).env("BLOCKPUZZLE_CACHE_DIR", &cache).output().unwrap());
+    // Off a terminal (here, a pipe) the pool says how far it has come, a line per family.
+    let err = String::from_utf8_lossy(&out.stderr);
+    for line in ["stream pool: family gripper (1 of 2): 3 generator seeds, 3 checked", "family push (2 of 2)"] {
+        assert!(err.contains(line), "{line:?} missing from: {err}");
+    }
     // An empty cache on the ranks' side: rank 0 works the pool out again, the others receive it.
     let fresh = dir.path().join("cache-ranks");
     ok(mpirun(2).args(stream(&ranks, 1)).env("BLOCKPUZZLE_CACHE_DIR", &fresh).output().unwrap());
