@@ -12,7 +12,13 @@
 //! value: the entity set network, rows 64 wide, head 3 × 256, Adam 0.001, no decay):
 //! `width`, `hidden`, `layers`, `encoder`, `lr`, `decay` (`none` or `cos`: cosine to 0 over the
 //! steps), `pooling` (`mean-max`, `attention`, `colour`, `query`), `transformer` (blocks),
-//! `tokens` (1: robot tokens), `typenorm` (1: statistics per row type).
+//! `tokens` (1: robot tokens), `typenorm` (1: statistics per row type), `heads` (K ≥ 2: K action
+//! heads and K logits trained by multiple-choice learning: the squared error of the nearest head,
+//! a little of every head's, and cross-entropy on which head was nearest; acting takes the most
+//! likely head, so a label that is "left or right of red" is not averaged into "straight on"),
+//! `balance` (1: each row of a batch from a family drawn uniformly, then a row of it, instead of a
+//! row drawn uniformly from all: every family gets the same share of the updates whatever the
+//! length of its episodes).
 //!
 //! The data: per task, `--episodes` solver episodes from episode seed 0 on (seeds ≡ 0 mod 5 held
 //! out), acted with Gaussian noise of `--noise` on the solver's action (DART) and labelled with
@@ -83,6 +89,17 @@ struct Args {
     /// Seed of the students' initial weights, the batches and the noise.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// DAgger rounds after the first training: each student plays `--dagger-episodes` episodes per
+    /// task, the solver labels every step, the rows join that student's, and it trains
+    /// `--dagger-steps` more steps.
+    #[arg(long, default_value_t = 0)]
+    dagger: usize,
+    /// Episodes per task in each DAgger round.
+    #[arg(long, default_value_t = 50)]
+    dagger_episodes: u64,
+    /// Gradient steps after each DAgger round.
+    #[arg(long, default_value_t = 3000)]
+    dagger_steps: usize,
     /// libtorch threads.
     #[arg(long, default_value_t = 1)]
     torch_threads: usize,
@@ -120,8 +137,12 @@ fn main() -> Result<()> {
         args.noise
     );
 
-    let parts: Vec<(Data, Data, usize, usize)> =
-        tasks.par_iter().enumerate().map(|(i, (_, t))| collect(&args, i as u64, t, slots)).collect::<Result<_>>()?;
+    let family_of = |name: &str| families.iter().position(|(f, _)| f == name).unwrap_or(0);
+    let parts: Vec<(Data, Data, usize, usize)> = tasks
+        .par_iter()
+        .enumerate()
+        .map(|(i, (f, t))| collect(&args, i as u64, family_of(f), t, slots))
+        .collect::<Result<_>>()?;
     let (mut train, mut val) = (Data::default(), Data::default());
     let (mut wins, mut episodes) = (0, 0);
     for (t, v, w, n) in parts {
@@ -142,34 +163,38 @@ fn main() -> Result<()> {
     let spec = ObsSpec::new(ObsMode::Entities, slots);
     let mut students: Vec<Student> =
         specs.iter().map(|s| Student::new(s, &spec, args.seed, &train)).collect::<Result<_>>()?;
-    let (train_y, val_y) = (train.actions(), val.actions());
+    let val_y = val.actions();
     let val_x: Vec<Tensor> = students.iter().map(|s| s.norm.tensor(&val.obs)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     rng.set_stream(1);
     println!("\ntraining: {} steps of {} rows; per student: batch MSE, validation MSE, share of validation rows with a component off by > {MISS}, per-component validation MSE, update seconds", args.steps, args.batch);
-    let mut recent = vec![0.0; students.len()];
-    for step in 1..=args.steps {
-        let rows: Vec<i64> = (0..args.batch).map(|_| rng.gen_range(0..train.len()) as i64).collect();
-        let index = Tensor::of_slice(&rows);
-        let y = train_y.index_select(0, &index);
-        for (k, s) in students.iter_mut().enumerate() {
-            s.set_lr(step, args.steps);
-            recent[k] += s.update(&index, &y) / REPORT_EVERY as f64;
-        }
-        if step % REPORT_EVERY == 0 || step == args.steps {
-            for (k, s) in students.iter().enumerate() {
-                let (mse, miss, per) = s.validation(&val_x[k], &val_y);
-                let per: Vec<String> = per.iter().map(|v| format!("{v:.4}")).collect();
-                println!(
-                    "step {step:>7} {:<12} {:.5} {mse:.5} {miss:.4} [{}] {:.0} s",
-                    s.spec.name,
-                    recent[k],
-                    per.join(" "),
-                    s.seconds
-                );
-                recent[k] = 0.0;
+    fit(&mut students, args.steps, args.batch, &mut rng, &val_x, &val_y);
+    for round in 1..=args.dagger {
+        println!(
+            "\nDAgger round {round}: {} episodes per task played by each student, labelled by the solver",
+            args.dagger_episodes
+        );
+        for s in students.iter_mut() {
+            let player = s.frozen();
+            let parts: Vec<(Data, usize)> = tasks
+                .par_iter()
+                .map(|(f, t)| dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player()))
+                .collect::<Result<_>>()?;
+            let mut data = Data::default();
+            let mut wins = 0;
+            for (d, w) in parts {
+                data.extend(d);
+                wins += w;
             }
+            let episodes = args.dagger_episodes as usize * tasks.len();
+            println!(
+                "{:<12} succeeded in {wins}/{episodes} of its own episodes; {} rows added",
+                s.spec.name,
+                data.len()
+            );
+            s.add(&data);
         }
+        fit(&mut students, args.dagger_steps, args.batch, &mut rng, &val_x, &val_y);
     }
 
     println!("\nevaluation: {} deterministic episodes per task from seed {EVAL_SEED}", args.eval_episodes);
@@ -177,7 +202,7 @@ fn main() -> Result<()> {
     header.extend(students.iter().map(|s| s.spec.name.clone()));
     println!("| family | {} |", header.join(" | "));
     println!("|---|{}", "---:|".repeat(header.len()));
-    let policies: Vec<DeterministicPolicy> = students.iter().map(Student::frozen).collect();
+    let policies: Vec<Box<dyn Fn() -> Box<dyn Policy> + Sync>> = students.iter().map(Student::frozen).collect();
     let mut per_family: Vec<Vec<(Outcomes, Vec<usize>)>> = Vec::new();
     for (name, _) in &families {
         let of: Vec<&Task> = tasks.iter().filter(|(f, _)| f == name).map(|(_, t)| t).collect();
@@ -188,7 +213,7 @@ fn main() -> Result<()> {
                 .map(|t| {
                     let mut p: Box<dyn Policy> = match player {
                         0 => Box::new(ScriptedPolicy::solver(slots)),
-                        k => Box::new(AnyPolicy::Deterministic(policies[k - 1].clone())),
+                        k => policies[k - 1](),
                     };
                     evaluate(t, slots, p.as_mut(), args.eval_episodes)
                 })
@@ -214,11 +239,68 @@ fn main() -> Result<()> {
     Ok(())
 }
 
+/// `steps` Adam steps of every student, each on `batch` of its own rows (the same uniform draws
+/// for all, mapped to rows by [`Student::row`]), with a report every [`REPORT_EVERY`] steps.
+fn fit(students: &mut [Student], steps: usize, batch: usize, rng: &mut ChaCha8Rng, val_x: &[Tensor], val_y: &Tensor) {
+    let mut recent = vec![0.0; students.len()];
+    let balance = students.iter().any(|s| s.spec.balance);
+    for step in 1..=steps {
+        // A family draw only where a student balances, so that the others' batches do not depend on it.
+        let draws: Vec<(f64, f64)> =
+            (0..batch).map(|_| (if balance { rng.gen::<f64>() } else { 0.0 }, rng.gen::<f64>())).collect();
+        for (k, s) in students.iter_mut().enumerate() {
+            s.set_lr(step, steps);
+            let rows: Vec<i64> = draws.iter().map(|&d| s.row(d)).collect();
+            recent[k] += s.update(&Tensor::of_slice(&rows)) / REPORT_EVERY as f64;
+        }
+        if step % REPORT_EVERY == 0 || step == steps {
+            for (k, s) in students.iter().enumerate() {
+                let (mse, miss, per) = s.validation(&val_x[k], val_y);
+                let per: Vec<String> = per.iter().map(|v| format!("{v:.4}")).collect();
+                println!(
+                    "step {step:>7} {:<12} {:.5} {mse:.5} {miss:.4} [{}] {:.0} s",
+                    s.spec.name,
+                    recent[k],
+                    per.join(" "),
+                    s.seconds
+                );
+                recent[k] = 0.0;
+            }
+        }
+    }
+}
+
+/// The first episode seed of DAgger's rounds (apart from the recorded 0.. and the evaluation's).
+const DAGGER_SEED: u64 = 1_000_000;
+
+/// `episodes` episodes of `task` played by `policy` (DAgger round `round`'s seeds), every step
+/// labelled with the solver's action; the rows and the policy's successes.
+fn dagger_episodes(
+    episodes: u64,
+    round: usize,
+    (family, task): (usize, &Task),
+    slots: usize,
+    mut policy: Box<dyn Policy>,
+) -> Result<(Data, usize)> {
+    let mut env = make_env(task, slots)?;
+    let labeller = ScriptedPolicy::solver(slots);
+    let (mut data, mut wins) = (Data::default(), 0);
+    let first = DAGGER_SEED + round as u64 * episodes;
+    for seed in first..first + episodes {
+        let success = record(&mut env, policy.as_mut(), seed, (&labeller, family), &mut data)
+            .with_context(|| format!("{} DAgger episode {seed}", task.id()))?;
+        wins += usize::from(success);
+    }
+    Ok((data, wins))
+}
+
 /// Recorded steps: observations and the solver's clean actions, row by row.
 #[derive(Default)]
 struct Data {
     obs: Vec<f32>,
     act: Vec<f32>,
+    /// Each row's family (its index in `--families`).
+    family: Vec<usize>,
 }
 
 impl Data {
@@ -228,6 +310,7 @@ impl Data {
     fn extend(&mut self, other: Data) {
         self.obs.extend(other.obs);
         self.act.extend(other.act);
+        self.family.extend(other.family);
     }
     fn actions(&self) -> Tensor {
         Tensor::of_slice(&self.act).view([-1, ACTION_DIM as i64])
@@ -265,7 +348,7 @@ impl Policy for Noisy {
 }
 
 /// Task `index`'s solver episodes: training rows, validation rows, successes, episodes.
-fn collect(args: &Args, index: u64, task: &Task, slots: usize) -> Result<(Data, Data, usize, usize)> {
+fn collect(args: &Args, index: u64, family: usize, task: &Task, slots: usize) -> Result<(Data, Data, usize, usize)> {
     let mut env = make_env(task, slots)?;
     let noise = (args.noise > 0.0).then(|| Normal::new(0.0, args.noise)).transpose()?;
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
@@ -275,18 +358,32 @@ fn collect(args: &Args, index: u64, task: &Task, slots: usize) -> Result<(Data, 
     let (mut train, mut val, mut wins) = (Data::default(), Data::default(), 0);
     for seed in 0..args.episodes {
         let data = if seed % VALIDATION_EVERY == 0 { &mut val } else { &mut train };
-        let mut success = false;
-        play_episode(&mut env, &mut actor, seed, |event| {
-            if let Event::Step { obs, step, .. } = event {
-                data.obs.extend_from_slice(obs);
-                data.act.extend_from_slice(&labeller.decide(obs).0);
-                success |= step.info.is_success;
-            }
-        })
-        .with_context(|| format!("{} episode {seed}", task.id()))?;
+        let success = record(&mut env, &mut actor, seed, (&labeller, family), data)
+            .with_context(|| format!("{} episode {seed}", task.id()))?;
         wins += usize::from(success);
     }
     Ok((train, val, wins, args.episodes as usize))
+}
+
+/// Episode `seed` played by `policy`, every step's observation with `labeller`'s action (rows of
+/// `family`) added to `data`; whether it succeeded.
+fn record(
+    env: &mut BlockEnv,
+    policy: &mut dyn Policy,
+    seed: u64,
+    (labeller, family): (&ScriptedPolicy, usize),
+    data: &mut Data,
+) -> Result<bool> {
+    let mut success = false;
+    play_episode(env, policy, seed, |event| {
+        if let Event::Step { obs, step, .. } = event {
+            data.obs.extend_from_slice(obs);
+            data.act.extend_from_slice(&labeller.decide(obs).0);
+            data.family.push(family);
+            success |= step.info.is_success;
+        }
+    })?;
+    Ok(success)
 }
 
 /// What a `--student` asks for.
@@ -298,6 +395,10 @@ struct StudentSpec {
     layers: usize,
     lr: f64,
     cosine: bool,
+    /// Action heads (1: plain regression).
+    heads: usize,
+    /// Draw a batch's rows family by family (uniform over families, then over its rows).
+    balance: bool,
 }
 
 impl StudentSpec {
@@ -312,6 +413,8 @@ impl StudentSpec {
             layers: 3,
             lr: 1e-3,
             cosine: false,
+            heads: 1,
+            balance: false,
         };
         for item in rest.split(',').filter(|i| !i.is_empty()) {
             let Some((key, value)) = item.split_once('=') else {
@@ -327,6 +430,13 @@ impl StudentSpec {
                 "decay" => s.cosine = matches!(value, "cos"),
                 "transformer" => s.net.set_transformer = value.parse().map_err(|_| bad())?,
                 "tokens" => s.net.set_robot_tokens = value == "1",
+                "balance" => s.balance = value == "1",
+                "heads" => {
+                    s.heads = value.parse().map_err(|_| bad())?;
+                    if s.heads == 0 {
+                        return Err(bad());
+                    }
+                }
                 "typenorm" => s.net.set_type_norm = value == "1",
                 "pooling" => {
                     s.net.set_pooling = match value {
@@ -351,6 +461,11 @@ struct Student {
     norm: Normalizer,
     opt: Adam,
     train_x: Tensor,
+    train_y: Tensor,
+    /// Its training rows (the recorded ones and those its DAgger rounds added).
+    rows: usize,
+    /// The rows of each family (by its index in `--families`).
+    groups: Vec<Vec<i64>>,
     seconds: f64,
 }
 
@@ -358,12 +473,50 @@ impl Student {
     fn new(spec: &StudentSpec, obs: &ObsSpec, seed: u64, train: &Data) -> Result<Self> {
         let arch = Arch::of(obs, &spec.net).map_err(anyhow::Error::msg)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let net = arch.net((spec.hidden, spec.layers), 0, ACTION_DIM, true, &mut rng);
+        let net = match spec.heads {
+            1 => arch.net((spec.hidden, spec.layers), 0, ACTION_DIM, true, &mut rng),
+            k => arch.net((spec.hidden, spec.layers), 0, k * (ACTION_DIM + 1), false, &mut rng),
+        };
         let mut norm = arch.normalizer(0.01, 5.0);
         norm.update(&train.obs);
         let train_x = norm.tensor(&train.obs);
         let opt = Adam::new(&net.params, spec.lr);
-        Ok(Self { spec: spec.clone(), net, norm, opt, train_x, seconds: 0.0 })
+        let (train_y, rows) = (train.actions(), train.len());
+        let mut s =
+            Self { spec: spec.clone(), net, norm, opt, train_x, train_y, rows: 0, groups: Vec::new(), seconds: 0.0 };
+        s.group(&train.family);
+        s.rows = rows;
+        Ok(s)
+    }
+
+    /// Files rows `self.rows..` (of families `family`) into their families' groups.
+    fn group(&mut self, family: &[usize]) {
+        for (k, &f) in family.iter().enumerate() {
+            if self.groups.len() <= f {
+                self.groups.resize(f + 1, Vec::new());
+            }
+            self.groups[f].push((self.rows + k) as i64);
+        }
+    }
+
+    /// The row of a batch that the uniform draws `(u, v)` pick.
+    fn row(&self, (u, v): (f64, f64)) -> i64 {
+        let pick = |n: usize, x: f64| ((x * n as f64) as usize).min(n - 1);
+        if self.spec.balance {
+            let live: Vec<&Vec<i64>> = self.groups.iter().filter(|g| !g.is_empty()).collect();
+            let g = live[pick(live.len(), u)];
+            g[pick(g.len(), v)]
+        } else {
+            pick(self.rows, v) as i64
+        }
+    }
+
+    /// More training rows (normalised with the statistics fitted on the recorded ones).
+    fn add(&mut self, data: &Data) {
+        self.train_x = Tensor::cat(&[&self.train_x, &self.norm.tensor(&data.obs)], 0);
+        self.train_y = Tensor::cat(&[&self.train_y, &data.actions()], 0);
+        self.group(&data.family);
+        self.rows += data.len();
     }
 
     fn set_lr(&mut self, step: usize, steps: usize) {
@@ -374,10 +527,14 @@ impl Student {
     }
 
     /// One Adam step on the batch `index` (labels `y`); its MSE before the step.
-    fn update(&mut self, index: &Tensor, y: &Tensor) -> f64 {
+    fn update(&mut self, index: &Tensor) -> f64 {
         let start = Instant::now();
         let x = self.train_x.index_select(0, index);
-        let loss = (self.net.forward(&x) - y).square().mean(Kind::Float);
+        let y = &self.train_y.index_select(0, index);
+        let loss = match self.spec.heads {
+            1 => (self.net.forward(&x) - y).square().mean(Kind::Float),
+            k => choice_loss(&self.net.forward(&x), y, k),
+        };
         self.net.zero_grad();
         loss.backward();
         let mut grads = Vec::new();
@@ -390,7 +547,7 @@ impl Student {
     /// Validation MSE, the share of rows with a component off by more than [`MISS`], per-component MSE.
     fn validation(&self, x: &Tensor, y: &Tensor) -> (f64, f64, Vec<f64>) {
         tch::no_grad(|| {
-            let err = self.net.forward(x) - y;
+            let err = self.predict(x) - y;
             let sq = err.square();
             let mse = sq.mean(Kind::Float).double_value(&[]);
             let worst = err.abs().amax([1i64].as_slice(), false);
@@ -400,8 +557,65 @@ impl Student {
         })
     }
 
-    fn frozen(&self) -> DeterministicPolicy {
-        DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() }
+    /// The action: the network's (one head) or its most likely head's.
+    fn predict(&self, x: &Tensor) -> Tensor {
+        match self.spec.heads {
+            1 => self.net.forward(x),
+            k => chosen(&self.net.forward(x), k),
+        }
+    }
+
+    fn frozen(&self) -> Box<dyn Fn() -> Box<dyn Policy> + Sync> {
+        let plain = DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() };
+        let heads = self.spec.heads;
+        Box::new(move || match heads {
+            1 => Box::new(AnyPolicy::Deterministic(plain.clone())),
+            k => Box::new(Chooser { policy: plain.clone(), heads: k }),
+        })
+    }
+}
+
+/// Heads' actions `[B, K, A]` (through tanh) and logits `[B, K]` from a `k`-head output.
+fn split_heads(out: &Tensor, k: usize) -> (Tensor, Tensor) {
+    let a = (k * ACTION_DIM) as i64;
+    let mu = out.narrow(1, 0, a).tanh().view([-1, k as i64, ACTION_DIM as i64]);
+    let logits = out.narrow(1, a, k as i64);
+    (mu, logits)
+}
+
+/// The most likely head's action, `[B, A]`.
+fn chosen(out: &Tensor, k: usize) -> Tensor {
+    let (mu, logits) = split_heads(out, k);
+    let best = logits.argmax(1, true).unsqueeze(2).expand([-1, 1, ACTION_DIM as i64].as_slice(), false);
+    mu.gather(1, &best, false).squeeze_dim(1)
+}
+
+/// Share of the loss every head gets beside the nearest one's (so that no head is left untrained).
+const OTHER_HEADS: f64 = 0.05;
+
+/// Multiple-choice learning (Guzman-Rivera et al. 2012; relaxed as Rupprecht et al. 2017): the
+/// per-component squared error of the head nearest each label, plus [`OTHER_HEADS`] of every
+/// head's, plus cross-entropy of the logits on the nearest head.
+fn choice_loss(out: &Tensor, y: &Tensor, k: usize) -> Tensor {
+    let (mu, logits) = split_heads(out, k);
+    let err = (mu - y.unsqueeze(1)).square().mean_dim([2i64].as_slice(), false, Kind::Float);
+    let nearest = err.argmin(1, false);
+    let fit = err.min_dim(1, false).0.mean(Kind::Float) * (1.0 - OTHER_HEADS) + err.mean(Kind::Float) * OTHER_HEADS;
+    fit + logits.cross_entropy_for_logits(&nearest)
+}
+
+/// A `heads`-head network as a policy: the most likely head's action.
+struct Chooser {
+    policy: DeterministicPolicy,
+    heads: usize,
+}
+
+impl Policy for Chooser {
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        let out = self.policy.act(obs);
+        let logits = &out[self.heads * ACTION_DIM..];
+        let best = (0..self.heads).fold(0, |b, h| if logits[h] > logits[b] { h } else { b });
+        std::array::from_fn(|c| out[best * ACTION_DIM + c].tanh())
     }
 }
 

@@ -95,15 +95,18 @@ fn malformed_suites_are_clear_errors() {
 /// family under another name, drawing procgen-v2's test seeds, is caught.
 #[test]
 fn validation_suites_never_read_a_test_split() {
-    let shipped =
-        suite::load(concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/suites/validation.toml")).unwrap();
-    let names: Vec<&str> = shipped.splits.iter().map(|s| s.name.as_str()).collect();
-    assert_eq!(names, ["train", "validation"]);
-    assert_eq!(shipped.splits[1].rows.len(), 35);
     let held = suite::held_out_tasks().unwrap();
     assert!(held.iter().any(|h| h.suite == "procgen-v2" && h.split == "test" && h.id == "push-20003-v0"));
-    for row in shipped.splits.iter().flat_map(|s| &s.rows) {
-        assert!(!held.iter().any(|h| h.content == row.task.content_hash()), "{}", row.source);
+    // The shipped ones: the seven families, and the seven with choose.
+    for (file, rows) in [("validation.toml", 35), ("validation-v2.toml", 40)] {
+        let path = format!("{}/experiments/generalist/suites/{file}", env!("CARGO_MANIFEST_DIR"));
+        let shipped = suite::load(&path).unwrap();
+        let names: Vec<&str> = shipped.splits.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["train", "validation"], "{file}");
+        assert_eq!(shipped.splits[1].rows.len(), rows, "{file}");
+        for row in shipped.splits.iter().flat_map(|s| &s.rows) {
+            assert!(!held.iter().any(|h| h.content == row.task.content_hash()), "{file}: {}", row.source);
+        }
     }
     let dir = tempfile::tempdir().unwrap();
     let family = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/families/push.toml")).unwrap();
