@@ -3,15 +3,17 @@
 validation suite): one column per result file, one row per family and split, each cell the pooled
 success over the family's rows, then each split's mean (every row weighing the same, as the suite's
 score). The last column divides the last file by the first (the solver's, usually). Markdown on stdout.
+With --steps, each cell is instead the mean number of steps of the family's successful episodes
+(each row's mean weighted by its successes), and each split's last line the same over all rows.
 
-    python3 bench/family_table.py results/generalist/validation/baseline-scripted.json FILE...
+    python3 bench/family_table.py [--steps] results/generalist/validation/baseline-scripted.json FILE...
 """
 import json
 import sys
 from collections import defaultdict
 
 
-def table(paths: list[str]) -> str:
+def table(paths: list[str], steps: bool = False) -> str:
     results = [json.load(open(p)) for p in paths]
     splits = [s["name"] for s in results[0]["splits"]]
     head = "| split | family | " + " | ".join(p.rsplit("/", 1)[-1].removesuffix(".json") for p in paths)
@@ -20,25 +22,40 @@ def table(paths: list[str]) -> str:
         cells = []
         for r in results:
             fam = defaultdict(lambda: [0, 0])
+            every = [0, 0]
             for row in next(s for s in r["splits"] if s["name"] == split)["rows"]:
                 e = row.get("evaluation")
                 if e:
                     f = fam[row["task"].rsplit("-", 2)[0]]
-                    f[0] += e["successes"]
-                    f[1] += e["episodes"]
-            mean = next(s for s in r["splits"] if s["name"] == split)["mean_success"]
+                    if steps:
+                        took = e["successes"] * (e.get("mean_steps_to_success") or 0.0)
+                        f[0] += took
+                        f[1] += e["successes"]
+                        every[0] += took
+                        every[1] += e["successes"]
+                    else:
+                        f[0] += e["successes"]
+                        f[1] += e["episodes"]
+            if steps:
+                mean = every[0] / every[1] if every[1] else float("nan")
+            else:
+                mean = next(s for s in r["splits"] if s["name"] == split)["mean_success"]
             cells.append((fam, mean))
+        fmt = (lambda x: f"{x:.1f}") if steps else (lambda x: f"{x:.3f}")
         for family in cells[0][0]:
             rates = [c[0][family][0] / c[0][family][1] if c[0][family][1] else float("nan") for c in cells]
             ratio = rates[-1] / rates[0] if rates[0] else float("nan")
-            lines.append(f"| {split} | {family} | " + " | ".join(f"{x:.3f}" for x in rates) + f" | {ratio:.2f}× |")
+            lines.append(f"| {split} | {family} | " + " | ".join(fmt(x) for x in rates) + f" | {ratio:.2f}× |")
         means = [c[1] for c in cells]
-        lines.append(f"| **{split}** | **mean** | " + " | ".join(f"**{x:.3f}**" for x in means)
+        lines.append(f"| **{split}** | **{'steps' if steps else 'mean'}** | " + " | ".join(f"**{fmt(x)}**" for x in means)
                      + f" | **{means[-1] / means[0]:.2f}×** |")
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2:
-        sys.exit("usage: family_table.py RESULT.json [RESULT.json ...] (suite results of one suite)")
-    print(table(sys.argv[1:]))
+    args = sys.argv[1:]
+    steps = "--steps" in args
+    files = [a for a in args if a != "--steps"]
+    if not files:
+        sys.exit("usage: family_table.py [--steps] RESULT.json [RESULT.json ...] (suite results of one suite)")
+    print(table(files, steps))
