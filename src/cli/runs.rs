@@ -267,6 +267,10 @@ fn branch_run(
 /// A run directory's config and progress rows.
 /// The maximum curriculum level of a run's task (its recorded copy, else its id).
 fn run_max_level(config: &crate::learn::train::TrainConfig) -> Result<usize> {
+    // A stream's tasks come from families, which draw them with no curriculum (level 0 only).
+    if config.stream.is_some() {
+        return Ok(0);
+    }
     // A multi-task run's level is the sum of its tasks' levels.
     if !config.tasks.is_empty() {
         return config.tasks.iter().map(|s| Ok(registry::recorded(s)?.max_level())).sum();

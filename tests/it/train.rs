@@ -1248,6 +1248,14 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     let b = train(&stream(3), split.path(), true, &mut quiet).unwrap();
     assert_eq!(comparable(&a), comparable(&b));
     assert!(a.iter().all(|r| r.level == 0) && a[2].env_steps > a[0].env_steps);
+    // `report` and `plot --run-dir` read a stream run (its tasks have no curriculum).
+    let dir = straight.path().to_str().unwrap();
+    for args in [vec!["report", dir], vec!["plot", "--run-dir", dir]] {
+        let out = std::process::Command::new(crate::common::CLI).args(&args).output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(args[0] != "report" || text.contains("gripper+push-0-3") && text.contains("level 0 of 0"), "{text}");
+    }
     let config = blockpuzzle::learn::train::RunDir { dir: straight.path().to_owned() }.read_config().unwrap();
     let record = config.stream.clone().unwrap();
     assert!(config.tasks.is_empty() && config.task.is_none());
