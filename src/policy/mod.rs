@@ -230,8 +230,11 @@ fn colour_of(row: &[f32]) -> Colour {
 /// around red, the steps spent closing, the swipe, letting go and rising); version 2 is a function
 /// of one observation; version 3 chooses among blocks of one colour by where they are (the
 /// nearest, [`nearest`]), never by their slot in the observation, so that its action does not
-/// depend on the order of the block rows and a policy that reads them as a set can copy it.
-pub const SOLVER_VERSION: u32 = 3;
+/// depend on the order of the block rows and a policy that reads them as a set can copy it;
+/// version 4 pushes with every threshold of `push_line` a smooth step (lined up behind the block,
+/// the corridor behind it, arriving, rising before crossing), so that its action is a continuous
+/// function of the observation, which a network copies better (results/generalist.md).
+pub const SOLVER_VERSION: u32 = 4;
 
 /// The scripted controller: for block tasks, get behind the blue block and
 /// push it towards the green one (or push the green one onto the blue one if

@@ -120,8 +120,15 @@ fn waypoint(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64; 
     }
 }
 
-/// Push `mover` towards `target`: get behind it (over the blocks when not
-/// already behind), line up, and push through it, steering back onto the line.
+/// 0 below `a`, 1 above `b`, and a smooth (cubic) step between.
+fn smoothstep(x: f64, a: f64, b: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Push `mover` towards `target`: get behind it (over the blocks when not already behind), line
+/// up, and push through it, steering back onto the line. Every threshold is a smooth step, so that
+/// the action is a continuous function of where the gripper and the block are.
 fn push_line(grip: [f64; 3], mover: [f64; 3], target: [f64; 3]) -> [f32; ACTION_DIM] {
     let d = {
         let (dx, dy) = (target[0] - mover[0], target[1] - mover[1]);
@@ -133,24 +140,26 @@ fn push_line(grip: [f64; 3], mover: [f64; 3], target: [f64; 3]) -> [f32; ACTION_
     let rel = [grip[0] - mover[0], grip[1] - mover[1]];
     let along = rel[0] * d[0] + rel[1] * d[1];
     let across = rel[0] * -d[1] + rel[1] * d[0];
-    let lined_up = across.abs() < 0.012 && along < -0.03 && grip[2] < PUSH_Z + 0.02;
-    if lined_up {
-        // Push: aim through the mover towards the target, steering back onto the line.
+    // How far the gripper is lined up behind the block, low: 1 pushes, 0 approaches.
+    let lined_up = (1.0 - smoothstep(across.abs(), 0.008, 0.016))
+        * (1.0 - smoothstep(along, -0.035, -0.025))
+        * (1.0 - smoothstep(grip[2], PUSH_Z + 0.01, PUSH_Z + 0.03));
+    // The push: aim through the mover towards the target, steering back onto the line, at most a
+    // full action's length ahead, so that the push keeps its direction.
+    let push = {
         let aim = [target[0] - across * -d[1] * 2.0, target[1] - across * d[0] * 2.0, PUSH_Z];
-        // At most a full action's length ahead, so that the push keeps its direction (each
-        // component clamped alone would bend a far aim towards the diagonal).
         let (dx, dy) = (aim[0] - grip[0], aim[1] - grip[1]);
         let scale = (1.0 / GAIN / dx.hypot(dy).max(1e-9)).min(1.0);
-        return toward(grip, [grip[0] + dx * scale, grip[1] + dy * scale, PUSH_Z]);
-    }
-    if xy_dist(grip, behind) > 0.015 {
-        // Travel to the standoff point, above the blocks unless already behind.
-        let low_ok = along < -0.04 && across.abs() < 0.04;
-        if grip[2] < SAFE_Z - 0.01 && !low_ok && xy_dist(grip, mover) < 0.12 {
-            return toward(grip, [grip[0], grip[1], SAFE_Z + 0.02]);
-        }
-        let z = if low_ok { PUSH_Z } else { SAFE_Z.max(grip[2].min(SAFE_Z + 0.05)) };
-        return toward(grip, [behind[0], behind[1], z]);
-    }
-    toward(grip, behind)
+        toward(grip, [grip[0] + dx * scale, grip[1] + dy * scale, PUSH_Z])
+    };
+    // The approach: to the standoff point, low inside the corridor behind the block or on
+    // arriving there, above the blocks elsewhere; near the block and below that height, rise
+    // before moving across.
+    let corridor = (1.0 - smoothstep(along, -0.05, -0.03)) * (1.0 - smoothstep(across.abs(), 0.03, 0.05));
+    let arriving = 1.0 - smoothstep(xy_dist(grip, behind), 0.01, 0.03);
+    let high = SAFE_Z.max(grip[2].min(SAFE_Z + 0.05));
+    let height = PUSH_Z + (high - PUSH_Z) * (1.0 - corridor.max(arriving));
+    let go = (1.0 - smoothstep(height - grip[2], 0.01, 0.03)).max(smoothstep(xy_dist(grip, mover), 0.10, 0.14));
+    let approach = toward(grip, [grip[0] + (behind[0] - grip[0]) * go, grip[1] + (behind[1] - grip[1]) * go, height]);
+    std::array::from_fn(|k| (lined_up as f32) * push[k] + (1.0 - lined_up as f32) * approach[k])
 }
