@@ -526,7 +526,7 @@ impl Student {
         }
     }
 
-    /// One Adam step on the batch `index` (labels `y`); its MSE before the step.
+    /// One Adam step on its training rows `index`; the batch's loss before the step (its MSE with one head).
     fn update(&mut self, index: &Tensor) -> f64 {
         let start = Instant::now();
         let x = self.train_x.index_select(0, index);
