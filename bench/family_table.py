@@ -22,7 +22,6 @@ def table(paths: list[str], steps: bool = False) -> str:
         cells = []
         for r in results:
             fam = defaultdict(lambda: [0, 0])
-            every = [0, 0]
             for row in next(s for s in r["splits"] if s["name"] == split)["rows"]:
                 e = row.get("evaluation")
                 if e:
@@ -31,13 +30,12 @@ def table(paths: list[str], steps: bool = False) -> str:
                         took = e["successes"] * (e.get("mean_steps_to_success") or 0.0)
                         f[0] += took
                         f[1] += e["successes"]
-                        every[0] += took
-                        every[1] += e["successes"]
                     else:
                         f[0] += e["successes"]
                         f[1] += e["episodes"]
             if steps:
-                mean = every[0] / every[1] if every[1] else float("nan")
+                took, successes = (sum(f[k] for f in fam.values()) for k in (0, 1))
+                mean = took / successes if successes else float("nan")
             else:
                 mean = next(s for s in r["splits"] if s["name"] == split)["mean_success"]
             cells.append((fam, mean))

@@ -464,8 +464,8 @@ struct Student {
     train_y: Tensor,
     /// Its training rows (the recorded ones and those its DAgger rounds added).
     rows: usize,
-    /// The rows of each family (by its index in `--families`).
-    groups: Vec<Vec<i64>>,
+    /// Each family that has rows (its index in `--families`) with its rows, in the order first seen.
+    groups: Vec<(usize, Vec<i64>)>,
     seconds: f64,
 }
 
@@ -492,10 +492,14 @@ impl Student {
     /// Files rows `self.rows..` (of families `family`) into their families' groups.
     fn group(&mut self, family: &[usize]) {
         for (k, &f) in family.iter().enumerate() {
-            if self.groups.len() <= f {
-                self.groups.resize(f + 1, Vec::new());
-            }
-            self.groups[f].push((self.rows + k) as i64);
+            let at = match self.groups.iter().position(|(g, _)| *g == f) {
+                Some(at) => at,
+                None => {
+                    self.groups.push((f, Vec::new()));
+                    self.groups.len() - 1
+                }
+            };
+            self.groups[at].1.push((self.rows + k) as i64);
         }
     }
 
@@ -503,8 +507,7 @@ impl Student {
     fn row(&self, (u, v): (f64, f64)) -> i64 {
         let pick = |n: usize, x: f64| ((x * n as f64) as usize).min(n - 1);
         if self.spec.balance {
-            let live: Vec<&Vec<i64>> = self.groups.iter().filter(|g| !g.is_empty()).collect();
-            let g = live[pick(live.len(), u)];
+            let (_, g) = &self.groups[pick(self.groups.len(), u)];
             g[pick(g.len(), v)]
         } else {
             pick(self.rows, v) as i64
