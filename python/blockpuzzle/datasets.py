@@ -71,6 +71,9 @@ class Demos:
         }
 
 
+#: The largest magnitude of an observation value a demos file may hold (the Rust reader's
+#: ``MAX_OBSERVATION_VALUE``): observations are metres, metres per step and one-hot flags.
+MAX_OBSERVATION_VALUE = 1e3
 #: What every error about a demos file ends with.
 FIX = "record it again with `blockpuzzle demos` (or blockpuzzle.record_demos)"
 #: The tensors of a demos file.
@@ -164,6 +167,20 @@ def _check_tensors(path, t: dict[str, np.ndarray], header: dict) -> None:
             value = a[r][~np.isfinite(a[r])][0]
             where = _where(r, obs_starts, "observation") if k in OBS else _where(r, step_starts, "step")
             raise _bad(path, f"tensor {k!r} holds {value} at {where}; demos hold finite numbers only")
+    for k in ("robot", "entities"):
+        a = np.abs(t[k].reshape(len(t[k]), -1))
+        bad_rows = np.flatnonzero((a > MAX_OBSERVATION_VALUE).any(axis=1))
+        if len(bad_rows):
+            r = int(bad_rows[0])
+            value = t[k].reshape(len(t[k]), -1)[r][a[r] > MAX_OBSERVATION_VALUE][0]
+            raise _bad(path, f"tensor {k!r} holds {float(value):g} at {_where(r, obs_starts, 'observation')}; an observation "
+                             f"is finite and within ±{MAX_OBSERVATION_VALUE:g}")
+    bad_rows = np.flatnonzero((np.abs(t["actions"]) > 1).any(axis=1))
+    if len(bad_rows):
+        r = int(bad_rows[0])
+        value = t["actions"][r][np.abs(t["actions"][r]) > 1][0]
+        raise _bad(path, f"tensor 'actions' holds {float(value):g} at {_where(r, step_starts, 'step')}; an action's "
+                         "components are within [-1, 1]")
     for k in ("mask", "terminations", "truncations"):
         a = t[k].reshape(len(t[k]), -1)
         bad_rows = np.flatnonzero(~((a == 0) | (a == 1)).all(axis=1))
@@ -182,6 +199,14 @@ def _check_tensors(path, t: dict[str, np.ndarray], header: dict) -> None:
         i = int(np.flatnonzero(~np.isin(last, ends))[0])
         raise _bad(path, f"episode {i} ({int(steps[i])} steps) is not ended at its last step by 'terminations' or "
                          "'truncations'")
+    last_step = np.zeros(total, dtype=bool)
+    last_step[last] = True
+    r = t["rewards"]
+    fits = np.where(last_step, (r <= 0) & (r == np.round(r)), r == -1)
+    if not fits.all():
+        k = int(np.flatnonzero(~fits)[0])
+        raise _bad(path, f"tensor 'rewards' holds {r[k]:g} at {_where(k, step_starts, 'step')}; the environment gives "
+                         "-1 for a step that does not end the episode, and 0 or a negative whole number for its last")
     if count:
         sums = np.add.reduceat(t["rewards"].astype(np.float64), step_starts)
         returns = np.array([e["episode_return"] for e in episodes], dtype=np.float64)

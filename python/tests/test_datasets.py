@@ -141,7 +141,16 @@ def test_a_bad_demos_file_is_a_valueerror_naming_the_file_the_field_and_the_fix(
     case(lambda h, d, data: set_value(h, data, "truncations", 0, 2),
          "tensor 'truncations' holds 2.0 at episode 0, step 0")
     case(lambda h, d, data: set_value(h, data, "terminations", 0, 1), "end an episode at episode 0, step 0")
-    case(lambda h, d, data: set_value(h, data, "rewards", 0, -5), "episode 0's rewards sum to")
+    case(lambda h, d, data: set_value(h, data, "rewards", d["episodes"][0]["steps"] - 1, -7), "episode 0's rewards sum to")
+    # Values no environment gives: a feature of 1e30, an action of 1e9, a reward of 100 or 0.5.
+    case(lambda h, d, data: set_value(h, data, "entities", 27, 1e30),
+         "tensor 'entities' holds 1e+30 at episode 0, observation 0 (row 0); an observation is finite and within ±1000")
+    case(lambda h, d, data: set_value(h, data, "actions", 5, 1e9),
+         "tensor 'actions' holds 1e+09 at episode 0, step 1", "within [-1, 1]")
+    case(lambda h, d, data: set_value(h, data, "rewards", 0, 100), "tensor 'rewards' holds 100 at episode 0, step 0",
+         "the environment gives -1")
+    case(lambda h, d, data: set_value(h, data, "rewards", d["episodes"][0]["steps"] - 1, -0.5),
+         "tensor 'rewards' holds -0.5 at episode 0, step")
     # The layout: overlapping, out-of-range and mis-sized data_offsets, a missing tensor.
     def overlap(h, d, data):
         h["rewards"]["data_offsets"] = [x - 4 for x in h["rewards"]["data_offsets"]]

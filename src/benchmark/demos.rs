@@ -395,6 +395,15 @@ impl Demos {
     /// # Errors
     /// Not a demos file (naming what is wrong), another version, tensors of the wrong shape.
     pub fn read(path: &Path) -> Result<Demos> {
+        Ok(Self::read_hashed(path)?.0)
+    }
+
+    /// As [`Demos::read`], with the `sha256:` of the bytes read: one bounded read, so that a run
+    /// records the hash of the very bytes it trained on.
+    ///
+    /// # Errors
+    /// As [`Demos::read`].
+    pub fn read_hashed(path: &Path) -> Result<(Demos, String)> {
         let bytes = crate::support::io::read_bytes(path, "demos file", MAX_BYTES)?;
         let bad = |why: String| DemosError::Unusable { path: path.to_owned(), why };
         let (_, header) =
@@ -441,6 +450,115 @@ impl Demos {
             terminations: tensor("terminations", vec![t])?,
             truncations: tensor("truncations", vec![t])?,
         };
-        Ok(Demos { tensors, layout, provenance, split, episodes })
+        check_values(&tensors, &episodes, &layout).map_err(bad)?;
+        let sha256 = crate::benchmark::provenance::sha256(&bytes);
+        Ok((Demos { tensors, layout, provenance, split, episodes }, sha256))
     }
+}
+
+/// The largest magnitude of an observation value a demos file may hold. Observations are metres,
+/// metres per step and one-hot flags; a value beyond this is a damaged or edited file, and one such
+/// value would swamp a learner's running normaliser.
+pub const MAX_OBSERVATION_VALUE: f32 = 1e3;
+
+/// A value for a message: exponent form when very large or very small, as a person reads it.
+fn show(v: f32) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
+/// Where row `index` of tensors whose episodes start at `starts` falls: "episode i, `noun` k".
+fn locate(index: usize, starts: &[usize], noun: &str) -> String {
+    let i = starts.partition_point(|&s| s <= index).saturating_sub(1);
+    format!("episode {i}, {noun} {} (row {index})", index - starts[i])
+}
+
+/// The values a recording can hold, checked as every reader (Python's `load_demos` too) checks them:
+/// observations finite and within [`MAX_OBSERVATION_VALUE`], actions within [-1, 1] (the solver
+/// clips them), masks and flags 0 or 1, each episode ended at its last step and at no other, each
+/// reward what the environment gives (-1 for a step that does not end the episode; 0 or a negative
+/// whole number for its last), and the rewards summing to the episode's recorded return.
+fn check_values(t: &DemoTensors, episodes: &[DemoEpisode], layout: &DemoLayout) -> Result<(), String> {
+    let (rows, robot) = (layout.rows, layout.robot.len());
+    let row = rows * layout.entity.len();
+    let mut step_starts = Vec::with_capacity(episodes.len());
+    let mut at = 0;
+    for e in episodes {
+        step_starts.push(at);
+        at += e.steps;
+    }
+    let obs_starts: Vec<usize> = step_starts.iter().enumerate().map(|(i, s)| s + i).collect();
+    let observations = [("robot", &t.robot, robot), ("entities", &t.entities, row)];
+    for (name, values, width) in observations {
+        if let Some(k) = values.iter().position(|v| !v.is_finite() || v.abs() > MAX_OBSERVATION_VALUE) {
+            return Err(format!(
+                "tensor {name:?} holds {} at {}; an observation is finite and within ±{MAX_OBSERVATION_VALUE}",
+                show(values[k]),
+                locate(k / width.max(1), &obs_starts, "observation")
+            ));
+        }
+    }
+    if let Some(k) = t.actions.iter().position(|a| !(-1.0..=1.0).contains(a)) {
+        return Err(format!(
+            "tensor \"actions\" holds {} at {}; an action's components are within [-1, 1]",
+            show(t.actions[k]),
+            locate(k / crate::env::ACTION_DIM, &step_starts, "step")
+        ));
+    }
+    for (name, values, width, starts, noun) in [
+        ("mask", &t.mask, rows.max(1), &obs_starts, "observation"),
+        ("terminations", &t.terminations, 1, &step_starts, "step"),
+        ("truncations", &t.truncations, 1, &step_starts, "step"),
+    ] {
+        if let Some(k) = values.iter().position(|&v| v != 0.0 && v != 1.0) {
+            return Err(format!(
+                "tensor {name:?} holds {} at {}; its values are 0 or 1",
+                show(values[k]),
+                locate(k / width, starts, noun)
+            ));
+        }
+    }
+    for (i, (e, &start)) in episodes.iter().zip(&step_starts).enumerate() {
+        if e.steps == 0 {
+            return Err(format!("episode {i} has no steps; a recorded episode has at least one"));
+        }
+        let last = start + e.steps - 1;
+        for k in start..start + e.steps {
+            let ends = t.terminations[k] == 1.0 || t.truncations[k] == 1.0;
+            if ends != (k == last) {
+                return Err(if ends {
+                    format!(
+                        "tensors \"terminations\"/\"truncations\" end an episode at {}, before its last step",
+                        locate(k, &step_starts, "step")
+                    )
+                } else {
+                    format!(
+                        "episode {i} ({} steps) is not ended at its last step by terminations or truncations",
+                        e.steps
+                    )
+                });
+            }
+            let r = t.rewards[k];
+            let fits = if k == last { r <= 0.0 && r.fract() == 0.0 } else { r == -1.0 };
+            if !fits {
+                return Err(format!(
+                    "tensor \"rewards\" holds {} at {}; the environment gives -1 for a step that does not end the \
+                     episode, and 0 or a negative whole number for its last",
+                    show(r),
+                    locate(k, &step_starts, "step")
+                ));
+            }
+        }
+        let sum: f64 = t.rewards[start..start + e.steps].iter().map(|&r| f64::from(r)).sum();
+        if (sum - f64::from(e.episode_return)).abs() > 1e-3 {
+            return Err(format!(
+                "episode {i}'s rewards sum to {sum}, its header's episode_return is {}",
+                e.episode_return
+            ));
+        }
+    }
+    Ok(())
 }

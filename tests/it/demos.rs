@@ -110,6 +110,31 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     assert_eq!(back, one);
     assert_eq!(back.provenance.suite.as_ref().unwrap().sha256, suite.sha256);
     assert_eq!(back.provenance.policy.name, "baseline:scripted");
+    // Values no recording holds are refused by the reader, naming the tensor, the place and the rule
+    // (Python's load_demos refuses the same: python/tests/test_datasets.py).
+    let last0 = one.episodes[0].steps - 1;
+    let edits: [(&str, fn(&mut Demos, usize)); 7] = [
+        ("tensor \"entities\" holds 1e30 at episode 0, observation 0", |d, _| d.tensors.entities[3] = 1e30),
+        ("tensor \"robot\" holds NaN at episode 0, observation 0", |d, _| d.tensors.robot[1] = f32::NAN),
+        (
+            "tensor \"actions\" holds 1e9 at episode 0, step 1 (row 1); an action's components are within [-1, 1]",
+            |d, _| d.tensors.actions[5] = 1e9,
+        ),
+        ("tensor \"rewards\" holds 100 at episode 0, step 0 (row 0); the environment gives -1", |d, _| {
+            d.tensors.rewards[0] = 100.0
+        }),
+        ("tensor \"mask\" holds 2 at episode 0, observation 0", |d, _| d.tensors.mask[0] = 2.0),
+        ("tensor \"terminations\" holds 0.5 at episode 0, step", |d, last| d.tensors.terminations[last] = 0.5),
+        ("episode 0's rewards sum to", |d, last| d.tensors.rewards[last] = -7.0),
+    ];
+    for (want, edit) in edits {
+        let mut edited = one.clone();
+        edit(&mut edited, last0);
+        let file = dir.path().join("edited.safetensors");
+        edited.write(&file).unwrap();
+        let e = Demos::read(&file).unwrap_err().to_string();
+        assert!(e.contains("is not a usable demos file") && e.contains(want), "{want}: {e}");
+    }
     // An unknown split, and files that are not demos, are named.
     let e = demos::record(&suite, "valid", None, 1, Harness::Cli).unwrap_err().to_string();
     assert!(e.contains("no split \"valid\" (it has train, test)"), "{e}");

@@ -270,6 +270,34 @@ fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
             &["recorded by solver version 1", "record the demos again", "blockpuzzle demos --suite"],
         )],
     );
+    // A file whose episode names another task than its hash's (an edit), and demos of a suite's
+    // test split: both refused, naming the fix.
+    let field = "\\\"task\\\":\\\"ToppleTower-v0\\\"";
+    let at = bytes.windows(field.len()).position(|w| w == field.as_bytes()).expect("the demos name their task");
+    let mut renamed = bytes.clone();
+    renamed[at + field.len() - 3] = b'9';
+    let renamed_demos = tmp.path().join("renamed.safetensors");
+    std::fs::write(&renamed_demos, renamed).unwrap();
+    let test_demos = tmp.path().join("test-split.safetensors");
+    let o = crate::common::blockpuzzle(&["demos", "--suite", &suite, "--split", "test", "--episodes", "1"])
+        .args(["--threads", "1", "--out"])
+        .arg(&test_demos)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    refused(
+        tmp.path(),
+        &[
+            (
+                &["--env", "ToppleTower-v0", "--net", "entity", "--demos", renamed_demos.to_str().unwrap()],
+                &["episode 0 names task ToppleTower-v9", "is task ToppleTower-v0's", "record the demos again"],
+            ),
+            (
+                &["--env", "ToppleTower-v0", "--net", "entity", "--demos", test_demos.to_str().unwrap()],
+                &["recorded on the test split of suite", "--split train"],
+            ),
+        ],
+    );
     let run = tmp.path().join("run");
     let args = ["--env", "ToppleTower-v0", "--net", "entity", "--demos", d, "--demos-ratio", "1"];
     let (ok, text) = train(&run, &args);

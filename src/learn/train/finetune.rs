@@ -13,7 +13,7 @@
 
 use super::rollouts::Episode;
 use super::{ConfigError, Context, Result, TrainConfig};
-use crate::benchmark::demos::Demos;
+use crate::benchmark::demos::{Demos, DemosError};
 use crate::benchmark::provenance::PolicyId;
 use crate::benchmark::saved::SavedPolicy;
 use crate::env::{ObsMode, ObsSpec};
@@ -236,23 +236,34 @@ impl FinetuneConfig {
     /// A missing or malformed file, named with the flag.
     pub fn read_demos(&self) -> Result<Option<DemoFile>> {
         let Some(path) = &self.demos else { return Ok(None) };
-        let bytes = std::fs::read(path).with_context(|| {
-            format!("--demos {}: cannot read it (record one with `blockpuzzle demos`)", path.display())
-        })?;
-        let demos = Demos::read(path).with_context(|| format!("--demos {}", path.display()))?;
+        let (demos, sha256) = match Demos::read_hashed(path) {
+            Ok(read) => read,
+            Err(e @ DemosError::Read(_)) => Err(e).with_context(|| {
+                format!("--demos {}: cannot read it (record one with `blockpuzzle demos`)", path.display())
+            })?,
+            Err(e) => Err(e).with_context(|| format!("--demos {}", path.display()))?,
+        };
+        let suite = demos.provenance.suite.as_ref().map_or("SUITE", |s| s.name.as_str());
+        if demos.split == "test" {
+            refuse!(
+                "--demos {}: recorded on the test split of suite {suite}, which a run must not train on (as `train \
+                 --split test` is refused); record demos of its train split (`blockpuzzle demos --suite {suite} \
+                 --split train`)",
+                path.display()
+            );
+        }
         let made_by = demos.provenance.build.solver_version();
         if made_by != crate::policy::SOLVER_VERSION {
             refuse!(
                 "--demos {}: recorded by solver version {made_by}, and this build's solver is version {}: its actions \
                  are not the labels this build's solver gives; record the demos again with this build \
-                 (`blockpuzzle demos --suite {} --split {}`)",
+                 (`blockpuzzle demos --suite {suite} --split {}`)",
                 path.display(),
                 crate::policy::SOLVER_VERSION,
-                demos.provenance.suite.as_ref().map_or("SUITE", |s| s.name.as_str()),
                 demos.split
             );
         }
-        Ok(Some(DemoFile { sha256: crate::benchmark::provenance::sha256(&bytes), demos }))
+        Ok(Some(DemoFile { sha256, demos }))
     }
 }
 
@@ -296,6 +307,16 @@ pub(crate) fn demo_episodes(
                 ours.join(", ")
             );
         };
+        if task.id() != e.task {
+            refuse!(
+                "--demos {}: episode {i} names task {}, and its hash {} is task {}'s: the file was edited; record the \
+                 demos again with `blockpuzzle demos`",
+                path.display(),
+                e.task,
+                e.task_sha256,
+                task.id()
+            );
+        }
         let blocks = task.object_count();
         if blocks + fixtures > rows || blocks > slots {
             refuse!("--demos {}: episode {i} ({}) does not fit this run's {slots} block rows", path.display(), e.task);
