@@ -580,7 +580,7 @@ pub struct BadResult {
 }
 
 /// Whether a stored number is the one recomputed (up to rounding in another harness's arithmetic).
-fn same_number(stored: f64, derived: f64) -> bool {
+pub(crate) fn same_number(stored: f64, derived: f64) -> bool {
     stored.is_finite() && (stored - derived).abs() <= 1e-9 * derived.abs().max(1.0)
 }
 

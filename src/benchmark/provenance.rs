@@ -62,6 +62,10 @@ pub struct Build {
     pub solver: Option<u32>,
 }
 
+/// The MuJoCo versions a build of this project runs: Debian's (the default) and the `mujoco3`
+/// feature's (the Python wheel's). A record naming another engine was not made by this project.
+pub const ENGINES: [&str; 2] = ["2.2.2", "3.11.0"];
+
 impl Build {
     /// This build, with the engine it has loaded.
     pub fn current() -> Self {

@@ -160,6 +160,83 @@ impl ZooEvaluation {
         self.policy_sha256().is_some_and(|h| Some(h) != policy)
     }
 
+    /// Whether its numbers hold together and name what exists, as a suite result's are checked
+    /// ([`crate::benchmark::evaluate::SuiteResult::verify`]): episodes within
+    /// [`crate::support::limits::EVAL_EPISODES`], outcome counts that sum to them, the success rate
+    /// and its interval recomputed from the successes, a task this entry can be played on (a
+    /// built-in id, or its own task) with that task's hash, and an engine this project runs
+    /// ([`crate::benchmark::provenance::ENGINES`]).
+    ///
+    /// # Errors
+    /// What does not hold, with the recorded and the recomputed value.
+    pub fn check(&self, meta: &ZooMeta) -> Result<(), String> {
+        use crate::benchmark::evaluate::same_number;
+        let bound = crate::support::limits::EVAL_EPISODES;
+        if bound.check(self.episodes as u64).is_err() {
+            return Err(format!("episodes {} is outside what an evaluation plays, {bound}", self.episodes));
+        }
+        if !matches!(self.distribution.as_str(), "normal" | "challenge") {
+            return Err(format!("distribution {:?} is neither normal nor challenge", self.distribution));
+        }
+        let n = self.episodes as f64;
+        let successes = match &self.outcomes {
+            Some(o) if o.total() != self.episodes => {
+                return Err(format!("its outcomes count {} episodes, and it records {}", o.total(), self.episodes))
+            }
+            Some(o) => o.success,
+            // Format 1 kept no outcome counts: the rate must still be a count of episodes.
+            None if (0.0..=1.0).contains(&self.success_rate)
+                && ((self.success_rate * n).round() - self.success_rate * n).abs() <= 1e-6 * n.max(1.0) =>
+            {
+                (self.success_rate * n).round() as usize
+            }
+            None => {
+                return Err(format!(
+                    "success_rate {} is not a count of {} episodes over their number",
+                    self.success_rate, self.episodes
+                ))
+            }
+        };
+        let rate = successes as f64 / n;
+        if !same_number(self.success_rate, rate) {
+            return Err(format!(
+                "success_rate {}, but its outcomes give {rate} ({successes} of {} episodes)",
+                self.success_rate, self.episodes
+            ));
+        }
+        let ci = crate::episode::outcome::wilson95(successes, self.episodes);
+        if !same_number(self.ci95.0, ci.0) || !same_number(self.ci95.1, ci.1) {
+            return Err(format!("ci95 {:?}, but {successes} of {} episodes give {ci:?}", self.ci95, self.episodes));
+        }
+        // The task: the entry's own (or one of a multi-task run's), or a built-in id.
+        let own = std::iter::once(&meta.task).chain(meta.multi_task.iter().flat_map(|m| &m.tasks));
+        let hash = match own.clone().find(|t| t.id == self.env) {
+            Some(t) => t.hash.clone(),
+            None if !crate::env::registry::is_path(&self.env) => match crate::env::registry::task(&self.env) {
+                Ok(t) => t.source.hash,
+                Err(_) => {
+                    return Err(format!(
+                        "env {:?} is neither a built-in task nor this entry's own ({})",
+                        self.env, meta.task.id
+                    ))
+                }
+            },
+            None => {
+                return Err(format!("env {:?} is a path; a record names a built-in task or the entry's own", self.env))
+            }
+        };
+        if let Some(h) = self.task_sha256.as_ref().filter(|h| **h != hash) {
+            return Err(format!("task_sha256 {h}, and task {}'s hash is {hash}", self.env));
+        }
+        if let Some(m) = self.mujoco().filter(|m| !crate::benchmark::provenance::ENGINES.contains(m)) {
+            return Err(format!(
+                "MuJoCo {m:?} is no engine this project runs ({})",
+                crate::benchmark::provenance::ENGINES.join(", ")
+            ));
+        }
+        Ok(())
+    }
+
     /// Whether `other` measures the same thing (task, distribution, view, episodes, seeds) on the same engine.
     pub fn same_measurement(&self, other: &ZooEvaluation) -> bool {
         (&self.env, &self.distribution, self.grey_blind, self.episodes, self.seed, self.mujoco())
@@ -271,6 +348,31 @@ impl ZooMeta {
         let bare = ZooMeta { evaluations: Vec::new(), meta_sha256: None, ..self.clone() };
         // Serialising a struct of these types cannot fail; the fallback seals nothing and never matches.
         crate::benchmark::provenance::sha256(&serde_json::to_vec(&bare).unwrap_or_default())
+    }
+
+    /// The first field it carries that a newer format than its own introduced ([`READS`]), with
+    /// that format's version: an older format carries nothing a newer one added (and seals), so an
+    /// entry relabelled as older cannot slip forged fields past the seal.
+    pub fn newer_field(&self) -> Option<(&'static str, u32)> {
+        let evals = |f: fn(&ZooEvaluation) -> bool| self.evaluations.iter().any(f);
+        let nets = || std::iter::once(&self.actor).chain(self.critic.as_ref());
+        let stream = self.multi_task.as_ref().is_some_and(|m| m.stream.is_some());
+        let fields = [
+            ("evaluations[].outcomes", 2, evals(|e| e.outcomes.is_some())),
+            ("a set network layout (actor.set, layers)", 3, nets().any(|n| n.set.is_some() || !n.layers.is_empty())),
+            ("evaluations[].provenance", 4, evals(|e| e.provenance.is_some())),
+            ("evaluations[].task_sha256", 4, evals(|e| e.task_sha256.is_some())),
+            ("multi_task", 5, self.multi_task.is_some()),
+            ("multi_task.stream", 6, stream),
+            ("meta_sha256", 6, self.meta_sha256.is_some()),
+            ("kind", 7, self.kind.is_some()),
+            ("obs_mode", 7, self.obs_mode.is_some()),
+            ("colour_feature", 7, self.colour_feature.is_some()),
+            ("fixtures", 7, self.fixtures.is_some()),
+            ("blend", 7, self.blend.is_some()),
+            ("hidden_norm", 7, nets().any(|n| n.hidden_norm)),
+        ];
+        fields.into_iter().find(|&(_, v, present)| present && v > self.version()).map(|(f, v, _)| (f, v))
     }
 
     /// What it was trained on, as listings name it: its task's id, or a multi-task run's label.
@@ -768,6 +870,17 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
             ),
         });
     }
+    if let Some((field, introduced)) = meta.newer_field() {
+        return Err(ZooError::Corrupt {
+            path: json_path,
+            reason: format!(
+                "it says format {:?}, and carries {field}, which blockpuzzle-zoo/{introduced} introduced: an entry \
+                 relabelled as an older format, whose unsealed fields cannot be trusted; restore the entry, or export \
+                 the policy again",
+                meta.format
+            ),
+        });
+    }
     Ok(meta)
 }
 
@@ -1006,6 +1119,15 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             e.policy_sha256().unwrap_or_default(),
             policy_sha.as_deref().unwrap_or("unnamed")
         )));
+    }
+    for (k, e) in meta.evaluations.iter().enumerate() {
+        e.check(&meta).map_err(|why| {
+            bad_meta(format!(
+                "evaluations[{k}] ({} {}): {why}; restore the entry, or play its evaluations again with `zoo \
+                 evaluate`",
+                e.env, e.distribution
+            ))
+        })?;
     }
     Ok((meta, saved.with_record()))
 }

@@ -261,13 +261,21 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     assert!(meta.evaluations.contains(&first), "{:?}", meta.evaluations);
     // `zoo list` shows this engine's evaluations, and names the others.
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    // The other engine's record (a consistent one: every record is checked), with other numbers.
+    let engine = blockpuzzle::sim::mj::version();
+    let theirs = blockpuzzle::benchmark::provenance::ENGINES.into_iter().find(|e| **e != engine).unwrap();
     let mut other = v["evaluations"][0].clone();
-    other["provenance"]["mujoco"] = "9.9.9".into();
-    other["success_rate"] = 0.123456.into();
+    other["provenance"]["mujoco"] = theirs.into();
+    let episodes = other["episodes"].as_u64().unwrap();
+    other["outcomes"] = serde_json::json!({"success": 0, "failure": 0, "unstable": 0, "no_contact": 0,
+        "off_table": 0, "blue_met_grey": 0, "timeout": episodes});
+    other["success_rate"] = 0.0.into();
+    let ci = blockpuzzle::episode::outcome::wilson95(0, episodes as usize);
+    other["ci95"] = serde_json::json!([ci.0, ci.1]);
     v["evaluations"].as_array_mut().unwrap().push(other);
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let listed = text(&bp(&["zoo", "list", "--zoo", z.to_str().unwrap()]));
-    assert!(listed.contains("r.json also has MuJoCo 9.9.9") && !listed.contains("0.123"), "{listed}");
+    assert!(listed.contains(&format!("r.json also has MuJoCo {theirs}")) && !listed.contains("normal: 0.000"), "{listed}");
 }
 
 /// The committed leaderboard and the result files it is drawn from.

@@ -339,12 +339,30 @@ fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
     let listed = String::from_utf8_lossy(&o.stdout);
     assert_eq!(listed.matches("the others: failure ").count(), 2, "{listed}");
 
-    // An entry of format 1 (no outcome counts) loads; an unknown format is refused, naming those read.
+    // An entry relabelled as an older format keeping what a newer one introduced is refused, naming
+    // the field and the format (issue 74: its unsealed fields could be forged, and `zoo upgrade`
+    // would seal them).
     let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    v["format"] = "blockpuzzle-zoo/5".into();
+    v.as_object_mut().unwrap().remove("meta_sha256");
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(
+        e.contains("says format \"blockpuzzle-zoo/5\", and carries kind, which blockpuzzle-zoo/7 introduced"),
+        "{e}"
+    );
+    let o = bp(&["zoo", "upgrade", "r", "--zoo", z.to_str().unwrap()]);
+    assert!(!o.status.success(), "zoo upgrade seals no relabelled entry");
+    // An entry of format 1, as format 1 was written (no outcome counts, no record of what made an
+    // evaluation, no record of what the policy is), loads; an unknown format is refused, naming those read.
     v["format"] = "blockpuzzle-zoo/1".into();
-    v.as_object_mut().unwrap().remove("meta_sha256"); // written from format 6 on
+    for field in ["kind", "obs_mode", "colour_feature", "fixtures"] {
+        v.as_object_mut().unwrap().remove(field);
+    }
     for e in v["evaluations"].as_array_mut().unwrap() {
-        e.as_object_mut().unwrap().remove("outcomes");
+        for field in ["outcomes", "provenance", "task_sha256"] {
+            e.as_object_mut().unwrap().remove(field);
+        }
     }
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let (meta, _) = zoo::load(&entry).unwrap();
@@ -356,6 +374,56 @@ fn evaluations_keep_their_outcomes_and_format_1_entries_still_load() {
         e.contains("\"blockpuzzle-zoo/9\"") && e.contains("blockpuzzle-zoo/1, blockpuzzle-zoo/2, blockpuzzle-zoo/3"),
         "{e}"
     );
+}
+
+/// Issue 74: evaluations lie outside the seal (`zoo evaluate` adds to them), so each is checked as a
+/// suite result's rows are: recomputed from its outcome counts and bounded, on a task and an engine
+/// that exist. `zoo check` and every loader (`zoo list`, Python's through the extension) refuse an
+/// edited one, naming the field, the recorded and the recomputed value, and the fix.
+#[test]
+fn evaluation_records_are_recomputed_and_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["json", "safetensors"] {
+        let from = zoo::dir().join(format!("ReachAvoid-v0-ddpg.{ext}"));
+        std::fs::copy(from, dir.path().join(format!("r.{ext}"))).unwrap();
+    }
+    let entry = dir.path().join("r.json");
+    let original: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    zoo::load(&entry).unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 9] = [
+        ("success_rate 0.5, but its outcomes give 0.99 (198 of 200 episodes)", |e| e["success_rate"] = 0.5.into()),
+        ("success_rate -0.1, but its outcomes give", |e| e["success_rate"] = (-0.1).into()),
+        ("its outcomes count 102 episodes, and it records 200", |e| e["outcomes"]["success"] = 100.into()),
+        ("episodes 1000000000000000 is outside what an evaluation plays, 1 to 1,000,000", |e| {
+            e["episodes"] = 1_000_000_000_000_000u64.into()
+        }),
+        ("ci95 (0.0, 1.0), but 198 of 200 episodes give (0.96", |e| e["ci95"] = serde_json::json!([0.0, 1.0])),
+        ("env \"BlocksNowhere-v0\" is neither a built-in task nor this entry's own (ReachAvoid-v0)", |e| {
+            e["env"] = "BlocksNowhere-v0".into()
+        }),
+        ("and task BlocksTouch-v0's hash is", |e| e["env"] = "BlocksTouch-v0".into()),
+        ("MuJoCo \"9.9.9\" is no engine this project runs (2.2.2, 3.11.0)", |e| {
+            e["provenance"]["mujoco"] = "9.9.9".into()
+        }),
+        ("distribution \"hard\" is neither normal nor challenge", |e| e["distribution"] = "hard".into()),
+    ];
+    for (want, edit) in edits {
+        let mut v = original.clone();
+        edit(&mut v["evaluations"][0]);
+        std::fs::write(&entry, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+        let e = err_text(zoo::load(&entry).unwrap_err());
+        assert!(e.contains("evaluations[0] (") && e.contains(want) && e.contains("zoo evaluate"), "{want}: {e}");
+    }
+    // A format-1 record (no outcome counts) is still checked: its rate must be a count of its episodes.
+    let mut v = original.clone();
+    v["evaluations"][0].as_object_mut().unwrap().remove("outcomes");
+    v["evaluations"][0]["success_rate"] = 0.9951.into();
+    std::fs::write(&entry, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(e.contains("success_rate 0.9951 is not a count of 200 episodes"), "{e}");
+    let o = crate::common::blockpuzzle(&["zoo", "check", "r", "--zoo", dir.path().to_str().unwrap()]).output().unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("is not a count of"));
 }
 
 /// Issue 60: an entry is checked as a whole. Its metadata is sealed by its hash (format 6), so a dropped
@@ -412,7 +480,7 @@ fn entries_are_checked_as_a_whole() {
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
     v["algo"] = "ddpg".into(); // before format 7, `algo` said what acts
-    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature"] {
+    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature", "fixtures"] {
         v.as_object_mut().unwrap().remove(k);
     }
     assert!(check(&v).0, "a format 5 entry as it was loads");
@@ -437,7 +505,7 @@ fn entries_are_checked_as_a_whole() {
     let mut v = original.clone();
     v["format"] = "blockpuzzle-zoo/5".into();
     v["algo"] = "ddpg".into();
-    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature"] {
+    for k in ["meta_sha256", "kind", "obs_mode", "colour_feature", "fixtures"] {
         v.as_object_mut().unwrap().remove(k);
     }
     check(&v);
@@ -555,8 +623,8 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     std::fs::create_dir(&z).unwrap();
     std::fs::copy(zoo::dir().join("BlocksTouch-v0-ddpg.safetensors"), z.join("old.safetensors")).unwrap();
     let mut old = zoo::read_meta(&zoo::dir().join("BlocksTouch-v0-ddpg.json")).unwrap();
-    (old.format, old.algo, old.kind, old.obs_mode, old.colour_feature, old.name) =
-        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, None, "old".into());
+    (old.format, old.algo, old.kind, old.obs_mode, old.colour_feature, old.fixtures, old.name) =
+        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, None, None, "old".into());
     old.meta_sha256 = Some(old.seal());
     std::fs::write(z.join("old.json"), serde_json::to_vec_pretty(&old).unwrap()).unwrap();
     let (meta, saved) = zoo::load(&z.join("old.json")).unwrap();
