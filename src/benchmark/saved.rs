@@ -100,6 +100,11 @@ pub struct SavedPolicy {
     /// weights came from. Its other records are the tuned policy's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blend: Option<BlendRecord>,
+    /// The policy a fine-tuning run started from (`train --init-from`), by name as given and hash:
+    /// what [`SavedPolicy::blend`] requires of a base (absent for a run from scratch, and in
+    /// policies saved before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub started_from: Option<crate::benchmark::provenance::PolicyId>,
 }
 
 /// Where a blended policy's weights came from: (1 − `weight`)·`base` + `weight`·`tuned`.
@@ -133,6 +138,37 @@ impl SavedPolicy {
             None => self.policy.legacy_obs_mode()?,
         };
         check_fixtures(self.fixtures.as_deref(), mode)?;
+        if let Some(a) = &self.algo {
+            let trainers = crate::benchmark::zoo::TRAINERS;
+            if !trainers.contains(&a.as_str()) {
+                return Err(format!("algo {a:?} is none of {} (an edited file)", trainers.join(", ")));
+            }
+            let expected = if a == "pggd" { "gaussian" } else { "deterministic" };
+            if expected != self.policy.kind() {
+                return Err(format!(
+                    "algo {a:?} with a {} policy: {a} trains a {expected} policy (PGGD a gaussian one, every other \
+                     algorithm a deterministic one); the file was edited, or record the algorithm that trained it",
+                    self.policy.kind()
+                ));
+            }
+        }
+        // Each recorded task is the task its hash names (a stream's are drawn again where they are used).
+        for t in self.task.iter().chain(&self.tasks) {
+            t.compile().map_err(|e| e.to_string())?;
+        }
+        if let Some(b) = &self.blend {
+            if !(0.0..=1.0).contains(&b.weight) {
+                return Err(format!("blend.weight {} is outside [0, 1] (an edited file)", b.weight));
+            }
+            if self.started_from.as_ref().is_some_and(|s| s.sha256 != b.base.sha256) {
+                return Err(format!(
+                    "blend.base records {}, and the policy was fine-tuned from {} (started_from): an edited \
+                     file; blend it again with `blockpuzzle blend`",
+                    b.base.sha256.as_deref().unwrap_or("no hash"),
+                    self.started_from.as_ref().and_then(|s| s.sha256.as_deref()).unwrap_or("no hash")
+                ));
+            }
+        }
         if let Some(c) = &self.critic {
             let n_in = self.policy.obs_dim() + crate::env::ACTION_DIM;
             c.check(n_in, 1, crate::policy::actor::MAX_ABS_WEIGHT).map_err(|e| format!("critic: {e}"))?;
@@ -239,12 +275,34 @@ impl SavedPolicy {
                 t.obs_mode()
             )));
         }
+        // Only a policy and the one it was fine-tuned from: unrelated policies of one network have
+        // weights that mean different things, and a point between them is no trade between the two.
+        let base_id = b.policy_id(base_name);
+        match &t.started_from {
+            Some(s) if s.sha256 == base_id.sha256 => {}
+            Some(s) => {
+                return Err(SavedError::Unblendable(format!(
+                    "{tuned_name} was fine-tuned from {} ({}), not from {base_name} ({}): blend a policy with the one \
+                     it was fine-tuned from (--base {})",
+                    s.name,
+                    s.sha256.as_deref().unwrap_or("no hash"),
+                    base_id.sha256.as_deref().unwrap_or("no hash"),
+                    s.name
+                )))
+            }
+            None => {
+                return Err(SavedError::Unblendable(format!(
+                    "{tuned_name} records no policy it was fine-tuned from (a run from scratch, or a file saved before \
+                     it was recorded): blend a policy of `train --init-from POLICY` with POLICY"
+                )))
+            }
+        }
         let policy =
             tp.blend(bp, weight).map_err(|e| SavedError::Unblendable(format!("{base_name} and {tuned_name}: {e}")))?;
         Ok(SavedPolicy {
             policy: AnyPolicy::Deterministic(policy),
             critic: None,
-            blend: Some(BlendRecord { base: b.policy_id(base_name), tuned: t.policy_id(tuned_name), weight }),
+            blend: Some(BlendRecord { base: base_id, tuned: t.policy_id(tuned_name), weight }),
             ..t.clone()
         })
     }

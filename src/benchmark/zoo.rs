@@ -305,6 +305,10 @@ pub struct ZooMeta {
     /// and hash, and the weight; sealed with the rest.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub blend: Option<crate::benchmark::saved::BlendRecord>,
+    /// For a fine-tuned policy: the policy its run started from (`train --init-from`), by name and
+    /// hash; sealed with the rest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub started_from: Option<crate::benchmark::provenance::PolicyId>,
     /// Its evaluations, best recorded with `zoo export --eval`.
     pub evaluations: Vec<ZooEvaluation>,
     /// The source policy's actions on a few observations (reset states of its
@@ -370,6 +374,7 @@ impl ZooMeta {
             ("colour_feature", 7, self.colour_feature.is_some()),
             ("fixtures", 7, self.fixtures.is_some()),
             ("blend", 7, self.blend.is_some()),
+            ("started_from", 7, self.started_from.is_some()),
             ("hidden_norm", 7, nets().any(|n| n.hidden_norm)),
         ];
         fields.into_iter().find(|&(_, v, present)| present && v > self.version()).map(|(f, v, _)| (f, v))
@@ -693,6 +698,7 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         trained_with: info.trained_with.clone(),
         exported_from: info.exported_from.clone(),
         blend: saved.blend.clone(),
+        started_from: saved.started_from.clone(),
         evaluations: info.evaluations.clone(),
         probes: probes(saved)?,
         tensors_sha256: crate::benchmark::provenance::sha256(&bytes),
@@ -1075,6 +1081,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         policy,
         critic,
         blend: meta.blend.clone(),
+        started_from: meta.started_from.clone(),
     };
     saved.check().map_err(&corrupt)?;
     for (k, p) in meta.probes.iter().enumerate() {

@@ -399,12 +399,40 @@ fn a_blend_lies_between_a_fine_tuned_policy_and_its_start() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // An edited policy file is refused by every command that reads one (eval, --init-from, blend):
+    // an algorithm the zoo refuses or one that trains another kind, a task text that is not its
+    // hash's, a blend record that names another base than the policy's start.
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let zeros = format!("sha256:{}", "0".repeat(64));
+    type Edit = fn(&mut serde_json::Value, &str);
+    let edits: [(&str, Edit); 4] = [
+        ("algo \"ppo\" is none of bc, dagger, ddpg, td3, sac, pggd", |v, _| v["algo"] = "ppo".into()),
+        ("algo \"pggd\" with a deterministic policy", |v, _| v["algo"] = "pggd".into()),
+        ("its text is not the task its hash", |v, z| v["task"]["hash"] = z.into()),
+        ("blend.base records sha256:000", |v, z| v["blend"]["base"]["sha256"] = z.into()),
+    ];
+    for (want, edit) in edits {
+        let mut edited = v.clone();
+        edit(&mut edited, &zeros);
+        let file = tmp.path().join("edited.json");
+        std::fs::write(&file, serde_json::to_vec(&edited).unwrap()).unwrap();
+        let o = crate::common::blockpuzzle(&["eval", "--env", "ToppleTower-v0", "--episodes", "1", "--checkpoint"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && text.contains(want), "{want}: {text}");
+    }
     // Refused, naming the problem, with nothing written: a weight outside [0, 1], a policy of another
     // observation or network, a missing policy.
     let cases: &[(&str, &str, &[&str])] = &[
         ("1.5", "generalist-bc-entity", &["--weight", "from 0 to 1"]),
         ("0.5", "BlocksChoose-v0-ddpg", &["BlocksChoose-v0-ddpg reads `flat` observations", "entities"]),
-        ("0.5", "cross-task-v2-dagger-entity", &["the base policy's actor is", "one network"]),
+        (
+            "0.5",
+            "cross-task-v2-dagger-entity",
+            &["was fine-tuned from generalist-bc-entity", "not from cross-task-v2-dagger-entity", "--base"],
+        ),
         ("0.5", "no-such-policy", &["no-such-policy"]),
     ];
     for (k, (weight, base, words)) in cases.iter().enumerate() {

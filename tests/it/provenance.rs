@@ -275,7 +275,10 @@ fn eval_table_and_zoo_evaluations_carry_provenance() {
     v["evaluations"].as_array_mut().unwrap().push(other);
     std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
     let listed = text(&bp(&["zoo", "list", "--zoo", z.to_str().unwrap()]));
-    assert!(listed.contains(&format!("r.json also has MuJoCo {theirs}")) && !listed.contains("normal: 0.000"), "{listed}");
+    assert!(
+        listed.contains(&format!("r.json also has MuJoCo {theirs}")) && !listed.contains("normal: 0.000"),
+        "{listed}"
+    );
 }
 
 /// The committed leaderboard and the result files it is drawn from.

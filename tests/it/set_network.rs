@@ -97,6 +97,7 @@ fn a_set_policy_round_trips_through_the_zoo() {
             policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
             blend: None,
+            started_from: None,
         };
         let info = ExportInfo {
             name: format!("set-{k}"),

@@ -48,6 +48,7 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
         blend: None,
+        started_from: None,
     }
 }
 

@@ -1091,6 +1091,7 @@ impl<'a> Trainer<'a> {
                 policy,
                 critic: self.learner.agent.critic(),
                 blend: None,
+                started_from: self.config.finetune.init_policy.clone(),
             };
             write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
