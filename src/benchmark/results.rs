@@ -270,13 +270,28 @@ pub fn comparable(a: &SuiteResult, b: &SuiteResult) -> Result<(), Mismatch> {
                     |r: &crate::benchmark::evaluate::RowResult| format!("{} episodes from seed {}", r.episodes, r.seed);
                 return Err(Mismatch::new(at("seed"), &show(ra), &show(rb)));
             }
+            // What was played: the level, the challenge draw and whether grey was hidden from the policy.
+            if let (Some(ea), Some(eb)) = (&ra.evaluation, &rb.evaluation) {
+                for (field, va, vb) in [
+                    ("evaluation.level", ea.level.to_string(), eb.level.to_string()),
+                    ("evaluation.challenge", ea.challenge.to_string(), eb.challenge.to_string()),
+                    ("evaluation.grey_blind", ea.grey_blind.to_string(), eb.grey_blind.to_string()),
+                ] {
+                    if va != vb {
+                        return Err(Mismatch::new(at(field), &va, &vb));
+                    }
+                }
+            }
         }
     }
     Ok(())
 }
 
 /// Every file comparable with the first, or an error naming the two files and the field.
-fn check_all(files: &[ResultFile]) -> Result<(), ResultsError> {
+///
+/// # Errors
+/// [`ResultsError::NotComparable`] for the first pair that is not.
+pub fn check_all(files: &[ResultFile]) -> Result<(), ResultsError> {
     let first = &files[0];
     for f in &files[1..] {
         comparable(&first.result, &f.result).map_err(|mismatch| ResultsError::NotComparable {

@@ -504,9 +504,13 @@ fn curves(a: &PlotArgs, out: &Path) -> Result<()> {
 /// `plot --scaling`: the points' figure, and their table (Markdown) on stdout.
 fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
     use crate::learn::train::plot::ScalingPoint;
-    // A result's train and test means, its suite and its policy's name.
-    let means = |path: &Path| -> Result<(f64, f64, String, String)> {
-        let r = crate::benchmark::results::read(path)?.result;
+    // A result's train and test means, its suite and its policy's name; every file read, to be
+    // checked comparable (one engine, one suite version, the same task contents) as `results compare` does.
+    let mut read = Vec::new();
+    let mut means = |path: &Path| -> Result<(f64, f64, String, String)> {
+        let file = crate::benchmark::results::read(path)?;
+        let r = file.result.clone();
+        read.push(file);
         let mean = |name: &str| {
             r.splits.iter().find(|s| s.name == name).and_then(|s| s.mean_success).ok_or_else(|| {
                 anyhow::anyhow!(
@@ -548,6 +552,8 @@ fn scaling(a: &PlotArgs, out: &Path) -> Result<()> {
     if suites.len() > 1 {
         bail!("--scaling: the results are of several suites ({}); give results of one suite", suites.join(", "));
     }
+    crate::benchmark::results::check_all(&read)
+        .map_err(|e| anyhow::anyhow!("--scaling: {e}; draw results of one engine and suite version in one figure"))?;
     let title = a.title.clone().unwrap_or_else(|| format!("Success against {} on {}", a.x_label, suites[0]));
     crate::learn::train::plot::scaling(
         out,

@@ -615,6 +615,17 @@ fn plot_scaling_draws_results_against_a_count_and_refuses_what_it_cannot_draw() 
         (args(&[point("0", &multi)], &[]), "logarithmic"),
         (args(&[point("abc", &multi)], &[]), "not a number"),
         (args(&[point("4", &multi), point("8", &shipped("baseline-scripted.layout.json"))], &[]), "several suites"),
+        // Another engine's result of the same suite: one figure holds one engine, as `results compare`.
+        (
+            args(
+                &[
+                    point("4", &multi),
+                    point("8", &shipped("baseline-scripted.procgen.json").replace("2.2.2", "3.11.0")),
+                ],
+                &[],
+            ),
+            "provenance.mujoco",
+        ),
     ] {
         let o = run(&bad);
         assert!(!o.status.success() && text(&o).contains(wanted), "{bad:?}: {}", text(&o));

@@ -176,6 +176,15 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
         assert!(board.status.success(), "{}", text(&board));
         assert_eq!(String::from_utf8_lossy(&board.stdout).matches("\n## `edited`").count(), 2, "{field}");
     }
+    // Rows played at another level, on the challenge draw or with grey hidden are other measurements.
+    for (field, value) in [("level", serde_json::json!(99)), ("challenge", true.into()), ("grey_blind", true.into())] {
+        let mut w = v.clone();
+        w["splits"][0]["rows"][0]["evaluation"][field] = value;
+        let b = dir.path().join(format!("{field}.json"));
+        std::fs::write(&b, serde_json::to_vec(&w).unwrap()).unwrap();
+        let t = text(&bp(&["results", "compare", a.to_str().unwrap(), b.to_str().unwrap()]));
+        assert!(t.contains(&format!("splits[train].rows[0].evaluation.{field}")), "{field}: {t}");
+    }
     // A file whose provenance and suite disagree is refused as edited.
     let mut edited = v.clone();
     edited["suite"]["sha256"] = "y".into();
