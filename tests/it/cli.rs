@@ -550,6 +550,27 @@ fn train_resume_with_only_the_run_dir_takes_the_runs_own_settings() {
     // ...and without the run's task, that is what the error asks for.
     let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3", "--gamma", "0.9"]);
     assert!(!o.status.success() && text(&o).contains("given --gamma") && text(&o).contains("--env"), "{}", text(&o));
+    // The checkpoint records its config's seal: an edited config.json (a seed here), or another run's
+    // checkpoint, is refused before anything is written (issue 74).
+    let good = std::fs::read_to_string(run.join("config.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&good).unwrap();
+    v["seed"] = 4.into();
+    std::fs::write(run.join("config.json"), serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3"]);
+    assert!(!o.status.success() && text(&o).contains("is not the configuration") && text(&o).contains("edited"));
+    std::fs::write(run.join("config.json"), &good).unwrap();
+    let other = dir.path().join("other");
+    let mut args = vec!["train", "--env", "GripperTouch-v0", "--epochs", "1", "--gamma", "0.9", "--seed", "5"];
+    args.extend(["--cycles", "1", "--batches", "2", "--test-episodes", "1", "--hidden", "16", "--run-dir"]);
+    args.push(other.to_str().unwrap());
+    assert!(bp(&args).status.success());
+    let ours = std::fs::read(run.join("checkpoint.bin")).unwrap();
+    std::fs::copy(other.join("checkpoint.bin"), run.join("checkpoint.bin")).unwrap();
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3"]);
+    assert!(!o.status.success() && text(&o).contains("the checkpoint is another run's"), "{}", text(&o));
+    std::fs::write(run.join("checkpoint.bin"), ours).unwrap();
+    let o = bp(&["train", "--resume", "--run-dir", r, "--epochs", "3"]);
+    assert!(o.status.success(), "the run's own files resume: {}", text(&o));
     // No run directory: refused, naming the fix.
     let o = bp(&["train", "--resume", "--epochs", "3"]);
     assert!(!o.status.success() && text(&o).contains("give --run-dir DIR"), "{}", text(&o));

@@ -48,6 +48,10 @@ pub struct BranchedFrom {
     pub env_steps: u64,
     /// The settings changed, by flag name (e.g. `--challenge-share`).
     pub changed: Vec<String>,
+    /// The seal of the parent's configuration ([`super::config_seal`]), which the copied checkpoint
+    /// records: the branch's first resume takes it (absent in branches made before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent_seal: Option<String>,
 }
 
 /// Makes `child` a branch of `parent` with the settings of `config`: checks
@@ -140,6 +144,7 @@ pub fn branch(parent: &Path, child: &Path, config: &TrainConfig) -> Result<Branc
                     epoch: state.epoch,
                     env_steps: state.env_steps,
                     changed: allowed.clone(),
+                    parent_seal: state.config_seal.clone(),
                 };
                 wanted.branched_from = Some(record.clone());
                 crate::support::io::write_json(&copy.config(), &wanted)?;

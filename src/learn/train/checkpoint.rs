@@ -78,6 +78,11 @@ pub struct RunState {
     /// The rank that wrote it.
     #[serde(default)]
     pub rank: usize,
+    /// The seal of the run's `config.json` this checkpoint was written with
+    /// ([`crate::learn::train::config_seal`]): a resume refuses a config that is not it (an edited
+    /// config, or another run's checkpoint). Absent in checkpoints written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub config_seal: Option<String>,
 }
 
 fn one() -> usize {

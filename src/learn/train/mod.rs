@@ -702,6 +702,24 @@ fn computation_differences(a: &TrainConfig, b: &TrainConfig) -> Vec<String> {
     out
 }
 
+/// The seal of a run's configuration, which its checkpoints record ([`checkpoint::RunState`]): the
+/// `sha256:` of every setting but those a resume may change ([`RESUMABLE_CHANGES`]), with the
+/// contents of its tasks (a task's, a list's or a stream's hashes). A resume whose `config.json` does
+/// not give the checkpoint's seal is refused: the file was edited (a seed, a width, an anchor, a
+/// dropped stream or fine-tuning record), or the checkpoint is another run's.
+pub(crate) fn config_seal(c: &TrainConfig) -> String {
+    let mut v = serde_json::to_value(c).unwrap_or_default();
+    if let Some(o) = v.as_object_mut() {
+        for k in RESUMABLE_CHANGES {
+            o.remove(*k);
+        }
+    }
+    let listed = c.task.iter().chain(&c.tasks).map(|t| t.hash.as_str());
+    let streamed = c.stream.iter().flat_map(|s| s.tasks.iter().map(|t| t.hash.as_str()));
+    let tasks: Vec<&str> = listed.chain(streamed).collect();
+    crate::benchmark::provenance::sha256(format!("{v}\ntasks {}", tasks.join("+")).as_bytes())
+}
+
 /// Fields that may change on `--resume`: the epoch target, thread count and
 /// snapshots, the task and its id (checked by content in [`run_task`]), and
 /// the record of a branch (kept from the run's `config.json`).

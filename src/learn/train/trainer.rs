@@ -358,6 +358,7 @@ fn fresh(
         best_finals: -1.0,
         ranks: comm.size(),
         rank: comm.rank(),
+        config_seal: None,
     };
     let shards = match config.replay_layout() {
         ReplayLayout::PerWorker => config.workers,
@@ -398,6 +399,24 @@ fn resumed(
             Some(c) => c,
             None => run.read_config()?,
         };
+        // The run's config.json is the one its checkpoint was written with (or, at a branch's first
+        // resume, the checkpoint is the parent's, written with the parent's). Checked before the
+        // checkpoint's replay is read: another run's checkpoint is named as such.
+        let (ours, branch) = (super::config_seal(&saved), saved.branched_from.clone());
+        let state = checkpoint::peek_state(&path)?;
+        if let Some(recorded) = &state.config_seal {
+            let branch_start =
+                branch.as_ref().is_some_and(|b| b.epoch == state.epoch && b.parent_seal.as_ref() == Some(recorded));
+            if ours != *recorded && !branch_start {
+                refuse!(
+                    "--resume: {} is not the configuration {} was written with (its seal {ours}, the \
+                     checkpoint's {recorded}): the file was edited, or the checkpoint is another run's; restore the \
+                     run's own config.json and checkpoint together, or start a new run with another --run-dir",
+                    run.config().display(),
+                    path.display()
+                );
+            }
+        }
         saved.replay = Some(saved.replay_layout());
         let changed = computation_differences(&saved, config);
         if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
@@ -673,6 +692,8 @@ impl<'a> Trainer<'a> {
         if rebuilt == Some(ReplayRebuilt::Regenerated) {
             trainer.regenerate_replay(&pushed)?;
         }
+        // Every checkpoint from here on is sealed to the config.json written now.
+        trainer.state.config_seal = Some(super::config_seal(&trainer.config));
         if comm.is_root() {
             let (run, epoch) = (&trainer.run, trainer.state.epoch);
             write_json(&run.config(), &trainer.config)?;
