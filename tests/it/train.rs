@@ -1359,6 +1359,8 @@ fn bad_streams_are_refused_before_anything_is_written() {
         &["suite procgen", "1000..1008", "990..1000"],
     );
     refused(&["--families", "push"], &["--generator-seeds"]);
+    refused(&["--families", "push,,gather", "--generator-seeds", "0..4"], &["item 2 of the list is empty"]);
+    refused(&["--families", "push,", "--generator-seeds", "0..4"], &["item 2 of the list is empty"]);
     // Nor does any run train on a suite's test split (issue 60).
     refused(&["--suite", "procgen", "--split", "test"], &["--split test", "score", "--split train"]);
     let validation = concat!(env!("CARGO_MANIFEST_DIR"), "/experiments/generalist/suites/validation.toml");

@@ -501,6 +501,18 @@ impl TrainConfig {
                     .into(),
             ));
         }
+        // A doubled or trailing comma names nothing: refused rather than dropped, since the list is
+        // recorded as given and a run's label and pool come from it.
+        // (An --env list is checked where its tasks are resolved.)
+        if let Some(list) = self.families.as_deref().filter(|l| l.contains(',')) {
+            if let Some(k) = list.split(',').position(|item| item.trim().is_empty()) {
+                return Err(ConfigError(format!(
+                    "--families {list:?}: item {} of the list is empty; list family names or files separated by \
+                     single commas",
+                    k + 1
+                )));
+            }
+        }
         if self.families.is_some() != self.generator_seeds.is_some() {
             return Err(ConfigError("--families and --generator-seeds go together: give both (e.g. --families push,gripper --generator-seeds 0..256)".into()));
         }
