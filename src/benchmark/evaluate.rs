@@ -579,10 +579,7 @@ pub struct BadResult {
     pub problem: String,
 }
 
-/// Whether a stored number is the one recomputed (up to rounding in another harness's arithmetic).
-pub(crate) fn same_number(stored: f64, derived: f64) -> bool {
-    stored.is_finite() && (stored - derived).abs() <= 1e-9 * derived.abs().max(1.0)
-}
+use crate::episode::outcome::same_number;
 
 /// The split a result of these splits is scored on (the suite's kind, from the splits it has).
 fn scored_split_of(splits: &[SplitResult]) -> &'static str {

@@ -107,6 +107,10 @@ pub struct SavedPolicy {
     pub started_from: Option<crate::benchmark::provenance::PolicyId>,
 }
 
+/// The algorithms a policy file or a format-7 zoo entry may name as the one that trained it (`ddpg` with `--td3` is
+/// `td3`; the training registry's names are checked against this list by its tests).
+pub const TRAINERS: [&str; 6] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"];
+
 /// Where a blended policy's weights came from: (1 − `weight`)·`base` + `weight`·`tuned`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BlendRecord {
@@ -139,7 +143,7 @@ impl SavedPolicy {
         };
         check_fixtures(self.fixtures.as_deref(), mode)?;
         if let Some(a) = &self.algo {
-            let trainers = crate::benchmark::zoo::TRAINERS;
+            let trainers = TRAINERS;
             if !trainers.contains(&a.as_str()) {
                 return Err(format!("algo {a:?} is none of {} (an edited file)", trainers.join(", ")));
             }

@@ -56,10 +56,6 @@ pub const READS: [&str; 7] = [
     FORMAT,
 ];
 
-/// The algorithms a format-7 entry may name as the one that trained it (`ddpg` with `--td3` is
-/// `td3`; the training registry's names are checked against this list by its tests).
-pub const TRAINERS: [&str; 6] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"];
-
 /// What a format-7 entry upgraded from an older format names as its algorithm until `zoo upgrade
 /// --algo` records it.
 pub const UNRECORDED: &str = "unrecorded";
@@ -170,7 +166,7 @@ impl ZooEvaluation {
     /// # Errors
     /// What does not hold, with the recorded and the recomputed value.
     pub fn check(&self, meta: &ZooMeta) -> Result<(), String> {
-        use crate::benchmark::evaluate::same_number;
+        use crate::episode::outcome::same_number;
         let bound = crate::support::limits::EVAL_EPISODES;
         if bound.check(self.episodes as u64).is_err() {
             return Err(format!("episodes {} is outside what an evaluation plays, {bound}", self.episodes));
@@ -254,7 +250,7 @@ pub struct ZooMeta {
     pub name: String,
     /// One line on what it is (e.g. the table row it stands for).
     pub description: String,
-    /// Format 7 on: the algorithm that trained it (one of [`TRAINERS`]; [`UNRECORDED`] for an entry
+    /// Format 7 on: the algorithm that trained it (one of [`crate::benchmark::saved::TRAINERS`]; [`UNRECORDED`] for an entry
     /// upgraded from an older format without `zoo upgrade --algo`). Formats 1–6: what acts, `ddpg`
     /// (a tanh actor) or `pggd` ([`ZooMeta::kind`] reads both).
     pub algo: String,
@@ -798,8 +794,8 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
 /// An unknown algorithm, an entry that records another already, or one that does not load.
 pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
     let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    if !TRAINERS.contains(&algo) {
-        return Err(bad(format!("--algo {algo:?}: give one of {}", TRAINERS.join(", "))));
+    if !crate::benchmark::saved::TRAINERS.contains(&algo) {
+        return Err(bad(format!("--algo {algo:?}: give one of {}", crate::benchmark::saved::TRAINERS.join(", "))));
     }
     rewrite(path, |meta, _| match meta.trained_by() {
         Some(a) if a != algo => {
@@ -1025,11 +1021,11 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         }
     };
     if meta.version() >= 7 {
-        if !TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
+        if !crate::benchmark::saved::TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
             return Err(bad_meta(format!(
                 "algo {:?} is none of {} or {UNRECORDED}; restore the entry",
                 meta.algo,
-                TRAINERS.join(", ")
+                crate::benchmark::saved::TRAINERS.join(", ")
             )));
         }
         if meta.algo != UNRECORDED && (meta.algo == "pggd") != (meta.kind() == Some("gaussian")) {

@@ -33,7 +33,7 @@ pub(super) enum ZooCommand {
         zoo: Option<PathBuf>,
         /// Record the algorithm that trained them (bc, dagger, ddpg, td3, sac, pggd) where they
         /// record none (older entries say `unrecorded`).
-        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::zoo::TRAINERS))]
+        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
         algo: Option<String>,
     },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
@@ -71,7 +71,7 @@ pub(super) struct ZooExportArgs {
     trained_with: String,
     /// The algorithm that trained it (bc, dagger, ddpg, td3, sac, pggd), where the policy file does
     /// not record it (runs before it was recorded).
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::zoo::TRAINERS))]
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
     algo: Option<String>,
     /// Evaluation results (JSON written by `blockpuzzle eval`) to record with it.
     #[arg(long = "eval")]

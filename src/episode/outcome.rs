@@ -241,6 +241,12 @@ impl<'a> FromIterator<&'a EpisodeRecord> for Outcomes {
     }
 }
 
+/// Whether a stored number (a rate, an interval's end) is the one recomputed from counts, up to
+/// rounding in another harness's arithmetic.
+pub fn same_number(stored: f64, derived: f64) -> bool {
+    stored.is_finite() && (stored - derived).abs() <= 1e-9 * derived.abs().max(1.0)
+}
+
 /// Wilson score interval for a binomial proportion at 95% (success rates of `eval`, suites and
 /// Python's `blockpuzzle.evaluate`).
 pub fn wilson95(successes: usize, n: usize) -> (f64, f64) {

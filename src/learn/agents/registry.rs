@@ -274,7 +274,7 @@ mod tests {
         assert_eq!((Algo::DDPG.name(), Algo::PGGD.name()), ("ddpg", "pggd"));
         // What policy files and zoo entries record as the training algorithm (`td3`: DDPG with --td3).
         for name in ALGORITHMS.iter().map(|r| r.info.name).chain(["td3"]) {
-            assert!(crate::benchmark::zoo::TRAINERS.contains(&name), "{name} is not among the zoo's trainers");
+            assert!(crate::benchmark::saved::TRAINERS.contains(&name), "{name} is not among the zoo's trainers");
         }
     }
 
