@@ -6,8 +6,8 @@
 //! ([`crate::episode::generate`]): up to `max_candidates × episodes` episodes. A disk cache keeps each seed's
 //! kept candidate by family hash and engine, so a second run over the same pool draws its tasks
 //! without playing (the kept candidate is drawn again and its hash compared with the cached one).
-//! The cache is a help, never a source of truth: a missing, unreadable or stale entry is worked out
-//! again.
+//! The cache is a help, never a source of truth: a missing, unreadable or stale entry, or one whose
+//! seal does not match (an edit), is worked out again.
 //!
 //! A stream records itself ([`StreamRecord`]): its families by name and hash, its seed range and each
 //! task by id, seed, candidate and hash. A run's `config.json` keeps that record; resume compares it.
@@ -124,6 +124,13 @@ pub struct StreamRecord {
 }
 
 impl StreamRecord {
+    /// Whether `other` has the same families (by hash) over the same seeds: where two such pools
+    /// differ, the solver's check chose otherwise (another solver version or engine), not the files.
+    pub fn same_families(&self, other: &StreamRecord) -> bool {
+        self.generator_seeds == other.generator_seeds
+            && self.families.iter().map(|f| &f.hash).eq(other.families.iter().map(|f| &f.hash))
+    }
+
     /// What differs between this pool and `other`, in words (empty: the same pool).
     pub fn differences(&self, other: &StreamRecord) -> Vec<String> {
         let mut out = Vec::new();
@@ -387,11 +394,11 @@ pub fn pool(
     let threadpool = crate::env::vector::model_threads(threads).map_err(StreamError::Threads)?;
     let total = range.len() * families.len() as u64;
     let bar = if progress {
-        crate::support::progress::bar(total, "generator seeds")
+        crate::support::progress::bar(total, "stream pool: generator seeds")
     } else {
-        indicatif::ProgressBar::hidden()
+        crate::support::progress::hidden()
     };
-    // Off a terminal the bar draws nothing: a line per family says how far a long pool has come.
+    // Off a terminal: a line per family besides the periodic ones.
     let lines = progress && !std::io::IsTerminal::is_terminal(&std::io::stderr());
     for (index, (_, family)) in families.iter().enumerate() {
         let family_started = std::time::Instant::now();
@@ -403,7 +410,7 @@ pub fn pool(
             seeds
                 .par_iter()
                 .map(|&seed| {
-                    let from_cache = cache_file.seeds.get(&seed).and_then(|entry| match entry {
+                    let from_cache = cache_file.entry(seed).and_then(|kept| match kept {
                         None => Some(None),
                         Some(p) => family
                             .draw(seed, p.candidate)
@@ -441,7 +448,7 @@ pub fn pool(
                             .or_insert_with(|| format!("{} seed {seed}: {detail}", family.spec.family));
                     }
                     let entry = kept.as_ref().map(|(c, t)| Pinned { candidate: *c, hash: t.source.hash.clone() });
-                    cache_file.seeds.insert(seed, entry);
+                    cache_file.insert(seed, entry);
                     changed = true;
                 }
                 None => cached += 1,
@@ -463,6 +470,13 @@ pub fn pool(
         }
         if changed {
             cache_file.write(cache, family, &engine);
+        }
+        if cache_file.unsealed > 0 {
+            eprintln!(
+                "warning: {} of the stream cache's entries for family {} do not match their seals (the file was \
+                 edited or damaged): those seeds were worked out again by the solver",
+                cache_file.unsealed, family.spec.family
+            );
         }
         if lines {
             eprintln!(
@@ -534,21 +548,34 @@ struct Pinned {
     hash: String,
 }
 
+/// A seed's cache entry: its kept candidate (None: the seed has no task) and a seal over it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Entry {
+    kept: Option<Pinned>,
+    seal: String,
+}
+
 /// One family's cache file: each worked-out seed's kept candidate (null: no task). Which candidate a
 /// seed keeps depends on the family, the engine and the solver that checks it, so all three key it.
+///
+/// Each entry is sealed ([`Cache::seal`]: a hash over the family's hash, the engine, the solver's
+/// version, the seed and what it keeps). The hash check at draw time catches an entry whose task no
+/// longer draws; the seal catches an edit that keeps the draw consistent (another candidate with its
+/// hash, or a seed marked as having no task), which would otherwise change the pool silently. An entry
+/// whose seal does not match is worked out again, and the run says so. The seal is a check against
+/// edits and damage, not a signature: anyone with this source can compute one.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Cache {
     family: String,
     hash: String,
     engine: String,
-    /// The solver's version ([`crate::policy::SOLVER_VERSION`]; files without it: version 1).
-    #[serde(default = "solver_v1")]
+    /// The solver's version ([`crate::policy::SOLVER_VERSION`]).
     solver: u32,
-    seeds: BTreeMap<u64, Option<Pinned>>,
-}
-
-fn solver_v1() -> u32 {
-    1
+    seeds: BTreeMap<u64, Entry>,
+    /// Entries read whose seal did not match (not written).
+    #[serde(skip)]
+    unsealed: usize,
 }
 
 /// The cache folder: `$BLOCKPUZZLE_CACHE_DIR`, else `$XDG_CACHE_HOME/blockpuzzle`, else
@@ -561,6 +588,25 @@ pub fn cache_dir() -> Option<PathBuf> {
 }
 
 impl Cache {
+    /// The seal of `seed`'s entry `kept` in this cache.
+    fn seal(&self, seed: u64, kept: Option<&Pinned>) -> String {
+        let kept = kept.map_or_else(|| "none".to_owned(), |p| format!("{} {}", p.candidate, p.hash));
+        let text = format!("{}\n{}\n{}\n{seed}\n{kept}", self.hash, self.engine, self.solver);
+        crate::benchmark::provenance::sha256(text.as_bytes())
+    }
+
+    /// `seed`'s kept candidate where its entry is there and sealed (None: not cached).
+    fn entry(&self, seed: u64) -> Option<Option<&Pinned>> {
+        let e = self.seeds.get(&seed)?;
+        (e.seal == self.seal(seed, e.kept.as_ref())).then_some(e.kept.as_ref())
+    }
+
+    /// Records `seed`'s kept candidate, sealed.
+    fn insert(&mut self, seed: u64, kept: Option<Pinned>) {
+        let seal = self.seal(seed, kept.as_ref());
+        self.seeds.insert(seed, Entry { kept, seal });
+    }
+
     fn path(dir: Option<&Path>, family: &Family, engine: &str) -> Option<PathBuf> {
         let hex = family.hash.trim_start_matches("sha256:");
         let name = format!(
@@ -587,8 +633,19 @@ impl Cache {
             return empty;
         };
         match serde_json::from_str::<Cache>(&text) {
-            Ok(c) if c.hash == family.hash && c.engine == engine && c.solver == crate::policy::SOLVER_VERSION => c,
-            _ => empty,
+            Ok(mut c) if c.hash == family.hash && c.engine == engine && c.solver == crate::policy::SOLVER_VERSION => {
+                c.unsealed = c.seeds.iter().filter(|(seed, e)| e.seal != c.seal(**seed, e.kept.as_ref())).count();
+                c
+            }
+            Ok(_) => empty,
+            Err(e) => {
+                eprintln!(
+                    "warning: the stream cache {} does not read ({e}; a file of an older blockpuzzle?): its seeds \
+                     are worked out again and the file rewritten",
+                    path.display()
+                );
+                empty
+            }
         }
     }
 

@@ -190,7 +190,12 @@ pub(super) fn train(a: TrainArgs) -> Result<()> {
 
 fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> {
     let recorded = bare_resume(&a)?;
-    let c = recorded.as_ref().unwrap_or(&a.config);
+    // A bare resume has the run's recorded settings; others are resolved as a new run records them.
+    let given = match recorded {
+        Some(_) => None,
+        None => Some(a.config.clone().with_absolute_paths()?),
+    };
+    let c = recorded.as_ref().or(given.as_ref()).unwrap_or(&a.config);
     let run_dir = a.run_dir.clone().unwrap_or_else(|| c.default_run_dir());
     let bar =
         if comm.is_root() { indicatif::ProgressBar::new(c.epochs as u64) } else { indicatif::ProgressBar::hidden() };
@@ -198,6 +203,7 @@ fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> 
         indicatif::ProgressStyle::with_template("{bar:30} epoch {pos}/{len} {msg} [{elapsed_precise} < {eta_precise}]")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
+    let plain = comm.is_root() && !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let mut last: Option<crate::learn::train::EpochRow> = None;
     let mut on_epoch = |row: &crate::learn::train::EpochRow, cfg: &crate::learn::train::TrainConfig| {
         let (steps, updates, secs) = match &last {
@@ -206,7 +212,7 @@ fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> 
         };
         bar.set_position(row.epoch as u64 + 1);
         let beta = if cfg.aggrevated.expert.is_some() { format!(" beta {:.2}", row.beta) } else { String::new() };
-        bar.set_message(format!(
+        let message = format!(
             "level {}{beta} success train {:.2} test {:.2} finals {:.2} | {:.0} env steps/s {:.1} updates/s",
             row.level,
             row.train_success,
@@ -214,7 +220,12 @@ fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> 
             row.finals_success,
             steps as f64 / secs.max(1e-9),
             updates as f64 / secs.max(1e-9)
-        ));
+        );
+        // Off a terminal (a log file, a batch job) the bar draws nothing: a plain line per epoch.
+        if plain {
+            eprintln!("epoch {}/{} {message} ({:.0} s)", row.epoch + 1, cfg.epochs, row.wall_seconds);
+        }
+        bar.set_message(message);
         last = Some(row.clone());
     };
     if let Some(parent) = &a.branch_from {

@@ -531,9 +531,29 @@ fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
     let third = pool(&list, range, 2, Some(cache.path()), false).unwrap();
     assert_eq!((third.cached, third.checked), (5, 1));
     assert_eq!(third.record, first.record);
+    // Edits that keep the draw consistent (a seed marked as having no task; another candidate with its
+    // own hash) break the entry's seal: worked out again, to the same pool.
+    let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        f(&mut v["seeds"]["0"]["kept"]);
+        std::fs::write(&file, serde_json::to_string(&v).unwrap()).unwrap();
+        let again = pool(&list, range, 2, Some(cache.path()), false).unwrap();
+        assert_eq!((again.cached, again.checked), (5, 1));
+        assert_eq!(again.record, first.record);
+    };
+    edit(&|kept| *kept = serde_json::Value::Null);
+    let seed0 = &first.record.tasks[0];
+    let other = (0..20).find(|&c| c != seed0.candidate).unwrap();
+    let other_hash = list[0].1.draw(0, other).unwrap().task.source.hash;
+    edit(&|kept| *kept = serde_json::json!({ "candidate": other, "hash": other_hash }));
+    // A pool that differs over the same families and seeds is the solver's doing, not the files'.
+    let mut moved = first.record.clone();
+    moved.tasks[0].candidate = other;
+    assert!(moved.same_families(&first.record) && !moved.differences(&first.record).is_empty());
     // Another range is another pool, and says so.
     let other = pool(&list, "1..3".parse().unwrap(), 1, Some(cache.path()), false).unwrap();
     assert!(other.record.differences(&first.record)[0].contains("generator seeds 1..3 against 0..3"));
+    assert!(!other.record.same_families(&first.record));
     // procgen's test split holds out the push and gripper seeds 1000..1008.
     let e = check_held_out(&list, "995..1001".parse().unwrap()).unwrap_err();
     assert!(matches!(&e, StreamError::HeldOut { suite, .. } if suite == "procgen"), "{e}");

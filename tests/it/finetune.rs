@@ -216,6 +216,11 @@ fn what_cannot_start_a_run_is_refused_before_anything_is_written() {
             &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity", "--critic-warmup", "4"],
             &["--critic-warmup 4", "make 4 updates", "more --epochs"],
         ),
+        // TD3 steps the actor on even updates only: after a warm-up of 3, the next would be update 4 of 4.
+        (
+            &["--env", "ToppleTower-v0", "--init-from", "generalist-bc-entity", "--td3", "--critic-warmup", "3"],
+            &["--critic-warmup 3 with TD3's --policy-delay 2", "never learn", "at most 2 warm-up updates"],
+        ),
         (&["--env", "ToppleTower-v0", "--critic-warmup", "4"], &["--init-from"]),
         (&sac_ibrl, &["--ibrl", "sac cannot"]),
         (&sac_anchor, &["--anchor-alpha", "sac cannot"]),

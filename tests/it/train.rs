@@ -1372,6 +1372,15 @@ fn bad_streams_are_refused_before_anything_is_written() {
     std::fs::copy(format!("{}/tasks/BlocksTouch-v0.toml", env!("CARGO_MANIFEST_DIR")), &copy).unwrap();
     refused(&["--env", &format!("BlocksTouch-v0,{}", copy.display())], &["same content", "BlocksTouch-v0"]);
     refused(&["--env", "BlocksTouch-v0", "--generator-seeds", "0..4"], &["--families"]);
+    // Options that would do nothing: level replay on a task of one level (issue 74).
+    let one_level = dir.path().join("one-level.toml");
+    let text = std::fs::read_to_string(format!("{}/tasks/BlocksTouch-v0.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    std::fs::write(&one_level, text.replace("max_level = 5", "max_level = 0").replace("BlocksTouch-v0", "OneLevel-v0"))
+        .unwrap();
+    refused(
+        &["--env", one_level.to_str().unwrap(), "--level-replay", "0.3"],
+        &["--level-replay 0.3", "OneLevel-v0 has one curriculum level", "leave --level-replay out"],
+    );
     let family = dir.path().join("no-green.toml");
     let text = std::fs::read_to_string(format!("{}/families/gripper.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let text =
@@ -1549,4 +1558,50 @@ fn the_committed_run_states_load_as_their_runs() {
         }
     }
     assert!(found >= 1, "no committed run state under {}", root.display());
+}
+
+/// Relative paths are recorded resolved (issue 74): a run started with `--families` and `--init-from`
+/// relative to its folder resumes from any other folder, reading the same files. Off a terminal,
+/// the pool and the epochs report their progress in plain lines.
+#[test]
+fn relative_paths_are_recorded_resolved_and_a_run_resumes_from_another_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("fam")).unwrap();
+    std::fs::copy(
+        format!("{}/families/gripper.toml", env!("CARGO_MANIFEST_DIR")),
+        dir.path().join("fam/my-gripper.toml"),
+    )
+    .unwrap();
+    let bp = |cwd: &Path, args: &str| {
+        let out = std::process::Command::new(crate::common::CLI)
+            .args(args.split_whitespace())
+            .current_dir(cwd)
+            .env("BLOCKPUZZLE_CACHE_DIR", dir.path().join("cache"))
+            .env("BLOCKPUZZLE_PROGRESS_SECONDS", "0")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{args}: {err}");
+        err
+    };
+    let tiny = "train --algo dagger --net entity --set-width 16 --epochs 1 --cycles 1 --batches 2 --batch-size 16 \
+                --test-episodes 1 --torch-threads 1";
+    let err =
+        bp(dir.path(), &format!("{tiny} --families fam/my-gripper.toml,push --generator-seeds 0..2 --run-dir first"));
+    // Off a terminal (a pipe here) long work says how far it has come in plain lines (issue 74).
+    for line in ["stream pool: generator seeds: 4 of 4 (100%)", "epoch 1/1 level 0"] {
+        assert!(err.contains(line), "{line:?} missing from: {err}");
+    }
+    bp(dir.path(), &format!("{tiny} --families push --generator-seeds 0..2 --init-from first --run-dir second"));
+    let config = |run: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.path().join(run).join("config.json")).unwrap()).unwrap()
+    };
+    let family = dir.path().join("fam/my-gripper.toml").display().to_string();
+    assert_eq!(config("first")["families"], format!("{family},push"));
+    assert_eq!(config("second")["finetune"]["init_from"], dir.path().join("first").display().to_string());
+    // A bare resume from another folder reads the recorded (absolute) files.
+    let elsewhere = tempfile::tempdir().unwrap();
+    for run in ["first", "second"] {
+        bp(elsewhere.path(), &format!("train --resume --run-dir {} --epochs 2", dir.path().join(run).display()));
+    }
 }

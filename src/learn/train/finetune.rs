@@ -183,6 +183,22 @@ impl FinetuneConfig {
                 (run.cycles as u64 * run.batches as u64).min(updates / 2)
             )));
         }
+        // TD3 steps the actor on every `--policy-delay`-th update only: the first after the warm-up
+        // must fall inside the run.
+        let ddpg = &run.algos.ddpg;
+        if self.critic_warmup > 0 && algo.name == "ddpg" && ddpg.td3 {
+            let delay = ddpg.policy_delay.max(1) as u64;
+            let first = self.critic_warmup.div_ceil(delay) * delay;
+            if first >= updates {
+                return Err(ConfigError(format!(
+                    "--critic-warmup {} with TD3's --policy-delay {delay}: the actor steps on every {delay}th update, \
+                     and the first after the warm-up would be update {first}, past the run's {updates}, so the actor \
+                     would never learn; give at most {} warm-up updates, or more --epochs",
+                    self.critic_warmup,
+                    (updates - 1) / delay * delay
+                )));
+            }
+        }
         Ok(())
     }
 

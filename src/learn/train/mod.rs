@@ -464,6 +464,60 @@ pub struct EpochRow {
 }
 
 impl TrainConfig {
+    /// The settings with every relative file path made absolute (against the current folder):
+    /// `--demos`, `--init-from` where it names a file or folder, the files of `--families` and of
+    /// `--env`. `config.json` records them so, and a resume from another folder reads the same files.
+    /// Names (a zoo entry, a shipped family, a task id) stay as given.
+    ///
+    /// # Errors
+    /// A current folder that cannot be read, or whose path is not UTF-8 (the lists are text).
+    pub fn with_absolute_paths(mut self) -> Result<Self> {
+        let cwd = std::env::current_dir().map_err(|e| {
+            TrainError::Refused(format!("cannot read the current folder to resolve the run's file paths: {e}"))
+        })?;
+        let absolute = |p: &Path| if p.is_relative() && p.exists() { cwd.join(p) } else { p.to_owned() };
+        let text = |p: std::path::PathBuf, flag: &str| {
+            p.into_os_string().into_string().map_err(|p| {
+                TrainError::Refused(format!(
+                    "{flag}: the file's full path {} is not UTF-8; run from a folder whose path is",
+                    Path::new(&p).display()
+                ))
+            })
+        };
+        let finetune = &mut self.finetune;
+        finetune.demos = finetune.demos.as_deref().map(absolute);
+        if let Some(p) = finetune.init_from.as_deref() {
+            let named =
+                p.to_str().is_some_and(|s| s == "random" || crate::benchmark::evaluate::Baseline::named(s).is_some());
+            if !named {
+                finetune.init_from = Some(absolute(p));
+            }
+        }
+        if let Some(list) = &self.families {
+            let builtin = |n: &str| crate::task::family::BUILTIN_FAMILIES.iter().any(|(b, _)| *b == n);
+            let items = list
+                .split(',')
+                .map(|item| match item.trim() {
+                    t if builtin(t) || !Path::new(t).exists() => Ok(item.to_owned()),
+                    t => text(absolute(Path::new(t)), "--families"),
+                })
+                .collect::<Result<Vec<_>>>()?;
+            self.families = Some(items.join(","));
+        }
+        if !self.env.is_empty() {
+            let items = self
+                .env
+                .split(',')
+                .map(|item| match item.trim() {
+                    t if !registry::is_path(t) || !Path::new(t).exists() => Ok(item.to_owned()),
+                    t => text(absolute(Path::new(t)), "--env"),
+                })
+                .collect::<Result<Vec<_>>>()?;
+            self.env = items.join(",");
+        }
+        Ok(self)
+    }
+
     /// Checks every setting before anything is written (`ranks`: the MPI processes of the run).
     ///
     /// # Errors

@@ -62,6 +62,16 @@ fn stream_tasks(
     );
     if let Some(recorded) = saved.and_then(|s| s.stream.as_ref()) {
         let changed = recorded.differences(&pool.record);
+        if !changed.is_empty() && recorded.same_families(&pool.record) {
+            refuse!(
+                "--resume: the stream's pool differs from the one recorded in {} ({}), though the families' files \
+                 are unchanged: the solver's check kept other candidates than when the run started (another \
+                 solver version or engine; provenance.json names the build that started it); resume with that \
+                 build, or start a new run with another --run-dir",
+                run.config().display(),
+                changed.join("; ")
+            );
+        }
         if !changed.is_empty() {
             refuse!(
                 "--resume: the stream's pool differs from the one recorded in {} ({}); restore the families' files, \

@@ -569,6 +569,24 @@ impl<'a> Trainer<'a> {
                 _ => config.finetune.demos_sha256 = Some(file.sha256.clone()),
             }
         }
+        // Options that would do nothing on these tasks, refused before any environment is built.
+        if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
+            match &tasks[..] {
+                [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
+                _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
+            }
+        }
+        if config.level_replay > 0.0 && tasks.iter().all(|t| t.max_level() == 0) {
+            let which = match &tasks[..] {
+                [task] => format!("the task {} has", task.id()),
+                _ => "every one of the run's tasks has".to_owned(),
+            };
+            refuse!(
+                "--level-replay {}: {which} one curriculum level, so there is no earlier level to replay; leave \
+                 --level-replay out (or 0)",
+                config.level_replay
+            );
+        }
         let thresholds: Vec<f64> =
             tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
         // One layout for every task: the most block slots of any (a stream: of any its families can draw).
@@ -598,13 +616,6 @@ impl<'a> Trainer<'a> {
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
         let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(TrainError::Refused)?;
         let max_levels: Vec<usize> = tasks.iter().map(Task::max_level).collect();
-        if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
-            match &tasks[..] {
-                [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
-                _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
-            }
-        }
-
         let dims = (arch, act_dim);
         let run_id = config.task_id();
         let begun = if resume {
