@@ -797,10 +797,15 @@ pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
     if !crate::benchmark::saved::TRAINERS.contains(&algo) {
         return Err(bad(format!("--algo {algo:?}: give one of {}", crate::benchmark::saved::TRAINERS.join(", "))));
     }
-    rewrite(path, |meta, _| match meta.trained_by() {
+    rewrite(path, |meta, saved| match meta.trained_by() {
         Some(a) if a != algo => {
             Err(bad(format!("it records {a} as the algorithm that trained it; --algo {algo} would change a record")))
         }
+        _ if (algo == "pggd") != (saved.policy.kind() == "gaussian") => Err(bad(format!(
+            "it holds a {} policy, which {algo} does not train (PGGD trains gaussian policies, every other \
+             algorithm deterministic ones); give the algorithm that trained it",
+            saved.policy.kind()
+        ))),
         _ => {
             meta.algo = algo.into();
             Ok(())
@@ -847,8 +852,20 @@ fn rewrite<T>(
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
-    crate::support::io::write_file(&json_path, &json)
-        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: crate::support::error::chain(&e) })?;
+    let write = |bytes: &[u8]| {
+        crate::support::io::write_file(&json_path, bytes)
+            .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: crate::support::error::chain(&e) })
+    };
+    let before = std::fs::read(&json_path).map_err(io(&json_path))?;
+    write(&json)?;
+    // What is written must load as every reader loads it; else the entry is put back as it was.
+    if let Err(e) = load(&json_path) {
+        write(&before)?;
+        return Err(ZooError::Corrupt {
+            path: json_path.clone(),
+            reason: format!("the rewritten entry would not load ({e}); it is left as it was"),
+        });
+    }
     Ok(out)
 }
 

@@ -237,7 +237,17 @@ fn train_in(comm: &crate::learn::train::comm::Comm, a: TrainArgs) -> Result<()> 
         (true, false, _) | (false, _, true) => Start::Resume,
         (false, _, false) => Start::New,
     };
-    let rows = crate::learn::train::train_ranks(comm, c, &run_dir, start, &mut on_epoch)?;
+    let trained = crate::learn::train::train_ranks(comm, c, &run_dir, start, &mut on_epoch);
+    // A branch that fails before its first epoch is removed: this command made it, and it holds
+    // nothing but the parent's copy (issue 74: it was left behind, a complete run directory).
+    if let (Err(_), Some(_), None) = (&trained, &a.branch_from, &last) {
+        if comm.is_root() {
+            if let Err(e) = std::fs::remove_dir_all(&run_dir) {
+                eprintln!("warning: cannot remove the failed branch {}: {e}", run_dir.display());
+            }
+        }
+    }
+    let rows = trained?;
     bar.finish();
     if let Some(r) = rows.last() {
         println!(

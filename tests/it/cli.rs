@@ -512,7 +512,14 @@ fn train_branch_from_names_refused_changes_and_continues_the_parent() {
     assert!(!o.status.success() && text(&o).contains("--resume"), "{}", text(&o));
     let o = bp(&["train", "--env", "GripperTouch-v0", "--branch-from", parent.to_str().unwrap()]);
     assert!(!o.status.success() && text(&o).contains("--run-dir"), "{}", text(&o));
+    // A branch refused when it starts (a setting out of range) leaves no run directory behind.
+    let o = train(&child, "2", &[&from[..], &["--level-replay", "2"]].concat());
+    assert!(!o.status.success() && text(&o).contains("--level-replay"), "{}", text(&o));
+    assert!(!child.exists(), "the failed branch was left behind");
+    // (GripperTouch-v0 has one level: level replay would do nothing there, and is refused.)
     let o = train(&child, "2", &[&from[..], &["--level-replay", "0.5"]].concat());
+    assert!(!o.status.success() && text(&o).contains("one curriculum level") && !child.exists(), "{}", text(&o));
+    let o = train(&child, "2", &[&from[..], &["--success-threshold", "0.5"]].concat());
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("branched from") && text(&o).contains("at epoch 1"), "{}", text(&o));
     let rows = std::fs::read_to_string(child.join("progress.csv")).unwrap();

@@ -815,6 +815,22 @@ fn empty_pipes_and_devices_are_refused_as_inputs() {
         (vec!["task", "check", fifo.to_str().unwrap()], "is a pipe (FIFO) that gave no data"),
         (vec!["eval", "--suite", "/dev/null", "--baseline", "scripted"], "is a device that gave no data"),
         (vec!["task", "generate", "/dev/null", "--out", dir.path().join("o").to_str().unwrap()], "gave no data"),
+        // --demos reads through the one bounded reader (issue 74: it read the whole file first, and
+        // blocked forever on a FIFO).
+        (
+            vec![
+                "train",
+                "--env",
+                "BlocksTouch-v0",
+                "--net",
+                "entity",
+                "--demos",
+                fifo.to_str().unwrap(),
+                "--run-dir",
+                "o",
+            ],
+            "is a pipe (FIFO) that gave no data",
+        ),
     ] {
         let o = bp_in(dir.path(), &args);
         refused(&o, &[wanted, "start its writer first"]);

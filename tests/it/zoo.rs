@@ -637,6 +637,14 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     assert_eq!((meta.version(), meta.algo.as_str(), meta.obs_mode), (7, "unrecorded", Some(ObsMode::Flat)));
     assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
     assert_eq!(meta.fixtures.as_deref(), Some(&[][..]));
+    // An algorithm that does not train this kind of policy is refused, and the entry stays as it was
+    // (issue 74: it was overwritten with one that `zoo check` refuses).
+    let before = std::fs::read(z.join("old.json")).unwrap();
+    let o = bp(&["zoo", "upgrade", "old", "--algo", "pggd", "--zoo", z.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("holds a deterministic policy, which pggd does not train"), "{e}");
+    assert_eq!(std::fs::read(z.join("old.json")).unwrap(), before);
+    assert!(bp(&["zoo", "check", "old", "--zoo", z.to_str().unwrap()]).status.success());
     let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some("ddpg"));
