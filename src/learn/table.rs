@@ -37,6 +37,10 @@ pub struct Row {
     pub paper: (Option<f64>, Option<f64>),
     /// The kind of policy the row stands for: a row takes only that kind.
     pub takes: Takes,
+    /// The algorithms the row stands for, as policy files record them ([`crate::benchmark::saved::TRAINERS`]).
+    pub algos: &'static [&'static str],
+    /// The task the row's agent is trained on (or the task the table plays, `table --env`).
+    pub trained_on: &'static str,
 }
 
 /// The kind of policy a row of the paper's table stands for.
@@ -50,12 +54,13 @@ pub enum Takes {
 
 impl Row {
     /// Whether `saved` is the kind of policy this row stands for: the row's kind (deterministic or
-    /// PGGD), trained on one task (the table may play it on another: `table --env`). A policy file does not record the algorithm that trained a deterministic actor (DDPG or an
-    /// imitator), so that part rests on the row's policy being named as the row asks.
+    /// PGGD), trained from scratch by the row's algorithm (where the file records it: files written
+    /// before they recorded it rest on being named as the row asks) on one task, the row's own or
+    /// `played`, the task the table plays (`table --env`).
     ///
     /// # Errors
     /// The mismatch, naming the row, the policy and the fix.
-    pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy) -> Result<(), TableError> {
+    pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy, played: &str) -> Result<(), TableError> {
         let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
         let is_pggd = matches!(saved.policy, crate::policy::actor::AnyPolicy::Pggd(_));
         let wanted = match self.takes {
@@ -74,6 +79,31 @@ impl Row {
                 "the row \"{}\" takes a single-task agent, and {name} was trained on several tasks ({}); give that \
                  row a policy trained on one task (the paper's rows are single-task agents)",
                 self.method, saved.env_id
+            )));
+        }
+        if let Some(algo) = saved.algo.as_deref().filter(|a| !self.algos.contains(a)) {
+            return Err(TableError::Misfit(format!(
+                "the row \"{}\" stands for {}, and {name} was trained by {algo}; give that row a policy its method \
+                 trained",
+                self.method,
+                self.algos.join(" or ")
+            )));
+        }
+        if let Some(start) = &saved.started_from {
+            return Err(TableError::Misfit(format!(
+                "the row \"{}\" stands for an agent trained from scratch, and {name} was fine-tuned from {}; give \
+                 that row a policy trained from scratch (the paper's rows are)",
+                self.method, start.name
+            )));
+        }
+        if saved.env_id != self.trained_on && saved.env_id != played {
+            return Err(TableError::Misfit(format!(
+                "the row \"{}\" stands for an agent trained on {}{}, and {name} was trained on {}; give that row a \
+                 policy trained there",
+                self.method,
+                self.trained_on,
+                if played == self.trained_on { String::new() } else { format!(" (or on {played}, the task played)") },
+                saved.env_id
             )));
         }
         Ok(())
@@ -128,11 +158,14 @@ pub const ZOO_EXPERT: &str = "BlocksTouch-v0-ddpg";
 pub fn rows(p: Policies) -> Vec<Row> {
     // This project's row is shown only when it has a policy (it is not the paper's).
     let (ddpg, pggd) = (Takes::Deterministic, Takes::Pggd);
+    // This project's DDPG may carry TD3's changes; the paper's rows are its own methods.
     let ours = p.ddpg_ours.map(|policy| Row {
         method: "DDPG (3 blocks), ours",
         policy: Some(policy),
         paper: (Some(0.97), Some(0.90)),
         takes: ddpg,
+        algos: &["ddpg", "td3"],
+        trained_on: ENV,
     });
     let mut rows = vec![
         Row {
@@ -140,11 +173,34 @@ pub fn rows(p: Policies) -> Vec<Row> {
             policy: p.expert,
             paper: (Some(0.44), Some(0.24)),
             takes: ddpg,
+            algos: &["ddpg"],
+            trained_on: "BlocksTouch-v0",
         },
-        Row { method: "DDPG (3 blocks)", policy: p.ddpg, paper: (Some(0.97), Some(0.90)), takes: ddpg },
-        Row { method: "PGGD + AggreVaTeD", policy: p.pggd, paper: (Some(0.64), Some(0.40)), takes: pggd },
+        Row {
+            method: "DDPG (3 blocks)",
+            policy: p.ddpg,
+            paper: (Some(0.97), Some(0.90)),
+            takes: ddpg,
+            algos: &["ddpg"],
+            trained_on: ENV,
+        },
+        Row {
+            method: "PGGD + AggreVaTeD",
+            policy: p.pggd,
+            paper: (Some(0.64), Some(0.40)),
+            takes: pggd,
+            algos: &["pggd"],
+            trained_on: ENV,
+        },
         // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
-        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None), takes: pggd },
+        Row {
+            method: "PGGD alone",
+            policy: p.pggd_alone,
+            paper: (None, None),
+            takes: pggd,
+            algos: &["pggd"],
+            trained_on: ENV,
+        },
     ];
     if let Some(ours) = ours {
         rows.insert(2, ours);
@@ -182,7 +238,7 @@ pub fn evaluate_row(row: &Row, task: &crate::task::Task, episodes: usize, seed: 
     // The policy file is read once; each evaluation gets its own copy.
     let run = || -> Result<RowResult, TableError> {
         let saved = load_policy(path)?;
-        row.check(&saved)?;
+        row.check(&saved, task.id())?;
         let (epoch, env_steps) = (saved.epoch, saved.env_steps);
         let policy = saved.policy_id(&path.display().to_string());
         let spec = |challenge| EvalSpec { task, challenge, distribution: None, level: None, episodes, seed, threads };

@@ -305,6 +305,18 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     );
     assert!(t.contains("seconds per epoch") && t.contains("updates"), "{t}");
 
+    // A row takes the policy its method trained from scratch on its task (issue 74): the zoo's TD3
+    // fine-tuned on ToppleTower-v0 is no "DDPG (3 blocks)", nor the BlocksTouch-v0 expert.
+    for (policy, wanted) in [
+        ("ToppleTower-v0-td3-finetuned", "stands for ddpg, and ToppleTower-v0-td3-finetuned was trained by td3"),
+        (expert.to_str().unwrap(), "stands for an agent trained on BlocksChoose-v0, and"),
+    ] {
+        let o = bp(&["table", "--ddpg", policy, "--episodes", "1", "--allow-missing", "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o));
+        let row = text(&o).lines().find(|l| l.starts_with("| DDPG (3 blocks) |")).unwrap_or_default().to_owned();
+        assert!(row.contains(wanted), "{policy}: {row}");
+    }
+
     // --zoo takes every row from the zoo by its standard name: here a zoo holding only the expert.
     let zoo = dir.path().join("zoo");
     let o = bp(&[
