@@ -99,6 +99,24 @@ pub struct PoolTask {
     pub hash: String,
 }
 
+impl PoolTask {
+    /// What differs from `other`, field by field, in words (each as "this against that").
+    fn differences(&self, other: &PoolTask) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut differ = |what: &str, a: String, b: String| {
+            if a != b {
+                out.push(format!("{what} {a} against {b}"));
+            }
+        };
+        differ("id", self.id.clone(), other.id.clone());
+        differ("family", self.family.to_string(), other.family.to_string());
+        differ("seed", self.seed.to_string(), other.seed.to_string());
+        differ("candidate", self.candidate.to_string(), other.candidate.to_string());
+        differ("hash", short(&self.hash).to_owned(), short(&other.hash).to_owned());
+        out
+    }
+}
+
 /// What a stream is: enough to draw its tasks again and to compare two runs' pools.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct StreamRecord {
@@ -152,7 +170,7 @@ impl StreamRecord {
         if out.is_empty() && self.tasks != other.tasks {
             let first = self.tasks.iter().zip(&other.tasks).find(|(a, b)| a != b);
             out.push(match first {
-                Some((a, b)) => format!("task {} (candidate {} against {})", a.id, a.candidate, b.candidate),
+                Some((a, b)) => format!("task {} ({})", a.id, a.differences(b).join(", ")),
                 None => format!("{} tasks against {}", self.tasks.len(), other.tasks.len()),
             });
         }
@@ -237,7 +255,8 @@ fn is_zero(n: &usize) -> bool {
 }
 
 fn short(hash: &str) -> &str {
-    &hash[..hash.len().min(19)]
+    // By characters: an edited record may hold any text.
+    hash.char_indices().nth(19).map_or(hash, |(i, _)| &hash[..i])
 }
 
 /// A stream's tasks and its record.

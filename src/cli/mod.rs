@@ -89,7 +89,7 @@ enum Command {
     /// Render a recorded episode headless (EGL): an animated GIF, a folder of PNGs, or a filmstrip PNG.
     Render(RenderArgs),
     #[cfg(feature = "train")]
-    /// Train an agent with the task's curriculum (--algo: DDPG, PGGD, SAC; PGGD with --expert is AggreVaTeD).
+    /// Train an agent with the task's curriculum (--algo: ddpg (--td3 for TD3), sac, pggd (with --expert: AggreVaTeD), bc, dagger).
     Train(TrainArgs),
     /// Evaluate a trained policy: success rate with a 95% confidence interval.
     Eval(EvalArgs),

@@ -784,3 +784,30 @@ fn suite_help_lists_every_built_in_suite() {
         }
     }
 }
+
+/// docs/cli.md names every command `blockpuzzle --help` lists (issue 74: `blend` was missing), and
+/// `train`'s summary names every algorithm `--algo` takes.
+#[test]
+fn the_command_line_reference_names_every_command_and_algorithm() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cli.md")).unwrap();
+    let help = text(&bp(&["--help"]));
+    let commands: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() > 10, "{help}");
+    for c in commands {
+        assert!(
+            doc.contains(&format!("`{c}")) || doc.contains(&format!("blockpuzzle {c}")),
+            "docs/cli.md names no {c}"
+        );
+    }
+    let train = help.lines().find(|l| l.trim_start().starts_with("train ")).unwrap().to_lowercase();
+    for algo in blockpuzzle::benchmark::saved::TRAINERS {
+        assert!(train.contains(algo), "`train`'s summary omits {algo}: {train}");
+    }
+}

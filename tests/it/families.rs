@@ -549,7 +549,14 @@ fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
     // A pool that differs over the same families and seeds is the solver's doing, not the files'.
     let mut moved = first.record.clone();
     moved.tasks[0].candidate = other;
-    assert!(moved.same_families(&first.record) && !moved.differences(&first.record).is_empty());
+    assert!(moved.same_families(&first.record));
+    let said = moved.differences(&first.record).join("; ");
+    assert!(said.contains(&format!("task gripper-0-v0 (candidate {other} against {})", seed0.candidate)), "{said}");
+    // Only what differs is named (issue 74: equal candidates were given as the difference).
+    moved.tasks[0].candidate = seed0.candidate;
+    moved.tasks[0].hash = "sha256:ffff".into();
+    let said = moved.differences(&first.record).join("; ");
+    assert!(said.contains("(hash sha256:ffff against") && !said.contains("candidate"), "{said}");
     // Another range is another pool, and says so.
     let other = pool(&list, "1..3".parse().unwrap(), 1, Some(cache.path()), false).unwrap();
     assert!(other.record.differences(&first.record)[0].contains("generator seeds 1..3 against 0..3"));

@@ -356,12 +356,16 @@ fn a_full_or_read_only_disk_fails_cleanly_naming_the_path() {
          $BP train --env BlocksTouch-v0 --epochs 1 --cycles 1 --batches 1 --test-episodes 1 --workers 1 --run-dir $M/run; \
          echo rc=$?; \
          $BP zoo export --from BlocksTouch-v0-ddpg --name n --description d --trained-with t --zoo $M/z; echo rc=$?; \
+         $BP plot --overlay {} --out $M/p.png; echo rc=$?; \
          rm $M/fill; echo left: $(ls -A $M)",
-        dump.display()
+        dump.display(),
+        run.display()
     );
     let Some(o) = on_small_fs("size=200k", &script) else { return };
     let t = text(&o);
-    assert_eq!(t.matches("rc=1").count(), 4, "{t}");
+    assert_eq!(t.matches("rc=1").count(), 5, "{t}");
+    // The plot's full disk in the OS's words, not the drawing backend's debug text (issue 74).
+    assert!(t.contains("p.png: No space left on device") && !t.contains("IOError") && !t.contains("Os {"), "{t}");
     assert!(t.contains("frames") && t.contains("No space left on device"), "{t}");
     assert!(t.contains("cannot write trajectory dump") && t.contains("x.jsonl: No space left on device"), "{t}");
     let last = String::from_utf8_lossy(&o.stdout).lines().last().map(str::to_owned);

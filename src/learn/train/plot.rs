@@ -4,6 +4,8 @@ use super::rundir::LogError;
 use super::EpochRow;
 use crate::support::io::WriteError;
 use plotters::prelude::*;
+use plotters_backend::DrawingErrorKind;
+use plotters_bitmap::BitMapBackendError;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
@@ -57,11 +59,20 @@ fn at<'a>(doing: &'static str, path: &'a Path) -> impl FnOnce(PlotError) -> Plot
     move |e| PlotError::At { doing, path: path.to_owned(), source: Box::new(e) }
 }
 
-/// plotters' error drawing `path`, in words.
-fn drawing<E: std::error::Error + Send + Sync>(
-    path: &Path,
-) -> impl Fn(DrawingAreaErrorKind<E>) -> PlotError + Copy + '_ {
-    move |e| PlotError::Draw(format!("drawing {}: {e}", path.display()))
+/// plotters' error drawing `path`, in words (the bitmap backend's own error prints its debug text:
+/// an I/O or encoding error is given by its own message instead).
+fn drawing(path: &Path) -> impl Fn(DrawingAreaErrorKind<BitMapBackendError>) -> PlotError + Copy + '_ {
+    move |e| {
+        let words = match &e {
+            DrawingAreaErrorKind::BackendError(DrawingErrorKind::DrawingError(b)) => match b {
+                BitMapBackendError::IOError(io) => io.to_string(),
+                BitMapBackendError::ImageError(image) => image.to_string(),
+                other => other.to_string(),
+            },
+            other => other.to_string(),
+        };
+        PlotError::Draw(format!("drawing {}: {words}", path.display()))
+    }
 }
 
 fn register_font() -> Result<()> {
