@@ -60,6 +60,9 @@ def evaluate(policy: Callable[[Any], Any], suite: str, num_envs: int = 8, thread
                              "leave obs_mode out for a zoo policy")
         return json.loads(_native.evaluate_saved(str(policy.path), name or policy.name, str(suite), threads,
                                                  episodes, on_row))
+    if not callable(policy):
+        raise TypeError(f"evaluate() takes a callable policy(obs) -> actions or a zoo policy, and got "
+                        f"{_what(policy)}")
     s = _native.suite(str(suite), episodes)
     name = name or getattr(policy, "__name__", type(policy).__name__)
     obs_mode = obs_mode or getattr(policy, "obs_mode", None) or "flat"
@@ -86,6 +89,19 @@ def evaluate(policy: Callable[[Any], Any], suite: str, num_envs: int = 8, thread
         "score": mean["test"],
         "gap": mean["train"] - mean["test"],
     }
+
+
+def _what(policy) -> str:
+    """What a non-callable ``policy`` is, and what to pass instead."""
+    if policy is None:
+        return "None; pass the policy itself, e.g. blockpuzzle.zoo.load(NAME) or blockpuzzle.policies.solver()"
+    if isinstance(policy, (str, bytes)) or hasattr(policy, "__fspath__"):
+        return (f"{policy!r}, a name or path; load the zoo entry first: "
+                f"blockpuzzle.evaluate(blockpuzzle.zoo.load({str(policy)!r}), ...)")
+    if hasattr(policy, "predict"):
+        return (f"a {type(policy).__name__} with .predict (a Stable-Baselines3 model?); pass "
+                "lambda obs: model.predict(obs, deterministic=True)[0]")
+    return f"a {type(policy).__name__}, which is not callable"
 
 
 class _Progress:
@@ -174,6 +190,13 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
             raise ValueError(f"the policy failed on {row['task_id']}'s observations (obs_mode={obs_mode!r}, "
                              f"batch shape {shape}): {e}. Give obs_mode= the mode the policy reads; a policy "
                              "trained on one task reads only tasks with the same observation") from e
+        except Exception as e:
+            # Any other error of the user's policy keeps its type, with the row it failed on.
+            where = f"raised by the policy on the suite row {row['task_id']} (obs_mode={obs_mode!r})"
+            if hasattr(e, "add_note"):
+                e.add_note(where)
+                raise
+            raise RuntimeError(f"{type(e).__name__}: {e} ({where})") from e
         if actions.shape != (n, 4):
             raise ValueError(f"the policy returned actions of shape {actions.shape} for {n} observations; "
                              f"return one action per observation, shape ({n}, 4)")

@@ -23,11 +23,17 @@ _FNV_PRIME = np.uint32(0x01000193)
 
 
 def _flat(obs) -> np.ndarray:
-    """The native vector(s) of ``obs``: itself, or a ``Dict`` observation joined as robot | objects | mask."""
+    """The native vector(s) of ``obs``: itself, or a ``Dict`` observation (``objects`` or
+    ``entities``) joined as robot | rows | mask, the layout of the mode's flat vector."""
     if isinstance(obs, dict):
-        lead = obs["robot"].shape[:-1]
-        parts = [obs["robot"], obs["objects"].reshape(*lead, -1), obs["mask"]]
-        return np.concatenate([np.asarray(p, np.float32) for p in parts], axis=-1)
+        rows = next((k for k in ("objects", "entities") if k in obs), None)
+        if rows is None or "robot" not in obs or "mask" not in obs:
+            raise ValueError(f"a Dict observation holds 'robot', 'objects' or 'entities', and 'mask'; this one holds "
+                             f"{sorted(obs)}")
+        robot = np.asarray(obs["robot"], np.float32)
+        lead = robot.shape[:-1]
+        parts = [robot, np.asarray(obs[rows], np.float32).reshape(*lead, -1), np.asarray(obs["mask"], np.float32)]
+        return np.concatenate(parts, axis=-1)
     return np.asarray(obs, np.float32)
 
 
@@ -72,12 +78,7 @@ class Solver:
             if "entities" not in obs:
                 raise ValueError("the solver reads the entities observation (make the environment with "
                                  "obs_mode=\"entities\"); this Dict has no 'entities'")
-            lead = np.asarray(obs["robot"]).shape[:-1]
-            parts = [np.asarray(obs["robot"], np.float32), np.asarray(obs["entities"], np.float32).reshape(*lead, -1),
-                     np.asarray(obs["mask"], np.float32)]
-            x = np.concatenate(parts, axis=-1)
-        else:
-            x = np.asarray(obs, np.float32)
+        x = _flat(obs)
         if x.ndim == 1:
             return _native.solver_act(np.ascontiguousarray(x[None, :]))[0]
         if x.ndim != 2:

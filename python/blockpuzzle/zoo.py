@@ -22,6 +22,7 @@ file imports nothing of blockpuzzle but that extension, and runs on its own with
 from __future__ import annotations
 
 import difflib
+import os
 import hashlib
 import json
 import pathlib
@@ -37,9 +38,16 @@ COLOUR_FEATURE = 15
 FOLDER = pathlib.Path(__file__).resolve().parent / "zoo_files"
 
 
-def names(folder: str | pathlib.Path = FOLDER) -> list[str]:
-    """The entries of a zoo folder (by default the package's), sorted."""
-    return sorted(p.stem for p in pathlib.Path(folder).glob("*.json"))
+def default_folder() -> pathlib.Path:
+    """The zoo names are looked up in: ``$BLOCKPUZZLE_ZOO`` where it is set (as for the command
+    line), else the package's own (``FOLDER``)."""
+    given = os.environ.get("BLOCKPUZZLE_ZOO", "")
+    return pathlib.Path(given) if given else FOLDER
+
+
+def names(folder: str | pathlib.Path | None = None) -> list[str]:
+    """The entries of a zoo folder (by default ``default_folder()``: ``$BLOCKPUZZLE_ZOO`` or the package's), sorted."""
+    return sorted(p.stem for p in pathlib.Path(folder or default_folder()).glob("*.json"))
 
 
 class ZooEntryNotFoundError(FileNotFoundError, KeyError):
@@ -54,9 +62,12 @@ def _missing_entry(name: str, folder: str | pathlib.Path) -> ZooEntryNotFoundErr
     """The error for a name that is not in ``folder``: the closest entry, and how to list them all."""
     folder = pathlib.Path(folder)
     if not folder.is_dir():
-        return ZooEntryNotFoundError(f"no zoo entry {name!r}: the zoo folder {folder} does not exist; pass "
-                                     "folder= a folder of NAME.json and NAME.safetensors entries, or leave it out "
-                                     "for the package's zoo")
+        from_env = os.environ.get("BLOCKPUZZLE_ZOO") and folder == pathlib.Path(os.environ["BLOCKPUZZLE_ZOO"])
+        where = "$BLOCKPUZZLE_ZOO" if from_env else "folder="
+        what = "is not a folder" if folder.exists() else "does not exist"
+        return ZooEntryNotFoundError(f"no zoo entry {name!r}: the zoo folder {folder} {what}; set {where} to a "
+                                     "folder of NAME.json and NAME.safetensors entries, or leave it unset for the "
+                                     "package's zoo")
     known = names(folder)
     lower = {n.lower(): n for n in known}
     close = [lower[m] for m in difflib.get_close_matches(str(name).lower(), list(lower), n=1, cutoff=0.6)]
@@ -66,12 +77,15 @@ def _missing_entry(name: str, folder: str | pathlib.Path) -> ZooEntryNotFoundErr
         f"{len(known)} entries")
 
 
-def load(name: str | pathlib.Path, folder: str | pathlib.Path = FOLDER, native: bool | None = None) -> ZooPolicy:
-    """The policy of a zoo entry: a name in ``folder`` or the path of an entry's .json/.safetensors.
+def load(name: str | pathlib.Path, folder: str | pathlib.Path | None = None, native: bool | None = None) -> ZooPolicy:
+    """The policy of a zoo entry: a name in ``folder`` (by default ``default_folder()``: ``$BLOCKPUZZLE_ZOO``
+    where it is set, else the package's zoo) or the path of an entry's .json/.safetensors.
     ``native``: act through the extension (the CLI's arithmetic; None: where it can be imported).
     A name that is not there raises ``ZooEntryNotFoundError`` (a ``FileNotFoundError``) naming the
     closest entry."""
     path = pathlib.Path(name)
+    if folder is None:
+        folder = default_folder()
     if path.suffix not in (".json", ".safetensors"):
         path = pathlib.Path(folder) / f"{name}.json"
         if not path.is_file():
@@ -86,7 +100,7 @@ def _unpickle(ref: tuple[str, str], files_sha256: str, native: bool) -> ZooPolic
     kind, where = ref
     what = f"the zoo policy {pathlib.Path(where).stem!r}"
     try:
-        policy = load(where, native=native) if kind == "zoo" else ZooPolicy(where, native=native)
+        policy = load(where, FOLDER, native=native) if kind == "zoo" else ZooPolicy(where, native=native)
     except FileNotFoundError as e:
         raise type(e)(f"cannot unpickle {what}: {e}; unpickle it where the package (or that file) has the "
                       "entry, or pickle it by loading the entry there") from None

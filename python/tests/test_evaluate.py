@@ -238,3 +238,32 @@ def test_an_error_in_the_row_callback_stops_the_clis_evaluator_and_is_raised():
     with pytest.raises(KeyboardInterrupt):
         blockpuzzle._native.evaluate_saved(path, "BlocksTouch-v0-ddpg", "layout", 2, 1, stop)
     assert len(calls) == 1 and calls[0][0] == "train" and calls[0][2] == 1
+
+
+def test_what_is_not_a_policy_is_named_and_an_error_in_the_policy_names_its_row(tmp_path):
+    # Issue 74: a zoo name, None or a model object got "set obs_mode"; a policy's own error named no row.
+    path = tmp_path / "tiny.toml"
+    path.write_text(TINY)
+    for given, words in [("BlocksTouch-v0-ddpg", r"blockpuzzle.zoo.load\('BlocksTouch-v0-ddpg'\)"),
+                         (None, "None; pass the policy itself"),
+                         (type("PPO", (), {"predict": lambda self, o: o})(), r"\.predict.*deterministic=True")]:
+        with pytest.raises(TypeError, match="takes a callable policy.*" + words):
+            blockpuzzle.evaluate(given, suite=str(path), progress=False)
+
+    def broken(obs):
+        raise ZeroDivisionError("oops")
+
+    with pytest.raises(ZeroDivisionError, match="oops") as e:
+        blockpuzzle.evaluate(broken, suite=str(path), episodes=1, progress=False)
+    assert any("suite row BlocksTouch-v0" in n for n in getattr(e.value, "__notes__", [])), e.value
+
+
+def test_obs_hash_reads_the_entities_observation_as_its_flat_vector():
+    # Issue 74: obs_hash failed on the entities Dict.
+    d, _ = blockpuzzle.make_vec("BlocksChoose-v0", num_envs=2, obs_mode="entities").reset(seed=[1, 2])
+    a = blockpuzzle.policies.obs_hash(d)
+    assert a.shape == (2, 4) and np.all(np.abs(a) <= 1)
+    joined = np.concatenate([d["robot"], d["entities"].reshape(2, -1), d["mask"]], axis=1)
+    assert np.array_equal(a, blockpuzzle.policies.obs_hash(joined))
+    with pytest.raises(ValueError, match="holds 'robot', 'objects' or 'entities', and 'mask'"):
+        blockpuzzle.policies.obs_hash({"robot": d["robot"]})

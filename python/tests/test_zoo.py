@@ -3,6 +3,7 @@ evaluations on the package's MuJoCo (test_provenance.py: a zoo policy scores wha
 built on the same MuJoCo, scores)."""
 
 import os
+import shutil
 
 import gymnasium as gym
 import numpy as np
@@ -146,3 +147,19 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
     (tmp_path / "x.json").write_text(json.dumps(old))
     p = zoo.load("x", folder=tmp_path, native=False)
     assert (p.version, p.obs_mode, p.kind, p.algo, p.fixtures) == (6, "flat", "deterministic", None, [])
+
+
+def test_blockpuzzle_zoo_names_the_zoo_as_for_the_command_line(tmp_path, monkeypatch):
+    # Issue 74: $BLOCKPUZZLE_ZOO worked in the CLI but not in Python.
+    for ext in ("json", "safetensors"):
+        shutil.copy(zoo.FOLDER / f"BlocksTouch-v0-ddpg.{ext}", tmp_path / f"BlocksTouch-v0-ddpg.{ext}")
+    monkeypatch.setenv("BLOCKPUZZLE_ZOO", str(tmp_path))
+    assert zoo.default_folder() == tmp_path and zoo.names() == ["BlocksTouch-v0-ddpg"]
+    assert zoo.load("BlocksTouch-v0-ddpg").path.parent == tmp_path
+    with pytest.raises(FileNotFoundError, match="no zoo entry 'generalist-bc-entity' in"):
+        zoo.load("generalist-bc-entity")
+    monkeypatch.setenv("BLOCKPUZZLE_ZOO", str(tmp_path / "BlocksTouch-v0-ddpg.json"))
+    with pytest.raises(FileNotFoundError, match=r"is not a folder; set \$BLOCKPUZZLE_ZOO"):
+        zoo.load("generalist-bc-entity")
+    monkeypatch.delenv("BLOCKPUZZLE_ZOO")
+    assert zoo.default_folder() == zoo.FOLDER and "generalist-bc-entity" in zoo.names()
