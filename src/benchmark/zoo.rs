@@ -84,6 +84,9 @@ pub enum ZooError {
     /// The zoo folder does not exist.
     #[error("the zoo folder {zoo} does not exist (set $BLOCKPUZZLE_ZOO or --zoo to a folder of NAME.safetensors + NAME.json entries)")]
     NoZoo { zoo: PathBuf },
+    /// A description that carries a result's figure.
+    #[error("--description carries the figure {figure:?}: an entry's figures are its recorded evaluations (`zoo list` shows them, recomputed from their outcomes) and its results/ pages; say what the policy is and where its numbers are, without them")]
+    FigureInDescription { figure: String },
     /// A name that is neither a file nor an entry of the zoo.
     #[error("no policy file or zoo entry named {name:?} (the zoo in {zoo} has: {known}); pass a policy file, a run directory or one of those names")]
     Unknown { name: String, zoo: PathBuf, known: String },
@@ -547,6 +550,45 @@ fn le_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
+/// The first figure in `description` that reads as a result (a rate such as 0.978 or 0.79x, or a
+/// percentage): descriptions are recorded once and never recomputed, so they carry none (None:
+/// none there). A weight such as "0.3 x" (one decimal) or a count is no result.
+pub fn figure_in(description: &str) -> Option<String> {
+    let chars: Vec<char> = description.chars().collect();
+    for (i, c) in chars.iter().enumerate() {
+        let before_ok = i == 0 || !(chars[i - 1].is_ascii_digit() || chars[i - 1] == '.');
+        let rate = matches!(c, '0' | '1')
+            && before_ok
+            && chars.get(i + 1) == Some(&'.')
+            && chars.get(i + 2).is_some_and(char::is_ascii_digit)
+            && chars.get(i + 3).is_some_and(char::is_ascii_digit);
+        let percent = *c == '%' && i > 0 && chars[i - 1].is_ascii_digit();
+        if rate || percent {
+            let from = if percent { i - 1 } else { i };
+            let start =
+                (0..=from).rev().take_while(|&j| chars[j].is_ascii_digit() || chars[j] == '.').last().unwrap_or(from);
+            let end = (i..chars.len()).take_while(|&j| chars[j].is_ascii_digit() || ".%x".contains(chars[j])).last();
+            return Some(chars[start..=end.unwrap_or(i)].iter().collect());
+        }
+    }
+    None
+}
+
+/// Replaces an entry's description (`zoo describe`), checked as [`export`] checks it; the entry is
+/// resealed and must load as before.
+///
+/// # Errors
+/// A figure in the description, an entry that does not load, I/O.
+pub fn describe(path: &Path, description: &str) -> Result<(), ZooError> {
+    if let Some(figure) = figure_in(description) {
+        return Err(ZooError::FigureInDescription { figure });
+    }
+    rewrite(path, |meta, _| {
+        meta.description = description.to_owned();
+        Ok(())
+    })
+}
+
 /// What [`export`] records besides the policy.
 #[derive(Debug, Clone, Default)]
 pub struct ExportInfo {
@@ -601,6 +643,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
             None => info.name.clone(),
         };
         return Err(ZooError::BadName { name });
+    }
+    if let Some(figure) = figure_in(&info.description) {
+        return Err(ZooError::FigureInDescription { figure });
     }
     entry_free(zoo, &info.name, info.overwrite)?;
     saved.check().map_err(&corrupt)?;

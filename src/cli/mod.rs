@@ -118,7 +118,7 @@ enum Command {
     /// FAMILY` writes tasks drawn from a task family (`tasks` is another name for it).
     #[command(subcommand, alias = "tasks")]
     Task(TaskCommand),
-    /// The model zoo (trained policies shipped in zoo/): list, check, export, evaluate.
+    /// The model zoo (trained policies shipped in zoo/): list, check, export, evaluate, describe, upgrade.
     #[command(subcommand)]
     Zoo(ZooCommand),
     /// Suite results side by side (`compare`) or as a leaderboard (`leaderboard`); numbers of

@@ -36,6 +36,18 @@ pub(super) enum ZooCommand {
         #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
         algo: Option<String>,
     },
+    /// Replace an entry's description (one line on what it is; figures belong in its evaluations
+    /// and results/, and are refused), resealed.
+    Describe {
+        /// The entry.
+        name: String,
+        /// The new description.
+        #[arg(long)]
+        description: String,
+        /// The zoo folder.
+        #[arg(long)]
+        zoo: Option<PathBuf>,
+    },
     /// Write a trained policy as a zoo entry (NAME.safetensors + NAME.json).
     #[cfg(feature = "train")]
     Export(ZooExportArgs),
@@ -187,6 +199,14 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             Ok(())
         }
         ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
+        ZooCommand::Describe { name, description, zoo } => {
+            let zoo = folder(zoo);
+            crate::benchmark::zoo::existing(&zoo)?;
+            let path = crate::benchmark::zoo::find(&zoo, &name)?;
+            crate::benchmark::zoo::describe(&path, &description)?;
+            println!("{name}: described, sealed");
+            Ok(())
+        }
         #[cfg(feature = "train")]
         ZooCommand::Export(a) => {
             if a.evaluate == 0 && !a.evaluate_envs.is_empty() {

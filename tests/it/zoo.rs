@@ -660,3 +660,48 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     let e = err_text(zoo::load(&z.join("fx.json")).unwrap_err());
     assert!(e.contains("fixtures records [gripper, table]") && e.contains("[gripper, table, floor]"), "{e}");
 }
+
+/// A description carries no result figures (issue 74: they were recorded once and went stale beside
+/// the recomputed evaluations): the shipped entries carry none, export and `zoo describe` refuse one,
+/// and `zoo describe` rewrites an entry that still loads and checks.
+#[test]
+fn descriptions_carry_no_figures() {
+    for name in zoo::names(&zoo::dir()) {
+        let meta = zoo::read_meta(&zoo::find(&zoo::dir(), &name).unwrap()).unwrap();
+        assert_eq!(zoo::figure_in(&meta.description), None, "{name}: {}", meta.description);
+    }
+    assert_eq!(zoo::figure_in("0.978 on ToppleTower-v0").as_deref(), Some("0.978"));
+    assert_eq!(zoo::figure_in("0.79x the generalist's").as_deref(), Some("0.79x"));
+    assert_eq!(zoo::figure_in("a gain of 12%").as_deref(), Some("12%"));
+    assert_eq!(zoo::figure_in("0.3 x generalist + 0.7 x fine-tuned, epoch 15 (46,496 env steps), v0.1"), None);
+    let dir = tempfile::tempdir().unwrap();
+    let z = dir.path();
+    for ext in ["json", "safetensors"] {
+        std::fs::copy(zoo::dir().join(format!("BlocksTouch-v0-ddpg.{ext}")), z.join(format!("e.{ext}"))).unwrap();
+    }
+    let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
+    let zs = z.to_str().unwrap();
+    let o = bp(&["zoo", "describe", "e", "--description", "solves 0.95 of episodes", "--zoo", zs]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("carries the figure \"0.95\"") && e.contains("zoo list"), "{e}");
+    let o = bp(&["zoo", "describe", "e", "--description", "the 2-block expert (results/headline.md)", "--zoo", zs]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(zoo::read_meta(&z.join("e.json")).unwrap().description, "the 2-block expert (results/headline.md)");
+    assert!(bp(&["zoo", "check", "e", "--zoo", zs]).status.success());
+    let o = bp(&[
+        "zoo",
+        "export",
+        "--from",
+        "BlocksTouch-v0-ddpg",
+        "--name",
+        "f",
+        "--description",
+        "50% better",
+        "--trained-with",
+        "t",
+        "--zoo",
+        zs,
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("\"50%\""));
+    assert!(!z.join("f.json").exists());
+}
