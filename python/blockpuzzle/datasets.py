@@ -29,6 +29,9 @@ def record_demos(suite: str | os.PathLike[str], out: str | os.PathLike[str], spl
     (default: the row's own count), and writes the demos file ``out``. Returns the counts
     (episodes, steps, successes, rows). The same file whatever ``threads``."""
     from blockpuzzle import _native
+    from blockpuzzle._checks import whole
+    episodes = None if episodes is None else whole("episodes", episodes)
+    threads = None if threads is None else whole("threads", threads)
     return json.loads(_native.record_demos(str(suite), str(out), split, episodes, threads))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from . import observation
+from ._checks import whole
 from ._native import Env as _NativeEnv
 
 
@@ -41,6 +42,7 @@ class BlockPuzzleEnv(gymnasium.Env):
             raise ValueError("no task: pass task='BlocksTouch-v0' (an id) or task='path/to/task.toml'")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; use one of {self.metadata['render_modes']} or None")
+        width, height = whole("width", width), whole("height", height)
         self._env = _NativeEnv(str(task), width, height, observation.check_mode(obs_mode))
         self.obs_mode = obs_mode
         self.obs_layout = self._env.obs_layout()

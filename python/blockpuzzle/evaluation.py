@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from . import _native
+from ._checks import whole
 from ._native import wilson95  # the CLI's interval, computed in Rust
 from .vector import make_vec
 
@@ -52,6 +53,9 @@ def evaluate(policy: Callable[[Any], Any], suite: str, num_envs: int = 8, thread
     ``suite`` with its sha256, ``splits`` of ``rows`` (each with its ``task_sha256`` and its
     ``evaluation``), ``score`` and ``gap``.
     """
+    num_envs = whole("num_envs", num_envs)
+    threads = None if threads is None else whole("threads", threads)
+    episodes = None if episodes is None else whole("episodes", episodes)
     on_row = _Progress(str(suite), episodes) if progress else None
     actor = getattr(policy, "native", None)
     if actor is not None:

@@ -12,6 +12,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from . import observation
+from ._checks import whole
 from ._native import Env as _NativeEnv
 from ._native import max_episode_steps as _native_max_steps
 from ._native import VecEnv as _NativeVecEnv
@@ -42,10 +43,11 @@ class BlockPuzzleVectorEnv(VectorEnv):
             raise ValueError(f"max_episode_steps={max_episode_steps}: {task} truncates its episodes at "
                              f"{_native_max_steps(str(task))} steps; for another limit write a task file with "
                              "max_episode_steps set")
+        num_envs = whole("num_envs", num_envs)
         if threads is None:
             threads = min(num_envs, os.cpu_count() or 1, 256)  # 256: the engine's thread bound
         observation.check_mode(obs_mode)
-        self._native = _NativeVecEnv(str(task), int(num_envs), int(threads), obs_mode)
+        self._native = _NativeVecEnv(str(task), num_envs, whole("threads", threads), obs_mode)
         single = _NativeEnv(str(task), 1, 1, obs_mode)
         low, high = single.observation_bounds()
         self.obs_mode = obs_mode
@@ -93,7 +95,11 @@ class BlockPuzzleVectorEnv(VectorEnv):
             raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution, reset_mask")
         mask = options.get("reset_mask")
         if mask is not None:
-            mask = [bool(m) for m in np.asarray(mask, dtype=np.bool_).reshape(-1)]
+            given = np.asarray(mask)
+            if given.shape != (n,):
+                raise ValueError(f"options['reset_mask'] has shape {given.shape}; the vector has {n} environments: "
+                                 f"give one bool per environment, shape ({n},)")
+            mask = [bool(m) for m in given.astype(np.bool_)]
         level = options.get("level")
         if level is not None and (isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0):
             raise ValueError(f"options['level'] must be an int >= 0, not {level!r}")

@@ -335,6 +335,11 @@ class ZooPolicy:
         extension's forward pass where there is one (``native``), else ``act_numpy``."""
         if isinstance(obs, dict):
             rows = "entities" if self.obs_mode == "entities" else "objects"
+            missing = [k for k in ("robot", rows, "mask") if k not in obs]
+            if missing:
+                raise ValueError(f"{self.name} reads the {self.obs_mode!r} observation (robot, {rows}, mask), and "
+                                 f"this Dict has {sorted(obs)}, without {missing}; make the environment with "
+                                 f"obs_mode={self.obs_mode!r}")
             parts = [np.asarray(obs[k], np.float32) for k in ("robot", rows, "mask")]
             batch = parts[0].ndim == 2
             n = len(parts[0]) if batch else 1

@@ -98,3 +98,28 @@ def test_pickling_or_copying_an_environment_says_how_to_remake_it():
             with pytest.raises(TypeError, match="cannot be pickled or copied.*same seed"):
                 attempt(env)
         env.close()
+
+
+def test_counts_and_masks_of_the_wrong_kind_are_named():
+    # Issue 74: a negative count was a bare OverflowError; a mask of the wrong length blamed "environment 0".
+    for call, name in [(lambda: blockpuzzle.make_vec("BlocksTouch-v0", num_envs=-2), "num_envs=-2"),
+                       (lambda: blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2, threads=-1), "threads=-1"),
+                       (lambda: gym.make("BlockPuzzle/BlocksTouch-v0", width=-5), "width=-5"),
+                       (lambda: blockpuzzle.evaluate(lambda o: o, suite="layout", num_envs=-1), "num_envs=-1"),
+                       (lambda: blockpuzzle.evaluate(lambda o: o, suite="layout", episodes=-3), "episodes=-3")]:
+        with pytest.raises(ValueError, match=f"{name}: give a whole number"):
+            call()
+    with pytest.raises(TypeError, match="num_envs must be a whole number"):
+        blockpuzzle.make_vec("BlocksTouch-v0", num_envs=2.5)
+    envs = blockpuzzle.make_vec("BlocksTouch-v0", num_envs=3)
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match=r"reset_mask'\] has shape \(2,\); the vector has 3 environments"):
+        envs.reset(options={"reset_mask": [True, False]})
+
+
+def test_a_zoo_policy_given_the_other_dict_mode_names_the_mode_it_reads():
+    # Issue 74: a bare KeyError.
+    policy = zoo.load("generalist-bc-entity")
+    obs, _ = gym.make("BlockPuzzle/BlocksChoose-v0", obs_mode="objects").reset(seed=0)
+    with pytest.raises(ValueError, match=r"reads the 'entities' observation .*without \['entities'\].*obs_mode='entities'"):
+        policy(obs)
