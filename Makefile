@@ -61,9 +61,10 @@ test-mujoco3: setup-mujoco3
 # The Python sdist and, built from it, the manylinux_2_28 wheel (MuJoCo 3.11.0 from the mujoco wheel,
 # the Fetch files from gymnasium-robotics'), installed into a fresh venv and tested away from the
 # checkout; its CLI comparisons run the package's own `blockpuzzle` command (the Rust command line's
-# code, on the same engine).
+# code, on the same engine). Built without link-time optimisation (scripts/build_wheel.sh, the test
+# profile): the same code in less time.
 test-wheel: setup-mujoco3
-	bash scripts/python_check.sh
+	BLOCKPUZZLE_WHEEL_PROFILE=test bash scripts/python_check.sh
 
 # Main job: DDPG with the paper's curriculum on BlocksTouch-v0 (2 workers); resumes $(RUN) if it exists.
 train: build

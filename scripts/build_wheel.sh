@@ -63,7 +63,13 @@ with tempfile.TemporaryDirectory() as tmp:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(top / rel, target)  # a fresh modification time: cargo rebuilds what uses it
 EOF
-echo "[wheel] maturin build --release --zig --compatibility $PLATFORM (from $(basename "$SDIST"))" >&2
+# BLOCKPUZZLE_WHEEL_PROFILE=test (`make test-wheel`, CI): the release code without link-time
+# optimisation and with more codegen units, as the Rust `release-test` profile is: the same
+# arithmetic (Rust has no fast-math), built in less time; a wheel to publish is built without it.
+if [ "${BLOCKPUZZLE_WHEEL_PROFILE:-}" = "test" ]; then
+    export CARGO_PROFILE_RELEASE_LTO=false CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16
+fi
+echo "[wheel] maturin build --release --zig --compatibility $PLATFORM (from $(basename "$SDIST"))${BLOCKPUZZLE_WHEEL_PROFILE:+, profile $BLOCKPUZZLE_WHEEL_PROFILE}" >&2
 (cd "$SRC" && CARGO_TARGET_DIR="$ROOT/python/target" \
     maturin build --release --quiet --zig --compatibility "${PLATFORM%_x86_64}" --auditwheel skip --out "$DIST" >&2)
 echo "[wheel] auditwheel repair --plat $PLATFORM --exclude libmujoco.so.3.11.0" >&2
