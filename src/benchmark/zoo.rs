@@ -1154,6 +1154,13 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
     // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
     match &meta.meta_sha256 {
+        Some(h) if !crate::support::limits::is_sha256(h) => {
+            return Err(bad_meta(format!(
+                "its meta_sha256 {:?} is not a content hash (sha256: and 64 hex digits): the file was damaged or \
+                 written by hand; restore both files of the entry together, or export the policy again",
+                crate::support::limits::cut_long_lines(h)
+            )))
+        }
         Some(h) if *h != meta.seal() => {
             return Err(bad_meta(
                 "its metadata is not what was exported (meta_sha256 does not match: a field was edited); restore \

@@ -255,3 +255,11 @@ mod tests {
         }
     }
 }
+
+/// Whether `hash` has the form of a content hash as this project writes them: `sha256:` and 64
+/// lower-case hex digits. A record whose hash lacks it was damaged or hand-written, which a message
+/// says rather than calling the content edited.
+pub fn is_sha256(hash: &str) -> bool {
+    hash.strip_prefix("sha256:")
+        .is_some_and(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)))
+}

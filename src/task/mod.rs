@@ -54,6 +54,17 @@ impl TaskSource {
     /// Text that does not compile, or compiles to another task than `hash` names.
     pub fn compile(&self) -> Result<Task, TaskError> {
         let origin = format!("the recorded copy of {}", self.id);
+        if !crate::support::limits::is_sha256(&self.hash) {
+            return Err(TaskError {
+                origin,
+                line: None,
+                message: format!(
+                    "its hash {:?} is not a content hash (sha256: and 64 hex digits): the record was damaged or \
+                     written by hand; restore the original file",
+                    crate::support::limits::cut_long_lines(&self.hash)
+                ),
+            });
+        }
         let mut task = Task::parse(&self.toml, &origin, None)?;
         if task.source.hash != self.hash {
             return Err(TaskError {

@@ -705,3 +705,25 @@ fn descriptions_carry_no_figures() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("\"50%\""));
     assert!(!z.join("f.json").exists());
 }
+
+/// A hash that is not of a hash's form is named as such, not called an edit of the content it
+/// guards (issue 74, misworded): a task record's, a zoo entry's seal.
+#[test]
+fn malformed_hashes_are_named_as_such() {
+    let mut source = registry::task("BlocksTouch-v0").unwrap().source.clone();
+    assert!(source.compile().is_ok());
+    source.hash = "sha256:zz".into();
+    let e = source.compile().unwrap_err().to_string();
+    assert!(e.contains("\"sha256:zz\" is not a content hash") && !e.contains("edited"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["json", "safetensors"] {
+        std::fs::copy(zoo::dir().join(format!("BlocksTouch-v0-ddpg.{ext}")), dir.path().join(format!("e.{ext}")))
+            .unwrap();
+    }
+    let entry = dir.path().join("e.json");
+    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&entry).unwrap()).unwrap();
+    v["meta_sha256"] = "d41d8cd98f00b204".into();
+    std::fs::write(&entry, serde_json::to_vec(&v).unwrap()).unwrap();
+    let e = err_text(zoo::load(&entry).unwrap_err());
+    assert!(e.contains("meta_sha256 \"d41d8cd98f00b204\" is not a content hash") && !e.contains("edited"), "{e}");
+}
