@@ -386,11 +386,13 @@ pub fn pool(
 ) -> Result<Pool, StreamError> {
     use rayon::prelude::*;
     check_held_out(families, range)?;
-    let held_out: std::collections::BTreeSet<String> = crate::benchmark::suite::held_out_tasks()
+    // Each held-out task by content, with the suite, split and row id that hold it out.
+    let held_out: BTreeMap<String, String> = crate::benchmark::suite::held_out_tasks()
         .map_err(|e| StreamError::Family(e.to_string()))?
         .into_iter()
-        .map(|h| h.content)
+        .map(|h| (h.content, format!("{}, held out by {}'s {} split", h.id, h.suite, h.split)))
         .collect();
+    let mut first_held_out: Option<String> = None;
     let engine = crate::sim::mj::version();
     let mut record = StreamRecord {
         families: families
@@ -473,7 +475,13 @@ pub fn pool(
                 None => cached += 1,
             }
             match kept {
-                Some((_, task)) if held_out.contains(&task.content_hash()) => record.seeds_held_out += 1,
+                Some((_, task)) if held_out.contains_key(&task.content_hash()) => {
+                    record.seeds_held_out += 1;
+                    if first_held_out.is_none() {
+                        let which = &held_out[&task.content_hash()];
+                        first_held_out = Some(format!("{} seed {seed} draws {which}", family.spec.family));
+                    }
+                }
                 Some((candidate, task)) => {
                     record.tasks.push(PoolTask {
                         id: task.id().to_owned(),
@@ -513,8 +521,10 @@ pub fn pool(
     if tasks.is_empty() {
         let reasons = if record.seeds_held_out > 0 {
             format!(
-                "{} of them draw a task a built-in suite holds out (by content, whatever the family is called)",
-                record.seeds_held_out
+                "{} of them draw a task a built-in suite holds out (by content, whatever the family is called; \
+                 first: {}); give generator seeds that no suite holds out",
+                record.seeds_held_out,
+                first_held_out.as_deref().unwrap_or_default()
             )
         } else if rejected.is_empty() {
             "the cache records no task for any of them".to_owned()

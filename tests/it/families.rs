@@ -492,6 +492,13 @@ fn a_stream_leaves_out_held_out_tasks_by_content() {
     assert!(p.tasks.iter().all(|t| !held.contains(&t.content_hash())));
     let seeds: Vec<u64> = p.record.tasks.iter().map(|t| t.seed).collect();
     assert_eq!(seeds, [206, 207]);
+    // A pool of held-out tasks only names the first, the suite and split holding it out, and the fix
+    // (issue 74, round 6: it named none of them).
+    let e = pool(&list, "208..211".parse().unwrap(), 2, None, false).unwrap_err().to_string();
+    assert!(
+        e.contains("my-gather seed 208 draws") && e.contains("held out by") && e.contains("give generator seeds"),
+        "{e}"
+    );
 }
 
 /// A stream's pool: the families' tasks of every seed in order, a record of them by hash, the disk
