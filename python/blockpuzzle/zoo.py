@@ -22,9 +22,9 @@ file imports nothing of blockpuzzle but that extension, and runs on its own with
 from __future__ import annotations
 
 import difflib
-import os
 import hashlib
 import json
+import os
 import pathlib
 
 import numpy as np

@@ -111,6 +111,16 @@ pub struct SavedPolicy {
 /// `td3`; the training registry's names are checked against this list by its tests).
 pub const TRAINERS: [&str; 6] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"];
 
+/// The kind of policy `algo` trains ([`crate::policy::actor::AnyPolicy::kind`]'s words): PGGD a
+/// `gaussian` one, every other algorithm a `deterministic` one.
+pub fn kind_trained_by(algo: &str) -> &'static str {
+    if algo == "pggd" {
+        "gaussian"
+    } else {
+        "deterministic"
+    }
+}
+
 /// Where a blended policy's weights came from: (1 − `weight`)·`base` + `weight`·`tuned`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BlendRecord {
@@ -147,7 +157,7 @@ impl SavedPolicy {
             if !trainers.contains(&a.as_str()) {
                 return Err(format!("algo {a:?} is none of {} (an edited file)", trainers.join(", ")));
             }
-            let expected = if a == "pggd" { "gaussian" } else { "deterministic" };
+            let expected = kind_trained_by(a);
             if expected != self.policy.kind() {
                 return Err(format!(
                     "algo {a:?} with a {} policy: {a} trains a {expected} policy (PGGD a gaussian one, every other \

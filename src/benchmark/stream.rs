@@ -420,7 +420,7 @@ pub fn pool(
         crate::support::progress::hidden()
     };
     // Off a terminal: a line per family besides the periodic ones.
-    let lines = progress && !std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let lines = bar.is_plain();
     for (index, (_, family)) in families.iter().enumerate() {
         let family_started = std::time::Instant::now();
         let checked_before = checked;

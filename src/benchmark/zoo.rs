@@ -698,10 +698,10 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let bytes = safetensors::tensor::serialize(views, Some(header)).map_err(|e| corrupt(e.to_string()))?;
     // PGGD trains a Gaussian policy, every other algorithm a deterministic one.
     if let Some(a) = saved.algo.as_ref().or(info.algo.as_ref()) {
-        if (a == "pggd") != matches!(saved.policy, AnyPolicy::Pggd(_)) {
+        if crate::benchmark::saved::kind_trained_by(a) != saved.policy.kind() {
             return Err(corrupt(format!(
                 "{a} trains a {} policy, and this one is {}; record the algorithm that trained it",
-                if a == "pggd" { "gaussian" } else { "deterministic" },
+                crate::benchmark::saved::kind_trained_by(a),
                 saved.policy.kind()
             )));
         }
@@ -846,7 +846,7 @@ pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
         Some(a) if a != algo => {
             Err(bad(format!("it records {a} as the algorithm that trained it; --algo {algo} would change a record")))
         }
-        _ if (algo == "pggd") != (saved.policy.kind() == "gaussian") => Err(bad(format!(
+        _ if crate::benchmark::saved::kind_trained_by(algo) != saved.policy.kind() => Err(bad(format!(
             "it holds a {} policy, which {algo} does not train (PGGD trains gaussian policies, every other \
              algorithm deterministic ones); give the algorithm that trained it",
             saved.policy.kind()
@@ -1090,7 +1090,7 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
                 crate::benchmark::saved::TRAINERS.join(", ")
             )));
         }
-        if meta.algo != UNRECORDED && (meta.algo == "pggd") != (meta.kind() == Some("gaussian")) {
+        if meta.algo != UNRECORDED && Some(crate::benchmark::saved::kind_trained_by(&meta.algo)) != meta.kind() {
             return Err(bad_meta(format!(
                 "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
                  deterministic one; restore the entry",

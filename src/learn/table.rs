@@ -35,9 +35,8 @@ pub struct Row {
     pub policy: Option<PathBuf>,
     /// The paper's success rates, where it gives them.
     pub paper: (Option<f64>, Option<f64>),
-    /// The kind of policy the row stands for: a row takes only that kind.
-    pub takes: Takes,
-    /// The algorithms the row stands for, as policy files record them ([`crate::benchmark::saved::TRAINERS`]).
+    /// The algorithms the row stands for, as policy files record them ([`crate::benchmark::saved::TRAINERS`]),
+    /// all of one kind of policy ([`Row::takes`]).
     pub algos: &'static [&'static str],
     /// The task the row's agent is trained on (or the task the table plays, `table --env`).
     pub trained_on: &'static str,
@@ -53,6 +52,14 @@ pub enum Takes {
 }
 
 impl Row {
+    /// The kind of policy the row stands for (its algorithms'): a row takes only that kind.
+    pub fn takes(&self) -> Takes {
+        match self.algos.first().map(|a| crate::benchmark::saved::kind_trained_by(a)) {
+            Some("gaussian") => Takes::Pggd,
+            _ => Takes::Deterministic,
+        }
+    }
+
     /// Whether `saved` is the kind of policy this row stands for: the row's kind (deterministic or
     /// PGGD), trained from scratch by the row's algorithm (where the file records it: files written
     /// before they recorded it rest on being named as the row asks) on one task, the row's own or
@@ -63,11 +70,12 @@ impl Row {
     pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy, played: &str) -> Result<(), TableError> {
         let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
         let is_pggd = matches!(saved.policy, crate::policy::actor::AnyPolicy::Pggd(_));
-        let wanted = match self.takes {
+        let takes = self.takes();
+        let wanted = match takes {
             Takes::Deterministic => "a deterministic (DDPG) actor",
             Takes::Pggd => "a PGGD policy",
         };
-        if is_pggd != (self.takes == Takes::Pggd) {
+        if is_pggd != (takes == Takes::Pggd) {
             return Err(TableError::Misfit(format!(
                 "the row \"{}\" takes {wanted}, and {name} is a {} policy; give that row a policy of its kind",
                 self.method,
@@ -157,13 +165,11 @@ pub const ZOO_EXPERT: &str = "BlocksTouch-v0-ddpg";
 /// project's DDPG after the paper's (where given), and PGGD alone.
 pub fn rows(p: Policies) -> Vec<Row> {
     // This project's row is shown only when it has a policy (it is not the paper's).
-    let (ddpg, pggd) = (Takes::Deterministic, Takes::Pggd);
     // This project's DDPG may carry TD3's changes; the paper's rows are its own methods.
     let ours = p.ddpg_ours.map(|policy| Row {
         method: "DDPG (3 blocks), ours",
         policy: Some(policy),
         paper: (Some(0.97), Some(0.90)),
-        takes: ddpg,
         algos: &["ddpg", "td3"],
         trained_on: ENV,
     });
@@ -172,7 +178,6 @@ pub fn rows(p: Policies) -> Vec<Row> {
             method: "DDPG (2 blocks), grey removed from its view",
             policy: p.expert,
             paper: (Some(0.44), Some(0.24)),
-            takes: ddpg,
             algos: &["ddpg"],
             trained_on: "BlocksTouch-v0",
         },
@@ -180,7 +185,6 @@ pub fn rows(p: Policies) -> Vec<Row> {
             method: "DDPG (3 blocks)",
             policy: p.ddpg,
             paper: (Some(0.97), Some(0.90)),
-            takes: ddpg,
             algos: &["ddpg"],
             trained_on: ENV,
         },
@@ -188,19 +192,11 @@ pub fn rows(p: Policies) -> Vec<Row> {
             method: "PGGD + AggreVaTeD",
             policy: p.pggd,
             paper: (Some(0.64), Some(0.40)),
-            takes: pggd,
             algos: &["pggd"],
             trained_on: ENV,
         },
         // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
-        Row {
-            method: "PGGD alone",
-            policy: p.pggd_alone,
-            paper: (None, None),
-            takes: pggd,
-            algos: &["pggd"],
-            trained_on: ENV,
-        },
+        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None), algos: &["pggd"], trained_on: ENV },
     ];
     if let Some(ours) = ours {
         rows.insert(2, ours);

@@ -17,7 +17,6 @@ pub struct Progress {
     what: String,
     /// Off a terminal: when the last plain line was written, and how often to write one.
     plain: Option<(Mutex<Instant>, Duration)>,
-    started: Instant,
 }
 
 /// A progress report of `len` steps named `what` on stderr.
@@ -32,12 +31,12 @@ pub fn bar(len: u64, what: &str) -> Progress {
     bar.set_style(
         indicatif::ProgressStyle::with_template(&template).unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    Progress { bar, what: what.to_owned(), plain, started: Instant::now() }
+    Progress { bar, what: what.to_owned(), plain }
 }
 
 /// A report that shows nothing anywhere (a quiet caller's).
 pub fn hidden() -> Progress {
-    Progress { bar: indicatif::ProgressBar::hidden(), what: String::new(), plain: None, started: Instant::now() }
+    Progress { bar: indicatif::ProgressBar::hidden(), what: String::new(), plain: None }
 }
 
 /// The interval between plain lines: `BLOCKPUZZLE_PROGRESS_SECONDS` where it is a whole number.
@@ -47,6 +46,11 @@ fn plain_every() -> Duration {
 }
 
 impl Progress {
+    /// Whether it reports in plain lines (a report shown off a terminal).
+    pub fn is_plain(&self) -> bool {
+        self.plain.is_some()
+    }
+
     /// `n` more steps done.
     pub fn inc(&self, n: u64) {
         self.bar.inc(n);
@@ -61,7 +65,7 @@ impl Progress {
     /// One plain line: where the work stands, how long it has taken and about how long is left.
     pub fn line(&self) -> String {
         let (pos, len) = (self.bar.position(), self.bar.length().unwrap_or(0));
-        let elapsed = self.started.elapsed().as_secs_f64();
+        let elapsed = self.bar.elapsed().as_secs_f64();
         let left = match pos {
             0 => String::new(),
             _ => format!(", about {:.0} s left", elapsed * (len.saturating_sub(pos)) as f64 / pos as f64),

@@ -493,27 +493,23 @@ impl TrainConfig {
                 finetune.init_from = Some(absolute(p));
             }
         }
-        if let Some(list) = &self.families {
-            let builtin = |n: &str| crate::task::family::BUILTIN_FAMILIES.iter().any(|(b, _)| *b == n);
+        // A comma-separated list with each item that is a file (not a `name`) made absolute.
+        let list = |list: &str, name: &dyn Fn(&str) -> bool, flag: &str| {
             let items = list
                 .split(',')
                 .map(|item| match item.trim() {
-                    t if builtin(t) || !Path::new(t).exists() => Ok(item.to_owned()),
-                    t => text(absolute(Path::new(t)), "--families"),
+                    t if name(t) || !Path::new(t).exists() => Ok(item.to_owned()),
+                    t => text(absolute(Path::new(t)), flag),
                 })
                 .collect::<Result<Vec<_>>>()?;
-            self.families = Some(items.join(","));
+            Ok::<_, TrainError>(items.join(","))
+        };
+        if let Some(families) = &self.families {
+            let builtin = |n: &str| crate::task::family::BUILTIN_FAMILIES.iter().any(|(b, _)| *b == n);
+            self.families = Some(list(families, &builtin, "--families")?);
         }
         if !self.env.is_empty() {
-            let items = self
-                .env
-                .split(',')
-                .map(|item| match item.trim() {
-                    t if !registry::is_path(t) || !Path::new(t).exists() => Ok(item.to_owned()),
-                    t => text(absolute(Path::new(t)), "--env"),
-                })
-                .collect::<Result<Vec<_>>>()?;
-            self.env = items.join(",");
+            self.env = list(&self.env, &|t| !registry::is_path(t), "--env")?;
         }
         Ok(self)
     }
