@@ -27,8 +27,8 @@ class BlockPuzzleEnv(gymnasium.Env):
     touches blue), ``truncated`` at the task's step limit or on numerical instability.
 
     ``reset(options=...)`` takes ``level`` (curriculum level), ``challenge`` (bool) and
-    ``distribution`` (a name from the task file); they stay in force for later resets until
-    changed. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
+    ``distribution`` (a name from the task file, listed in ``distributions``); they stay in force
+    for later resets until changed. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
     ``distribution``, ``touching`` (object index pairs touching during the step),
     ``contact_matrix`` (int8, 0 never touched, 1 touched before, 2 touching now),
     ``elapsed_steps`` and ``unstable``; ``env.unwrapped.objects`` names the indices.
@@ -53,6 +53,9 @@ class BlockPuzzleEnv(gymnasium.Env):
         self.task_id = self._env.id
         self.objects = [name for name, _ in self._env.objects()]
         self.max_level = self._env.max_level
+        #: The names of the task file's distributions, what ``reset(options={"distribution": name})``
+        #: takes (empty for a task with none).
+        self.distributions: list[str] = list(self._env.distributions())
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)

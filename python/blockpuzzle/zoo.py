@@ -6,7 +6,7 @@ the checkout's zoo (``names()``); ``load`` also takes the path of an entry elsew
 
     import gymnasium as gym, blockpuzzle
     policy = blockpuzzle.zoo.load("BlocksTouch-v0-ddpg")
-    env = gym.make(f"BlockPuzzle/{policy.task_id}", obs_mode=policy.obs_mode)
+    env = policy.make_env()                   # its task (built in or generated), its observation mode
     obs, _ = env.reset(seed=0)
     action = policy(obs)                      # one observation, or a batch of rows
     policy.evaluations                        # what the CLI measured, on this MuJoCo
@@ -258,6 +258,45 @@ class ZooPolicy:
         several tasks, the first of them (``training_tasks`` has them all)."""
         return self.meta["task"]["id"]
 
+    def make_env(self, **kwargs):
+        """A Gymnasium environment of the task the entry records (``task_id``: for a policy trained
+        on several tasks, the first), reading the policy's observation mode: ``gym.make`` of the
+        built-in id, or for a task that is not built in (a generated or hand-written task file) of
+        the task text the entry carries, written once to ``blockpuzzle-tasks/`` in the temporary
+        folder under its content hash. ``kwargs`` go to ``gym.make`` (``render_mode``, ...). A built-in
+        task whose text has changed since the policy was trained is refused, naming both hashes."""
+        try:
+            import gymnasium as gym
+
+            import blockpuzzle
+        except ImportError as e:
+            raise ImportError("make_env needs the blockpuzzle package (pip install blockpuzzle); this file "
+                              "alone reads the entry with numpy") from e
+        import tempfile
+
+        task = self.meta["task"]
+        kwargs.setdefault("obs_mode", self.obs_mode)
+        recorded = task.get("hash")
+        if task["id"] in blockpuzzle.env_ids():
+            now = "sha256:" + blockpuzzle._native.task_sha256(task["id"]).removeprefix("sha256:")
+            if recorded and recorded != now:
+                raise ValueError(f"{self.name} was trained on {task['id']} {recorded}; this package's {task['id']} is "
+                                 f"{now} (its text has changed): the policy's own task is not built in any more")
+            return gym.make(f"{blockpuzzle.NAMESPACE}/{task['id']}", **kwargs)
+        text = task.get("toml")
+        if not text:
+            raise ValueError(f"{self.name} records no task text for {task['id']!r}, which is not a built-in id: make "
+                             "its environment from the task file, blockpuzzle.make_task(path)")
+        digest = hashlib.sha256(text.encode()).hexdigest()
+        folder = pathlib.Path(tempfile.gettempdir()) / "blockpuzzle-tasks"
+        folder.mkdir(exist_ok=True)
+        path = folder / f"{digest}.toml"
+        if not path.is_file() or hashlib.sha256(path.read_bytes()).hexdigest() != digest:
+            part = folder / f".{digest}.{os.getpid()}.tmp"
+            part.write_text(text)
+            os.replace(part, path)
+        return blockpuzzle.make_task(path, **kwargs)
+
     @property
     def training_tasks(self) -> list[str]:
         """The ids of the tasks it was trained on: one, or a multi-task policy's every task
@@ -363,8 +402,8 @@ class ZooPolicy:
     def _check_width(self, width: int) -> None:
         """An observation of another length is an error naming both shapes and the fix (not a numpy
         broadcast error, nor a set network silently reading a misaligned vector)."""
-        fix = (f"make the environment with the policy's task and observation mode "
-               f"(gym.make('BlockPuzzle/{self.task_id}', obs_mode={self.obs_mode!r})), or evaluate it with "
+        fix = (f"make the environment with the policy's task and observation mode, policy.make_env() (for a "
+               f"built-in task, gym.make('BlockPuzzle/{self.task_id}', obs_mode={self.obs_mode!r})), or evaluate it with "
                "blockpuzzle.evaluate(policy, suite=...), which plays each row the way the command line does")
         if self.set is None and width != self.obs_dim:
             raise ValueError(f"{self.name} reads flat observations of shape ({self.obs_dim},); these have shape "

@@ -77,6 +77,19 @@ def test_options_set_level_and_challenge_and_bad_ones_raise_valueerror():
         gym.make("BlockPuzzle/GripperTouch-v0").reset(options={"challenge": True})
 
 
+def test_a_task_lists_its_distributions_and_each_is_a_reset_option():
+    env = gym.make("BlockPuzzle/BlocksAvoid-v0")
+    names = env.get_wrapper_attr("distributions")
+    assert sorted(names) == ["challenge", "clear"], names
+    for name in names:
+        _, info = env.reset(seed=0, options={"distribution": name})
+        assert info["distribution"] == name
+    assert gym.make("BlockPuzzle/GripperTouch-v0").get_wrapper_attr("distributions") == []
+    envs = blockpuzzle.make_vec("BlocksAvoid-v0", num_envs=1)
+    assert envs.distributions == names
+    envs.close()
+
+
 def test_info_carries_success_failure_touching_and_the_contact_matrix():
     env = gym.make("BlockPuzzle/BlocksTouch-v0")
     _, info = env.reset(seed=1)

@@ -170,6 +170,10 @@ def test_the_example_trainer_is_in_the_wheel_and_runs_with_python_m(tmp_path):
     run = [sys.executable, "-m", "blockpuzzle.examples.sb3_td3"]
     out = subprocess.run([*run, "--help"], capture_output=True, text=True, cwd=tmp_path)
     assert out.returncode == 0 and "--vec-env {dummy,rust}" in out.stdout and "--evaluate" in out.stdout, out
+    # The description is whole (it was cut at the docstring's first line), and --env says what it takes.
+    words = " ".join(out.stdout.split())  # argparse wraps lines at the terminal's width
+    assert "so the two trainers' curves on the same environment can be drawn side by side." in words, words
+    assert "with or without the BlockPuzzle/ namespace" in words, words
     if HAS_SB3:
         pytest.skip("SB3 is installed: test_sb3.py runs the trainer")
     out = subprocess.run([*run, "--timesteps", "10", "--run-dir", "r"], capture_output=True, text=True, cwd=tmp_path)

@@ -160,3 +160,82 @@ def test_make_vec_takes_the_spec_step_limit_and_refuses_another():
     with pytest.raises(ValueError, match="truncates its episodes at 50 steps"):
         gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=2, vectorization_mode="vector_entry_point",
                      max_episode_steps=10)
+
+
+def episodes_of(mode, steps=150, obs_mode="flat"):
+    """Environment 1's observations, rewards and flags under an autoreset mode, each episode's
+    first observation as the mode reports it; DISABLED resets the ended environments itself."""
+    envs = blockpuzzle.make_vec("GripperTouch-v0", num_envs=2, threads=1, obs_mode=obs_mode, autoreset_mode=mode)
+    assert envs.metadata["autoreset_mode"] == AutoresetMode[mode.upper()]
+    obs, _ = envs.reset(seed=3)
+
+    def row(o, i):
+        return o[i] if obs_mode == "flat" else np.concatenate([v[i].ravel() for v in o.values()])
+
+    def flat(o):
+        return row(o, 1)
+
+    # Each action a function of the environment's own observation: the episodes do not depend on
+    # where the steps fall (next-step autoreset spends a step on the reset).
+    weights = np.random.default_rng(0).normal(size=(4, len(flat(obs)))) * 0.5
+
+    def act(o):
+        return np.stack([np.tanh(weights @ np.nan_to_num(row(o, i))) for i in range(2)]).astype(np.float32)
+
+    starts, finals = [flat(obs)], []
+    for t in range(steps):
+        obs, rew, term, trunc, info = envs.step(act(obs))
+        if mode == "next_step" and info["autoreset"][1]:
+            starts.append(flat(obs))
+            continue
+        if term[1] or trunc[1]:
+            if mode == "same_step":
+                assert info["_final_obs"][1] and info["_final_info"][1]
+                final = info["final_obs"][1]
+                finals.append(final if obs_mode == "flat" else np.concatenate([v.ravel() for v in final.values()]))
+                assert info["final_info"]["elapsed_steps"][1] > 0 and info["elapsed_steps"][1] == 0
+                starts.append(flat(obs))
+            else:
+                finals.append(flat(obs))
+            if mode == "disabled":
+                done = term | trunc
+                with pytest.raises(ValueError, match="DISABLED: reset them first"):
+                    envs.step(act(obs))
+                obs, _ = envs.reset(options={"reset_mask": done})
+                starts.append(flat(obs))
+        elif mode == "disabled" and (term[0] or trunc[0]):
+            obs, _ = envs.reset(options={"reset_mask": term | trunc})
+    envs.close()
+    return starts, finals
+
+
+@pytest.mark.parametrize("obs_mode", ["flat", "entities"])
+def test_the_three_autoreset_modes_play_the_same_episodes(obs_mode):
+    nxt = episodes_of("next_step", obs_mode=obs_mode)
+    assert len(nxt[1]) >= 2, "episodes ended within the steps"
+    for mode in ("same_step", "disabled"):
+        other = episodes_of(mode, obs_mode=obs_mode)
+        n = min(len(nxt[1]), len(other[1]))
+        assert n >= 2
+        for a, b in zip(nxt[0][:n + 1], other[0][:n + 1]):
+            assert np.array_equal(a, b), mode
+        for a, b in zip(nxt[1][:n], other[1][:n]):
+            assert np.array_equal(a, b), mode
+    with pytest.raises(ValueError, match="not one of Gymnasium's"):
+        blockpuzzle.make_vec("GripperTouch-v0", num_envs=1, autoreset_mode="sometimes")
+    envs = gym.make_vec("BlockPuzzle/GripperTouch-v0", num_envs=2, autoreset_mode=AutoresetMode.SAME_STEP)
+    assert envs.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    envs.close()
+
+
+def test_per_environment_wrappers_take_the_sync_mode():
+    # Gymnasium refuses wrappers= for a vector entry point (its own environments' too); sync mode
+    # wraps each environment, as docs/python.md says.
+    with pytest.raises(gym.error.Error, match="wrappers"):
+        gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=2, wrappers=[gym.wrappers.RecordEpisodeStatistics])
+    envs = gym.make_vec("BlockPuzzle/BlocksTouch-v0", num_envs=2, vectorization_mode="sync",
+                        wrappers=[gym.wrappers.RecordEpisodeStatistics])
+    obs, _ = envs.reset(seed=0)
+    assert obs.shape == (2, envs.single_observation_space.shape[0])
+    envs.step(np.zeros((2, 4), np.float32))
+    envs.close()

@@ -163,3 +163,26 @@ def test_blockpuzzle_zoo_names_the_zoo_as_for_the_command_line(tmp_path, monkeyp
         zoo.load("generalist-bc-entity")
     monkeypatch.delenv("BLOCKPUZZLE_ZOO")
     assert zoo.default_folder() == zoo.FOLDER and "generalist-bc-entity" in zoo.names()
+
+
+def test_a_policy_makes_its_own_environment_built_in_or_generated(tmp_path):
+    # Trained on a generated task: its id is no registered one, and gym.make cannot take it.
+    generalist = zoo.load("generalist-bc-entity")
+    assert generalist.task_id not in blockpuzzle.env_ids()
+    env = generalist.make_env()
+    assert env.unwrapped.task_id == generalist.task_id and env.unwrapped.obs_mode == generalist.obs_mode
+    assert env.spec.max_episode_steps is not None, "the task file's step limit, as make_task gives it"
+    obs, _ = env.reset(seed=0)
+    assert generalist(obs).shape == (4,)
+    again = generalist.make_env(render_mode="rgb_array")   # the task file is written once, and kwargs pass on
+    assert again.render_mode == "rgb_array"
+    # Built in: gym.make of its id, in its observation mode.
+    touch = zoo.load("BlocksTouch-v0-ddpg")
+    env = touch.make_env()
+    assert env.spec.id == "BlockPuzzle/BlocksTouch-v0" and env.unwrapped.obs_mode == "flat"
+    obs, _ = env.reset(seed=0)
+    assert touch(obs).shape == (4,)
+    # A built-in task whose text changed since training is not passed off as the policy's.
+    touch.meta = {**touch.meta, "task": {**touch.meta["task"], "hash": "sha256:" + "0" * 64}}
+    with pytest.raises(ValueError, match="its text has changed"):
+        touch.make_env()

@@ -159,7 +159,23 @@ case_ "zoo describe with a figure" "refuse:figure;zoo list" \
 case_ "zoo export with a figure" "refuse:figure" "$BP" zoo export --from run --name y --description "a 50% gain" \
     --trained-with t --zoo zoo
 
-# 6. Work on stream runs, and the cache.
+# 6. Misworded: a folder, pipe or empty file named as what it is; a default not called a flag given.
+mkdir -p a-folder && : > empty.json
+snapshot > "$BEFORE"
+case_ "zoo check of a FIFO here" "refuse:is a pipe \\(FIFO\\) here, not the name of a zoo entry;zoo list" \
+    "$BP" zoo check fifo.safetensors --zoo zoo
+case_ "zoo check of a folder here" "refuse:is a folder here;zoo list" "$BP" zoo check a-folder --zoo zoo
+case_ "task check of a folder" "refuse:is a folder; give the task file itself" "$BP" task check a-folder
+case_ "eval --checkpoint of a folder that holds no run" "refuse:neither best_policy.json nor policy.json;run directory" \
+    "$BP" eval --env BlocksTouch-v0 --checkpoint a-folder --episodes 1
+case_ "plot --run-dir of a folder that holds no run" "refuse:holds no run;train --run-dir" \
+    "$BP" plot --run-dir a-folder
+case_ "eval --checkpoint of an empty file" "refuse:is empty;policy.json" \
+    "$BP" eval --env BlocksTouch-v0 --checkpoint empty.json --episodes 1
+case_ "--demos with no --net given" "refuse:mlp \\(--net's default\\);--net entity" \
+    "$BP" train --env BlocksTouch-v0 "${TINY[@]}" --demos test-demos.safetensors --run-dir t8
+
+# 7. Work on stream runs, and the cache.
 case_ "report of a stream run" accept "$BP" report stream
 case_ "plot of a stream run" accept "$BP" plot --run-dir stream
 snapshot > "$BEFORE"

@@ -30,6 +30,16 @@ pub enum LoadError {
         /// The baseline's name.
         name: String,
     },
+    /// A folder that holds no policy file: not a run directory.
+    #[error(
+        "{} is a folder with neither {BEST_POLICY_FILE} nor {POLICY_FILE}, so not a run directory; give a run \
+         directory (one `blockpuzzle train --run-dir` wrote), a policy file or a zoo name",
+        path.display()
+    )]
+    NotARun {
+        /// The folder.
+        path: PathBuf,
+    },
 }
 
 /// What a policy name stands for.
@@ -77,8 +87,11 @@ pub fn resolve(path: &Path) -> Result<Named, LoadError> {
         let tensors = path.with_extension("safetensors");
         return Err(crate::benchmark::zoo::ZooError::NoTensors { json: path.to_owned(), tensors }.into());
     } else if path.is_dir() {
-        let best = path.join(BEST_POLICY_FILE);
-        crate::benchmark::saved::read(&if best.exists() { best } else { path.join(POLICY_FILE) })?
+        let (best, last) = (path.join(BEST_POLICY_FILE), path.join(POLICY_FILE));
+        if !best.exists() && !last.exists() {
+            return Err(LoadError::NotARun { path: path.to_owned() });
+        }
+        crate::benchmark::saved::read(&if best.exists() { best } else { last })?
     } else {
         crate::benchmark::saved::read(path)?
     };

@@ -480,8 +480,20 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
                 rate(r.gap),
                 harnesses.join(", ")
             );
-            let files: Vec<String> = same.iter().map(|f| format!("`{}`", f.path.display())).collect();
             let p = &r.provenance;
+            // Each file under the build that made it: files of one result made by two builds keep
+            // their own commits.
+            let mut made: Vec<(String, Vec<String>)> = Vec::new();
+            for f in same.iter() {
+                let maker = f.result.provenance.build.maker();
+                let file = format!("`{}`", f.path.display());
+                match made.iter_mut().find(|(m, _)| *m == maker) {
+                    Some((_, files)) => files.push(file),
+                    None => made.push((maker, vec![file])),
+                }
+            }
+            let made: Vec<String> =
+                made.into_iter().map(|(maker, files)| format!("made by {maker}; {}", files.join(", "))).collect();
             let hash = match p.policy.sha256.as_deref() {
                 Some(h) => format!("policy {h}"),
                 None if p.policy.name == crate::benchmark::provenance::SOLVER_POLICY => {
@@ -489,7 +501,7 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
                 }
                 None => "a baseline".to_owned(),
             };
-            notes.push(format!("[^{label}-{}]: {hash}; made by {}; {}.", rank + 1, p.build.maker(), files.join(", ")));
+            notes.push(format!("[^{label}-{}]: {hash}; {}.", rank + 1, made.join("; ")));
         }
         md += "\n";
         for n in notes {

@@ -28,6 +28,16 @@ pub enum SavedError {
         #[source]
         source: std::io::Error,
     },
+    /// An empty file (a write that never finished, or a file made by hand).
+    #[error(
+        "{} is empty: a policy file is the JSON `blockpuzzle train` writes (a run directory's policy.json or \
+         snapshots/epoch-NNNN.json); give one of those, the run directory or a zoo name",
+        path.display()
+    )]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
     /// The text is not a policy file's JSON.
     #[error("{} is not a blockpuzzle policy file", path.display())]
     Malformed {
@@ -349,6 +359,9 @@ pub fn read(file: &Path) -> Result<SavedPolicy, SavedError> {
     let path = || file.to_owned();
     let text = crate::support::io::read_text(file, "policy file", crate::support::limits::POLICY_FILE_BYTES)
         .map_err(|source| SavedError::Unreadable { path: path(), source })?;
+    if text.trim().is_empty() {
+        return Err(SavedError::Empty { path: path() });
+    }
     let saved: SavedPolicy =
         serde_json::from_str(&text).map_err(|source| SavedError::Malformed { path: path(), source })?;
     saved.check().map_err(|reason| SavedError::Unusable { path: path(), reason })?;

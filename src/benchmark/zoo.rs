@@ -90,6 +90,9 @@ pub enum ZooError {
     /// A name that is neither a file nor an entry of the zoo.
     #[error("no policy file or zoo entry named {name:?} (the zoo in {zoo} has: {known}); pass a policy file, a run directory or one of those names")]
     Unknown { name: String, zoo: PathBuf, known: String },
+    /// A path given where an entry's name is wanted (`zoo check`, `upgrade`, `describe`).
+    #[error("{name:?} is {what} here, not the name of a zoo entry: `zoo {command}` takes the names of the zoo in {zoo} (`zoo list` shows them; --zoo FOLDER picks another zoo)")]
+    PathForName { name: String, what: &'static str, command: &'static str, zoo: PathBuf },
 }
 
 /// The network layout of one net: layer sizes (input first) and output.
@@ -504,11 +507,45 @@ pub fn find(zoo: &Path, name: &str) -> Result<PathBuf, ZooError> {
         return Err(ZooError::NoTensors { json, tensors: path });
     }
     let known = names(zoo);
-    Err(ZooError::Unknown {
-        name: name.to_owned(),
-        zoo: zoo.to_owned(),
-        known: if known.is_empty() { "no entries".into() } else { known.join(", ") },
-    })
+    Err(ZooError::Unknown { name: name.to_owned(), zoo: zoo.to_owned(), known: some_names(&known) })
+}
+
+/// How many entry names a message lists before it says how many more there are.
+const NAMES_LISTED: usize = 12;
+
+/// `a, b, c` for a few names, the first [`NAMES_LISTED`] and a count for many.
+fn some_names(known: &[String]) -> String {
+    match known.len() {
+        0 => "no entries".into(),
+        n if n <= NAMES_LISTED => known.join(", "),
+        n => format!("{}, and {} more (`zoo list`)", known[..NAMES_LISTED].join(", "), n - NAMES_LISTED),
+    }
+}
+
+/// As [`find`] for an entry name given to `zoo COMMAND`, where a path is refused as such: a folder,
+/// pipe or file of that name here is not mistaken for an entry the zoo lacks.
+///
+/// # Errors
+/// [`ZooError::PathForName`] for a path; otherwise as [`find`].
+pub fn find_named(zoo: &Path, name: &str, command: &'static str) -> Result<PathBuf, ZooError> {
+    let given = Path::new(name);
+    if let Ok(meta) = std::fs::metadata(given) {
+        if !zoo.join(format!("{name}.safetensors")).exists() {
+            use std::os::unix::fs::FileTypeExt;
+            let t = meta.file_type();
+            let what = if t.is_dir() {
+                "a folder"
+            } else if t.is_fifo() {
+                "a pipe (FIFO)"
+            } else if t.is_file() {
+                "a file"
+            } else {
+                "a device or socket"
+            };
+            return Err(ZooError::PathForName { name: name.to_owned(), what, command, zoo: zoo.to_owned() });
+        }
+    }
+    find(zoo, name)
 }
 
 /// Whether `path` is a zoo file: `X.safetensors`, or the `X.json` beside one.

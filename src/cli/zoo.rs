@@ -172,7 +172,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 bail!("no zoo entries in {}", zoo.display());
             }
             for name in &names {
-                let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find(&zoo, name)?)?;
+                let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find_named(&zoo, name, "check")?)?;
                 println!(
                     "{name}: ok ({} {}, epoch {})",
                     meta.trained_on(),
@@ -187,7 +187,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             crate::benchmark::zoo::existing(&zoo)?;
             let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
             for name in &names {
-                let path = crate::benchmark::zoo::find(&zoo, name)?;
+                let path = crate::benchmark::zoo::find_named(&zoo, name, "upgrade")?;
                 let before = crate::benchmark::zoo::read_meta(&path)?.format;
                 crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
                 if let Some(algo) = &algo {
@@ -202,7 +202,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
         ZooCommand::Describe { name, description, zoo } => {
             let zoo = folder(zoo);
             crate::benchmark::zoo::existing(&zoo)?;
-            let path = crate::benchmark::zoo::find(&zoo, &name)?;
+            let path = crate::benchmark::zoo::find_named(&zoo, &name, "describe")?;
             crate::benchmark::zoo::describe(&path, &description)?;
             println!("{name}: described, sealed");
             Ok(())
@@ -331,7 +331,7 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
     }
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     for name in &names {
-        let path = crate::benchmark::zoo::find(zoo, name)?;
+        let path = crate::benchmark::zoo::find_named(zoo, name, "evaluate")?;
         let (meta, saved) = crate::benchmark::zoo::load(&path)?;
         // Each measurement once (an entry may hold it for several engines).
         let mut wanted: Vec<&crate::benchmark::zoo::ZooEvaluation> = Vec::new();

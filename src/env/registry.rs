@@ -40,14 +40,18 @@ pub fn ids() -> Vec<&'static str> {
     REGISTRY.iter().map(|r| r.id).collect()
 }
 
-/// Whether `arg` names a task file rather than an id: it ends in `.toml` or
-/// `.json`, has a path separator, or is an existing file.
+/// Whether `arg` names a task file rather than an id: it is no registered id, and it ends in
+/// `.toml` or `.json`, has a path separator, or exists (a folder or pipe of that name is then
+/// refused as what it is, not called an unknown id).
 pub fn is_path(arg: &str) -> bool {
+    if REGISTRY.iter().any(|r| r.id == arg) {
+        return false;
+    }
     arg.ends_with(".toml")
         || arg.ends_with(".json")
         || arg.contains('/')
         || arg.contains('\\')
-        || Path::new(arg).is_file()
+        || Path::new(arg).exists()
 }
 
 /// The task registered under `id`, or read from the task file at `id` when

@@ -246,7 +246,10 @@ fn demonstrations_join_a_run_of_their_task_and_nothing_else() {
             &["--env", "BlocksStack-v0", "--net", "entity", "--demos", d],
             &["episode 0 is of task ToppleTower-v0", "(BlocksStack-v0)"],
         ),
-        (&["--env", "ToppleTower-v0", "--demos", d], &["`entities` observation", "--net mlp", "--net entity"]),
+        (
+            &["--env", "ToppleTower-v0", "--demos", d],
+            &["`entities` observation", "mlp (--net's default)", "--net entity"],
+        ),
         (
             &["--env", "ToppleTower-v0", "--net", "entity", "--demos", d, "--demos-ratio", "1.5"],
             &["--demos-ratio 1.5", "from 0 to 1"],

@@ -871,3 +871,50 @@ fn misworded_errors_of_round_5_name_the_problem_and_the_fix() {
     assert!(!t.contains("..0"), "{t}");
     assert!(t.contains("seed 18446744073709551615"), "{t}");
 }
+
+/// Issue 74's misworded classes: a folder, a pipe or an empty file given where a name, a run or a
+/// policy is wanted is named as what it is (not as an unknown zoo entry or id, nor in the OS's bare
+/// words), and a setting the user may not have given is not presented as a flag they passed.
+#[test]
+fn misworded_errors_of_round_6_name_what_was_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let (folder, fifo, empty) = (dir.path().join("d"), dir.path().join("f"), dir.path().join("empty.json"));
+    std::fs::create_dir(&folder).unwrap();
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    std::fs::write(&empty, "").unwrap();
+    let cases: &[(&[&str], &[&str])] = &[
+        // A FIFO or folder here was called a zoo entry the zoo lacks, and the whole zoo listed.
+        (&["zoo", "check", "f"], &["\"f\" is a pipe (FIFO) here, not the name of a zoo entry", "`zoo list`"]),
+        (&["zoo", "upgrade", "d"], &["\"d\" is a folder here", "`zoo upgrade` takes the names"]),
+        (&["zoo", "describe", "d", "--description", "x"], &["\"d\" is a folder here"]),
+        // A folder as a task was "unknown environment id".
+        (&["task", "check", "d"], &["it is a folder; give the task file itself"]),
+        (&["train", "--env", "d", "--run-dir", "r"], &["it is a folder; give the task file itself"]),
+        // A folder without a policy was "No such file or directory" about a file never named.
+        (
+            &["eval", "--env", "BlocksTouch-v0", "--checkpoint", "d"],
+            &["d is a folder with neither", "not a run directory"],
+        ),
+        (&["plot", "--run-dir", "d", "--out", "p.png"], &["d holds no run", "`blockpuzzle train --run-dir`"]),
+        (&["report", "nowhere"], &["there is no run directory nowhere"]),
+        // An empty policy file was "EOF while parsing".
+        (&["eval", "--env", "BlocksTouch-v0", "--checkpoint", "empty.json"], &["empty.json is empty", "policy.json"]),
+        // --net was never given: the default is named as the default.
+        (&["train", "--env", "BlocksTouch-v0", "--demos", "d", "--run-dir", "r"], &["mlp (--net's default)"]),
+    ];
+    for (args, wanted) in cases {
+        let o = bp_in(dir.path(), args);
+        refused(&o, wanted);
+        let t = text(&o);
+        for bare in ["os error", "EOF while parsing", "unknown environment id", "BlocksTouch-v0-ddpg-epoch60"] {
+            assert!(!t.contains(bare), "{args:?}: {t}");
+        }
+    }
+    // A name the zoo lacks lists a dozen entries at most, then a count.
+    let o = bp_in(dir.path(), &["zoo", "check", "no-such-entry"]);
+    refused(&o, &["no policy file or zoo entry named \"no-such-entry\""]);
+    let t = text(&o);
+    let listed = t.split("has: ").nth(1).and_then(|l| l.split("; pass").next()).map_or(0, |l| l.split(", ").count());
+    assert!(listed <= 13 && (listed < 13 || t.contains("more (`zoo list`)")), "{t}");
+    assert_eq!(entries(dir.path()), ["d", "empty.json", "f"], "nothing was written");
+}

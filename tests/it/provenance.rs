@@ -450,3 +450,85 @@ fn two_solver_versions_are_not_compared() {
     let json = serde_json::to_value(&now).unwrap();
     assert_eq!(json["solver"], serde_json::json!(blockpuzzle::policy::SOLVER_VERSION));
 }
+
+/// Every file under `dir`, recursively, in sorted order.
+fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_owned()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Whether `text` names a commit of a build with uncommitted changes (40 hex digits, then `-dirty`).
+fn names_a_dirty_build(text: &str) -> bool {
+    text.match_indices("-dirty")
+        .any(|(at, _)| at >= 40 && text[..at].bytes().rev().take(40).all(|b| b.is_ascii_hexdigit()))
+}
+
+/// Issue 74: a published figure comes from a clean build. No result file behind the leaderboard
+/// (results/generalization/), the leaderboard itself, a zoo entry or a results file the README
+/// links names a dirty build; every older log under results/ that does is listed as such in
+/// results/dirty-builds.md, and that list names no file that is clean or gone.
+#[test]
+fn published_figures_come_from_clean_builds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(names_a_dirty_build("commit `4752ce5bd11fe70324ce376264de90ca1702b188-dirty`"));
+    assert!(!names_a_dirty_build("no `-dirty` commit") && !names_a_dirty_build("ab-dirty"));
+    let read = |p: &Path| String::from_utf8_lossy(&std::fs::read(p).unwrap()).into_owned();
+    let mut headline: Vec<PathBuf> = files_under(&root.join("results/generalization"));
+    headline.push(root.join("results/leaderboard.md"));
+    headline.extend(files_under(&root.join("zoo")).into_iter().filter(|p| p.extension().is_some_and(|e| e == "json")));
+    let readme = read(&root.join("README.md"));
+    for link in readme.split("](").skip(1).filter_map(|l| l.split(')').next()) {
+        if link.starts_with("results/") && root.join(link).is_file() {
+            headline.push(root.join(link));
+        }
+    }
+    assert!(headline.len() > 300, "the published files were found: {}", headline.len());
+    let dirty: Vec<&PathBuf> = headline.iter().filter(|p| names_a_dirty_build(&read(p))).collect();
+    assert!(dirty.is_empty(), "published figures from a dirty build (re-make them from a clean one): {dirty:?}");
+
+    let listed_in = root.join("results/dirty-builds.md");
+    let list = read(&listed_in);
+    let listed: std::collections::BTreeSet<String> = list
+        .lines()
+        .filter_map(|l| l.strip_prefix("- `").and_then(|l| l.split('`').next()))
+        .map(str::to_owned)
+        .collect();
+    let found: std::collections::BTreeSet<String> = files_under(&root.join("results"))
+        .into_iter()
+        .filter(|p| *p != listed_in && names_a_dirty_build(&read(p)))
+        .map(|p| p.strip_prefix(root).unwrap().to_string_lossy().into_owned())
+        .collect();
+    let unlisted: Vec<&String> = found.difference(&listed).collect();
+    let stale: Vec<&String> = listed.difference(&found).collect();
+    assert!(unlisted.is_empty(), "files naming a dirty build, not listed in results/dirty-builds.md: {unlisted:?}");
+    assert!(stale.is_empty(), "results/dirty-builds.md lists files that are gone or name no dirty build: {stale:?}");
+}
+
+/// Issue 74: one result made by two builds (the command line's and the Python package's, say) keeps
+/// each file's own build in its leaderboard footnote, not the first file's for all.
+#[test]
+fn a_leaderboard_footnote_names_each_files_build() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let good = root.join("results/generalization/mujoco-2.2.2/baseline-scripted.cross-task-v2.json");
+    let first = results::read(&good).unwrap();
+    let mut second = first.clone();
+    second.path = PathBuf::from("elsewhere/baseline-scripted.cross-task-v2.json");
+    second.result.provenance.build.commit = Some("0123456789abcdef0123456789abcdef01234567".to_owned());
+    let md = results::leaderboard(&[first.clone(), second]).unwrap();
+    let note = md.lines().find(|l| l.starts_with("[^")).unwrap();
+    let own = first.result.provenance.build.maker();
+    assert!(note.contains(&format!("made by {own}; `{}`", good.display())), "{note}");
+    assert!(note.contains("(commit `0123456789abcdef0123456789abcdef01234567`); `elsewhere/"), "{note}");
+}

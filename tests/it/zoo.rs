@@ -302,7 +302,12 @@ fn cli_takes_zoo_names() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("ReachAvoid-v0-ddpg"));
     let o = bp(&["eval", "--checkpoint", "NoSuchEntry", "--episodes", "2"]);
     let text = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && text.contains("NoSuchEntry") && text.contains("ReachAvoid-v0-ddpg"), "{text}");
+    // The zoo's first names, and a count of the rest (issue 74: not the whole zoo).
+    assert!(
+        !o.status.success() && text.contains("NoSuchEntry") && text.contains("BlocksChoose-v0-dagger-entity"),
+        "{text}"
+    );
+    assert!(text.contains(" more (`zoo list`)") && !text.contains("topple-20003-v0-td3-finetuned"), "{text}");
 }
 
 #[test]

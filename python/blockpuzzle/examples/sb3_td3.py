@@ -30,7 +30,7 @@ import sys
 import gymnasium as gym
 import numpy as np
 
-import blockpuzzle  # noqa: F401  (registers the ids)
+import blockpuzzle  # registers the ids
 
 
 class Curriculum(gym.Wrapper):
@@ -68,8 +68,11 @@ NEEDS_SB3 = ("this example needs Stable-Baselines3 and torch, which the blockpuz
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog="python -m blockpuzzle.examples.sb3_td3", description=__doc__.splitlines()[0])
-    ap.add_argument("--env", default="BlockPuzzle/BlocksTouch-v0")
+    # The description is the docstring's first paragraph, whole.
+    ap = argparse.ArgumentParser(prog="python -m blockpuzzle.examples.sb3_td3",
+                                 description=" ".join(__doc__.split("\n\n")[0].split()))
+    ap.add_argument("--env", default="BlockPuzzle/BlocksTouch-v0",
+                    help="a built-in id, with or without the BlockPuzzle/ namespace (default: %(default)s)")
     ap.add_argument("--timesteps", type=int, default=600_000)
     ap.add_argument("--eval-every", type=int, default=5_000, help="env steps between evaluations (one 'epoch')")
     ap.add_argument("--episodes", type=int, default=20, help="test and finals episodes per evaluation")
@@ -83,6 +86,8 @@ def main(argv=None):
     ap.add_argument("--vec-env", choices=["dummy", "rust"], default="dummy",
                     help="dummy: SB3's DummyVecEnv of two gym.make environments; rust: blockpuzzle.sb3.SB3VecEnv")
     args = ap.parse_args(argv)
+    if args.env in blockpuzzle.env_ids():
+        args.env = f"{blockpuzzle.NAMESPACE}/{args.env}"
     try:
         from stable_baselines3 import TD3
         from stable_baselines3.common.callbacks import BaseCallback
@@ -96,7 +101,7 @@ def main(argv=None):
         if not os.path.exists(model_path):
             ap.error(f"--evaluate: no saved model in {args.run_dir}")
         model = TD3.load(model_path, device="cpu")
-        top = gym.make(args.env).unwrapped.max_level
+        top = gym.make(args.env).get_wrapper_attr("max_level")
         n = args.evaluate
         p = success_rate(model, args.env, top, n, 1_000_000)
         # Wilson score interval, 95%.
@@ -119,7 +124,7 @@ def main(argv=None):
     if args.resume:
         with open(paths["state.json"]) as f:
             state.update(json.load(f))
-    max_level = gym.make(args.env).unwrapped.max_level
+    max_level = gym.make(args.env).get_wrapper_attr("max_level")
     if args.vec_env == "rust":
         from blockpuzzle.sb3 import SB3VecEnv
         envs = SB3VecEnv(args.env, num_envs=2, threads=2)

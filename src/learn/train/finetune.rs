@@ -165,9 +165,9 @@ impl FinetuneConfig {
         }
         if self.demos.is_some() && run.net.obs_mode() != crate::env::ObsMode::Entities {
             return Err(ConfigError(format!(
-                "--demos hold the solver's `entities` observation, and this run's network (--net {}) reads `{}`; \
+                "--demos hold the solver's `entities` observation, and this run's network, {}, reads `{}`; \
                  train with --net entity",
-                run.net.net.name(),
+                network(&run.net),
                 run.net.obs_mode()
             )));
         }
@@ -218,10 +218,10 @@ impl FinetuneConfig {
         let (theirs, ours) = (saved.obs_mode(), run.net.obs_mode());
         if theirs != ours {
             refuse!(
-                "--init-from {}: the policy reads the `{theirs}` observation, and this run's network (--net {}) reads \
+                "--init-from {}: the policy reads the `{theirs}` observation, and this run's network, {}, reads \
                  `{ours}`; train with the policy's network (--net {})",
                 path.display(),
-                run.net.net.name(),
+                network(&run.net),
                 crate::learn::agents::arch::NetKind::reading(theirs).name()
             );
         }
@@ -370,6 +370,14 @@ pub(crate) fn demo_episodes(
         step_at += e.steps;
     }
     Ok(out)
+}
+
+/// The run's network as a message names it, without claiming a flag the user may not have given:
+/// `mlp (--net's default)`, `entity (--net)`.
+fn network(net: &crate::learn::agents::arch::NetConfig) -> String {
+    let default = crate::learn::agents::arch::NetConfig::default().net;
+    let how = if net.net == default { "--net's default" } else { "--net" };
+    format!("{} ({how})", net.net.name())
 }
 
 #[cfg(test)]

@@ -98,6 +98,19 @@ impl RunDir {
     /// A missing or malformed file, named.
     pub fn read_config(&self) -> Result<TrainConfig> {
         let path = self.config();
+        if !self.dir.exists() {
+            refuse!(
+                "there is no run directory {}: give a folder that `blockpuzzle train --run-dir` wrote",
+                self.dir.display()
+            );
+        }
+        if self.dir.is_dir() && !path.exists() {
+            refuse!(
+                "{} holds no run (no {}): give a folder that `blockpuzzle train --run-dir` wrote",
+                self.dir.display(),
+                path.display()
+            );
+        }
         let text = crate::support::io::read_text(&path, "run config", crate::support::limits::RESULT_FILE_BYTES)
             .with_context(|| format!("cannot read {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("{} is not a training config", path.display()))
