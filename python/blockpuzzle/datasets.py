@@ -136,6 +136,11 @@ def _header(path, raw: bytes) -> dict:
                 ok = _int(v, kind)
             if not ok:
                 raise _bad(path, f"field episodes[{i}].{key} is {'missing' if key not in e else repr(v)}, not {what}")
+        # Recorded since levels were: absent in older files, checked where present.
+        if "level" in e and not _int(e["level"], 0):
+            raise _bad(path, f"field episodes[{i}].level is {e['level']!r}, not a curriculum level >= 0")
+        if "distribution" in e and not (isinstance(e["distribution"], str) and e["distribution"]):
+            raise _bad(path, f"field episodes[{i}].distribution is {e['distribution']!r}, not a distribution's name")
     return header
 
 
@@ -282,12 +287,27 @@ def env_spec(demos: Demos) -> gymnasium.envs.registration.EnvSpec | None:
     return spec
 
 
+def reset_options(episode: dict[str, Any]) -> dict[str, Any]:
+    """The ``reset`` options that play a recorded episode again, with its seed: its task and task
+    hash (which ``BlockPuzzleEnv.reset`` checks against its own), its level and, where it had one,
+    its distribution. A file written before levels were recorded has none: such an episode was played
+    at its task's top level (the suites' default)."""
+    options = {"task": episode["task"], "task_sha256": episode["task_sha256"]}
+    if episode.get("level") is not None:
+        options["level"] = int(episode["level"])
+    if episode.get("distribution"):
+        options["distribution"] = episode["distribution"]
+    return options
+
+
 def to_minari(path: str | os.PathLike[str], dataset_id: str, *, author: str | None = None,
               author_email: str | None = None, code_permalink: str | None = None,
               description: str | None = None) -> Any:
     """Exports a demos file as the local Minari dataset ``dataset_id`` (in ``$MINARI_DATASETS_PATH``
     or ``~/.minari/datasets``, HDF5) and returns it (a ``minari.MinariDataset``): one Minari episode
-    per recorded episode with its seed, and as its options the task id, task hash, row and outcome;
+    per recorded episode with its seed and, as its options, the ``reset`` options that play it again
+    (``reset_options``: task id and hash, level, distribution), so that
+    ``env.reset(seed=seed, options=options)`` on the recovered environment replays it;
     observations keep the documented key order (robot, entities, mask); the dataset's description
     says the suite, split, engine and build, its requirements the package. A file of one built-in
     task gets that task's environment spec (``env_spec``: ``dataset.recover_environment()`` makes
@@ -308,7 +328,7 @@ def to_minari(path: str | os.PathLike[str], dataset_id: str, *, author: str | No
         ep = demos.episode(i)
         buffers.append(EpisodeBuffer(
             id=i, seed=int(ep["seed"]),
-            options={"task": ep["task"], "task_sha256": ep["task_sha256"], "row": ep["row"], "outcome": ep["outcome"]},
+            options=reset_options(ep),
             observations=ep["observations"], actions=ep["actions"], rewards=ep["rewards"],
             terminations=ep["terminations"], truncations=ep["truncations"], infos={}))
     p = demos.provenance

@@ -28,7 +28,8 @@ class BlockPuzzleEnv(gymnasium.Env):
 
     ``reset(options=...)`` takes ``level`` (curriculum level), ``challenge`` (bool) and
     ``distribution`` (a name from the task file, listed in ``distributions``); they stay in force
-    for later resets until changed. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
+    for later resets until changed. ``task`` and ``task_sha256`` are checks: a recorded episode's
+    options (``blockpuzzle.datasets.reset_options``) name its task, and another task is refused. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
     ``distribution``, ``touching`` (object index pairs touching during the step),
     ``contact_matrix`` (int8, 0 never touched, 1 touched before, 2 touching now),
     ``elapsed_steps`` and ``unstable``; ``env.unwrapped.objects`` names the indices.
@@ -43,7 +44,8 @@ class BlockPuzzleEnv(gymnasium.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode {render_mode!r} is not supported; use one of {self.metadata['render_modes']} or None")
         width, height = whole("width", width), whole("height", height)
-        self._env = _NativeEnv(str(task), width, height, observation.check_mode(obs_mode))
+        self._task = str(task)
+        self._env = _NativeEnv(self._task, width, height, observation.check_mode(obs_mode))
         self.obs_mode = obs_mode
         self.obs_layout = self._env.obs_layout()
         low, high = self._env.observation_bounds()
@@ -60,9 +62,11 @@ class BlockPuzzleEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         options = dict(options or {})
-        unknown = set(options) - {"level", "challenge", "distribution"}
+        unknown = set(options) - {"level", "challenge", "distribution", "task", "task_sha256"}
         if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution")
+            raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution, "
+                             "task, task_sha256")
+        self._check_task(options)
         if seed is not None and not (0 <= int(seed) < 2**64):
             raise ValueError(f"seed {seed} is outside [0, 2**64)")
         level = options.get("level")
@@ -77,6 +81,21 @@ class BlockPuzzleEnv(gymnasium.Env):
             options.get("distribution"),
         )
         return observation.split(obs, self.obs_layout), info
+
+    def _check_task(self, options: dict[str, Any]) -> None:
+        """``task`` and ``task_sha256`` options (a recorded episode's, as Minari replays it) must be
+        this environment's own: an episode of another task is refused, not played on this one."""
+        if options.get("task") not in (None, self.task_id):
+            raise ValueError(f"options['task'] is {options['task']!r}, and this environment plays {self.task_id}: "
+                             "make the environment of that task to replay its episode")
+        wanted = options.get("task_sha256")
+        if wanted is not None:
+            from ._native import task_sha256
+
+            own = task_sha256(self._task)
+            if str(wanted).removeprefix("sha256:") != own.removeprefix("sha256:"):
+                raise ValueError(f"options['task_sha256'] is {wanted}, and this environment's {self.task_id} is "
+                                 f"{own}: the task has changed since the episode was recorded")
 
     def step(self, action):
         action = np.ascontiguousarray(action, dtype=np.float32)

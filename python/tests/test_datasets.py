@@ -4,6 +4,7 @@ numpy, and exported as a Minari dataset that Minari loads back equal to the reco
 import importlib.util
 import json
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -80,6 +81,10 @@ def test_demos_export_to_minari_and_load_back(tmp_path, monkeypatch):
     meta = list(ds.storage.get_episode_metadata([0, 1]))
     assert [m["seed"] for m in meta] == [7, 11]
     assert meta[1]["options"]["task_sha256"] == d.episodes[1]["task_sha256"]
+    # The options are reset's own (issue 74: they held row and outcome, which reset refuses).
+    assert set(meta[1]["options"]) == {"task", "task_sha256", "level"}, meta[1]["options"]
+    assert int(meta[1]["options"]["level"]) == d.episodes[1]["level"] == gym.make(
+        f"BlockPuzzle/{d.episodes[1]['task']}").get_wrapper_attr("max_level")
 
 
 def record(tmp_path, split="train", name="d.safetensors"):
@@ -181,6 +186,16 @@ def test_a_bad_demos_file_is_a_valueerror_naming_the_file_the_field_and_the_fix(
     case(lambda h, d, data: d["episodes"][1].update(steps="7"), "field episodes[1].steps is '7', not a step count")
     case(lambda h, d, data: d["episodes"][0].pop("task"), "field episodes[0].task is missing")
     case(lambda h, d, data: d["layout"].update(rows=0), "field layout.rows is 0")
+    # A file from before levels were recorded still reads, its options without one.
+    header, demos, data = parts(good)
+    assert demos["episodes"][0]["level"] == 5 and "distribution" not in demos["episodes"][0]
+    for e in demos["episodes"]:
+        e.pop("level")
+    older = blockpuzzle.load_demos(write(tmp_path / "older.safetensors", header, demos, data))
+    assert blockpuzzle.datasets.reset_options(older.episode(0)) == {"task": "BlocksTouch-v0",
+                                                                    "task_sha256": older.episodes[0]["task_sha256"]}
+    case(lambda h, d, data: d["episodes"][0].update(level=-1), "field episodes[0].level is -1, not a curriculum level")
+    case(lambda h, d, data: d["episodes"][1].update(distribution=""), "field episodes[1].distribution is ''")
     case(lambda h, d, data: d.update(version=2), "version 2 (this package reads version 1)")
     # Cut short, and a folder.
     bad.write_bytes(good.read_bytes()[:5])
@@ -206,8 +221,9 @@ def test_a_single_task_minari_export_recovers_its_environment_a_multi_task_one_h
     # The recovered environment replays the recorded episode exactly.
     episode = next(iter(ds.iterate_episodes()))
     assert list(episode.observations) == ["robot", "entities", "mask"], "the documented order, not sorted"
-    seed = next(iter(ds.storage.get_episode_metadata([0])))["seed"]
-    obs, _ = env.reset(seed=seed, options={"level": env.unwrapped.max_level})  # the suite row's level: the top
+    # Minari's way: the episode's seed and options, as recorded.
+    meta = next(iter(ds.storage.get_episode_metadata([0])))
+    obs, _ = env.reset(seed=meta["seed"], options=meta["options"])
     for k in obs:
         assert np.array_equal(obs[k], episode.observations[k][0]), k
     for t, action in enumerate(episode.actions):
@@ -215,6 +231,11 @@ def test_a_single_task_minari_export_recovers_its_environment_a_multi_task_one_h
         assert reward == episode.rewards[t] and terminated == episode.terminations[t]
         assert all(np.array_equal(obs[k], episode.observations[k][t + 1]) for k in obs)
     assert terminated or truncated
+    # Options of another task's episode, or of a task that has changed since, are refused.
+    with pytest.raises(ValueError, match="make the environment of that task"):
+        env.reset(seed=0, options={**meta["options"], "task": "BlocksAvoid-v0"})
+    with pytest.raises(ValueError, match="the task has changed since the episode was recorded"):
+        env.reset(seed=0, options={**meta["options"], "task_sha256": "sha256:" + "0" * 64})
     # A multi-task split: no spec, and Minari says so when asked.
     many = record(tmp_path, split="train", name="many.safetensors")
     blockpuzzle.to_minari(many, "blockpuzzle/many/solver-v0", author="A", author_email="a@example.org",

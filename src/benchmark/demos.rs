@@ -59,6 +59,13 @@ pub struct DemoEpisode {
     pub episode_return: f32,
     /// Why it ended.
     pub outcome: Outcome,
+    /// The curriculum level it was played at: with `seed` and `distribution`, what `reset` takes to
+    /// play it again (None in files written before levels were recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub level: Option<usize>,
+    /// The task file's distribution it was drawn from (None: the task's own draw).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distribution: Option<String>,
 }
 
 /// What the observation tensors hold.
@@ -272,6 +279,8 @@ pub fn record(suite: &Suite, split: &str, episodes: Option<usize>, threads: usiz
                     steps: rec.steps.len(),
                     episode_return: rec.episode_return,
                     outcome: Outcome::of(&rec),
+                    level: Some(env.level()),
+                    distribution: env.distribution_name().map(str::to_owned),
                 };
                 let mut p = DemoTensors::default();
                 for o in &obs {

@@ -71,7 +71,10 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     let spec = env.obs_spec();
     let (mut env, seed) = (env, one.episodes[0].seed);
     let top = env.max_level();
-    env.set_level(top).unwrap();
+    // Each episode records what reset takes to play it again: the level (the row's, by default the
+    // top) and no distribution for a plain row.
+    assert_eq!((one.episodes[0].level, one.episodes[0].distribution.as_deref()), (Some(top), None));
+    env.set_level(one.episodes[0].level.unwrap()).unwrap();
     let (obs, _) = env.reset(Some(seed)).unwrap();
     assert_eq!(
         &one.tensors.entities[..rows * f],
