@@ -25,6 +25,19 @@ if ! "$VENV/bin/python" -c "$check" 2>/dev/null || ! "$VENV/bin/pip" install -q 
     python3 -m venv "$VENV"
     "$VENV/bin/pip" install -q --disable-pip-version-check --no-compile "${PINS[@]}" "${DEPS[@]}"
 fi
+# The minimum-versions venv: every dependency pyproject.toml gives a floor (`name>=X.Y`) at that
+# floor's release line (`name==X.Y.*`), the rest as declared, and the test tools; no Minari (its
+# releases need a newer numpy), so its tests skip there. The suite runs in it too, but for the two
+# CLI comparisons of test_provenance.py (the Rust outcome counts, the same whatever numpy).
+MIN_VENV="$VENV-min"
+mapfile -t MIN_DEPS < <(printf '%s\n' "${DEPS[@]}" | sed -E 's/^([A-Za-z0-9_.-]+)>=([0-9]+\.[0-9]+).*/\1==\2.*/')
+MIN_PINS=(pytest==9.2.0 pytest-xdist==3.8.0 "${MIN_DEPS[@]}")
+if ! "$MIN_VENV/bin/pip" install -q --disable-pip-version-check --dry-run --no-index "${MIN_PINS[@]}" >/dev/null 2>&1; then
+    echo "[python] making $MIN_VENV with ${MIN_PINS[*]}"
+    rm -rf "$MIN_VENV"
+    python3 -m venv "$MIN_VENV"
+    "$MIN_VENV/bin/pip" install -q --disable-pip-version-check --no-compile "${MIN_PINS[@]}"
+fi
 [ "${1:-}" = "--venv" ] && exit 0
 WHEEL="$(bash "$ROOT/scripts/build_wheel.sh")"
 echo "[python] built $(basename "$WHEEL")"
@@ -49,3 +62,11 @@ cd "$WORK"
 env -u BLOCKPUZZLE_MODELS_DIR HOME="$WORK/home" BLOCKPUZZLE_WHEEL_TEST="$ROOT" \
     "$VENV/bin/python" -m pytest -q -p no:cacheprovider -n "${PYTEST_WORKERS:-2}" --dist worksteal \
     "$ROOT/python/tests"
+echo "[python] the minimum versions: $("$MIN_VENV/bin/python" -c 'import numpy, gymnasium; print("numpy", numpy.__version__, "gymnasium", gymnasium.__version__)')"
+"$MIN_VENV/bin/pip" uninstall -q -y blockpuzzle 2>/dev/null || true
+"$MIN_VENV/bin/pip" install -q --disable-pip-version-check --no-compile --no-deps "$WHEEL"
+"$MIN_VENV/bin/pip" check >/dev/null || { "$MIN_VENV/bin/pip" check >&2; exit 1; }
+rm -rf "$WORK/home" && mkdir -p "$WORK/home"
+env -u BLOCKPUZZLE_MODELS_DIR HOME="$WORK/home" BLOCKPUZZLE_WHEEL_TEST="$ROOT" \
+    "$MIN_VENV/bin/python" -m pytest -q -p no:cacheprovider -n "${PYTEST_WORKERS:-2}" --dist worksteal \
+    -k "not clis_outcome_counts" "$ROOT/python/tests"
