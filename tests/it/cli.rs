@@ -386,7 +386,7 @@ fn table_runs_end_to_end_and_reports_missing_rows() {
     let o = bp(&["plot", "--overlay", expert.to_str().unwrap()]);
     assert!(!o.status.success() && text(&o).contains("--out"), "{}", text(&o));
     let o = bp(&["plot", "--overlay", "/nonexistent/run", "--out", png.to_str().unwrap()]);
-    assert!(!o.status.success() && text(&o).contains("/nonexistent/run/config.json"), "{}", text(&o));
+    assert!(!o.status.success() && text(&o).contains("there is no run directory /nonexistent/run"), "{}", text(&o));
 }
 
 #[test]
