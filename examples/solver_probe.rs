@@ -18,7 +18,9 @@
 //! likely head, so a label that is "left or right of red" is not averaged into "straight on"),
 //! `balance` (1: each row of a batch from a family drawn uniformly, then a row of it, instead of a
 //! row drawn uniformly from all: every family gets the same share of the updates whatever the
-//! length of its episodes).
+//! length of its episodes), `family` (1: one action head per family of `--families`, each trained
+//! on its family's rows alone and acting on its family's tasks: the trunk is shared, the last layer
+//! is not; the family is given, so this measures whether the families compete for one function).
 //!
 //! The data: per task, `--episodes` solver episodes from episode seed 0 on (seeds ≡ 0 mod 5 held
 //! out), acted with Gaussian noise of `--noise` on the solver's action (DART) and labelled with
@@ -162,13 +164,13 @@ fn main() -> Result<()> {
 
     let spec = ObsSpec::new(ObsMode::Entities, slots);
     let mut students: Vec<Student> =
-        specs.iter().map(|s| Student::new(s, &spec, args.seed, &train)).collect::<Result<_>>()?;
-    let val_y = val.actions();
+        specs.iter().map(|s| Student::new(s, &spec, args.seed, &train, families.len())).collect::<Result<_>>()?;
+    let (val_y, val_f) = (val.actions(), val.families());
     let val_x: Vec<Tensor> = students.iter().map(|s| s.norm.tensor(&val.obs)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     rng.set_stream(1);
     println!("\ntraining: {} steps of {} rows; per student: batch MSE, validation MSE, share of validation rows with a component off by > {MISS}, per-component validation MSE, update seconds", args.steps, args.batch);
-    fit(&mut students, args.steps, args.batch, &mut rng, &val_x, &val_y);
+    fit(&mut students, args.steps, args.batch, &mut rng, &val_x, &val_y, &val_f);
     for round in 1..=args.dagger {
         println!(
             "\nDAgger round {round}: {} episodes per task played by each student, labelled by the solver",
@@ -178,7 +180,9 @@ fn main() -> Result<()> {
             let player = s.frozen();
             let parts: Vec<(Data, usize)> = tasks
                 .par_iter()
-                .map(|(f, t)| dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player()))
+                .map(|(f, t)| {
+                    dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player(family_of(f)))
+                })
                 .collect::<Result<_>>()?;
             let mut data = Data::default();
             let mut wins = 0;
@@ -194,7 +198,7 @@ fn main() -> Result<()> {
             );
             s.add(&data);
         }
-        fit(&mut students, args.dagger_steps, args.batch, &mut rng, &val_x, &val_y);
+        fit(&mut students, args.dagger_steps, args.batch, &mut rng, &val_x, &val_y, &val_f);
     }
 
     println!("\nevaluation: {} deterministic episodes per task from seed {EVAL_SEED}", args.eval_episodes);
@@ -202,7 +206,7 @@ fn main() -> Result<()> {
     header.extend(students.iter().map(|s| s.spec.name.clone()));
     println!("| family | {} |", header.join(" | "));
     println!("|---|{}", "---:|".repeat(header.len()));
-    let policies: Vec<Box<dyn Fn() -> Box<dyn Policy> + Sync>> = students.iter().map(Student::frozen).collect();
+    let policies: Vec<Box<dyn Fn(usize) -> Box<dyn Policy> + Sync>> = students.iter().map(Student::frozen).collect();
     let mut per_family: Vec<Vec<(Outcomes, Vec<usize>)>> = Vec::new();
     for (name, _) in &families {
         let of: Vec<&Task> = tasks.iter().filter(|(f, _)| f == name).map(|(_, t)| t).collect();
@@ -213,7 +217,7 @@ fn main() -> Result<()> {
                 .map(|t| {
                     let mut p: Box<dyn Policy> = match player {
                         0 => Box::new(ScriptedPolicy::solver(slots)),
-                        k => policies[k - 1](),
+                        k => policies[k - 1](family_of(name)),
                     };
                     evaluate(t, slots, p.as_mut(), args.eval_episodes)
                 })
@@ -241,7 +245,15 @@ fn main() -> Result<()> {
 
 /// `steps` Adam steps of every student, each on `batch` of its own rows (the same uniform draws
 /// for all, mapped to rows by [`Student::row`]), with a report every [`REPORT_EVERY`] steps.
-fn fit(students: &mut [Student], steps: usize, batch: usize, rng: &mut ChaCha8Rng, val_x: &[Tensor], val_y: &Tensor) {
+fn fit(
+    students: &mut [Student],
+    steps: usize,
+    batch: usize,
+    rng: &mut ChaCha8Rng,
+    val_x: &[Tensor],
+    val_y: &Tensor,
+    val_f: &Tensor,
+) {
     let mut recent = vec![0.0; students.len()];
     let balance = students.iter().any(|s| s.spec.balance);
     for step in 1..=steps {
@@ -255,7 +267,7 @@ fn fit(students: &mut [Student], steps: usize, batch: usize, rng: &mut ChaCha8Rn
         }
         if step % REPORT_EVERY == 0 || step == steps {
             for (k, s) in students.iter().enumerate() {
-                let (mse, miss, per) = s.validation(&val_x[k], val_y);
+                let (mse, miss, per) = s.validation(&val_x[k], val_y, val_f);
                 let per: Vec<String> = per.iter().map(|v| format!("{v:.4}")).collect();
                 println!(
                     "step {step:>7} {:<12} {:.5} {mse:.5} {miss:.4} [{}] {:.0} s",
@@ -314,6 +326,10 @@ impl Data {
     }
     fn actions(&self) -> Tensor {
         Tensor::of_slice(&self.act).view([-1, ACTION_DIM as i64])
+    }
+    /// Each row's family, `[rows]` i64.
+    fn families(&self) -> Tensor {
+        Tensor::of_slice(&self.family.iter().map(|&f| f as i64).collect::<Vec<i64>>())
     }
     fn mse_to(&self, prediction: &Tensor) -> f64 {
         (self.actions() - prediction).square().mean(Kind::Float).double_value(&[])
@@ -399,6 +415,8 @@ struct StudentSpec {
     heads: usize,
     /// Draw a batch's rows family by family (uniform over families, then over its rows).
     balance: bool,
+    /// One action head per family, chosen by the row's (the task's) family.
+    per_family: bool,
 }
 
 impl StudentSpec {
@@ -415,6 +433,7 @@ impl StudentSpec {
             cosine: false,
             heads: 1,
             balance: false,
+            per_family: false,
         };
         for item in rest.split(',').filter(|i| !i.is_empty()) {
             let Some((key, value)) = item.split_once('=') else {
@@ -431,6 +450,7 @@ impl StudentSpec {
                 "transformer" => s.net.set_transformer = value.parse().map_err(|_| bad())?,
                 "tokens" => s.net.set_robot_tokens = value == "1",
                 "balance" => s.balance = value == "1",
+                "family" => s.per_family = value == "1",
                 "heads" => {
                     s.heads = value.parse().map_err(|_| bad())?;
                     if s.heads == 0 {
@@ -466,14 +486,22 @@ struct Student {
     rows: usize,
     /// Each family that has rows (its index in `--families`) with its rows, in the order first seen.
     groups: Vec<(usize, Vec<i64>)>,
+    /// Each training row's family.
+    train_f: Tensor,
+    /// The families (the heads of a `family=1` student).
+    families: usize,
     seconds: f64,
 }
 
 impl Student {
-    fn new(spec: &StudentSpec, obs: &ObsSpec, seed: u64, train: &Data) -> Result<Self> {
+    fn new(spec: &StudentSpec, obs: &ObsSpec, seed: u64, train: &Data, families: usize) -> Result<Self> {
         let arch = Arch::of(obs, &spec.net).map_err(anyhow::Error::msg)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        if spec.per_family && spec.heads > 1 {
+            bail!("--student {}: family=1 and heads=K are two ways to have several heads; take one", spec.name);
+        }
         let net = match spec.heads {
+            _ if spec.per_family => arch.net((spec.hidden, spec.layers), 0, families * ACTION_DIM, false, &mut rng),
             1 => arch.net((spec.hidden, spec.layers), 0, ACTION_DIM, true, &mut rng),
             k => arch.net((spec.hidden, spec.layers), 0, k * (ACTION_DIM + 1), false, &mut rng),
         };
@@ -482,8 +510,20 @@ impl Student {
         let train_x = norm.tensor(&train.obs);
         let opt = Adam::new(&net.params, spec.lr);
         let (train_y, rows) = (train.actions(), train.len());
-        let mut s =
-            Self { spec: spec.clone(), net, norm, opt, train_x, train_y, rows: 0, groups: Vec::new(), seconds: 0.0 };
+        let train_f = train.families();
+        let mut s = Self {
+            spec: spec.clone(),
+            net,
+            norm,
+            opt,
+            train_x,
+            train_y,
+            rows: 0,
+            groups: Vec::new(),
+            train_f,
+            families,
+            seconds: 0.0,
+        };
         s.group(&train.family);
         s.rows = rows;
         Ok(s)
@@ -518,6 +558,7 @@ impl Student {
     fn add(&mut self, data: &Data) {
         self.train_x = Tensor::cat(&[&self.train_x, &self.norm.tensor(&data.obs)], 0);
         self.train_y = Tensor::cat(&[&self.train_y, &data.actions()], 0);
+        self.train_f = Tensor::cat(&[&self.train_f, &data.families()], 0);
         self.group(&data.family);
         self.rows += data.len();
     }
@@ -535,6 +576,10 @@ impl Student {
         let x = self.train_x.index_select(0, index);
         let y = &self.train_y.index_select(0, index);
         let loss = match self.spec.heads {
+            _ if self.spec.per_family => {
+                let f = self.train_f.index_select(0, index);
+                (family_head(&self.net.forward(&x), &f, self.families) - y).square().mean(Kind::Float)
+            }
             1 => (self.net.forward(&x) - y).square().mean(Kind::Float),
             k => choice_loss(&self.net.forward(&x), y, k),
         };
@@ -548,9 +593,9 @@ impl Student {
     }
 
     /// Validation MSE, the share of rows with a component off by more than [`MISS`], per-component MSE.
-    fn validation(&self, x: &Tensor, y: &Tensor) -> (f64, f64, Vec<f64>) {
+    fn validation(&self, x: &Tensor, y: &Tensor, f: &Tensor) -> (f64, f64, Vec<f64>) {
         tch::no_grad(|| {
-            let err = self.predict(x) - y;
+            let err = self.predict(x, f) - y;
             let sq = err.square();
             let mse = sq.mean(Kind::Float).double_value(&[]);
             let worst = err.abs().amax([1i64].as_slice(), false);
@@ -560,21 +605,46 @@ impl Student {
         })
     }
 
-    /// The action: the network's (one head) or its most likely head's.
-    fn predict(&self, x: &Tensor) -> Tensor {
+    /// The action: the network's (one head), its family's head's (rows of families `f`) or its most
+    /// likely head's.
+    fn predict(&self, x: &Tensor, f: &Tensor) -> Tensor {
         match self.spec.heads {
+            _ if self.spec.per_family => family_head(&self.net.forward(x), f, self.families),
             1 => self.net.forward(x),
             k => chosen(&self.net.forward(x), k),
         }
     }
 
-    fn frozen(&self) -> Box<dyn Fn() -> Box<dyn Policy> + Sync> {
+    /// A maker of the student's policy for a task of family `f`.
+    fn frozen(&self) -> Box<dyn Fn(usize) -> Box<dyn Policy> + Sync> {
         let plain = DeterministicPolicy { net: self.net.to_plain(), norm: self.norm.clone() };
-        let heads = self.spec.heads;
-        Box::new(move || match heads {
+        let (heads, per_family) = (self.spec.heads, self.spec.per_family);
+        Box::new(move |f| match heads {
+            _ if per_family => Box::new(FamilyHead { policy: plain.clone(), family: f }),
             1 => Box::new(AnyPolicy::Deterministic(plain.clone())),
             k => Box::new(Chooser { policy: plain.clone(), heads: k }),
         })
+    }
+}
+
+/// The action of each row's family's head (through tanh), `[B, A]`, from an output of `families`
+/// heads and the rows' families `f` (`[B]`, i64).
+fn family_head(out: &Tensor, f: &Tensor, families: usize) -> Tensor {
+    let heads = out.view([-1, families as i64, ACTION_DIM as i64]);
+    let pick = f.view([-1, 1, 1]).expand([-1, 1, ACTION_DIM as i64].as_slice(), false);
+    heads.gather(1, &pick, false).squeeze_dim(1).tanh()
+}
+
+/// A `family=1` network as the policy of one family's tasks: that family's head.
+struct FamilyHead {
+    policy: DeterministicPolicy,
+    family: usize,
+}
+
+impl Policy for FamilyHead {
+    fn act(&mut self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        let out = self.policy.act(obs);
+        std::array::from_fn(|c| out[self.family * ACTION_DIM + c].tanh())
     }
 }
 

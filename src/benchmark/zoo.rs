@@ -895,6 +895,47 @@ pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
     })
 }
 
+/// Records the policy an entry was fine-tuned from (`zoo upgrade --started-from`), for entries
+/// exported before policy files recorded it (`train --init-from` records it since): `start` must read
+/// the entry's observation through a network of the same layers (fine-tuning changes weights, not
+/// shapes); an entry that records another start is refused, and the same one is kept as it is.
+///
+/// # Errors
+/// [`ZooError::Corrupt`] naming the entry and what does not fit, or [`rewrite`]'s.
+pub fn record_started_from(
+    path: &Path,
+    start: &SavedPolicy,
+    id: crate::benchmark::provenance::PolicyId,
+) -> Result<(), ZooError> {
+    let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    let shapes = |p: &SavedPolicy| -> Vec<(usize, usize)> {
+        p.policy.net().layers.iter().map(|l| (l.n_in, l.b.len())).collect()
+    };
+    rewrite(path, |meta, saved| match &meta.started_from {
+        Some(s) if s.sha256 == id.sha256 => Ok(()),
+        Some(s) => Err(bad(format!(
+            "it records that it was fine-tuned from {} ({}); --started-from {} ({}) would change a record",
+            s.name,
+            s.sha256.as_deref().unwrap_or("no hash"),
+            id.name,
+            id.sha256.as_deref().unwrap_or("no hash")
+        ))),
+        None if start.obs_mode() != saved.obs_mode() || shapes(start) != shapes(saved) => Err(bad(format!(
+            "--started-from {}: it reads `{}` observations through layers {:?}, and this entry `{}` through {:?}; a \
+             policy is fine-tuned from one of its own network, give that one",
+            id.name,
+            start.obs_mode(),
+            shapes(start),
+            saved.obs_mode(),
+            shapes(saved)
+        ))),
+        None => {
+            meta.started_from = Some(id);
+            Ok(())
+        }
+    })
+}
+
 /// The one rewrite of an entry's metadata: it loads first (an edited entry is neither rewritten
 /// nor sealed), an older format is brought to this one (its kind and observation recorded, its
 /// algorithm [`UNRECORDED`]), `edit` changes it, and it is written atomically in [`FORMAT`],

@@ -35,6 +35,11 @@ pub(super) enum ZooCommand {
         /// record none (older entries say `unrecorded`).
         #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
         algo: Option<String>,
+        /// Record the policy they were fine-tuned from (a zoo name, run directory or policy file),
+        /// where they record none (entries exported before `train --init-from` recorded it); it
+        /// must have their network's layers.
+        #[arg(long, value_name = "POLICY")]
+        started_from: Option<PathBuf>,
     },
     /// Replace an entry's description (one line on what it is; figures belong in its evaluations
     /// and results/, and are refused), resealed.
@@ -182,9 +187,21 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             }
             Ok(())
         }
-        ZooCommand::Upgrade { names, zoo, algo } => {
+        ZooCommand::Upgrade { names, zoo, algo, started_from } => {
             let zoo = folder(zoo);
             crate::benchmark::zoo::existing(&zoo)?;
+            if started_from.is_some() && names.is_empty() {
+                bail!("--started-from records one start: name the entries fine-tuned from it");
+            }
+            let start = match &started_from {
+                Some(p) => {
+                    let saved = crate::benchmark::load::load_policy(p)
+                        .with_context(|| format!("--started-from {}", p.display()))?;
+                    let id = saved.policy_id(&p.display().to_string());
+                    Some((saved, id))
+                }
+                None => None,
+            };
             let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
             for name in &names {
                 let path = crate::benchmark::zoo::find_named(&zoo, name, "upgrade")?;
@@ -192,6 +209,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
                 crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
                 if let Some(algo) = &algo {
                     crate::benchmark::zoo::record_algo(&path, algo)?;
+                }
+                if let Some((saved, id)) = &start {
+                    crate::benchmark::zoo::record_started_from(&path, saved, id.clone())?;
                 }
                 let after = crate::benchmark::zoo::read_meta(&path)?;
                 println!("{name}: {before} -> {}, sealed, trained by {}", after.format, after.algo);

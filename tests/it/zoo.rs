@@ -732,3 +732,61 @@ fn malformed_hashes_are_named_as_such() {
     let e = err_text(zoo::load(&entry).unwrap_err());
     assert!(e.contains("meta_sha256 \"d41d8cd98f00b204\" is not a content hash") && !e.contains("edited"), "{e}");
 }
+
+/// Issue 74: a fine-tuned entry exported before policy files recorded their start records it by
+/// `zoo upgrade --started-from`: only a policy of its own network, never over another record; and
+/// then `blend` of it with its start gives the shipped blend's policy again.
+#[test]
+fn a_fine_tuned_entry_records_the_policy_it_started_from() {
+    let bp = |args: &[&str]| {
+        let o = crate::common::blockpuzzle(args).output().unwrap();
+        (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let name = "ToppleTower-v0-td3-finetuned";
+    for ext in ["json", "safetensors"] {
+        std::fs::copy(zoo::dir().join(format!("{name}.{ext}")), tmp.path().join(format!("{name}.{ext}"))).unwrap();
+    }
+    let folder = tmp.path().to_str().unwrap();
+    let entry = tmp.path().join(format!("{name}.json"));
+    // A start of another network is refused, and the entry is left as it was.
+    let before = std::fs::read(&entry).unwrap();
+    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", "BlocksTouch-v0-ddpg", "--zoo", folder]);
+    assert!(!ok && text.contains("a policy is fine-tuned from one of its own network"), "{text}");
+    assert_eq!(std::fs::read(&entry).unwrap(), before);
+    let (ok, text) = bp(&["zoo", "upgrade", "--started-from", "generalist-bc-entity", "--zoo", folder]);
+    assert!(!ok && text.contains("name the entries"), "{text}");
+    // Its own start is recorded and sealed, by name and hash; again, nothing changes.
+    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", "generalist-bc-entity", "--zoo", folder]);
+    assert!(ok, "{text}");
+    let (meta, saved) = zoo::load(&entry).unwrap();
+    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    let start = meta.started_from.clone().unwrap();
+    assert_eq!((start.name.as_str(), &start.sha256), ("generalist-bc-entity", &generalist.policy_id("x").sha256));
+    assert_eq!(saved.started_from, meta.started_from);
+    let sealed = std::fs::read(&entry).unwrap();
+    assert!(bp(&["zoo", "upgrade", name, "--started-from", "generalist-bc-entity", "--zoo", folder]).0);
+    assert_eq!(std::fs::read(&entry).unwrap(), sealed);
+    // Another start of the same network over the record is refused.
+    let other = "topple-20003-v0-td3-finetuned";
+    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", other, "--zoo", folder]);
+    assert!(!ok && text.contains("would change a record"), "{text}");
+    assert_eq!(std::fs::read(&entry).unwrap(), sealed);
+    // The shipped blend is this entry and its start at 0.7: blend makes it again.
+    let out = tmp.path().join("blend.json");
+    let (ok, text) = bp(&[
+        "blend",
+        "--base",
+        "generalist-bc-entity",
+        "--tuned",
+        entry.to_str().unwrap(),
+        "--weight",
+        "0.7",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{text}");
+    let made = blockpuzzle::benchmark::saved::read(&out).unwrap();
+    let (_, shipped) = zoo::load(&zoo::dir().join(format!("{name}-blend.json"))).unwrap();
+    assert_eq!(made.policy.net().layers, shipped.policy.net().layers, "the shipped blend's weights");
+}
