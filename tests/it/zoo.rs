@@ -734,46 +734,49 @@ fn malformed_hashes_are_named_as_such() {
 }
 
 /// Issue 74: a fine-tuned entry exported before policy files recorded their start records it by
-/// `zoo upgrade --started-from`: only a policy of its own network, never over another record; and
-/// then `blend` of it with its start gives the shipped blend's policy again.
+/// `zoo upgrade --started-from` (the shipped ones do): only a policy of its own network, never over
+/// another record; and `blend` of it with its start gives the shipped blend's policy again.
 #[test]
 fn a_fine_tuned_entry_records_the_policy_it_started_from() {
     let bp = |args: &[&str]| {
         let o = crate::common::blockpuzzle(args).output().unwrap();
         (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
     };
-    let tmp = tempfile::tempdir().unwrap();
-    let name = "ToppleTower-v0-td3-finetuned";
-    for ext in ["json", "safetensors"] {
-        std::fs::copy(zoo::dir().join(format!("{name}.{ext}")), tmp.path().join(format!("{name}.{ext}"))).unwrap();
+    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
+    for shipped in ["ToppleTower-v0-td3-finetuned", "topple-20003-v0-td3-finetuned"] {
+        let (meta, saved) = zoo::load(&zoo::dir().join(format!("{shipped}.json"))).unwrap();
+        let start = meta.started_from.clone().unwrap();
+        assert_eq!((start.name.as_str(), &start.sha256), ("generalist-bc-entity", &generalist.policy_id("x").sha256));
+        assert_eq!(saved.started_from, meta.started_from, "{shipped}");
     }
+    let tmp = tempfile::tempdir().unwrap();
+    let copy = |name: &str| {
+        for ext in ["json", "safetensors"] {
+            std::fs::copy(zoo::dir().join(format!("{name}.{ext}")), tmp.path().join(format!("{name}.{ext}"))).unwrap();
+        }
+        tmp.path().join(format!("{name}.json"))
+    };
     let folder = tmp.path().to_str().unwrap();
-    let entry = tmp.path().join(format!("{name}.json"));
-    // A start of another network is refused, and the entry is left as it was.
-    let before = std::fs::read(&entry).unwrap();
-    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", "BlocksTouch-v0-ddpg", "--zoo", folder]);
+    // A start of another network is refused (an entry that records none), and the entry is left as it was.
+    let blend = copy("ToppleTower-v0-td3-finetuned-blend");
+    let before = std::fs::read(&blend).unwrap();
+    let args = ["zoo", "upgrade", "ToppleTower-v0-td3-finetuned-blend", "--started-from", "BlocksTouch-v0-ddpg"];
+    let (ok, text) = bp(&[&args[..], &["--zoo", folder]].concat());
     assert!(!ok && text.contains("a policy is fine-tuned from one of its own network"), "{text}");
-    assert_eq!(std::fs::read(&entry).unwrap(), before);
+    assert_eq!(std::fs::read(&blend).unwrap(), before);
     let (ok, text) = bp(&["zoo", "upgrade", "--started-from", "generalist-bc-entity", "--zoo", folder]);
     assert!(!ok && text.contains("name the entries"), "{text}");
-    // Its own start is recorded and sealed, by name and hash; again, nothing changes.
-    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", "generalist-bc-entity", "--zoo", folder]);
-    assert!(ok, "{text}");
-    let (meta, saved) = zoo::load(&entry).unwrap();
-    let (_, generalist) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
-    let start = meta.started_from.clone().unwrap();
-    assert_eq!((start.name.as_str(), &start.sha256), ("generalist-bc-entity", &generalist.policy_id("x").sha256));
-    assert_eq!(saved.started_from, meta.started_from);
+    // The same start again changes nothing; another over the record is refused.
+    let name = "ToppleTower-v0-td3-finetuned";
+    let entry = copy(name);
     let sealed = std::fs::read(&entry).unwrap();
     assert!(bp(&["zoo", "upgrade", name, "--started-from", "generalist-bc-entity", "--zoo", folder]).0);
     assert_eq!(std::fs::read(&entry).unwrap(), sealed);
-    // Another start of the same network over the record is refused.
-    let other = "topple-20003-v0-td3-finetuned";
-    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", other, "--zoo", folder]);
+    let (ok, text) = bp(&["zoo", "upgrade", name, "--started-from", "topple-20003-v0-td3-finetuned", "--zoo", folder]);
     assert!(!ok && text.contains("would change a record"), "{text}");
     assert_eq!(std::fs::read(&entry).unwrap(), sealed);
     // The shipped blend is this entry and its start at 0.7: blend makes it again.
-    let out = tmp.path().join("blend.json");
+    let out = tmp.path().join("made.json");
     let (ok, text) = bp(&[
         "blend",
         "--base",
