@@ -29,7 +29,8 @@ class BlockPuzzleEnv(gymnasium.Env):
     ``reset(options=...)`` takes ``level`` (curriculum level), ``challenge`` (bool) and
     ``distribution`` (a name from the task file, listed in ``distributions``); they stay in force
     for later resets until changed. ``task`` and ``task_sha256`` are checks: a recorded episode's
-    options (``blockpuzzle.datasets.reset_options``) name its task, and another task is refused. ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
+    options (``blockpuzzle.datasets.reset_options``) name its task, and another task is refused.
+    ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
     ``distribution``, ``touching`` (object index pairs touching during the step),
     ``contact_matrix`` (int8, 0 never touched, 1 touched before, 2 touching now),
     ``elapsed_steps`` and ``unstable``; ``env.unwrapped.objects`` names the indices.
