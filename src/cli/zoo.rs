@@ -1,8 +1,6 @@
 //! `blockpuzzle zoo`: list, check and export the shipped policies (src/benchmark/zoo.rs has the format).
 
-#[cfg(feature = "train")]
-use anyhow::Context;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 use std::path::{Path, PathBuf};
 
