@@ -531,17 +531,7 @@ pub fn find_named(zoo: &Path, name: &str, command: &'static str) -> Result<PathB
     let given = Path::new(name);
     if let Ok(meta) = std::fs::metadata(given) {
         if !zoo.join(format!("{name}.safetensors")).exists() {
-            use std::os::unix::fs::FileTypeExt;
-            let t = meta.file_type();
-            let what = if t.is_dir() {
-                "a folder"
-            } else if t.is_fifo() {
-                "a pipe (FIFO)"
-            } else if t.is_file() {
-                "a file"
-            } else {
-                "a device or socket"
-            };
+            let what = crate::support::io::kind(meta.file_type());
             return Err(ZooError::PathForName { name: name.to_owned(), what, command, zoo: zoo.to_owned() });
         }
     }

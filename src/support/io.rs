@@ -400,12 +400,28 @@ fn read(path: &Path, what: &str, max: u64, text: bool) -> std::io::Result<Vec<u8
     }
     // A pipe or device that gave nothing (a FIFO without a writer, /dev/null) is not an empty file.
     if !t.is_file() && bytes.is_empty() {
-        let kind = if t.is_fifo() { "a pipe (FIFO)" } else { "a device" };
+        let kind = kind(t);
         return Err(refuse(&format!(
             "is {kind} that gave no data (no process wrote to it); give the {what} as a file, or start its writer first"
         )));
     }
     Ok(bytes)
+}
+
+/// What a file of type `t` is, as messages name it: "a folder", "a pipe (FIFO)", "a file", "a
+/// device" or "a socket".
+pub fn kind(t: std::fs::FileType) -> &'static str {
+    if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a pipe (FIFO)"
+    } else if t.is_file() {
+        "a file"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "a device"
+    }
 }
 
 /// `1.5 MB` for 1_500_000.
