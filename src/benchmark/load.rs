@@ -33,7 +33,8 @@ pub enum LoadError {
     /// A folder that holds no policy file: not a run directory.
     #[error(
         "{} is a folder with neither {BEST_POLICY_FILE} nor {POLICY_FILE}, so not a run directory; give a run \
-         directory (one `blockpuzzle train --run-dir` wrote), a policy file or a zoo name",
+         directory (one `blockpuzzle train --run-dir` wrote), a policy file or a zoo name (a run carried with \
+         only its checkpoint.bin: `blockpuzzle zoo export --from RUN` makes its policy)",
         path.display()
     )]
     NotARun {

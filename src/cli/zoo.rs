@@ -233,7 +233,7 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             let zoo = folder(a.zoo);
             // Before the evaluations, which may take long.
             crate::benchmark::zoo::entry_free(&zoo, &a.name, a.force)?;
-            let saved = crate::benchmark::load::load_policy(&a.from)?;
+            let saved = exported_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {
                 evaluations.push(read_eval(path)?);
@@ -403,6 +403,23 @@ fn evaluate_entries(zoo: &Path, names: Vec<String>, threads: Option<usize>) -> R
         }
     }
     Ok(())
+}
+
+/// The policy `zoo export --from` names: a policy file, run directory or zoo name; or a run carried
+/// without its policy files (checkpoint.bin, config.json and progress.csv, as
+/// `experiments/generalist/state/` keeps them), whose checkpoint gives the policy it wrote then.
+#[cfg(feature = "train")]
+fn exported_policy(from: &std::path::Path) -> Result<crate::benchmark::saved::SavedPolicy> {
+    use crate::benchmark::saved::{BEST_POLICY_FILE, POLICY_FILE};
+    let carried = from.is_dir()
+        && !from.join(BEST_POLICY_FILE).exists()
+        && !from.join(POLICY_FILE).exists()
+        && from.join("checkpoint.bin").is_file();
+    if carried {
+        return crate::learn::train::policy_from_checkpoint(from)
+            .with_context(|| format!("--from {}: the policy of its checkpoint", from.display()));
+    }
+    Ok(crate::benchmark::load::load_policy(from)?)
 }
 
 #[cfg(feature = "train")]

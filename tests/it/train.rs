@@ -8,7 +8,8 @@ use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::learn::agents::registry::Algo;
 use blockpuzzle::learn::agents::shared::SharedConfig;
 use blockpuzzle::learn::train::{
-    branch, checkpoint, read_progress, train, AggrevatedConfig, EpochRow, PgWeight, ReplayLayout, TrainConfig,
+    branch, checkpoint, policy_from_checkpoint, read_progress, train, AggrevatedConfig, EpochRow, PgWeight,
+    ReplayLayout, TrainConfig,
 };
 use blockpuzzle::policy::actor::AnyPolicy;
 use std::path::Path;
@@ -124,6 +125,40 @@ fn short_run_writes_every_run_directory_file() {
     let spans = blockpuzzle::learn::train::RunDir { dir: dir.path().to_owned() }.read_provenance().unwrap();
     assert_eq!(spans.len(), 1);
     assert_eq!((spans[0].from_epoch, spans[0].build.mujoco.clone()), (0, blockpuzzle::sim::mj::version()));
+    // A run carried with its checkpoint, config and progress only gives its policy file again, field for field.
+    assert_eq!(policy_from_checkpoint(dir.path()).unwrap(), last);
+    let carried = tempfile::tempdir().unwrap();
+    for f in ["config.json", "progress.csv", "checkpoint.bin"] {
+        std::fs::copy(dir.path().join(f), carried.path().join(f)).unwrap();
+    }
+    assert_eq!(policy_from_checkpoint(carried.path()).unwrap(), last);
+    // Through the CLI: `zoo export --from` the carried run.
+    let zoo = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(crate::common::CLI)
+        .args(["zoo", "export", "--name", "carried", "--description", "d", "--trained-with", "t", "--zoo"])
+        .arg(zoo.path())
+        .arg("--from")
+        .arg(carried.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The same entry as the run's own policy file exports (the zoo keeps the normaliser's statistics in f32).
+    let (_, exported) = blockpuzzle::benchmark::zoo::load(&zoo.path().join("carried.json")).unwrap();
+    let info = blockpuzzle::benchmark::zoo::ExportInfo { name: "direct".into(), ..Default::default() };
+    let direct = blockpuzzle::benchmark::zoo::export(zoo.path(), &last, &info).unwrap().with_extension("json");
+    let (_, direct) = blockpuzzle::benchmark::zoo::load(&direct).unwrap();
+    assert_eq!((exported.policy, exported.epoch), (direct.policy, 2));
+    // Without its epoch's progress row, or with another run's config, it is refused by name.
+    let config = std::fs::read_to_string(carried.path().join("config.json")).unwrap();
+    std::fs::write(carried.path().join("config.json"), config.replace("\"seed\": 7", "\"seed\": 8")).unwrap();
+    let e = policy_from_checkpoint(carried.path()).unwrap_err().to_string();
+    assert!(e.contains("config.json") && e.contains("restore"), "{e}");
+    std::fs::write(carried.path().join("config.json"), config).unwrap();
+    let progress = std::fs::read_to_string(carried.path().join("progress.csv")).unwrap();
+    let first_row: Vec<&str> = progress.lines().take(2).collect();
+    std::fs::write(carried.path().join("progress.csv"), first_row.join("\n") + "\n").unwrap();
+    let e = policy_from_checkpoint(carried.path()).unwrap_err().to_string();
+    assert!(e.contains("no row for epoch 2"), "{e}");
     // a second fresh run into the same directory is refused
     let err = train(&tiny("BlocksTouch-v0", 2), dir.path(), false, &mut quiet).unwrap_err();
     assert!(err.to_string().contains("--resume"), "{err}");
@@ -1266,6 +1301,7 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     // The policy records the stream (not its tasks by content) and draws every task of the pool again from
     // it, in the layout of the most blocks.
     let saved = load_policy(&straight.path().join("policy.json")).unwrap();
+    assert_eq!(policy_from_checkpoint(straight.path()).unwrap(), saved);
     assert_eq!(saved.env_id, "gripper+push-0-3");
     assert!(saved.tasks.is_empty() && saved.task.is_none() && saved.is_multi_task());
     assert_eq!(saved.stream.as_ref(), Some(&record));

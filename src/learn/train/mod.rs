@@ -21,7 +21,9 @@
 //! `policy.json` (latest actor + normaliser), `best_policy.json` (best
 //! finals success), `success.png` (the success curves) and, for AggreVaTeD,
 //! `expert_policy.json` (the run's copy of its expert); with `--snapshot-every
-//! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch).
+//! N`, `snapshots/epoch-NNNN.json` (the policy after every Nth epoch). A run carried to another
+//! machine with its checkpoint, `config.json` and `progress.csv` alone gives its `policy.json` again
+//! (`export.rs`).
 
 /// Returns a [`TrainError::Refused`] with the formatted message: the problem and its fix.
 macro_rules! refuse {
@@ -31,6 +33,7 @@ macro_rules! refuse {
 }
 
 mod branch;
+mod export;
 pub mod finetune;
 pub mod checkpoint;
 pub mod comm;
@@ -45,6 +48,7 @@ mod trainer;
 
 use crate::learn::agents::registry::Algo;
 pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
+pub use export::policy_from_checkpoint;
 pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
 pub use rundir::{read_progress, LogError, ReplayRebuilt, RunDir, Span};

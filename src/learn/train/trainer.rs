@@ -464,6 +464,41 @@ fn resumed(
     })
 }
 
+/// The policy file a run writes after an epoch (`policy.json`, snapshots, `best_policy.json`), from
+/// its config, its state after the epoch, the epoch's finals success and the agent's policy and
+/// critic. A multi-task policy names its run's tasks (`config.json` records them) and holds no one
+/// task; a stream run's, its stream's record. [`super::export::policy_from_checkpoint`] writes the
+/// same file from a checkpoint alone.
+pub(crate) fn saved_policy(
+    config: &TrainConfig,
+    state: &RunState,
+    finals_success: f64,
+    policy: AnyPolicy,
+    critic: Option<crate::policy::actor::mlp::PlainNet>,
+) -> SavedPolicy {
+    let (task, tasks, stream) = match &config.stream {
+        Some(stream) => (None, Vec::new(), Some(stream.clone())),
+        None if config.tasks.is_empty() => (config.task.clone(), Vec::new(), None),
+        None => (None, config.tasks.clone(), None),
+    };
+    SavedPolicy {
+        env_id: state.env_id.clone(),
+        task,
+        tasks,
+        stream,
+        epoch: state.epoch,
+        env_steps: Some(state.env_steps),
+        finals_success,
+        algo: Some(config.algo_label().to_owned()),
+        obs_mode: Some(config.net.obs_mode()),
+        fixtures: Some(config.net.obs_mode().fixtures().to_vec()),
+        policy,
+        critic,
+        blend: None,
+        started_from: config.finetune.init_policy.clone(),
+    }
+}
+
 /// Everything a run holds between epochs.
 struct Trainer<'a> {
     comm: &'a Comm,
@@ -1102,29 +1137,8 @@ impl<'a> Trainer<'a> {
             // A multi-task run's level is the sum of its tasks' levels.
             let max_level = self.max_levels.iter().sum();
             plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
-            // A multi-task policy names its run's tasks (`config.json` records them) and holds no one task;
-            // a stream run's, its stream's record.
-            let (task, tasks, stream) = match (&self.tasks[..], &self.config.stream) {
-                (_, Some(stream)) => (None, Vec::new(), Some(stream.clone())),
-                ([task], None) => (Some(task.source.clone()), Vec::new(), None),
-                (all, None) => (None, all.iter().map(|t| t.source.clone()).collect(), None),
-            };
-            let saved = SavedPolicy {
-                env_id: self.state.env_id.clone(),
-                task,
-                tasks,
-                stream,
-                epoch: state.epoch,
-                env_steps: Some(state.env_steps),
-                finals_success: row.finals_success,
-                algo: Some(self.config.algo_label().to_owned()),
-                obs_mode: Some(self.config.net.obs_mode()),
-                fixtures: Some(self.config.net.obs_mode().fixtures().to_vec()),
-                policy,
-                critic: self.learner.agent.critic(),
-                blend: None,
-                started_from: self.config.finetune.init_policy.clone(),
-            };
+            let (agent, finals) = (&*self.learner.agent, row.finals_success);
+            let saved = saved_policy(&self.config, state, finals, policy, agent.critic());
             write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
                 std::fs::create_dir_all(run.snapshots())
