@@ -233,6 +233,9 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
             let zoo = folder(a.zoo);
             // Before the evaluations, which may take long.
             crate::benchmark::zoo::entry_free(&zoo, &a.name, a.force)?;
+            if let Some(figure) = crate::benchmark::zoo::figure_in(&a.description) {
+                return Err(crate::benchmark::zoo::ZooError::FigureInDescription { figure }.into());
+            }
             let saved = exported_policy(&a.from)?;
             let mut evaluations = Vec::new();
             for path in &a.evals {

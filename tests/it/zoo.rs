@@ -706,8 +706,12 @@ fn descriptions_carry_no_figures() {
         "t",
         "--zoo",
         zs,
+        "--evaluate",
+        "5",
     ]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("\"50%\""));
+    // Refused before its evaluations are played, not after.
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("normal"), "{}", String::from_utf8_lossy(&o.stdout));
     assert!(!z.join("f.json").exists());
 }
 
