@@ -11,6 +11,8 @@
 //! | [`evaluate`] | evaluation of a policy on a task or a suite |
 //! | [`results`] | suite results compared and ranked, every derived number recomputed |
 //! | [`demos`] | the solver's episodes on a suite split, for imitation and offline RL |
+//! | [`table`] | the paper's results table on BlocksChoose-v0, from saved policies |
+//! | [`throughput`] | environment steps/s and `mj_step`/s (`blockpuzzle bench`) |
 
 pub mod demos;
 pub mod evaluate;
@@ -20,4 +22,6 @@ pub mod results;
 pub mod saved;
 pub mod stream;
 pub mod suite;
+pub mod table;
+pub mod throughput;
 pub mod zoo;

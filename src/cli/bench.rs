@@ -30,7 +30,7 @@ pub(super) struct BenchArgs {
     #[arg(long, default_value_t = 1, requires = "train", value_parser = crate::learn::train::WORKERS.parser::<usize>())]
     workers: usize,
     /// With --train: gradient updates to time.
-    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::learn::bench::train::BENCH_UPDATES.parser::<usize>())]
+    #[arg(long, default_value_t = 300, requires = "train", value_parser = crate::learn::bench::BENCH_UPDATES.parser::<usize>())]
     updates: usize,
     /// With --train: transitions per update batch.
     #[arg(long, default_value_t = 256, requires = "train", value_parser = crate::learn::train::BATCH_SIZE.parser::<usize>())]
@@ -82,7 +82,7 @@ pub(super) fn align_bench(reference: &Path, steps: usize, threads: usize) -> Res
             .map_err(|e| crate::env::EnvError::BadState { reason: e.to_string() })?;
         env.set_state(&q, &v)
     };
-    let report = crate::learn::bench::run_with(
+    let report = crate::benchmark::throughput::run_with(
         "FetchPush-like",
         &crate::episode::align::fetchpush_like,
         &start,
@@ -122,7 +122,7 @@ pub(super) fn align(reference: &Path, plot: Option<&Path>) -> Result<()> {
 
 /// `bench --train`: collection env steps/s and update rate.
 pub(super) fn train(a: BenchArgs) -> Result<()> {
-    let r = crate::learn::bench::train::run(&crate::learn::bench::train::TrainBenchConfig {
+    let r = crate::learn::bench::run(&crate::learn::bench::TrainBenchConfig {
         env: a.env,
         workers: a.workers,
         steps: a.steps,
@@ -157,7 +157,7 @@ pub(super) fn train(a: BenchArgs) -> Result<()> {
 
 /// `blockpuzzle bench`: env steps/s and mj_step/s.
 pub(super) fn run(a: &BenchArgs) -> Result<()> {
-    let r = crate::learn::bench::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
+    let r = crate::benchmark::throughput::run(&a.env, a.steps, a.threads, !a.no_collision_filter)?;
     if a.json {
         println!("{}", serde_json::to_string(&r)?);
     } else {

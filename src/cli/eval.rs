@@ -2,7 +2,6 @@
 //! paper's results table).
 
 use super::episodes::policy_task;
-#[cfg(feature = "train")]
 use crate::env::registry;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
@@ -58,12 +57,11 @@ pub(super) struct EvalArgs {
     threads: Option<usize>,
 }
 
-#[cfg(feature = "train")]
 #[derive(Debug, clap::Args)]
 pub(super) struct TableArgs {
     /// The task: the paper's BlocksChoose-v0, or another id or task file with a challenge
     /// distribution (e.g. BlocksChooseShuffled-v0, to test generalisation).
-    #[arg(long, default_value = crate::learn::table::ENV)]
+    #[arg(long, default_value = crate::benchmark::table::ENV)]
     env: String,
     /// The 2-block DDPG expert (run directory, policy file or zoo name); evaluated with grey blocks removed from its view.
     #[arg(long)]
@@ -101,7 +99,6 @@ pub(super) struct TableArgs {
     threads: Option<usize>,
 }
 
-#[cfg(feature = "train")]
 /// `blockpuzzle table`.
 pub(super) fn table(a: TableArgs) -> Result<()> {
     crate::support::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
@@ -113,24 +110,25 @@ pub(super) fn table(a: TableArgs) -> Result<()> {
     if task.distribution("challenge").is_none() {
         bail!("the table's second column is the challenge distribution, which {} does not define", a.env);
     }
-    let given = crate::learn::table::Policies {
+    let given = crate::benchmark::table::Policies {
         expert: a.expert,
         ddpg: a.ddpg,
         ddpg_ours: a.ddpg_ours,
         pggd: a.pggd,
         pggd_alone: a.pggd_alone,
     };
-    let rows = crate::learn::table::rows(if a.zoo { given.or(crate::learn::table::Policies::zoo()) } else { given });
+    let rows =
+        crate::benchmark::table::rows(if a.zoo { given.or(crate::benchmark::table::Policies::zoo()) } else { given });
     let mut done = Vec::new();
     for row in rows {
         eprintln!("evaluating {} ...", row.method);
-        let outcome = crate::learn::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
+        let outcome = crate::benchmark::table::evaluate_row(&row, &task, a.episodes, a.seed, threads);
         done.push((row, outcome));
     }
     let missing: Vec<String> = done
         .iter()
         .filter_map(|(row, r)| match r {
-            crate::learn::table::RowResult::Missing(why) => Some(format!(
+            crate::benchmark::table::RowResult::Missing(why) => Some(format!(
                 "{} ({}): {why}",
                 row.method,
                 row.policy.as_deref().map_or(String::new(), |p| p.display().to_string())
@@ -148,7 +146,7 @@ pub(super) fn table(a: TableArgs) -> Result<()> {
             missing.len()
         );
     }
-    let md = crate::learn::table::markdown(&done, task.id(), a.episodes, a.seed);
+    let md = crate::benchmark::table::markdown(&done, task.id(), a.episodes, a.seed);
     print!("{md}");
     if let Some(out) = &a.out {
         crate::support::io::write_file(out, md.as_bytes())?;

@@ -24,7 +24,6 @@ mod zoo;
 use bench::BenchArgs;
 use episodes::{policy_task, DemosArgs, RenderArgs, RolloutArgs};
 use eval::EvalArgs;
-#[cfg(feature = "train")]
 use eval::TableArgs;
 use results::ResultsCommand;
 #[cfg(feature = "train")]
@@ -37,7 +36,7 @@ use zoo::ZooCommand;
 /// The commands only the training build has (the `train` feature: libtorch, plots, benchmarks). A
 /// build without it (the Python package's command, or `--no-default-features --features cli`) says
 /// so when given one, rather than clap's "unrecognized subcommand".
-pub const TRAINING_COMMANDS: &[&str] = &["train", "bench", "table", "plot", "report", "align", "zoo export"];
+pub const TRAINING_COMMANDS: &[&str] = &["train", "bench", "plot", "report", "align", "zoo export"];
 
 /// The command a command line `args` (from the program name on) runs, before clap parses it: its
 /// first two words after the program that are not options (a command and its subcommand).
@@ -96,7 +95,6 @@ enum Command {
     /// Interpolate a fine-tuned policy towards the one it started from, weight by weight (WiSE-FT):
     /// (1 - w) x BASE + w x TUNED, written as a policy file with the blend recorded.
     Blend(blend::BlendArgs),
-    #[cfg(feature = "train")]
     /// The paper's results table on BlocksChoose-v0 (Normal and Challenge), beside the paper's numbers.
     Table(TableArgs),
     #[cfg(feature = "train")]
@@ -283,7 +281,6 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Results(c) => results::run(c),
         #[cfg(feature = "train")]
         Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
-        #[cfg(feature = "train")]
         Command::Table(a) => eval::table(a),
         Command::Task(TaskCommand::Check(a)) => task::check(a),
         Command::Task(TaskCommand::Generate(a)) => task::generate(a),

@@ -1,7 +1,7 @@
 //! The hard limits on numbers a user gives to the core (task-file fields, evaluation, rollouts,
 //! suites, the files it reads) and the [`Bound`] type every limit is written with. Each bound is
 //! written once, with why it exists; those of training and rendering are written beside the
-//! settings they bound (`learn::train`, `learn::agents`, `learn::bench`, `render`, the CLI's
+//! settings they bound (`learn::train`, `learn::agents`, `learn::bench`, `benchmark::throughput`, `render`, the CLI's
 //! render flags). Each is checked
 //! before anything is created or allocated: by the command line's parsers
 //! ([`Bound::parse`], which also turns `--episodes -3` into a message naming

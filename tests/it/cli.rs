@@ -609,6 +609,8 @@ fn training_commands_are_named_once() {
     assert_eq!(training_command(&line(&["zoo", "export", "--from", "x"])), Some("zoo export"));
     assert_eq!(training_command(&line(&["train", "--env", "BlocksTouch-v0"])), Some("train"));
     assert_eq!(training_command(&line(&["zoo", "list"])), None);
+    // The paper's table evaluates saved policies: no libtorch, so the Python package's command has it too.
+    assert_eq!(training_command(&line(&["table", "--zoo"])), None);
     assert_eq!(training_command(&line(&["--version"])), None);
     // Every entry is a command of this (the training) build: its help prints.
     for c in TRAINING_COMMANDS {

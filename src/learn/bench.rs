@@ -112,7 +112,7 @@ const WARMUP_UPDATES: usize = 20;
 /// # Errors
 /// Unknown environment id, zero counts, environment failures.
 pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
-    use crate::learn::bench::train::BENCH_UPDATES;
+    use crate::learn::bench::BENCH_UPDATES;
     use crate::learn::train::{BATCH_SIZE, WORKERS};
     use crate::support::limits::BENCH_STEPS;
     for (bound, v) in

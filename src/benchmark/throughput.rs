@@ -1,9 +1,7 @@
 //! Throughput measurement: environment steps per second, MuJoCo `mj_step`
 //! calls per second on the same trajectories, and the environment's overhead
-//! (the share of a step spent outside `mj_step`); training's collection and
-//! update rates, for any algorithm, in [`train`].
-
-pub mod train;
+//! (the share of a step spent outside `mj_step`). Training's collection and
+//! update rates, for any algorithm, are `learn::bench` (libtorch).
 
 use crate::env::vector::VectorEnv;
 use crate::env::{registry, BlockEnv, EnvError};
