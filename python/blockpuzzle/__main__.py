@@ -2,8 +2,8 @@
 
 The Rust command line's own commands and flags, those that need no libtorch: ``envs``, ``info``,
 ``rollout``, ``render``, ``eval`` (``--suite`` included), ``demos``, ``zoo list|check|evaluate``,
-``results``, ``task check|generate`` and ``scene``, on the package's engine (MuJoCo 3.11.0). Training (``train``,
-``table``, ``bench``, ``plot``, ``report``, ``align``, ``zoo export``) is in the Rust command line
+``results``, ``task check|generate``, ``table`` and ``scene``, on the package's engine (MuJoCo 3.11.0). Training
+(``train``, ``bench``, ``plot``, ``report``, ``align``, ``zoo export``) is in the Rust command line
 (``cargo run --release -- train ...``, docs/training.md); asked for here, they are named as such.
 """
 
