@@ -1,4 +1,19 @@
-//! The `blockpuzzle` command line. With the `cli` feature alone, the commands that need no
+//! Layer 10, cli (the `cli` feature): the `blockpuzzle` command line.
+//!
+//! | module | what |
+//! |---|---|
+//! | this file | the commands, their dispatch, `envs`, `info`, `scene`, the list of training commands |
+//! | `episodes` | `rollout`, `render`, `demos` |
+//! | `eval` | `eval` (a task or a suite) and `table` |
+//! | `blend` | `blend` (WiSE-FT interpolation of a fine-tuned policy) |
+//! | `results` | `results compare` and `results leaderboard` |
+//! | `task` | `task check` and `task generate` |
+//! | `zoo` | `zoo list`, `check`, `evaluate`, `describe`, `upgrade`, `export` |
+//! | `runs` (`train`) | `train` (one process or an MPI rank), `plot`, `report` |
+//! | `experiment` (`train`) | `train --config FILE` recipes |
+//! | `bench` (`train`) | `bench` and `align` |
+//!
+//! With the `cli` feature alone, the commands that need no
 //! libtorch (the Python package's `blockpuzzle`); with `train`, every command.
 
 use anyhow::{bail, Result};

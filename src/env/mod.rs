@@ -1,3 +1,14 @@
+//! Layer 4, env: the environments, with Gymnasium's semantics.
+//!
+//! | module | what |
+//! |---|---|
+//! | `config` | [`EnvConfig`] and the environment API's errors ([`EnvError`]) |
+//! | `obs` | the observation modes ([`ObsSpec`]) and how each is read off the simulation |
+//! | `reset` | the reset pipeline: roles dealt, a layout drawn, the settled robot restored |
+//! | [`registry`] | the versioned environment ids, each a task file in `tasks/` |
+//! | [`vector`] | the vector engine: N environments stepped on K threads |
+//! | [`hindsight`] | hindsight colour relabelling of an episode's contacts |
+//!
 //! The environments, with Gymnasium semantics: `reset(seed)` returns the first
 //! observation and an [`Info`]; `step(action)` returns a [`Step`] with the
 //! reward and separate `terminated` / `truncated` flags.

@@ -1,10 +1,19 @@
+//! Layer 5, policy: policies that read only observations.
+//!
+//! | module | what |
+//! |---|---|
+//! | this file | the [`Policy`] trait, random and obs-hash, the scripted controller and solver |
+//! | `push`, `reach`, `topple`, `pick` | the solver's behaviours, each a function of one observation |
+//! | [`actor`] | trained policies' plain-Rust forward pass (no libtorch) |
+//!
 //! Policies that need no learning: uniform random actions, and scripted
 //! controllers that prove the tasks solvable: pushing blue onto green,
 //! reaching green with a blue gripper (over any red wall), toppling a tower
 //! with a red gripper, and picking blue up and putting it on green.
 //!
 //! Both read only the observation, and the scripted controller nothing else: it keeps no state
-//! from step to step, and it does not read the order of the block rows ([`SOLVER_VERSION`] 3).
+//! from step to step, and it does not read the order of the block rows (since [`SOLVER_VERSION`] 3;
+//! the version each number records).
 //! The scripted controller as a solver
 //! ([`ScriptedPolicy::solver`], the `scripted` baseline) decides what to do
 //! from the `entities` observation alone: which blocks are blue, green, red,

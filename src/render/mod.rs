@@ -1,3 +1,11 @@
+//! Layer 8, render (the `render` feature): headless rendering.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`egl`] | a headless OpenGL context through EGL (software, no display) |
+//! | [`output`] | frames written as an animated GIF, a folder of PNGs or a filmstrip |
+//! | [`replay`] | frames of a recorded episode, its stored states put back |
+//!
 //! Headless rendering with MuJoCo's own renderer (`mjv_updateScene`,
 //! `mjr_render`, `mjr_readPixels`) in an offscreen OpenGL context made
 //! through EGL ([`egl`]): frames of an environment's state, and GIF, PNG

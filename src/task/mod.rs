@@ -1,3 +1,16 @@
+//! Layer 3, task: tasks as data, with no MuJoCo.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`spec`] | the task file format (TOML, version 1), every default written once |
+//! | `compile` | the compiler: a spec checked against its ranges and references, counts expanded |
+//! | `diagnostics` | what a task file's errors say ([`TaskError`]): file, line, the fix |
+//! | `exact` | fixed-length lists read strictly |
+//! | [`expr`] | curriculum expressions over named values (`min(0.08 + 0.025 * level, 0.20)`) |
+//! | [`sampler`] | layouts drawn from a task's start specs |
+//! | [`counts`] | count ranges given from outside a file (`train --counts grey=0-2`) |
+//! | [`family`] | task families: ranges over the framework that generate tasks |
+//!
 //! Tasks as data: a task file (TOML, [`spec`]) describes the objects, their
 //! colours and sizes, where each starts (samplers over the curriculum
 //! level), the curriculum, named evaluation distributions, the gripper and

@@ -106,10 +106,23 @@ fn lib_lists_the_layers_bottom_to_top_and_src_holds_nothing_else() {
         LAYERS.iter().map(|l| l.to_string()).chain(["lib.rs".into(), "main.rs".into()]).collect();
     want.sort();
     assert_eq!(top, want, "src/ holds the layers' folders, lib.rs and main.rs");
-    // Each layer's mod.rs opens with its part of the map.
-    for l in LAYERS {
+    // Each layer's mod.rs opens with its part of the map: its number and name as ARCHITECTURE.md has
+    // them, then a table with a row for each of its modules.
+    for (i, l) in LAYERS.iter().enumerate() {
         let text = std::fs::read_to_string(src.join(l).join("mod.rs")).unwrap();
-        assert!(text.starts_with("//!"), "src/{l}/mod.rs opens with its doc");
+        let opening = format!("//! Layer {}, {l}", i + 1);
+        assert!(text.starts_with(&opening), "src/{l}/mod.rs opens with `{opening}`");
+        let doc: Vec<&str> = text.lines().take_while(|l| l.starts_with("//!")).collect();
+        let modules = text.lines().filter_map(|line| {
+            let line = line.trim_start_matches("pub(crate) ").trim_start_matches("pub ");
+            line.strip_prefix("mod ").and_then(|m| m.strip_suffix(';'))
+        });
+        for m in modules {
+            let row = doc
+                .iter()
+                .any(|d| d.starts_with("//! |") && d.split('|').nth(1).is_some_and(|c| c.contains(&format!("`{m}`"))));
+            assert!(row, "src/{l}/mod.rs: its map has no row for module `{m}`");
+        }
     }
 }
 

@@ -184,3 +184,192 @@ fn every_toml_block_in_the_docs_is_a_valid_task_family_or_suite_file() {
         }
     }
 }
+
+/// Every Markdown file of the repository (git-tracked, outside `target/`): the docs, the README's,
+/// ARCHITECTURE.md, the research logs in results/, the recipes' notes.
+fn all_markdown() -> Vec<PathBuf> {
+    let out = std::process::Command::new("git").args(["ls-files", "*.md"]).current_dir(root()).output().unwrap();
+    assert!(out.status.success(), "git ls-files: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap().lines().map(|l| root().join(l)).filter(|p| p.is_file()).collect()
+}
+
+/// The `src/…` paths a text names (a word that starts with `src/`, not a part of a longer path such
+/// as `python/src/lib.rs`), trailing punctuation cut; globs and placeholders left out.
+fn src_paths(text: &str) -> Vec<String> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::new();
+    for (at, _) in text.match_indices("src/") {
+        let before = at.checked_sub(1).map(|k| bytes[k] as char);
+        if before.is_some_and(|c| c.is_ascii_alphanumeric() || matches!(c, '/' | '_' | '-' | '.')) {
+            continue;
+        }
+        let path: String = text[at..]
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '/' | '_' | '-' | '.'))
+            .collect();
+        let path = path.trim_end_matches(['.', '/']).to_owned();
+        if path.len() > "src/".len() && !path.contains("..") {
+            out.push(path);
+        }
+    }
+    out
+}
+
+/// Issue 75: a doc that names a `src/` file or folder names one that exists (at the root, or in the
+/// crate beside it: `mujoco-sys/`, `python/`).
+#[test]
+fn every_src_path_the_docs_name_exists() {
+    let files = all_markdown();
+    assert!(files.len() > 30, "{files:?}");
+    let mut missing = Vec::new();
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            for p in src_paths(line) {
+                if !["", "mujoco-sys/", "python/"].iter().any(|dir| root().join(format!("{dir}{p}")).exists()) {
+                    missing.push(format!("{}:{}: {p}", file.strip_prefix(root()).unwrap().display(), n + 1));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "docs name src/ paths that do not exist:\n{}", missing.join("\n"));
+    // The check can fail, and reads a path as a word.
+    assert_eq!(src_paths("see `src/no/such.rs`, and python/src/lib.rs."), ["src/no/such.rs"]);
+    assert_eq!(src_paths("(src/learn/train/mod.rs)."), ["src/learn/train/mod.rs"]);
+}
+
+/// The flags of a command line that name a policy, and the `zoo` subcommands that take an entry.
+const POLICY_FLAGS: &[&str] = &[
+    "--checkpoint",
+    "--policy",
+    "--init-from",
+    "--expert",
+    "--ddpg",
+    "--pggd",
+    "--pggd-alone",
+    "--base",
+    "--started-from",
+];
+
+/// The zoo entries a command line names (values of [`POLICY_FLAGS`], `zoo check|describe|evaluate|upgrade
+/// NAME…`): words that read as a name, not a path, a placeholder (`NAME`) or a baseline.
+fn zoo_names(command: &str) -> Vec<String> {
+    let w = words(command);
+    let Some(start) = w.iter().position(|a| a == "blockpuzzle" || a.ends_with("/blockpuzzle") || a == "--") else {
+        return Vec::new();
+    };
+    let args = &w[start + 1..];
+    let mut named: Vec<&str> =
+        args.windows(2).filter(|p| POLICY_FLAGS.contains(&p[0].as_str())).map(|p| p[1].as_str()).collect();
+    if let [zoo, sub, rest @ ..] = args {
+        if zoo == "zoo" && matches!(sub.as_str(), "check" | "describe" | "evaluate" | "upgrade") {
+            let mut rest = rest.iter();
+            while let Some(a) = rest.next() {
+                match a.as_str() {
+                    "--zoo" | "--description" | "--algo" | "--started-from" | "--threads" => {
+                        rest.next();
+                    }
+                    a if !a.starts_with('-') => named.push(a),
+                    _ => {}
+                }
+            }
+        }
+    }
+    let is_name = |v: &&str| {
+        v.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            && v.chars().any(|c| c.is_ascii_lowercase())
+            && !v.ends_with(".json")
+            && !v.ends_with(".safetensors")
+            && !matches!(*v, "scripted" | "random" | "obs-hash" | "solver")
+    };
+    named.into_iter().filter(is_name).map(str::to_owned).collect()
+}
+
+/// Issue 75: every zoo entry a command line of the docs names is in the zoo.
+#[test]
+fn every_zoo_entry_the_docs_name_exists() {
+    let commands: Vec<(String, String)> = all_markdown()
+        .iter()
+        .flat_map(|p| blocks(p))
+        .filter(|b| matches!(b.lang.as_str(), "sh" | "bash"))
+        .flat_map(|b| shell_commands(&b))
+        .collect();
+    let named: Vec<(String, String)> =
+        commands.iter().flat_map(|(at, c)| zoo_names(c).into_iter().map(move |n| (at.clone(), n))).collect();
+    assert!(named.len() > 10, "{named:?}");
+    let zoo = blockpuzzle::benchmark::zoo::dir();
+    let missing: Vec<String> = named
+        .iter()
+        .filter(|(_, n)| !zoo.join(format!("{n}.json")).is_file())
+        .map(|(at, n)| format!("{at}: {n}"))
+        .collect();
+    assert!(missing.is_empty(), "docs name zoo entries that do not exist:\n{}", missing.join("\n"));
+    // The check can fail: a name that is no entry is found, a path or a placeholder is not a name.
+    let names = zoo_names("blockpuzzle eval --checkpoint no-such-entry --episodes 3");
+    assert_eq!(names, ["no-such-entry"]);
+    assert!(zoo_names("blockpuzzle eval --checkpoint runs/x/policy.json").is_empty());
+    assert!(zoo_names("blockpuzzle zoo check NAME").is_empty());
+    assert_eq!(zoo_names("blockpuzzle zoo describe e --description d --zoo z"), ["e"]);
+}
+
+/// The inline code spans of a text that are command lines: `` `blockpuzzle …` ``.
+fn inline_commands(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut spans = text.split('`');
+    // Odd pieces are inside backticks (fences are whole lines of them: their pieces are empty).
+    spans.next();
+    while let Some(inside) = spans.next() {
+        if inside.starts_with("blockpuzzle ") && !inside.contains('\n') {
+            out.push(inside.to_owned());
+        }
+        spans.next();
+    }
+    out
+}
+
+/// Why an inline command names a subcommand or flag that does not exist, or None. Prose names a
+/// command by part of its line (`blockpuzzle demos`, `eval --suite`), so a missing argument or value
+/// is no fault here; an unknown word is.
+fn unknown_words(command: &str) -> Option<String> {
+    let argv = words(command).into_iter().map(Into::into).collect();
+    let e = blockpuzzle::cli::check_args(argv).err()?;
+    use clap::error::ErrorKind;
+    let kind = e.downcast_ref::<clap::Error>().map(clap::Error::kind);
+    matches!(kind, Some(ErrorKind::UnknownArgument | ErrorKind::InvalidSubcommand)).then(|| format!("{e:#}"))
+}
+
+/// Issue 75: the command lines the docs' prose names inline name subcommands and flags that exist,
+/// unless they are synopses (`…`, `NAME`, `[--flag]`).
+#[test]
+fn every_inline_command_in_the_docs_names_real_flags() {
+    let mut checked = 0;
+    let mut wrong = Vec::new();
+    for file in docs().iter().chain(&[root().join("ARCHITECTURE.md")]) {
+        let text = std::fs::read_to_string(file).unwrap();
+        for paragraph in text.split("\n\n").filter(|p| !p.trim_start().starts_with("```")) {
+            for c in inline_commands(&paragraph.replace('\n', " ")) {
+                let synopsis = c.contains('…')
+                    || c.contains("...")
+                    || c.contains('[')
+                    || c.contains('|')
+                    || c.contains('<')
+                    || c.split_whitespace()
+                        .any(|w| w.len() > 1 && w.chars().all(|ch| ch.is_ascii_uppercase() || ch == '_'));
+                if synopsis {
+                    continue;
+                }
+                checked += 1;
+                if let Some(why) = unknown_words(&c) {
+                    wrong.push(format!("{}: `{c}`: {why}", file.strip_prefix(root()).unwrap().display()));
+                }
+            }
+        }
+    }
+    assert!(checked > 20, "{checked}");
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert_eq!(inline_commands("run `blockpuzzle envs` or `make test`"), ["blockpuzzle envs"]);
+    // The check can fail: an unknown flag or subcommand is named; a partial line is not.
+    assert!(unknown_words("blockpuzzle eval --no-such-flag").is_some());
+    assert!(unknown_words("blockpuzzle no-such-command").is_some());
+    assert!(unknown_words("blockpuzzle demos").is_none());
+}
