@@ -163,9 +163,8 @@ impl SavedPolicy {
         };
         check_fixtures(self.fixtures.as_deref(), mode)?;
         if let Some(a) = &self.algo {
-            let trainers = TRAINERS;
-            if !trainers.contains(&a.as_str()) {
-                return Err(format!("algo {a:?} is none of {} (an edited file)", trainers.join(", ")));
+            if !TRAINERS.contains(&a.as_str()) {
+                return Err(format!("algo {a:?} is none of {} (an edited file)", TRAINERS.join(", ")));
             }
             let expected = kind_trained_by(a);
             if expected != self.policy.kind() {

@@ -146,6 +146,15 @@ impl ObsMode {
     /// Every mode, in the order the docs list them.
     pub const ALL: [ObsMode; 3] = [ObsMode::Flat, ObsMode::Objects, ObsMode::Entities];
 
+    /// Whether it is the `entities` mode (the solver's, the demonstrations' and the generalist's),
+    /// decided here by a `match`, not by `==` at each caller.
+    pub fn is_entities(self) -> bool {
+        match self {
+            ObsMode::Entities => true,
+            ObsMode::Flat | ObsMode::Objects => false,
+        }
+    }
+
     /// Its name, as `obs_mode` takes it.
     pub fn name(self) -> &'static str {
         match self {

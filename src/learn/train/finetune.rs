@@ -16,7 +16,7 @@ use super::{ConfigError, Context, Result, TrainConfig};
 use crate::benchmark::demos::{Demos, DemosError};
 use crate::benchmark::provenance::PolicyId;
 use crate::benchmark::saved::SavedPolicy;
-use crate::env::{ObsMode, ObsSpec};
+use crate::env::ObsSpec;
 use crate::policy::actor::{AnyPolicy, DeterministicPolicy};
 use crate::task::Task;
 use serde::{Deserialize, Serialize};
@@ -163,7 +163,7 @@ impl FinetuneConfig {
                 self.demos_ratio
             )));
         }
-        if self.demos.is_some() && run.net.obs_mode() != crate::env::ObsMode::Entities {
+        if self.demos.is_some() && !run.net.obs_mode().is_entities() {
             return Err(ConfigError(format!(
                 "--demos hold the solver's `entities` observation, and this run's network, {}, reads `{}`; \
                  train with --net entity",
@@ -297,7 +297,7 @@ pub(crate) fn demo_episodes(
 ) -> Result<Vec<Episode>> {
     let d = &file.demos;
     let (r, f, rows) = (d.layout.robot.len(), d.layout.entity.len(), d.layout.rows);
-    if spec.mode != ObsMode::Entities || r != spec.robot_dim() || f != spec.object_dim() {
+    if !spec.mode.is_entities() || r != spec.robot_dim() || f != spec.object_dim() {
         refuse!(
             "--demos {}: its observations have {r} robot features and rows of {f}, and this run's have {} and {} \
              (the `{}` observation); record the demos with this build",

@@ -146,7 +146,7 @@ impl Episode {
         let Some(c) = &self.contacts else { return Vec::new() };
         let mut out = Vec::new();
         // The gripper's and table's colours are relabelled where the observation shows them.
-        let fixtures = spec.mode == crate::env::ObsMode::Entities;
+        let fixtures = spec.mode.is_entities();
         for colours in hindsight::alternatives(&c.colours, &c.steps, k, strategy, fixtures) {
             let Ok(replayed) = hindsight::replay(&colours, &c.steps, max_steps) else { continue };
             let n = replayed.len();

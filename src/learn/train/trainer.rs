@@ -499,6 +499,74 @@ pub(crate) fn saved_policy(
     }
 }
 
+/// Declares [`RowSums`]: its fields, in the order ranks send them.
+macro_rules! row_sums {
+    ($($(#[$doc:meta])* $field:ident),* $(,)?) => {
+        /// What an epoch's row sums over ranks before dividing: counts, and each mean's sum with the
+        /// count it divides by. Ranks exchange them as one vector in field order (then each task's
+        /// test successes and episodes).
+        #[derive(Debug, Clone, Copy, Default)]
+        struct RowSums {
+            $($(#[$doc])* $field: f64,)*
+        }
+
+        impl RowSums {
+            /// How many numbers it sends.
+            const LEN: usize = [$(stringify!($field)),*].len();
+
+            /// Its numbers in field order.
+            fn to_vec(self) -> Vec<f64> {
+                vec![$(self.$field),*]
+            }
+
+            /// The sums whose field number `i` (in field order) is `value(i)`.
+            fn from_fn(value: impl Fn(usize) -> f64) -> Self {
+                let mut i = 0;
+                let mut next = || {
+                    i += 1;
+                    value(i - 1)
+                };
+                Self { $($field: next()),* }
+            }
+        }
+    };
+}
+
+row_sums! {
+    /// Exploration episodes.
+    episodes,
+    /// Exploration episodes that succeeded.
+    wins,
+    /// Exploration steps.
+    steps,
+    /// Exploration steps the expert played (AggreVaTeD, DAgger).
+    expert_steps,
+    /// Test episodes that succeeded.
+    test_wins,
+    /// Test episodes.
+    tests,
+    /// Finals episodes that succeeded.
+    finals_wins,
+    /// Finals episodes.
+    finals,
+    /// Sum of the updates' mean Q.
+    q,
+    /// Updates with a mean Q.
+    q_n,
+    /// Sum of the updates' critic losses.
+    critic_loss,
+    /// Updates with a critic loss.
+    critic_loss_n,
+    /// Sum of the updates' actor losses.
+    actor_loss,
+    /// Updates with an actor loss.
+    actor_loss_n,
+    /// Relabelled episodes (hindsight colours).
+    relabelled,
+    /// Relabelled episodes that succeed.
+    relabelled_wins,
+}
+
 /// Everything a run holds between epochs.
 struct Trainer<'a> {
     comm: &'a Comm,
@@ -1060,54 +1128,50 @@ impl<'a> Trainer<'a> {
             (v.iter().sum::<f64>(), v.len() as f64)
         };
         let (q, cl, al) = (sum_of(|s| s.mean_q), sum_of(|s| s.critic_loss), sum_of(|s| s.actor_loss));
-        let mut local = vec![
-            tally.episodes as f64,
-            tally.wins as f64,
-            tally.steps as f64,
-            tally.expert_steps as f64,
-            wins(test),
-            test.len() as f64,
-            wins(finals),
-            finals.len() as f64,
-            q.0,
-            q.1,
-            cl.0,
-            cl.1,
-            al.0,
-            al.1,
-            tally.relabelled as f64,
-            tally.relabelled_wins as f64,
-        ];
-        // Each task's test (successes, episodes).
-        const TASKS_AT: usize = 16;
+        let local = RowSums {
+            episodes: tally.episodes as f64,
+            wins: tally.wins as f64,
+            steps: tally.steps as f64,
+            expert_steps: tally.expert_steps as f64,
+            test_wins: wins(test),
+            tests: test.len() as f64,
+            finals_wins: wins(finals),
+            finals: finals.len() as f64,
+            q: q.0,
+            q_n: q.1,
+            critic_loss: cl.0,
+            critic_loss_n: cl.1,
+            actor_loss: al.0,
+            actor_loss_n: al.1,
+            relabelled: tally.relabelled as f64,
+            relabelled_wins: tally.relabelled_wins as f64,
+        };
+        // Then each task's test (successes, episodes).
+        let mut sent = local.to_vec();
         for t in 0..self.tasks.len() {
             let of_t = || test.iter().zip(test_tasks).filter(move |(_, &k)| k == t).map(|(e, _)| e);
-            local.extend([of_t().filter(|e| e.success).count() as f64, of_t().count() as f64]);
+            sent.extend([of_t().filter(|e| e.success).count() as f64, of_t().count() as f64]);
         }
-        let per_rank = self.comm.gather_f64(&local);
-        let total = |i: usize| -> f64 {
-            if per_rank.len() == 1 {
-                per_rank[0][i]
-            } else {
-                per_rank.iter().map(|r| r[i]).sum()
-            }
-        };
-        let ratio = |a: usize, b: usize| if total(b) == 0.0 { 0.0 } else { total(a) / total(b) };
-        self.state.env_steps += total(2) as u64;
+        let per_rank = self.comm.gather_f64(&sent);
+        // Summed over ranks in rank order.
+        let total = |i: usize| -> f64 { per_rank.iter().map(|r| r[i]).fold(0.0, |a, x| a + x) };
+        let all = RowSums::from_fn(total);
+        let ratio = |a: f64, b: f64| if b == 0.0 { 0.0 } else { a / b };
+        self.state.env_steps += all.steps as u64;
         let epoch_wall = started.elapsed().as_secs_f64();
         self.state.wall_seconds += epoch_wall;
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-        let tested =
-            (0..self.tasks.len()).map(|t| [total(TASKS_AT + 2 * t) as u64, total(TASKS_AT + 2 * t + 1) as u64]);
+        let at = RowSums::LEN;
+        let tested = (0..self.tasks.len()).map(|t| [total(at + 2 * t) as u64, total(at + 2 * t + 1) as u64]);
         let row = EpochRow {
             epoch,
             level: self.state.level,
-            train_success: ratio(1, 0),
-            test_success: ratio(4, 5),
-            finals_success: ratio(6, 7),
-            mean_q: ratio(8, 9),
-            critic_loss: ratio(10, 11),
-            actor_loss: ratio(12, 13),
+            train_success: ratio(all.wins, all.episodes),
+            test_success: ratio(all.test_wins, all.tests),
+            finals_success: ratio(all.finals_wins, all.finals),
+            mean_q: ratio(all.q, all.q_n),
+            critic_loss: ratio(all.critic_loss, all.critic_loss_n),
+            actor_loss: ratio(all.actor_loss, all.actor_loss_n),
             env_steps: self.state.env_steps,
             updates: self.state.updates,
             wall_seconds: self.state.wall_seconds,
@@ -1118,9 +1182,9 @@ impl<'a> Trainer<'a> {
             eval_seconds,
             persist_seconds: self.persist_seconds,
             beta: self.learner.beta(epoch, &self.config).unwrap_or(0.0),
-            expert_share: ratio(3, 2),
-            relabelled: total(14) / total(0).max(1.0),
-            relabelled_success: ratio(15, 14),
+            expert_share: ratio(all.expert_steps, all.steps),
+            relabelled: all.relabelled / all.episodes.max(1.0),
+            relabelled_success: ratio(all.relabelled_wins, all.relabelled),
             cpu_utilisation: (cpu_seconds() - cpu_started) / (epoch_wall * cores).max(1e-9),
         };
         (row, tested.collect())
