@@ -965,20 +965,16 @@ fn rewrite<T>(
     meta.meta_sha256 = Some(meta.seal());
     let json = serde_json::to_vec_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
-    let write = |bytes: &[u8]| {
-        crate::support::io::write_file(&json_path, bytes)
-            .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: crate::support::error::chain(&e) })
-    };
-    let before = std::fs::read(&json_path).map_err(io(&json_path))?;
-    write(&json)?;
-    // What is written must load as every reader loads it; else the entry is put back as it was.
-    if let Err(e) = load(&json_path) {
-        write(&before)?;
-        return Err(ZooError::Corrupt {
-            path: json_path.clone(),
-            reason: format!("the rewritten entry would not load ({e}); it is left as it was"),
-        });
-    }
+    // What is written must load as every reader loads it: checked on the bytes before they are
+    // written, so that the entry on disk is the old one or the new one, never one that does not load.
+    let text =
+        String::from_utf8(json).map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
+    parse_meta(json_path.clone(), &text).and_then(|m| check_entry(&json_path, &m)).map_err(|e| ZooError::Corrupt {
+        path: json_path.clone(),
+        reason: format!("the rewritten entry would not load ({e}); it is left as it was"),
+    })?;
+    crate::support::io::write_file(&json_path, text.as_bytes())
+        .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: crate::support::error::chain(&e) })?;
     Ok(out)
 }
 
@@ -990,7 +986,12 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
     let json_path = path.with_extension("json");
     let text = crate::support::io::read_text(&json_path, "zoo entry", crate::support::limits::RESULT_FILE_BYTES)
         .map_err(io(&json_path))?;
-    let meta: ZooMeta = serde_json::from_str(&text)
+    parse_meta(json_path, &text)
+}
+
+/// An entry's metadata from the text of its JSON file `json_path`, as [`read_meta`] reads it.
+fn parse_meta(json_path: PathBuf, text: &str) -> Result<ZooMeta, ZooError> {
+    let meta: ZooMeta = serde_json::from_str(text)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: format!("bad metadata: {e}") })?;
     if !READS.contains(&meta.format.as_str()) {
         return Err(ZooError::Corrupt {
@@ -1024,6 +1025,35 @@ pub fn read_meta(path: &Path) -> Result<ZooMeta, ZooError> {
 /// [`ZooError::Corrupt`] naming what does not fit.
 pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
     let meta = read_meta(path)?;
+    let saved = check_entry(path, &meta)?;
+    Ok((meta, saved))
+}
+
+/// Every check [`load`] makes of an entry whose metadata is `meta` (its JSON file beside `path`'s
+/// tensor file), in order: its records (tasks, stream), its networks against the tensors, what
+/// format 7 records of them, the policy as a whole and its probes, the seal, the evaluations. The
+/// policy it loads is returned.
+///
+/// # Errors
+/// [`ZooError::Corrupt`] naming what does not fit.
+fn check_entry(path: &Path, meta: &ZooMeta) -> Result<SavedPolicy, ZooError> {
+    check_records(path, meta)?;
+    let (policy, critic) = read_networks(path, meta)?;
+    if meta.version() >= 7 {
+        check_recorded_kind(path, meta, &policy)?;
+    }
+    let saved = saved_of(meta, policy, critic);
+    let corrupt = |reason: String| ZooError::Corrupt { path: path.with_extension("safetensors"), reason };
+    saved.check().map_err(corrupt)?;
+    check_probes(path, meta, &saved)?;
+    check_seal(path, meta)?;
+    check_evaluations(path, meta, &saved)?;
+    Ok(saved.with_record())
+}
+
+/// A multi-task entry's label and records, and every task it records, compile; a stream draws as
+/// recorded, its first task the entry's.
+fn check_records(path: &Path, meta: &ZooMeta) -> Result<(), ZooError> {
     let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
     if let Some(m) = &meta.multi_task {
         let plain = |c: char| c.is_ascii_alphanumeric() || "-_+.".contains(c);
@@ -1054,6 +1084,13 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )));
         }
     }
+    Ok(())
+}
+
+/// The actor (and critic, where kept) from the tensor file beside `path`, checked against the
+/// metadata's layout and checksum.
+fn read_networks(path: &Path, meta: &ZooMeta) -> Result<(AnyPolicy, Option<PlainNet>), ZooError> {
+    let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
     let tensors_path = path.with_extension("safetensors");
     let bytes =
         crate::support::io::read_bytes(&tensors_path, "zoo tensor file", crate::support::limits::POLICY_FILE_BYTES)
@@ -1150,50 +1187,61 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )));
         }
     };
-    if meta.version() >= 7 {
-        if !crate::benchmark::saved::TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
-            return Err(bad_meta(format!(
-                "algo {:?} is none of {} or {UNRECORDED}; restore the entry",
-                meta.algo,
-                crate::benchmark::saved::TRAINERS.join(", ")
-            )));
+    Ok((policy, critic))
+}
+
+/// Format 7's records of the policy: the algorithm that trained it, its kind, the colour feature,
+/// the observation its network reads and its fixtures.
+fn check_recorded_kind(path: &Path, meta: &ZooMeta, policy: &AnyPolicy) -> Result<(), ZooError> {
+    let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    if !crate::benchmark::saved::TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
+        return Err(bad_meta(format!(
+            "algo {:?} is none of {} or {UNRECORDED}; restore the entry",
+            meta.algo,
+            crate::benchmark::saved::TRAINERS.join(", ")
+        )));
+    }
+    if meta.algo != UNRECORDED && Some(crate::benchmark::saved::kind_trained_by(&meta.algo)) != meta.kind() {
+        return Err(bad_meta(format!(
+            "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
+             deterministic one; restore the entry",
+            meta.algo,
+            meta.kind().unwrap_or_default()
+        )));
+    }
+    if meta.colour_feature != Some(crate::env::COLOUR_FEATURE) {
+        return Err(bad_meta(format!(
+            "colour_feature records {:?}, but this build's observation rows have their colour at feature {}; \
+             restore the entry",
+            meta.colour_feature,
+            crate::env::COLOUR_FEATURE
+        )));
+    }
+    // The recorded observation is one its network reads, with this build's fixtures.
+    match meta.obs_mode {
+        Some(m) if policy.reads(m) => {
+            crate::benchmark::saved::check_fixtures(meta.fixtures.as_deref(), m).map_err(bad_meta)?;
         }
-        if meta.algo != UNRECORDED && Some(crate::benchmark::saved::kind_trained_by(&meta.algo)) != meta.kind() {
+        recorded => {
+            let reads = policy.legacy_obs_mode().map_or_else(|_| "another".to_owned(), |r| format!("the `{r}`"));
             return Err(bad_meta(format!(
-                "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
-                 deterministic one; restore the entry",
-                meta.algo,
-                meta.kind().unwrap_or_default()
+                "obs_mode records {}, but its network reads {reads} observation; restore the entry",
+                recorded.map_or_else(|| "nothing".to_owned(), |m| format!("`{m}`"))
             )));
-        }
-        if meta.colour_feature != Some(crate::env::COLOUR_FEATURE) {
-            return Err(bad_meta(format!(
-                "colour_feature records {:?}, but this build's observation rows have their colour at feature {}; \
-                 restore the entry",
-                meta.colour_feature,
-                crate::env::COLOUR_FEATURE
-            )));
-        }
-        // The recorded observation is one its network reads, with this build's fixtures.
-        match meta.obs_mode {
-            Some(m) if policy.reads(m) => {
-                crate::benchmark::saved::check_fixtures(meta.fixtures.as_deref(), m).map_err(bad_meta)?;
-            }
-            recorded => {
-                let reads = policy.legacy_obs_mode().map_or_else(|_| "another".to_owned(), |r| format!("the `{r}`"));
-                return Err(bad_meta(format!(
-                    "obs_mode records {}, but its network reads {reads} observation; restore the entry",
-                    recorded.map_or_else(|| "nothing".to_owned(), |m| format!("`{m}`"))
-                )));
-            }
         }
     }
+    Ok(())
+}
+
+/// The policy an entry holds, as its run saved it: a multi-task policy with no one task, its label
+/// and its tasks.
+fn saved_of(meta: &ZooMeta, policy: AnyPolicy, critic: Option<PlainNet>) -> SavedPolicy {
     // A multi-task policy loads as its run saved it: no one task, its label and its tasks.
     let (env_id, task, tasks) = match &meta.multi_task {
         None => (meta.task.id.clone(), Some(meta.task.clone()), Vec::new()),
         Some(m) => (m.label.clone(), None, m.tasks.clone()),
     };
-    let saved = SavedPolicy {
+    SavedPolicy {
         env_id,
         task,
         tasks,
@@ -1208,8 +1256,12 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         critic,
         blend: meta.blend.clone(),
         started_from: meta.started_from.clone(),
-    };
-    saved.check().map_err(&corrupt)?;
+    }
+}
+
+/// The policy acts as the exported one did on every probe.
+fn check_probes(path: &Path, meta: &ZooMeta, saved: &SavedPolicy) -> Result<(), ZooError> {
+    let corrupt = |reason: String| ZooError::Corrupt { path: path.with_extension("safetensors"), reason };
     for (k, p) in meta.probes.iter().enumerate() {
         if p.obs.len() != saved.policy.obs_dim() || saved.policy.act(&p.obs) != p.action {
             return Err(corrupt(format!(
@@ -1218,9 +1270,15 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             )));
         }
     }
+    Ok(())
+}
+
+/// The metadata as a whole is what was exported (format 6 on; older formats were written before it
+/// was sealed): an edit that the other checks cannot name (a dropped multi_task, a description, an
+/// epoch) is refused here.
+fn check_seal(path: &Path, meta: &ZooMeta) -> Result<(), ZooError> {
+    let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
     let sealed = meta.version() >= 6;
-    // Last, the metadata as a whole (format 6 on; older formats were written before it was sealed): an edit
-    // that the checks above cannot name (a dropped multi_task, a description, an epoch) is refused here.
     match &meta.meta_sha256 {
         Some(h) if !crate::support::limits::is_sha256(h) => {
             return Err(bad_meta(format!(
@@ -1245,9 +1303,16 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
         }
         _ => {}
     }
-    // Every evaluation that names its policy names this one (in sealed entries: older ones were written
-    // by builds whose policy ids this one need not reproduce). After the seal: an edited field changes
-    // the policy's id too, and the seal names that edit for what it is.
+    Ok(())
+}
+
+/// Every evaluation that names its policy names this one (in sealed entries: older ones were
+/// written by builds whose policy ids this one need not reproduce), and each holds together.
+fn check_evaluations(path: &Path, meta: &ZooMeta, saved: &SavedPolicy) -> Result<(), ZooError> {
+    let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    let sealed = meta.version() >= 6;
+    // Checked after the seal: an edited field changes the policy's id too, and the seal names that edit
+    // for what it is.
     let policy_sha = saved.policy_id(&meta.name).sha256;
     let foreign = meta.evaluations.iter().enumerate().filter(|_| sealed);
     if let Some((k, e)) = foreign.into_iter().find(|(_, e)| e.names_another_policy(policy_sha.as_deref())) {
@@ -1269,5 +1334,38 @@ pub fn load(path: &Path) -> Result<(ZooMeta, SavedPolicy), ZooError> {
             ))
         })?;
     }
-    Ok((meta, saved.with_record()))
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A rewrite whose result would not load leaves the entry's file as it was, byte for byte: it is
+    /// checked before anything is written.
+    #[test]
+    fn a_rewrite_that_would_not_load_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        for ext in ["json", "safetensors"] {
+            std::fs::copy(super::dir().join(format!("BlocksTouch-v0-ddpg.{ext}")), dir.path().join(format!("e.{ext}")))
+                .unwrap();
+        }
+        let json = dir.path().join("e.json");
+        let before = std::fs::read(&json).unwrap();
+        let e = rewrite(&json, |meta, _| {
+            meta.norm_clip = -1.0;
+            Ok(())
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("would not load") && e.contains("norm_clip"), "{e}");
+        assert_eq!(std::fs::read(&json).unwrap(), before);
+        // A rewrite that loads is written.
+        rewrite(&json, |meta, _| {
+            meta.description = "rewritten".into();
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(load(&json).unwrap().0.description, "rewritten");
+    }
 }

@@ -383,7 +383,7 @@ fn network(net: &crate::learn::agents::arch::NetConfig) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::env::{BlockEnv, EnvConfig};
+    use crate::env::{BlockEnv, EnvConfig, ObsMode};
 
     /// A demonstration's observations, put in a run's layout, are what the run's own environment
     /// shows at the same task and seed: in the task's own layout, and in a wider one (a multi-task
