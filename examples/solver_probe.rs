@@ -206,7 +206,8 @@ fn main() -> Result<()> {
     header.extend(students.iter().map(|s| s.spec.name.clone()));
     println!("| family | {} |", header.join(" | "));
     println!("|---|{}", "---:|".repeat(header.len()));
-    let policies: Vec<Box<dyn Fn(usize) -> Box<dyn Policy> + Sync>> = students.iter().map(Student::frozen).collect();
+    type Frozen = Box<dyn Fn(usize) -> Box<dyn Policy> + Sync>;
+    let policies: Vec<Frozen> = students.iter().map(Student::frozen).collect();
     let mut per_family: Vec<Vec<(Outcomes, Vec<usize>)>> = Vec::new();
     for (name, _) in &families {
         let of: Vec<&Task> = tasks.iter().filter(|(f, _)| f == name).map(|(_, t)| t).collect();

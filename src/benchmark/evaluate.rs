@@ -170,8 +170,9 @@ impl Subject<'_> {
     }
 }
 
-/// What acts in the episodes of one evaluation.
+/// What acts in the episodes of one evaluation (one per evaluation: its size does not matter).
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
 enum Actor {
     Trained(Trained),
     Scripted(ScriptedPolicy),

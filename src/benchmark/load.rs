@@ -43,8 +43,9 @@ pub enum LoadError {
     },
 }
 
-/// What a policy name stands for.
+/// What a policy name stands for (resolved once per name: its size does not matter).
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
 pub enum Named {
     /// Uniform random actions (seeded by the command that plays them).
     Random,

@@ -291,10 +291,11 @@ pub enum StreamError {
     Repeated(String),
     /// The range overlaps a built-in suite's held-out seeds.
     #[error(
-        "--generator-seeds {range}: the suite {suite} holds out the {family} family's seeds {held} (its {split} \
-         split); choose seeds outside them, e.g. {suggest}"
+        "--generator-seeds {}: the suite {} holds out the {} family's seeds {} (its {} split); choose seeds outside \
+         them, e.g. {}",
+        .0.range, .0.suite, .0.family, .0.held, .0.split, .0.suggest
     )]
-    HeldOut { range: SeedRange, suite: String, split: String, family: String, held: SeedRange, suggest: String },
+    HeldOut(Box<SeedsHeldOut>),
     /// Every seed of every family failed.
     #[error(
         "no task in the stream: every candidate of the {seeds} seeds was rejected ({reasons}); loosen the families' \
@@ -309,6 +310,24 @@ pub enum StreamError {
 /// The most blocks `family` can draw: the sum of its groups' largest counts.
 pub fn max_blocks(family: &Family) -> usize {
     family.spec.blocks.iter().map(|g| g.get_ref().count[1]).sum()
+}
+
+/// What [`StreamError::HeldOut`] names: the range asked for, the suite and split that hold out some
+/// of its seeds, the family, those seeds, and a range to use instead.
+#[derive(Debug)]
+pub struct SeedsHeldOut {
+    /// The range asked for.
+    pub range: SeedRange,
+    /// The suite that holds seeds of it out.
+    pub suite: String,
+    /// Its split.
+    pub split: String,
+    /// The family.
+    pub family: String,
+    /// The seeds held out.
+    pub held: SeedRange,
+    /// A range of as many seeds outside them.
+    pub suggest: String,
 }
 
 /// Loads the families of a comma-separated list (shipped names or files).
@@ -355,14 +374,14 @@ pub fn check_held_out(families: &[(String, Family)], range: SeedRange) -> Result
                 } else {
                     SeedRange([above, above.saturating_add(range.len())]).to_string()
                 };
-                return Err(StreamError::HeldOut {
+                return Err(StreamError::HeldOut(Box::new(SeedsHeldOut {
                     range,
                     suite: h.suite.clone(),
                     split: h.split.clone(),
                     family: family.spec.family.clone(),
                     held: SeedRange([a, b]),
                     suggest,
-                });
+                })));
             }
         }
     }
@@ -384,7 +403,6 @@ pub fn pool(
     cache: Option<&Path>,
     progress: bool,
 ) -> Result<Pool, StreamError> {
-    use rayon::prelude::*;
     check_held_out(families, range)?;
     // Each held-out task by content, with the suite, split and row id that hold it out.
     let held_out: BTreeMap<String, String> = crate::benchmark::suite::held_out_tasks()
@@ -426,35 +444,7 @@ pub fn pool(
         let checked_before = checked;
         let mut cache_file = Cache::read(cache, family, &engine);
         let seeds: Vec<u64> = (range.0[0]..range.0[1]).collect();
-        // Cached seeds are drawn again (cheap) and kept where the hash still matches.
-        let results: Vec<(u64, Option<(usize, Task)>, Option<SeedResult>)> = threadpool.install(|| {
-            seeds
-                .par_iter()
-                .map(|&seed| {
-                    let from_cache = cache_file.entry(seed).and_then(|kept| match kept {
-                        None => Some(None),
-                        Some(p) => family
-                            .draw(seed, p.candidate)
-                            .ok()
-                            .filter(|d| d.task.source.hash == p.hash)
-                            .map(|d| Some((p.candidate, d.task))),
-                    });
-                    let out = match from_cache {
-                        Some(hit) => (seed, hit, None),
-                        None => {
-                            let r = generate_seed(family, seed);
-                            let kept = r
-                                .task
-                                .as_ref()
-                                .and_then(|g| Task::from_toml(&g.toml, None).ok().map(|t| (g.candidate, t)));
-                            (seed, kept, Some(r))
-                        }
-                    };
-                    bar.inc(1);
-                    out
-                })
-                .collect()
-        });
+        let results = threadpool.install(|| seed_outcomes(family, &seeds, &cache_file, &bar));
         let mut changed = false;
         for (seed, kept, worked) in results {
             match &worked {
@@ -519,22 +509,72 @@ pub fn pool(
     }
     bar.finish_and_clear();
     if tasks.is_empty() {
-        let reasons = if record.seeds_held_out > 0 {
-            format!(
-                "{} of them draw a task a built-in suite holds out (by content, whatever the family is called; \
-                 first: {}); give generator seeds that no suite holds out",
-                record.seeds_held_out,
-                first_held_out.as_deref().unwrap_or_default()
-            )
-        } else if rejected.is_empty() {
-            "the cache records no task for any of them".to_owned()
-        } else {
-            let example = |why: &String| examples.get(why).map_or(String::new(), |e| format!(", first: {e}"));
-            rejected.iter().map(|(why, n)| format!("{n} {why}{}", example(why))).collect::<Vec<_>>().join("; ")
-        };
+        let reasons = empty_reasons(&record, first_held_out.as_deref(), &rejected, &examples);
         return Err(StreamError::Empty { seeds: total, reasons });
     }
     Ok(Pool { tasks, record, cached, checked })
+}
+
+/// What a pool's seed gave: the seed, the task it keeps (its candidate), and the solver's work where
+/// the seed was worked out rather than taken from the cache.
+type SeedOutcome = (u64, Option<(usize, Task)>, Option<SeedResult>);
+
+/// Each seed of `family`: from the cache where it holds the seed (drawn again, cheap, and kept where
+/// the hash still matches), else worked out by the solver; in parallel on the calling thread pool.
+fn seed_outcomes(
+    family: &Family,
+    seeds: &[u64],
+    cache_file: &Cache,
+    bar: &crate::support::progress::Progress,
+) -> Vec<SeedOutcome> {
+    use rayon::prelude::*;
+    seeds
+        .par_iter()
+        .map(|&seed| {
+            let from_cache = cache_file.entry(seed).and_then(|kept| match kept {
+                None => Some(None),
+                Some(p) => family
+                    .draw(seed, p.candidate)
+                    .ok()
+                    .filter(|d| d.task.source.hash == p.hash)
+                    .map(|d| Some((p.candidate, d.task))),
+            });
+            let out = match from_cache {
+                Some(hit) => (seed, hit, None),
+                None => {
+                    let r = generate_seed(family, seed);
+                    let kept =
+                        r.task.as_ref().and_then(|g| Task::from_toml(&g.toml, None).ok().map(|t| (g.candidate, t)));
+                    (seed, kept, Some(r))
+                }
+            };
+            bar.inc(1);
+            out
+        })
+        .collect()
+}
+
+/// Why a stream has no task: its seeds draw held-out tasks, the cache records none, or the solver
+/// rejected every candidate (each reason counted, with its first example).
+fn empty_reasons(
+    record: &StreamRecord,
+    first_held_out: Option<&str>,
+    rejected: &BTreeMap<String, usize>,
+    examples: &BTreeMap<String, String>,
+) -> String {
+    if record.seeds_held_out > 0 {
+        format!(
+            "{} of them draw a task a built-in suite holds out (by content, whatever the family is called; \
+             first: {}); give generator seeds that no suite holds out",
+            record.seeds_held_out,
+            first_held_out.unwrap_or_default()
+        )
+    } else if rejected.is_empty() {
+        "the cache records no task for any of them".to_owned()
+    } else {
+        let example = |why: &String| examples.get(why).map_or(String::new(), |e| format!(", first: {e}"));
+        rejected.iter().map(|(why, n)| format!("{n} {why}{}", example(why))).collect::<Vec<_>>().join("; ")
+    }
 }
 
 /// The pool indices that have environments in `epoch` of a run of `seed`: `k` tasks a time, taken in

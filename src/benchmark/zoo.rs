@@ -1326,7 +1326,7 @@ fn check_evaluations(path: &Path, meta: &ZooMeta, saved: &SavedPolicy) -> Result
         )));
     }
     for (k, e) in meta.evaluations.iter().enumerate() {
-        e.check(&meta).map_err(|why| {
+        e.check(meta).map_err(|why| {
             bad_meta(format!(
                 "evaluations[{k}] ({} {}): {why}; restore the entry, or play its evaluations again with `zoo \
                  evaluate`",

@@ -115,187 +115,198 @@ pub(super) struct ZooExportArgs {
 pub(super) fn run(c: ZooCommand) -> Result<()> {
     let folder = |z: Option<PathBuf>| z.unwrap_or_else(crate::benchmark::zoo::dir);
     match c {
-        ZooCommand::List { zoo } => {
-            let zoo = folder(zoo);
-            crate::benchmark::zoo::existing(&zoo)?;
-            let names = crate::benchmark::zoo::names(&zoo);
-            if names.is_empty() {
-                println!("the zoo in {} has no entries", zoo.display());
-            }
-            for name in names {
-                let meta = crate::benchmark::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
-                let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
-                println!(
-                    "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
-                    meta.trained_on(),
-                    meta.trained_by().unwrap_or("(algorithm unrecorded)"),
-                    meta.epoch
-                );
-                println!("    {}", meta.description);
-                // Numbers of different engines differ: this build's engine's only, the others counted.
-                let engine = crate::sim::mj::version();
-                let others: std::collections::BTreeSet<String> = meta
-                    .evaluations
-                    .iter()
-                    .filter(|e| e.mujoco() != Some(engine.as_str()))
-                    .map(|e| {
-                        e.mujoco().map_or_else(|| "ones that name no engine".to_owned(), |m| format!("MuJoCo {m}"))
-                    })
-                    .collect();
-                if !others.is_empty() {
-                    println!(
-                        "    (evaluations on MuJoCo {engine} below; {name}.json also has {})",
-                        others.into_iter().collect::<Vec<_>>().join(", ")
-                    );
-                }
-                for e in meta.evaluations.iter().filter(|e| e.mujoco() == Some(engine.as_str())) {
-                    println!(
-                        "    {} {}{}: {:.3} ({:.3}-{:.3}), {} episodes from seed {}",
-                        e.env,
-                        e.distribution,
-                        if e.grey_blind { ", grey removed" } else { "" },
-                        e.success_rate,
-                        e.ci95.0,
-                        e.ci95.1,
-                        e.episodes,
-                        e.seed
-                    );
-                    if let Some(o) = &e.outcomes {
-                        println!("        the others: {}", o.summary());
-                    }
-                }
-            }
-            Ok(())
-        }
-        ZooCommand::Check { names, zoo } => {
-            let zoo = folder(zoo);
-            crate::benchmark::zoo::existing(&zoo)?;
-            let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
-            if names.is_empty() {
-                bail!("no zoo entries in {}", zoo.display());
-            }
-            for name in &names {
-                let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find_named(&zoo, name, "check")?)?;
-                println!(
-                    "{name}: ok ({} {}, epoch {})",
-                    meta.trained_on(),
-                    meta.trained_by().unwrap_or("(algorithm unrecorded)"),
-                    meta.epoch
-                );
-            }
-            Ok(())
-        }
+        ZooCommand::List { zoo } => list(&folder(zoo)),
+        ZooCommand::Check { names, zoo } => check(&folder(zoo), names),
         ZooCommand::Upgrade { names, zoo, algo, started_from } => {
-            let zoo = folder(zoo);
-            crate::benchmark::zoo::existing(&zoo)?;
-            if started_from.is_some() && names.is_empty() {
-                bail!("--started-from records one start: name the entries fine-tuned from it");
-            }
-            let start = match &started_from {
-                Some(p) => {
-                    let saved = crate::benchmark::load::load_policy(p)
-                        .with_context(|| format!("--started-from {}", p.display()))?;
-                    let id = saved.policy_id(&p.display().to_string());
-                    Some((saved, id))
-                }
-                None => None,
-            };
-            let names = if names.is_empty() { crate::benchmark::zoo::names(&zoo) } else { names };
-            for name in &names {
-                let path = crate::benchmark::zoo::find_named(&zoo, name, "upgrade")?;
-                let before = crate::benchmark::zoo::read_meta(&path)?.format;
-                crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
-                if let Some(algo) = &algo {
-                    crate::benchmark::zoo::record_algo(&path, algo)?;
-                }
-                if let Some((saved, id)) = &start {
-                    crate::benchmark::zoo::record_started_from(&path, saved, id.clone())?;
-                }
-                let after = crate::benchmark::zoo::read_meta(&path)?;
-                println!("{name}: {before} -> {}, sealed, trained by {}", after.format, after.algo);
-            }
-            Ok(())
+            upgrade(&folder(zoo), names, algo.as_deref(), started_from.as_deref())
         }
         ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
-        ZooCommand::Describe { name, description, zoo } => {
-            let zoo = folder(zoo);
-            crate::benchmark::zoo::existing(&zoo)?;
-            let path = crate::benchmark::zoo::find_named(&zoo, &name, "describe")?;
-            crate::benchmark::zoo::describe(&path, &description)?;
-            println!("{name}: described, sealed");
-            Ok(())
-        }
+        ZooCommand::Describe { name, description, zoo } => describe(&folder(zoo), &name, &description),
         #[cfg(feature = "train")]
-        ZooCommand::Export(a) => {
-            if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
-                bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
+        ZooCommand::Export(a) => export(&folder(a.zoo.clone()), a),
+    }
+}
+
+/// `zoo list`: every entry, with its evaluations on this build's engine.
+fn list(zoo: &Path) -> Result<()> {
+    crate::benchmark::zoo::existing(zoo)?;
+    let names = crate::benchmark::zoo::names(zoo);
+    if names.is_empty() {
+        println!("the zoo in {} has no entries", zoo.display());
+    }
+    for name in names {
+        let meta = crate::benchmark::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
+        let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
+        println!(
+            "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
+            meta.trained_on(),
+            meta.trained_by().unwrap_or("(algorithm unrecorded)"),
+            meta.epoch
+        );
+        println!("    {}", meta.description);
+        // Numbers of different engines differ: this build's engine's only, the others counted.
+        let engine = crate::sim::mj::version();
+        let others: std::collections::BTreeSet<String> = meta
+            .evaluations
+            .iter()
+            .filter(|e| e.mujoco() != Some(engine.as_str()))
+            .map(|e| e.mujoco().map_or_else(|| "ones that name no engine".to_owned(), |m| format!("MuJoCo {m}")))
+            .collect();
+        if !others.is_empty() {
+            println!(
+                "    (evaluations on MuJoCo {engine} below; {name}.json also has {})",
+                others.into_iter().collect::<Vec<_>>().join(", ")
+            );
+        }
+        for e in meta.evaluations.iter().filter(|e| e.mujoco() == Some(engine.as_str())) {
+            println!(
+                "    {} {}{}: {:.3} ({:.3}-{:.3}), {} episodes from seed {}",
+                e.env,
+                e.distribution,
+                if e.grey_blind { ", grey removed" } else { "" },
+                e.success_rate,
+                e.ci95.0,
+                e.ci95.1,
+                e.episodes,
+                e.seed
+            );
+            if let Some(o) = &e.outcomes {
+                println!("        the others: {}", o.summary());
             }
-            let zoo = folder(a.zoo);
-            // Before the evaluations, which may take long.
-            crate::benchmark::zoo::entry_free(&zoo, &a.name, a.force)?;
-            if let Some(figure) = crate::benchmark::zoo::figure_in(&a.description) {
-                return Err(crate::benchmark::zoo::ZooError::FigureInDescription { figure }.into());
-            }
-            let saved = exported_policy(&a.from)?;
-            let mut evaluations = Vec::new();
-            for path in &a.evals {
-                evaluations.push(read_eval(path)?);
-            }
-            if a.evaluate > 0 && a.evaluate_envs.is_empty() && saved.is_multi_task() {
-                bail!(
-                    "{} was trained on several tasks ({}) and holds no one task to evaluate on: name them with \
-                     --evaluate-env ID (repeatable)",
-                    a.from.display(),
-                    saved.env_id
-                );
-            }
-            let envs: Vec<Option<&str>> = if a.evaluate_envs.is_empty() {
-                vec![None]
-            } else {
-                a.evaluate_envs.iter().map(|e| Some(e.as_str())).collect()
-            };
-            for env in envs.into_iter().filter(|_| a.evaluate > 0) {
-                let task = super::policy_task(env, &saved)?;
-                let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-                let has_challenge = task.distribution("challenge").is_some();
-                for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
-                    let spec = crate::benchmark::evaluate::EvalSpec {
-                        distribution: None,
-                        task: &task,
-                        challenge,
-                        level: None,
-                        episodes: a.evaluate,
-                        seed: crate::benchmark::evaluate::TEST_SEED,
-                        threads,
-                    };
-                    let provenance = crate::benchmark::provenance::Provenance::new(
-                        crate::benchmark::provenance::Harness::Cli,
-                        saved.policy_id(&a.name),
-                        None,
-                    );
-                    let e = crate::benchmark::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
-                    let r = crate::benchmark::zoo::ZooEvaluation::new(e, provenance);
-                    eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
-                    evaluations.push(r);
-                }
-            }
-            let info = crate::benchmark::zoo::ExportInfo {
-                name: a.name.clone(),
-                description: a.description,
-                trained_with: a.trained_with,
-                exported_from: a.from.display().to_string(),
-                env_steps: saved.env_steps.or_else(|| env_steps_of(&a.from, saved.epoch)),
-                evaluations,
-                keep_critic: a.critic,
-                overwrite: a.force,
-                algo: a.algo,
-            };
-            let out = crate::benchmark::zoo::export(&zoo, &saved, &info)?;
-            let size = std::fs::metadata(&out).map_or(0, |m| m.len());
-            println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
-            Ok(())
         }
     }
+    Ok(())
+}
+
+/// `zoo check`: each named entry (every one by default) loads with all its checks.
+fn check(zoo: &Path, names: Vec<String>) -> Result<()> {
+    crate::benchmark::zoo::existing(zoo)?;
+    let names = if names.is_empty() { crate::benchmark::zoo::names(zoo) } else { names };
+    if names.is_empty() {
+        bail!("no zoo entries in {}", zoo.display());
+    }
+    for name in &names {
+        let (meta, _) = crate::benchmark::zoo::load(&crate::benchmark::zoo::find_named(zoo, name, "check")?)?;
+        println!(
+            "{name}: ok ({} {}, epoch {})",
+            meta.trained_on(),
+            meta.trained_by().unwrap_or("(algorithm unrecorded)"),
+            meta.epoch
+        );
+    }
+    Ok(())
+}
+
+/// `zoo upgrade`: entries rewritten in this format and sealed, with the algorithm or the start given.
+fn upgrade(zoo: &Path, names: Vec<String>, algo: Option<&str>, started_from: Option<&Path>) -> Result<()> {
+    crate::benchmark::zoo::existing(zoo)?;
+    if started_from.is_some() && names.is_empty() {
+        bail!("--started-from records one start: name the entries fine-tuned from it");
+    }
+    let start = match started_from {
+        Some(p) => {
+            let saved =
+                crate::benchmark::load::load_policy(p).with_context(|| format!("--started-from {}", p.display()))?;
+            let id = saved.policy_id(&p.display().to_string());
+            Some((saved, id))
+        }
+        None => None,
+    };
+    let names = if names.is_empty() { crate::benchmark::zoo::names(zoo) } else { names };
+    for name in &names {
+        let path = crate::benchmark::zoo::find_named(zoo, name, "upgrade")?;
+        let before = crate::benchmark::zoo::read_meta(&path)?.format;
+        crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
+        if let Some(algo) = algo {
+            crate::benchmark::zoo::record_algo(&path, algo)?;
+        }
+        if let Some((saved, id)) = &start {
+            crate::benchmark::zoo::record_started_from(&path, saved, id.clone())?;
+        }
+        let after = crate::benchmark::zoo::read_meta(&path)?;
+        println!("{name}: {before} -> {}, sealed, trained by {}", after.format, after.algo);
+    }
+    Ok(())
+}
+
+/// `zoo describe`: an entry's description replaced, resealed.
+fn describe(zoo: &Path, name: &str, description: &str) -> Result<()> {
+    crate::benchmark::zoo::existing(zoo)?;
+    let path = crate::benchmark::zoo::find_named(zoo, name, "describe")?;
+    crate::benchmark::zoo::describe(&path, description)?;
+    println!("{name}: described, sealed");
+    Ok(())
+}
+
+#[cfg(feature = "train")]
+/// `zoo export`: a trained policy written as an entry, with its evaluations.
+fn export(zoo: &Path, a: ZooExportArgs) -> Result<()> {
+    if a.evaluate == 0 && !a.evaluate_envs.is_empty() {
+        bail!("--evaluate-env needs --evaluate N (the episodes per evaluation)");
+    }
+    // Before the evaluations, which may take long.
+    crate::benchmark::zoo::entry_free(zoo, &a.name, a.force)?;
+    if let Some(figure) = crate::benchmark::zoo::figure_in(&a.description) {
+        return Err(crate::benchmark::zoo::ZooError::FigureInDescription { figure }.into());
+    }
+    let saved = exported_policy(&a.from)?;
+    let mut evaluations = Vec::new();
+    for path in &a.evals {
+        evaluations.push(read_eval(path)?);
+    }
+    if a.evaluate > 0 && a.evaluate_envs.is_empty() && saved.is_multi_task() {
+        bail!(
+            "{} was trained on several tasks ({}) and holds no one task to evaluate on: name them with \
+             --evaluate-env ID (repeatable)",
+            a.from.display(),
+            saved.env_id
+        );
+    }
+    let envs: Vec<Option<&str>> = if a.evaluate_envs.is_empty() {
+        vec![None]
+    } else {
+        a.evaluate_envs.iter().map(|e| Some(e.as_str())).collect()
+    };
+    for env in envs.into_iter().filter(|_| a.evaluate > 0) {
+        let task = super::policy_task(env, &saved)?;
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let has_challenge = task.distribution("challenge").is_some();
+        for challenge in [false, true].into_iter().filter(|&c| !c || has_challenge) {
+            let spec = crate::benchmark::evaluate::EvalSpec {
+                distribution: None,
+                task: &task,
+                challenge,
+                level: None,
+                episodes: a.evaluate,
+                seed: crate::benchmark::evaluate::TEST_SEED,
+                threads,
+            };
+            let provenance = crate::benchmark::provenance::Provenance::new(
+                crate::benchmark::provenance::Harness::Cli,
+                saved.policy_id(&a.name),
+                None,
+            );
+            let e = crate::benchmark::evaluate::evaluate(&a.from, saved.clone(), &spec)?;
+            let r = crate::benchmark::zoo::ZooEvaluation::new(e, provenance);
+            eprintln!("{} {}: {:.3}", r.env, r.distribution, r.success_rate);
+            evaluations.push(r);
+        }
+    }
+    let info = crate::benchmark::zoo::ExportInfo {
+        name: a.name.clone(),
+        description: a.description,
+        trained_with: a.trained_with,
+        exported_from: a.from.display().to_string(),
+        env_steps: saved.env_steps.or_else(|| env_steps_of(&a.from, saved.epoch)),
+        evaluations,
+        keep_critic: a.critic,
+        overwrite: a.force,
+        algo: a.algo,
+    };
+    let out = crate::benchmark::zoo::export(zoo, &saved, &info)?;
+    let size = std::fs::metadata(&out).map_or(0, |m| m.len());
+    println!("wrote {} ({:.0} kB) and its .json", out.display(), size as f64 / 1e3);
+    Ok(())
 }
 
 #[cfg(feature = "train")]

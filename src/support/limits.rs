@@ -222,6 +222,14 @@ pub fn gigabytes(bytes: u64) -> String {
     format!("{:.1} GB", bytes as f64 / 1e9)
 }
 
+/// Whether `hash` has the form of a content hash as this project writes them: `sha256:` and 64
+/// lower-case hex digits. A record whose hash lacks it was damaged or hand-written, which a message
+/// says rather than calling the content edited.
+pub fn is_sha256(hash: &str) -> bool {
+    hash.strip_prefix("sha256:")
+        .is_some_and(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,12 +262,4 @@ mod tests {
             assert!(parse_fraction(bad).is_err(), "{bad}");
         }
     }
-}
-
-/// Whether `hash` has the form of a content hash as this project writes them: `sha256:` and 64
-/// lower-case hex digits. A record whose hash lacks it was damaged or hand-written, which a message
-/// says rather than calling the content edited.
-pub fn is_sha256(hash: &str) -> bool {
-    hash.strip_prefix("sha256:")
-        .is_some_and(|h| h.len() == 64 && h.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)))
 }

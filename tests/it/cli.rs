@@ -653,7 +653,7 @@ fn plot_scaling_draws_results_against_a_count_and_refuses_what_it_cannot_draw() 
     assert!(table.contains(&row) && table.contains("| reference |"), "{row} in {table}");
     std::fs::remove_file(&png).unwrap();
     for (bad, wanted) in [
-        (args(&[multi.clone()], &[]), "X:FILE"),
+        (args(std::slice::from_ref(&multi), &[]), "X:FILE"),
         (args(&[point("0", &multi)], &[]), "logarithmic"),
         (args(&[point("abc", &multi)], &[]), "not a number"),
         (args(&[point("4", &multi), point("8", &shipped("baseline-scripted.layout.json"))], &[]), "several suites"),

@@ -116,7 +116,8 @@ fn demos_are_the_solvers_episodes_padded_and_round_trip() {
     // Values no recording holds are refused by the reader, naming the tensor, the place and the rule
     // (Python's load_demos refuses the same: python/tests/test_datasets.py).
     let last0 = one.episodes[0].steps - 1;
-    let edits: [(&str, fn(&mut Demos, usize)); 7] = [
+    type Edit = fn(&mut Demos, usize);
+    let edits: [(&str, Edit); 7] = [
         ("tensor \"entities\" holds 1e30 at episode 0, observation 0", |d, _| d.tensors.entities[3] = 1e30),
         ("tensor \"robot\" holds NaN at episode 0, observation 0", |d, _| d.tensors.robot[1] = f32::NAN),
         (

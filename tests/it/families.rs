@@ -570,7 +570,7 @@ fn a_stream_pool_is_recorded_cached_and_refuses_held_out_seeds() {
     assert!(!other.record.same_families(&first.record));
     // procgen's test split holds out the push and gripper seeds 1000..1008.
     let e = check_held_out(&list, "995..1001".parse().unwrap()).unwrap_err();
-    assert!(matches!(&e, StreamError::HeldOut { suite, .. } if suite == "procgen"), "{e}");
+    assert!(matches!(&e, StreamError::HeldOut(h) if h.suite == "procgen"), "{e}");
     assert!(e.to_string().contains("1000..1008") && e.to_string().contains("995..1000"), "{e}");
     assert!(check_held_out(&list, "1008..1100".parse().unwrap()).is_ok());
     assert!(pool(&list, "1007..1009".parse().unwrap(), 1, None, false).is_err());

@@ -480,7 +480,8 @@ pub fn scaling(
         let mut xs: Vec<f64> = points.iter().map(|p| p.x).collect();
         xs.sort_by(f64::total_cmp);
         xs.dedup();
-        let series: [(&str, RGBColor, fn(&ScalingPoint) -> f64); 2] =
+        type Series<'a> = (&'a str, RGBColor, fn(&ScalingPoint) -> f64);
+        let series: [Series; 2] =
             [("train split", RGBColor(30, 90, 200), |p| p.train), ("test split", RGBColor(200, 40, 40), |p| p.test)];
         for (label, colour, of) in series {
             let means: Vec<(f64, f64)> = xs
