@@ -12,7 +12,7 @@ resume = $$(test -f $(1)/checkpoint.bin && echo --resume)
 
 # Set-up, build, test, the main job, a demo and the benchmark. Every other experiment is a recipe
 # file in experiments/ run with `blockpuzzle train --config FILE` (docs/training.md lists them).
-.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel test-fast demo test bench train build leaderboard
+.PHONY: setup setup-mujoco3 test-mujoco3 test-wheel test-fast lint demo test bench train build leaderboard
 
 setup:
 	bash scripts/setup.sh
@@ -31,9 +31,14 @@ demo: build
 test: setup
 	mkdir -p target && { bash scripts/python_venvs.sh > target/python-venvs.log 2>&1 & venvs=$$!; }; \
 	$(CARGO) test --all && { wait $$venvs && cat target/python-venvs.log || { cat target/python-venvs.log; exit 1; }; }
+	$(MAKE) lint
 	bash scripts/zoo_python_check.sh
 	$(MAKE) test-mujoco3
 	$(MAKE) test-wheel
+
+# Clippy on every target (library, binary, tests, examples) of the default build, warnings denied.
+lint: setup
+	$(CARGO) clippy --all-targets -- -D warnings
 
 # The fast tier for the inner loop: the library's unit tests and the integration tests of the core
 # (environments, tasks, rules, suites, the CLI, provenance), without the training runs, MPI and the

@@ -29,10 +29,20 @@ import os as _os
 import pathlib as _pathlib
 from typing import Any as _Any
 
-#: The MuJoCo the extension is built against and links (``libmujoco.so.3.11.0``).
-MUJOCO_PIN = "3.11.0"
-#: The gymnasium-robotics whose Fetch files the scenes read.
-GYMNASIUM_ROBOTICS_PIN = "1.4.2"
+def _pinned(requirement: str) -> str:
+    """The exact version the installed package requires of ``requirement`` (``mujoco==3.11.0``):
+    pyproject.toml's pins, read from the package's own metadata, so that they are written once."""
+    for line in _metadata.requires("blockpuzzle") or []:
+        name, _, version = line.partition("==")
+        if name.strip() == requirement and version:
+            return version.split(";")[0].strip()
+    raise ImportError(f"blockpuzzle's metadata pins no {requirement} version: reinstall the package")
+
+
+#: The MuJoCo the extension is built against and links (``libmujoco.so.3.11.0``; pyproject.toml's pin).
+MUJOCO_PIN = _pinned("mujoco")
+#: The gymnasium-robotics whose Fetch files the scenes read (pyproject.toml's pin).
+GYMNASIUM_ROBOTICS_PIN = _pinned("gymnasium-robotics")
 
 
 def _check_engine() -> None:

@@ -122,9 +122,10 @@ class _Progress:
               f"({time.monotonic() - self.start:.0f} s)", file=sys.stderr, flush=True)
 
 
-#: The outcomes in the order they are tested (src/episode/outcome.rs; docs/suites.md).
-OUTCOMES = ("success", "failure", "unstable", "no_contact", "off_table", "blue_met_grey", "timeout")
-_RED, _BLUE, _GREEN, _GREY = range(4)
+#: The outcomes in the order they are tested (src/episode/outcome.rs's ``Outcome::ALL``; docs/suites.md).
+OUTCOMES: tuple[str, ...] = tuple(_native.facts()["outcomes"])
+#: The colours in one-hot order (src/sim/rules.rs's ``Colour::ALL``): a colour's index is its place.
+COLOURS: tuple[str, ...] = tuple(_native.facts()["colours"])
 
 
 def _rows(obs, layout: dict) -> np.ndarray:
@@ -168,8 +169,7 @@ def _row(policy, row: dict, num_envs: int, threads: int | None, obs_mode: str) -
             envs = make_vec(path, num_envs=n, threads=threads, obs_mode=obs_mode)
     else:
         envs = make_vec(row["task"], num_envs=n, threads=threads, obs_mode=obs_mode)
-    names = {"red": _RED, "blue": _BLUE, "green": _GREEN, "grey": _GREY}
-    rule = [(name, names[c]) for name, c in envs.rule_objects]
+    rule = [(name, COLOURS.index(c)) for name, c in envs.rule_objects]
     surfaces = [rule[0][1], rule[1][1]] + ([rule[-1][1]] if rule[-1][0] == "floor" else [])
     # As the CLI: the row's level, else the task's last; the row's distribution if it names one.
     level = envs.max_level if row["level"] is None else row["level"]

@@ -29,11 +29,26 @@ import pathlib
 
 import numpy as np
 
-FORMATS = ("blockpuzzle-zoo/1", "blockpuzzle-zoo/2", "blockpuzzle-zoo/3", "blockpuzzle-zoo/4", "blockpuzzle-zoo/5",
-           "blockpuzzle-zoo/6", "blockpuzzle-zoo/7")
+
+def _facts() -> dict:
+    """The facts the Rust core defines (``_native.facts()``). Run on its own, without the extension,
+    this file takes the zoo format's documented values (zoo/README.md), which the package's tests
+    check against the core's (python/tests/test_facts.py)."""
+    try:
+        from blockpuzzle import _native
+        return _native.facts()
+    except ImportError:
+        # Standalone fallback: the format's documented values (checked equal to the core's in the tests).
+        return {"zoo_formats": tuple(f"blockpuzzle-zoo/{v}" for v in range(1, 8)), "colour_feature": 15,
+                "entity_features": 26}
+
+
+_FACTS = _facts()
+#: The formats this reader reads (the core's ``zoo::READS``).
+FORMATS: tuple[str, ...] = tuple(_FACTS["zoo_formats"])
 #: Where an object row's colour one-hot (red, blue, green, grey) begins in entries of formats 1-6,
 #: which do not record it (format 7 records ``colour_feature``, written by the Rust exporter).
-COLOUR_FEATURE = 15
+COLOUR_FEATURE: int = _FACTS["colour_feature"]
 #: The zoo the package carries.
 FOLDER = pathlib.Path(__file__).resolve().parent / "zoo_files"
 
@@ -126,7 +141,7 @@ def _native_actor(path: pathlib.Path, required: bool):
 
 #: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how an entry of
 #: formats 1-6, which does not record its observation, is read (format 7 records ``obs_mode``).
-ENTITY_FEATURES = 26
+ENTITY_FEATURES: int = _FACTS["entity_features"]
 
 
 def read_safetensors(path: str | pathlib.Path, fix: str = "restore the zoo entry") -> dict[str, np.ndarray]:
@@ -358,7 +373,10 @@ class ZooPolicy:
             from blockpuzzle import _native
             engine = _native.mujoco_version()
         except ImportError:
-            engine = "3.11.0"  # the package's pinned engine (blockpuzzle.MUJOCO_PIN)
+            # Standalone: the engine the package pins (its metadata's mujoco requirement).
+            import importlib.metadata
+            pins = [r.partition("==")[2] for r in importlib.metadata.requires("blockpuzzle") or [] if r.startswith("mujoco==")]
+            engine = pins[0] if pins else None
         return [e for e in self.all_evaluations if (e.get("provenance") or {}).get("mujoco") == engine]
 
     @property

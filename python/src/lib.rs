@@ -534,6 +534,27 @@ fn training_commands() -> Vec<&'static str> {
     blockpuzzle::cli::TRAINING_COMMANDS.to_vec()
 }
 
+/// The facts Rust defines once and Python reads from here rather than writing them again (issue
+/// 75): where an object row's colour one-hot begins and an `entities` row's width (entries of zoo
+/// formats 1-6 do not record them), the colours in one-hot order, the outcome names in the order
+/// they are tested, the zoo formats this build reads and the one it writes, and the engines numbers
+/// are made on. `python/tests/test_facts.py` fails on one of them written by hand in the package.
+#[pyfunction]
+fn facts(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    use blockpuzzle::env::{ObsSpec, COLOUR_FEATURE};
+    let d = PyDict::new(py);
+    d.set_item("colour_feature", COLOUR_FEATURE)?;
+    d.set_item("entity_features", ObsSpec::new(ObsMode::Entities, 1).object_dim())?;
+    let colours: Vec<&str> = blockpuzzle::sim::rules::Colour::ALL.iter().map(|c| c.name()).collect();
+    d.set_item("colours", PyTuple::new(py, colours)?)?;
+    let outcomes: Vec<&str> = blockpuzzle::episode::outcome::Outcome::ALL.iter().map(|o| o.name()).collect();
+    d.set_item("outcomes", PyTuple::new(py, outcomes)?)?;
+    d.set_item("zoo_formats", PyTuple::new(py, blockpuzzle::benchmark::zoo::READS)?)?;
+    d.set_item("zoo_format", blockpuzzle::benchmark::zoo::FORMAT)?;
+    d.set_item("engines", PyTuple::new(py, blockpuzzle::benchmark::provenance::ENGINES)?)?;
+    Ok(d)
+}
+
 /// The observation modes, by name (`obs_mode`): the core's closed set, in its order.
 #[pyfunction]
 fn obs_modes() -> Vec<&'static str> {
@@ -612,6 +633,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(wilson95, m)?)?;
     m.add_function(wrap_pyfunction!(cli, m)?)?;
     m.add_function(wrap_pyfunction!(obs_modes, m)?)?;
+    m.add_function(wrap_pyfunction!(facts, m)?)?;
     m.add_function(wrap_pyfunction!(generate_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(record_demos, m)?)?;
     m.add_function(wrap_pyfunction!(training_commands, m)?)?;

@@ -464,6 +464,79 @@ fn resumed(
     })
 }
 
+/// Records the demonstrations' hash in the run's config; a resume refuses a file other than the one
+/// the run started with.
+fn record_demos(config: &mut TrainConfig, file: &super::finetune::DemoFile, resume: bool) -> Result<()> {
+    match (&config.finetune.demos_sha256, resume) {
+        (Some(recorded), true) if *recorded != file.sha256 => refuse!(
+            "--resume: --demos {} is not the file this run started with ({recorded}); restore that file",
+            config.finetune.demos.as_deref().unwrap_or(Path::new("")).display()
+        ),
+        _ => config.finetune.demos_sha256 = Some(file.sha256.clone()),
+    }
+    Ok(())
+}
+
+/// Options that would do nothing on these tasks, refused before any environment is built: a
+/// challenge share without a challenge distribution, level replay without a second level.
+fn refuse_idle_options(config: &TrainConfig, tasks: &[Task]) -> Result<()> {
+    if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
+        match &tasks[..] {
+            [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
+            _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
+        }
+    }
+    if config.level_replay > 0.0 && tasks.iter().all(|t| t.max_level() == 0) {
+        let which = match &tasks[..] {
+            [task] => format!("the task {} has", task.id()),
+            _ => "every one of the run's tasks has".to_owned(),
+        };
+        refuse!(
+            "--level-replay {}: {which} one curriculum level, so there is no earlier level to replay; leave \
+             --level-replay out (or 0)",
+            config.level_replay
+        );
+    }
+    Ok(())
+}
+
+/// The demonstrations (`--demos`) in a buffer of their own, their observations counted by a new
+/// run's normaliser unless it starts from a policy's; None without demonstrations.
+fn demo_buffer(
+    demos: Option<&super::finetune::DemoFile>,
+    config: &TrainConfig,
+    envs: &VectorEnv,
+    tasks: &[Task],
+    agent: &mut dyn Algorithm,
+    resume: bool,
+) -> Result<Option<ReplayBuffer>> {
+    let (Some(file), Some(path)) = (demos, &config.finetune.demos) else { return Ok(None) };
+    let spec = envs.obs_spec();
+    let episodes = super::finetune::demo_episodes(file, path, &spec, tasks)?;
+    let steps = episodes.iter().map(|e| e.len()).sum::<usize>();
+    let mut replay = ReplayBuffer::new(spec.dim(), crate::env::ACTION_DIM, steps);
+    for e in &episodes {
+        e.store_transitions(&mut replay, config.shared.gamma, config.shared.n_step);
+    }
+    if !resume && config.finetune.init_from.is_none() {
+        agent.norm_mut().update(&episodes.iter().flat_map(|e| e.obs.concat()).collect::<Vec<_>>());
+    }
+    Ok(Some(replay))
+}
+
+/// What each update exchanges under `mpirun`: gradients of `gradient_len` numbers from every rank's
+/// `workers` workers.
+fn announce_ranks(comm: &Comm, workers: usize, gradient_len: usize) {
+    let (p, w, bytes) = (comm.size(), workers, 4 * gradient_len);
+    eprintln!(
+        "mpirun: {p} ranks × {w} workers; each update averages {} gradients of {} KiB: every rank sends and \
+         receives about {} KiB",
+        p * w,
+        bytes / 1024,
+        2 * (p - 1) * w * bytes / p / 1024
+    );
+}
+
 /// The policy file a run writes after an epoch (`policy.json`, snapshots, `best_policy.json`), from
 /// its config, its state after the epoch, the epoch's finals success and the agent's policy and
 /// critic. A multi-task policy names its run's tasks (`config.json` records them) and holds no one
@@ -664,32 +737,9 @@ impl<'a> Trainer<'a> {
             config.finetune.init_policy = Some(id.clone());
         }
         if let Some(file) = &demos {
-            match (&config.finetune.demos_sha256, resume) {
-                (Some(recorded), true) if *recorded != file.sha256 => refuse!(
-                    "--resume: --demos {} is not the file this run started with ({recorded}); restore that file",
-                    config.finetune.demos.as_deref().unwrap_or(Path::new("")).display()
-                ),
-                _ => config.finetune.demos_sha256 = Some(file.sha256.clone()),
-            }
+            record_demos(&mut config, file, resume)?;
         }
-        // Options that would do nothing on these tasks, refused before any environment is built.
-        if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
-            match &tasks[..] {
-                [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
-                _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
-            }
-        }
-        if config.level_replay > 0.0 && tasks.iter().all(|t| t.max_level() == 0) {
-            let which = match &tasks[..] {
-                [task] => format!("the task {} has", task.id()),
-                _ => "every one of the run's tasks has".to_owned(),
-            };
-            refuse!(
-                "--level-replay {}: {which} one curriculum level, so there is no earlier level to replay; leave \
-                 --level-replay out (or 0)",
-                config.level_replay
-            );
-        }
+        refuse_idle_options(&config, &tasks)?;
         let thresholds: Vec<f64> =
             tasks.iter().map(|t| config.success_threshold.unwrap_or(t.spec.curriculum.success_threshold)).collect();
         // One layout for every task: the most block slots of any (a stream: of any its families can draw).
@@ -741,34 +791,11 @@ impl<'a> Trainer<'a> {
             keep_policy(&mut *begun.agent, &config, policy)?;
         }
         begun.check(&config, &mine)?;
-        // Demonstrations in a buffer of their own (their observations counted by a new run's
-        // normaliser, unless it starts from a policy's).
-        let demo_replay = match (&demos, &config.finetune.demos) {
-            (Some(file), Some(path)) => {
-                let episodes = super::finetune::demo_episodes(file, path, &envs.obs_spec(), &tasks)?;
-                let steps = episodes.iter().map(|e| e.len()).sum::<usize>();
-                let mut replay = ReplayBuffer::new(obs_dim, act_dim, steps);
-                for e in &episodes {
-                    e.store_transitions(&mut replay, config.shared.gamma, config.shared.n_step);
-                }
-                if !resume && config.finetune.init_from.is_none() {
-                    begun.agent.norm_mut().update(&episodes.iter().flat_map(|e| e.obs.concat()).collect::<Vec<_>>());
-                }
-                Some(replay)
-            }
-            _ => None,
-        };
+        let demo_replay = demo_buffer(demos.as_ref(), &config, &envs, &tasks, &mut *begun.agent, resume)?;
         let seen = crate::policy::actor::obs_dim_without_grey(&envs.envs()[0].config().blocks());
         let expert = Expert::load(&config.aggrevated, seen, &mine.expert_policy(), resume)?;
         if comm.is_root() && comm.size() > 1 {
-            let (p, w, bytes) = (comm.size(), config.workers, 4 * begun.agent.gradient_len());
-            eprintln!(
-                "mpirun: {p} ranks × {w} workers; each update averages {} gradients of {} KiB: every rank sends and \
-                 receives about {} KiB",
-                p * w,
-                bytes / 1024,
-                2 * (p - 1) * w * bytes / p / 1024
-            );
+            announce_ranks(comm, config.workers, begun.agent.gradient_len());
         }
         let pushed = begun.pushed;
         let mut trainer = Self {
