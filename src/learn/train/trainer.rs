@@ -481,13 +481,13 @@ fn record_demos(config: &mut TrainConfig, file: &super::finetune::DemoFile, resu
 /// challenge share without a challenge distribution, level replay without a second level.
 fn refuse_idle_options(config: &TrainConfig, tasks: &[Task]) -> Result<()> {
     if config.challenge_share > 0.0 && tasks.iter().all(|t| t.distribution("challenge").is_none()) {
-        match &tasks[..] {
+        match tasks {
             [task] => refuse!("--challenge-share: the task {} has no challenge distribution", task.id()),
             _ => refuse!("--challenge-share: none of the run's tasks has a challenge distribution"),
         }
     }
     if config.level_replay > 0.0 && tasks.iter().all(|t| t.max_level() == 0) {
-        let which = match &tasks[..] {
+        let which = match tasks {
             [task] => format!("the task {} has", task.id()),
             _ => "every one of the run's tasks has".to_owned(),
         };
