@@ -32,7 +32,12 @@ from typing import Any as _Any
 def _pinned(requirement: str) -> str:
     """The exact version the installed package requires of ``requirement`` (``mujoco==3.11.0``):
     pyproject.toml's pins, read from the package's own metadata, so that they are written once."""
-    for line in _metadata.requires("blockpuzzle") or []:
+    try:
+        requires = _metadata.requires("blockpuzzle") or []
+    except _metadata.PackageNotFoundError:
+        raise ImportError("blockpuzzle's package metadata is missing (it pins the engine and the Fetch files): "
+                          "install the package (pip install blockpuzzle, or maturin develop in python/)") from None
+    for line in requires:
         name, _, version = line.partition("==")
         if name.strip() == requirement and version:
             return version.split(";")[0].strip()

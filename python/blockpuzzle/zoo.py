@@ -375,7 +375,11 @@ class ZooPolicy:
         except ImportError:
             # Standalone: the engine the package pins (its metadata's mujoco requirement).
             import importlib.metadata
-            pins = [r.partition("==")[2] for r in importlib.metadata.requires("blockpuzzle") or [] if r.startswith("mujoco==")]
+            try:
+                requires = importlib.metadata.requires("blockpuzzle") or []
+            except importlib.metadata.PackageNotFoundError:
+                requires = []  # a copy of this file alone: no engine to name, so no evaluation is this engine's
+            pins = [r.partition("==")[2] for r in requires if r.startswith("mujoco==")]
             engine = pins[0] if pins else None
         return [e for e in self.all_evaluations if (e.get("provenance") or {}).get("mujoco") == engine]
 
