@@ -22,7 +22,7 @@ use rayon::prelude::*;
 ///
 /// # Errors
 /// A pool that cannot be started, in words.
-pub fn model_threads(threads: usize) -> Result<rayon::ThreadPool, String> {
+pub(crate) fn model_threads(threads: usize) -> Result<rayon::ThreadPool, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .stack_size(8 << 20)

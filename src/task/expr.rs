@@ -280,7 +280,7 @@ impl Expr {
     ///
     /// # Errors
     /// The first unknown name.
-    pub fn eval(&self, lookup: &dyn Fn(&str) -> Option<f64>) -> Result<f64, String> {
+    pub(crate) fn eval(&self, lookup: &dyn Fn(&str) -> Option<f64>) -> Result<f64, String> {
         Ok(match self {
             Expr::Num(v) => *v,
             Expr::Var(n) => lookup(n).ok_or_else(|| format!("unknown name {n:?}"))?,

@@ -101,13 +101,13 @@ pub struct Registration<C: AlgorithmConfig> {
     /// Its own settings away from the paper's, in words for titles, e.g. "TD3", "no action penalty".
     pub describe: fn(&C) -> Vec<String>,
     /// Gives a learner of it (loaded from a checkpoint) the settings a branch may change,
-    /// [`Info::branchable`], from the branch's own ([`take_fields`] copies the listed ones;
-    /// [`no_branch`] for an algorithm with none).
+    /// [`Info::branchable`], from the branch's own (`take_fields` copies the listed ones;
+    /// `no_branch` for an algorithm with none).
     pub take_branch: fn(&mut dyn Algorithm, &C) -> Result<(), String>,
 }
 
 /// The `take_branch` of an algorithm with no branchable setting.
-pub fn no_branch<C>(_: &mut dyn Algorithm, _: &C) -> Result<(), String> {
+pub(crate) fn no_branch<C>(_: &mut dyn Algorithm, _: &C) -> Result<(), String> {
     Ok(())
 }
 
@@ -116,7 +116,7 @@ pub fn no_branch<C>(_: &mut dyn Algorithm, _: &C) -> Result<(), String> {
 ///
 /// # Errors
 /// A learner of another type.
-pub fn learner_mut<'a, T: 'static>(agent: &'a mut dyn Algorithm, name: &str) -> Result<&'a mut T, String> {
+pub(crate) fn learner_mut<'a, T: 'static>(agent: &'a mut dyn Algorithm, name: &str) -> Result<&'a mut T, String> {
     agent.as_any_mut().downcast_mut::<T>().ok_or_else(|| {
         format!(
             "{name}: a branch's settings are for another algorithm's learner (the registry pairs each with its own)"
@@ -382,7 +382,7 @@ impl StateDict {
     ///
     /// # Errors
     /// Missing or mis-sized parameters, naming `name`.
-    pub fn load_net(&self, name: &str, net: &mut Net) -> Result<(), String> {
+    pub(crate) fn load_net(&self, name: &str, net: &mut Net) -> Result<(), String> {
         net.load_vecs(&self.arrays(name)).map_err(|e| format!("{name}: {e}"))
     }
 
@@ -390,7 +390,7 @@ impl StateDict {
     ///
     /// # Errors
     /// Missing or mis-sized moments or step count, naming `name`.
-    pub fn load_adam(&self, name: &str, adam: &mut Adam) -> Result<(), String> {
+    pub(crate) fn load_adam(&self, name: &str, adam: &mut Adam) -> Result<(), String> {
         let t = self.counter(&format!("{name}.t"))?;
         adam.load_vecs(&self.arrays(name), t).map_err(|e| format!("{name}: {e}"))
     }
@@ -399,7 +399,7 @@ impl StateDict {
     ///
     /// # Errors
     /// When it is missing.
-    pub fn counter(&self, name: &str) -> Result<u64, String> {
+    pub(crate) fn counter(&self, name: &str) -> Result<u64, String> {
         self.counters.get(name).copied().ok_or_else(|| format!("the counter {name} is missing"))
     }
 }
@@ -505,7 +505,7 @@ pub fn split_gradient<'g>(gradient: &'g [f32], nets: &[&Net]) -> Vec<&'g [f32]> 
 ///
 /// # Errors
 /// A name that is no field of the settings, or a value that does not read back.
-pub fn take_fields<C>(into: &C, from: &C, fields: &[&str]) -> Result<C, String>
+pub(crate) fn take_fields<C>(into: &C, from: &C, fields: &[&str]) -> Result<C, String>
 where
     C: serde::Serialize + serde::de::DeserializeOwned,
 {

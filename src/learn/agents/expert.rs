@@ -67,7 +67,7 @@ impl ExpertCritic {
     /// # Errors
     /// A message when the critic does not take the policy's observation and
     /// action, or does not output one value.
-    pub fn new(policy: &DeterministicPolicy, critic: &PlainNet) -> Result<Self, String> {
+    pub(crate) fn new(policy: &DeterministicPolicy, critic: &PlainNet) -> Result<Self, String> {
         let actor = Net::from_plain(&policy.net).map_err(|e| format!("actor: {e}"))?;
         let critic = Net::from_plain(critic).map_err(|e| format!("critic: {e}"))?;
         let (obs_dim, act_dim) = (actor.sizes()[0], *actor.sizes().last().unwrap_or(&0));

@@ -110,7 +110,7 @@ impl Net {
     ///
     /// # Errors
     /// A message naming the first layer whose sizes do not chain.
-    pub fn from_plain(mlp: &PlainNet) -> Result<Self, String> {
+    pub(crate) fn from_plain(mlp: &PlainNet) -> Result<Self, String> {
         let Some(first) = mlp.layers.first() else {
             return Err("the network has no layers".into());
         };
@@ -404,7 +404,7 @@ impl Net {
     ///
     /// # Errors
     /// A message naming the first parameter whose size differs.
-    pub fn load_vecs(&mut self, vecs: &[Vec<f32>]) -> Result<(), String> {
+    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>]) -> Result<(), String> {
         if vecs.len() != self.params.len() {
             return Err(format!("expected {} parameter tensors, found {}", self.params.len(), vecs.len()));
         }
@@ -526,7 +526,7 @@ impl Adam {
     ///
     /// # Errors
     /// A message if the number or sizes of the moments differ.
-    pub fn load_vecs(&mut self, vecs: &[Vec<f32>], t: u64) -> Result<(), String> {
+    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>], t: u64) -> Result<(), String> {
         let n = self.m.len();
         if vecs.len() != 2 * n {
             return Err(format!("expected {} optimiser moments, found {}", 2 * n, vecs.len()));

@@ -192,7 +192,7 @@ impl Algo {
     ///
     /// # Errors
     /// An agent of another algorithm than these settings'.
-    pub fn take_branch_settings(self, agent: &mut dyn Algorithm, algos: &AlgoConfigs) -> Result<(), String> {
+    pub(crate) fn take_branch_settings(self, agent: &mut dyn Algorithm, algos: &AlgoConfigs) -> Result<(), String> {
         (self.0.take_branch)(agent, algos)
     }
 
