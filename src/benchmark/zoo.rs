@@ -963,12 +963,10 @@ fn rewrite<T>(
     }
     meta.format = FORMAT.into();
     meta.meta_sha256 = Some(meta.seal());
-    let json = serde_json::to_vec_pretty(&meta)
+    let text = serde_json::to_string_pretty(&meta)
         .map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
     // What is written must load as every reader loads it: checked on the bytes before they are
     // written, so that the entry on disk is the old one or the new one, never one that does not load.
-    let text =
-        String::from_utf8(json).map_err(|e| ZooError::Corrupt { path: json_path.clone(), reason: e.to_string() })?;
     parse_meta(json_path.clone(), &text).and_then(|m| check_entry(&json_path, &m)).map_err(|e| ZooError::Corrupt {
         path: json_path.clone(),
         reason: format!("the rewritten entry would not load ({e}); it is left as it was"),

@@ -514,7 +514,8 @@ fn demo_buffer(
     let spec = envs.obs_spec();
     let episodes = super::finetune::demo_episodes(file, path, &spec, tasks)?;
     let steps = episodes.iter().map(|e| e.len()).sum::<usize>();
-    let mut replay = ReplayBuffer::new(spec.dim(), crate::env::ACTION_DIM, steps);
+    let act_dim = envs.envs()[0].action_space().dim();
+    let mut replay = ReplayBuffer::new(spec.dim(), act_dim, steps);
     for e in &episodes {
         e.store_transitions(&mut replay, config.shared.gamma, config.shared.n_step);
     }
@@ -549,10 +550,12 @@ pub(crate) fn saved_policy(
     policy: AnyPolicy,
     critic: Option<crate::policy::actor::mlp::PlainNet>,
 ) -> SavedPolicy {
-    let (task, tasks, stream) = match &config.stream {
-        Some(stream) => (None, Vec::new(), Some(stream.clone())),
-        None if config.tasks.is_empty() => (config.task.clone(), Vec::new(), None),
-        None => (None, config.tasks.clone(), None),
+    let (task, tasks, stream) = match (&config.stream, &config.tasks[..]) {
+        (Some(stream), _) => (None, Vec::new(), Some(stream.clone())),
+        (None, []) => (config.task.clone(), Vec::new(), None),
+        // A list or suite split of one task saves it as the one task, as a one-task run does.
+        (None, [task]) => (Some(task.clone()), Vec::new(), None),
+        (None, all) => (None, all.to_vec(), None),
     };
     SavedPolicy {
         env_id: state.env_id.clone(),
@@ -1228,8 +1231,7 @@ impl<'a> Trainer<'a> {
             // A multi-task run's level is the sum of its tasks' levels.
             let max_level = self.max_levels.iter().sum();
             plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
-            let (agent, finals) = (&*self.learner.agent, row.finals_success);
-            let saved = saved_policy(&self.config, state, finals, policy, agent.critic());
+            let saved = saved_policy(&self.config, state, row.finals_success, policy, self.learner.agent.critic());
             write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
                 std::fs::create_dir_all(run.snapshots())
