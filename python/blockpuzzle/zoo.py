@@ -358,6 +358,13 @@ class ZooPolicy:
         return None
 
     @property
+    def solver(self) -> int | None:
+        """The version of the solver whose actions it learned from (behaviour cloning, DAgger, runs
+        with demonstrations) where the entry records it; None for a policy that learned from rewards
+        alone and for entries exported before it was recorded."""
+        return self.meta.get("solver")
+
+    @property
     def kind(self) -> str:
         """What acts: "deterministic" (a tanh actor) or "gaussian" (PGGD), recorded (format 7) or
         read from an older entry's ``algo`` ("ddpg" or "pggd")."""

@@ -119,9 +119,12 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
     import shutil
     expected = {"generalist-bc-entity": ("entities", "bc"), "BlocksChoose-v0-dagger-entity": ("entities", "dagger"),
                 "BlocksChoose-v0-ddpg-ours": ("flat", "td3"), "BlocksChoose-v0-pggd": ("flat", "pggd")}
+    assert zoo.load("generalist-bc-entity-v2", native=False).solver == 4
     for name, (mode, algo) in expected.items():
         p = zoo.load(name, native=False)
         assert (p.version, p.obs_mode, p.algo) == (7, mode, algo), name
+        # The solver version an imitation entry learned from, where recorded (issue 73).
+        assert p.solver is None, name
         assert (p.meta["obs_mode"], p.meta["algo"]) == (mode, algo)
         # The colour one-hot's place, recorded by the Rust exporter from the observation's one definition.
         assert p.meta["colour_feature"] == zoo.COLOUR_FEATURE

@@ -5,7 +5,7 @@
 //! (file, run directory or zoo name) is resolved by `crate::benchmark::load`.
 
 use crate::policy::actor::mlp::PlainNet;
-use crate::policy::actor::AnyPolicy;
+use crate::policy::actor::{AnyPolicy, PolicyKind};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -85,10 +85,14 @@ pub struct SavedPolicy {
     pub env_steps: Option<u64>,
     /// Its finals success when saved.
     pub finals_success: f64,
-    /// The algorithm that trained it (`bc`, `dagger`, `ddpg`, `td3`, `sac`, `pggd`; absent in
-    /// policies saved before it was recorded).
+    /// The algorithm that trained it (absent in policies saved before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub algo: Option<String>,
+    pub algo: Option<Trainer>,
+    /// The version of the solver whose actions it learned from ([`crate::policy::SOLVER_VERSION`] of
+    /// the builds that labelled its run): BC, DAgger and runs with `--demos`. Absent for a policy that
+    /// learned from rewards alone, and in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<u32>,
     /// The observation it reads, as the run recorded it (absent in policies saved before it was
     /// recorded; checked against the network when the file is read).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -117,17 +121,74 @@ pub struct SavedPolicy {
     pub started_from: Option<crate::benchmark::provenance::PolicyId>,
 }
 
-/// The algorithms a policy file or a format-7 zoo entry may name as the one that trained it (`ddpg` with `--td3` is
-/// `td3`; the training registry's names are checked against this list by its tests).
-pub const TRAINERS: [&str; 6] = ["bc", "dagger", "ddpg", "td3", "sac", "pggd"];
+/// The algorithm that trained a policy, as policy files and format-7 zoo entries record it (`ddpg`
+/// with `--td3` is `td3`; the training registry's names are checked against these by its tests).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Trainer {
+    /// Behaviour cloning of the solver.
+    Bc,
+    /// DAgger with the solver as expert.
+    Dagger,
+    /// DDPG.
+    Ddpg,
+    /// TD3 (`--algo ddpg --td3`).
+    Td3,
+    /// SAC.
+    Sac,
+    /// PGGD (AggreVaTeD with an expert).
+    Pggd,
+}
 
-/// The kind of policy `algo` trains ([`crate::policy::actor::AnyPolicy::kind`]'s words): PGGD a
-/// `gaussian` one, every other algorithm a `deterministic` one.
-pub fn kind_trained_by(algo: &str) -> &'static str {
-    if algo == "pggd" {
-        "gaussian"
-    } else {
-        "deterministic"
+impl Trainer {
+    /// Every trainer, in the order help texts list them.
+    pub const ALL: [Trainer; 6] = [Self::Bc, Self::Dagger, Self::Ddpg, Self::Td3, Self::Sac, Self::Pggd];
+
+    /// The recorded name (`bc`, `dagger`, `ddpg`, `td3`, `sac`, `pggd`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bc => "bc",
+            Self::Dagger => "dagger",
+            Self::Ddpg => "ddpg",
+            Self::Td3 => "td3",
+            Self::Sac => "sac",
+            Self::Pggd => "pggd",
+        }
+    }
+
+    /// The trainer of that recorded name.
+    pub fn named(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// The kind of policy it trains: PGGD a Gaussian one, every other algorithm a deterministic one.
+    pub fn trains(self) -> PolicyKind {
+        match self {
+            Self::Pggd => PolicyKind::Gaussian,
+            _ => PolicyKind::Deterministic,
+        }
+    }
+
+    /// Whether it trains a policy of `kind`: the one check of a recorded algorithm against what acts,
+    /// for policy files, zoo entries and `zoo upgrade --algo`.
+    ///
+    /// # Errors
+    /// The mismatch, in words each caller completes with its fix.
+    pub fn check_trains(self, kind: PolicyKind) -> Result<(), String> {
+        if self.trains() == kind {
+            return Ok(());
+        }
+        Err(format!(
+            "{self} trains a {} policy, and this one is {kind} (PGGD trains gaussian policies, every other algorithm \
+             deterministic ones)",
+            self.trains()
+        ))
+    }
+}
+
+impl std::fmt::Display for Trainer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -162,18 +223,12 @@ impl SavedPolicy {
             None => self.policy.legacy_obs_mode()?,
         };
         check_fixtures(self.fixtures.as_deref(), mode)?;
-        if let Some(a) = &self.algo {
-            if !TRAINERS.contains(&a.as_str()) {
-                return Err(format!("algo {a:?} is none of {} (an edited file)", TRAINERS.join(", ")));
-            }
-            let expected = kind_trained_by(a);
-            if expected != self.policy.kind() {
-                return Err(format!(
-                    "algo {a:?} with a {} policy: {a} trains a {expected} policy (PGGD a gaussian one, every other \
-                     algorithm a deterministic one); the file was edited, or record the algorithm that trained it",
-                    self.policy.kind()
-                ));
-            }
+        if let Some(a) = self.algo {
+            a.check_trains(self.policy.kind())
+                .map_err(|e| format!("algo: {e}; the file was edited, or record the algorithm that trained it"))?;
+        }
+        if let Some(v) = self.solver {
+            check_solver(v).map_err(|e| format!("{e} (an edited file)"))?;
         }
         // Each recorded task is the task its hash names (a stream's are drawn again where they are used).
         for t in self.task.iter().chain(&self.tasks) {
@@ -198,6 +253,18 @@ impl SavedPolicy {
         }
         Ok(())
     }
+}
+
+/// Whether `version` is a solver version some build of this project has had (1 to this build's).
+///
+/// # Errors
+/// Another number, with the range.
+pub fn check_solver(version: u32) -> Result<(), String> {
+    let newest = crate::policy::SOLVER_VERSION;
+    if (1..=newest).contains(&version) {
+        return Ok(());
+    }
+    Err(format!("solver {version} is no solver version this build knows (1 to {newest})"))
 }
 
 /// Whether a recorded fixtures list is the one `mode` has in this build.

@@ -5,6 +5,8 @@
 
 use crate::benchmark::evaluate::{evaluate, EvalError, EvalSpec, Evaluation};
 use crate::benchmark::load::{load_policy, LoadError};
+use crate::benchmark::saved::Trainer;
+use crate::policy::actor::PolicyKind;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -35,29 +37,17 @@ pub struct Row {
     pub policy: Option<PathBuf>,
     /// The paper's success rates, where it gives them.
     pub paper: (Option<f64>, Option<f64>),
-    /// The algorithms the row stands for, as policy files record them ([`crate::benchmark::saved::TRAINERS`]),
-    /// all of one kind of policy ([`Row::takes`]).
-    pub algos: &'static [&'static str],
+    /// The algorithms the row stands for, as policy files record them, all of one kind of policy
+    /// ([`Row::takes`]).
+    pub algos: &'static [Trainer],
     /// The task the row's agent is trained on (or the task the table plays, `table --env`).
     pub trained_on: &'static str,
 }
 
-/// The kind of policy a row of the paper's table stands for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Takes {
-    /// A deterministic actor (DDPG's rows).
-    Deterministic,
-    /// A Gaussian PGGD policy (PGGD's rows).
-    Pggd,
-}
-
 impl Row {
     /// The kind of policy the row stands for (its algorithms'): a row takes only that kind.
-    pub fn takes(&self) -> Takes {
-        match self.algos.first().map(|a| crate::benchmark::saved::kind_trained_by(a)) {
-            Some("gaussian") => Takes::Pggd,
-            _ => Takes::Deterministic,
-        }
+    pub fn takes(&self) -> PolicyKind {
+        self.algos.first().map_or(PolicyKind::Deterministic, |a| a.trains())
     }
 
     /// Whether `saved` is the kind of policy this row stands for: the row's kind (deterministic or
@@ -69,13 +59,12 @@ impl Row {
     /// The mismatch, naming the row, the policy and the fix.
     pub fn check(&self, saved: &crate::benchmark::saved::SavedPolicy, played: &str) -> Result<(), TableError> {
         let name = self.policy.as_deref().map_or_else(String::new, |p| p.display().to_string());
-        let is_pggd = matches!(saved.policy, crate::policy::actor::AnyPolicy::Pggd(_));
         let takes = self.takes();
         let wanted = match takes {
-            Takes::Deterministic => "a deterministic (DDPG) actor",
-            Takes::Pggd => "a PGGD policy",
+            PolicyKind::Deterministic => "a deterministic (DDPG) actor",
+            PolicyKind::Gaussian => "a PGGD policy",
         };
-        if is_pggd != (takes == Takes::Pggd) {
+        if saved.policy.kind() != takes {
             return Err(TableError::Misfit(format!(
                 "the row \"{}\" takes {wanted}, and {name} is a {} policy; give that row a policy of its kind",
                 self.method,
@@ -89,12 +78,12 @@ impl Row {
                 self.method, saved.env_id
             )));
         }
-        if let Some(algo) = saved.algo.as_deref().filter(|a| !self.algos.contains(a)) {
+        if let Some(algo) = saved.algo.filter(|a| !self.algos.contains(a)) {
             return Err(TableError::Misfit(format!(
                 "the row \"{}\" stands for {}, and {name} was trained by {algo}; give that row a policy its method \
                  trained",
                 self.method,
-                self.algos.join(" or ")
+                self.algos.iter().map(|a| a.name()).collect::<Vec<_>>().join(" or ")
             )));
         }
         if let Some(start) = &saved.started_from {
@@ -170,7 +159,7 @@ pub fn rows(p: Policies) -> Vec<Row> {
         method: "DDPG (3 blocks), ours",
         policy: Some(policy),
         paper: (Some(0.97), Some(0.90)),
-        algos: &["ddpg", "td3"],
+        algos: &[Trainer::Ddpg, Trainer::Td3],
         trained_on: ENV,
     });
     let mut rows = vec![
@@ -178,25 +167,31 @@ pub fn rows(p: Policies) -> Vec<Row> {
             method: "DDPG (2 blocks), grey removed from its view",
             policy: p.expert,
             paper: (Some(0.44), Some(0.24)),
-            algos: &["ddpg"],
+            algos: &[Trainer::Ddpg],
             trained_on: "BlocksTouch-v0",
         },
         Row {
             method: "DDPG (3 blocks)",
             policy: p.ddpg,
             paper: (Some(0.97), Some(0.90)),
-            algos: &["ddpg"],
+            algos: &[Trainer::Ddpg],
             trained_on: ENV,
         },
         Row {
             method: "PGGD + AggreVaTeD",
             policy: p.pggd,
             paper: (Some(0.64), Some(0.40)),
-            algos: &["pggd"],
+            algos: &[Trainer::Pggd],
             trained_on: ENV,
         },
         // The paper gives no number: "barely passes the first difficulty level after 200 epochs".
-        Row { method: "PGGD alone", policy: p.pggd_alone, paper: (None, None), algos: &["pggd"], trained_on: ENV },
+        Row {
+            method: "PGGD alone",
+            policy: p.pggd_alone,
+            paper: (None, None),
+            algos: &[Trainer::Pggd],
+            trained_on: ENV,
+        },
     ];
     if let Some(ours) = ours {
         rows.insert(2, ours);

@@ -23,10 +23,10 @@
 //! --policy`, `table`, AggreVaTeD's `--expert`) takes a zoo name as well as
 //! a file or run directory: [`crate::benchmark::load::load_policy`].
 
-use crate::benchmark::saved::SavedPolicy;
+use crate::benchmark::saved::{SavedPolicy, Trainer};
 use crate::policy::actor::mlp::{Dense, PlainNet};
 use crate::policy::actor::normalizer::Normalizer;
-use crate::policy::actor::{AnyPolicy, DeterministicPolicy, PggdPolicy};
+use crate::policy::actor::{AnyPolicy, DeterministicPolicy, PggdPolicy, PolicyKind};
 use crate::task::TaskSource;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use serde::{Deserialize, Serialize};
@@ -59,6 +59,27 @@ pub const READS: [&str; 7] = [
 /// What a format-7 entry upgraded from an older format names as its algorithm until `zoo upgrade
 /// --algo` records it.
 pub const UNRECORDED: &str = "unrecorded";
+
+/// [`ZooMeta::algo`] as entries write it: the trainer's name, or [`UNRECORDED`] for none.
+mod recorded_algo {
+    use super::{Trainer, UNRECORDED};
+    use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(algo: &Option<Trainer>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(algo.map_or(UNRECORDED, Trainer::name))
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Trainer>, D::Error> {
+        let name = String::deserialize(d)?;
+        if name == UNRECORDED {
+            return Ok(None);
+        }
+        Trainer::named(&name).map(Some).ok_or_else(|| {
+            let names: Vec<&str> = Trainer::ALL.iter().map(|t| t.name()).collect();
+            D::Error::custom(format!("algo {name:?} is none of {} or {UNRECORDED}", names.join(", ")))
+        })
+    }
+}
 
 /// Zoo errors: each names the file and what to do.
 #[derive(Debug, Error)]
@@ -256,14 +277,18 @@ pub struct ZooMeta {
     pub name: String,
     /// One line on what it is (e.g. the table row it stands for).
     pub description: String,
-    /// Format 7 on: the algorithm that trained it (one of [`crate::benchmark::saved::TRAINERS`]; [`UNRECORDED`] for an entry
+    /// Format 7 on: the algorithm that trained it (None, written [`UNRECORDED`], for an entry
     /// upgraded from an older format without `zoo upgrade --algo`). Formats 1–6: what acts, `ddpg`
     /// (a tanh actor) or `pggd` ([`ZooMeta::kind`] reads both).
-    pub algo: String,
-    /// Format 7 on: what acts, `deterministic` (a tanh actor: DDPG, TD3, SAC's mean action, BC,
-    /// DAgger) or `gaussian` (PGGD).
+    #[serde(with = "recorded_algo")]
+    pub algo: Option<Trainer>,
+    /// Format 7 on, where recorded: the version of the solver whose actions it learned from (BC,
+    /// DAgger, runs with `--demos`; [`SavedPolicy::solver`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kind: Option<String>,
+    pub solver: Option<u32>,
+    /// Format 7 on: what acts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<PolicyKind>,
     /// Format 7 on: the observation the policy reads, as recorded (readers take it from here).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub obs_mode: Option<crate::env::ObsMode>,
@@ -331,21 +356,21 @@ impl ZooMeta {
         self.format.rsplit('/').next().and_then(|v| v.parse().ok()).unwrap_or(0)
     }
 
-    /// What acts: `deterministic` or `gaussian`, recorded (format 7) or read from `algo` (before).
-    pub fn kind(&self) -> Option<&str> {
+    /// What acts, recorded (format 7) or read from `algo` (before).
+    pub fn kind(&self) -> Option<PolicyKind> {
         if self.version() >= 7 {
-            return self.kind.as_deref();
+            return self.kind;
         }
-        match self.algo.as_str() {
-            "ddpg" => Some("deterministic"),
-            "pggd" => Some("gaussian"),
+        match self.algo {
+            Some(Trainer::Ddpg) => Some(PolicyKind::Deterministic),
+            Some(Trainer::Pggd) => Some(PolicyKind::Gaussian),
             _ => None,
         }
     }
 
     /// The algorithm that trained it, where the entry records it (format 7, not `unrecorded`).
-    pub fn trained_by(&self) -> Option<&str> {
-        (self.version() >= 7 && self.algo != UNRECORDED).then_some(self.algo.as_str())
+    pub fn trained_by(&self) -> Option<Trainer> {
+        self.algo.filter(|_| self.version() >= 7)
     }
 
     /// `sha256:` of the metadata with its evaluations (which `zoo evaluate` adds to) and `meta_sha256`
@@ -377,6 +402,7 @@ impl ZooMeta {
             ("fixtures", 7, self.fixtures.is_some()),
             ("blend", 7, self.blend.is_some()),
             ("started_from", 7, self.started_from.is_some()),
+            ("solver", 7, self.solver.is_some()),
             ("hidden_norm", 7, nets().any(|n| n.hidden_norm)),
         ];
         fields.into_iter().find(|&(_, v, present)| present && v > self.version()).map(|(f, v, _)| (f, v))
@@ -636,7 +662,7 @@ pub struct ExportInfo {
     /// Replace an entry of the same name (else that is an error).
     pub overwrite: bool,
     /// The algorithm that trained it where the policy file does not record it (older runs).
-    pub algo: Option<String>,
+    pub algo: Option<Trainer>,
 }
 
 /// Whether the entry `name` may be written in `zoo`: it does not exist yet, or `overwrite`.
@@ -723,17 +749,11 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
     let header: HashMap<String, String> =
         [("format".to_owned(), FORMAT.to_owned()), ("name".to_owned(), info.name.clone())].into_iter().collect();
     let bytes = safetensors::tensor::serialize(views, Some(header)).map_err(|e| corrupt(e.to_string()))?;
-    // PGGD trains a Gaussian policy, every other algorithm a deterministic one.
-    if let Some(a) = saved.algo.as_ref().or(info.algo.as_ref()) {
-        if crate::benchmark::saved::kind_trained_by(a) != saved.policy.kind() {
-            return Err(corrupt(format!(
-                "{a} trains a {} policy, and this one is {}; record the algorithm that trained it",
-                crate::benchmark::saved::kind_trained_by(a),
-                saved.policy.kind()
-            )));
-        }
+    if let Some(a) = saved.algo.or(info.algo) {
+        a.check_trains(saved.policy.kind())
+            .map_err(|e| corrupt(format!("{e}; record the algorithm that trained it")))?;
     }
-    if let (Some(recorded), Some(given)) = (&saved.algo, &info.algo) {
+    if let (Some(recorded), Some(given)) = (saved.algo, info.algo) {
         if recorded != given {
             return Err(corrupt(format!(
                 "--algo {given}: the policy file records that {recorded} trained it; leave --algo out"
@@ -744,11 +764,9 @@ pub fn export(zoo: &Path, saved: &SavedPolicy, info: &ExportInfo) -> Result<Path
         format: FORMAT.into(),
         name: info.name.clone(),
         description: info.description.clone(),
-        algo: match (&saved.algo, &info.algo) {
-            (Some(a), _) | (None, Some(a)) => a.clone(),
-            (None, None) => UNRECORDED.into(),
-        },
-        kind: Some(saved.policy.kind().into()),
+        algo: saved.algo.or(info.algo),
+        solver: saved.solver,
+        kind: Some(saved.policy.kind()),
         obs_mode: Some(saved.obs_mode()),
         colour_feature: Some(crate::env::COLOUR_FEATURE),
         fixtures: Some(saved.obs_mode().fixtures().to_vec()),
@@ -864,22 +882,36 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
 ///
 /// # Errors
 /// An unknown algorithm, an entry that records another already, or one that does not load.
-pub fn record_algo(path: &Path, algo: &str) -> Result<(), ZooError> {
+pub fn record_algo(path: &Path, algo: Trainer) -> Result<(), ZooError> {
     let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    if !crate::benchmark::saved::TRAINERS.contains(&algo) {
-        return Err(bad(format!("--algo {algo:?}: give one of {}", crate::benchmark::saved::TRAINERS.join(", "))));
-    }
     rewrite(path, |meta, saved| match meta.trained_by() {
         Some(a) if a != algo => {
             Err(bad(format!("it records {a} as the algorithm that trained it; --algo {algo} would change a record")))
         }
-        _ if crate::benchmark::saved::kind_trained_by(algo) != saved.policy.kind() => Err(bad(format!(
-            "it holds a {} policy, which {algo} does not train (PGGD trains gaussian policies, every other \
-             algorithm deterministic ones); give the algorithm that trained it",
-            saved.policy.kind()
+        _ => {
+            algo.check_trains(saved.policy.kind())
+                .map_err(|e| bad(format!("--algo {algo}: {e}; give the algorithm that trained it")))?;
+            meta.algo = Some(algo);
+            Ok(())
+        }
+    })
+}
+
+/// Records the version of the solver whose actions the entry at `path` learned from (`zoo upgrade
+/// --solver`), for entries exported before policy files recorded it; an entry that records another is
+/// refused, the same one kept.
+///
+/// # Errors
+/// A version no build has had, another recorded version, or [`rewrite`]'s.
+pub fn record_solver(path: &Path, version: u32) -> Result<(), ZooError> {
+    let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
+    crate::benchmark::saved::check_solver(version).map_err(|e| bad(format!("--solver: {e}")))?;
+    rewrite(path, |meta, _| match meta.solver {
+        Some(v) if v != version => Err(bad(format!(
+            "it records that it learned from solver version {v}; --solver {version} would change a record"
         ))),
         _ => {
-            meta.algo = algo.into();
+            meta.solver = Some(version);
             Ok(())
         }
     })
@@ -939,9 +971,9 @@ fn rewrite<T>(
     if meta.version() < 7 {
         // What an older entry says of itself, recorded: its kind, its observation; who trained it
         // is unknown here (`zoo upgrade --algo` records it).
-        meta.kind = Some(saved.policy.kind().into());
+        meta.kind = Some(saved.policy.kind());
         meta.obs_mode = Some(saved.obs_mode());
-        meta.algo = UNRECORDED.into();
+        meta.algo = None;
     }
     meta.colour_feature = Some(crate::env::COLOUR_FEATURE);
     meta.fixtures = Some(saved.obs_mode().fixtures().to_vec());
@@ -1174,14 +1206,19 @@ fn read_networks(path: &Path, meta: &ZooMeta) -> Result<(AnyPolicy, Option<Plain
     );
     let out = *meta.actor.sizes.last().unwrap_or(&0);
     let policy = match (meta.kind(), meta.sigma_min) {
-        (Some("deterministic"), None) => AnyPolicy::Deterministic(DeterministicPolicy { net, norm }),
-        (Some("gaussian"), Some(sigma_min)) => AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min }),
+        (Some(PolicyKind::Deterministic), None) => AnyPolicy::Deterministic(DeterministicPolicy { net, norm }),
+        (Some(PolicyKind::Gaussian), Some(sigma_min)) => {
+            AnyPolicy::Pggd(PggdPolicy { net, norm, act_dim: out / 2, sigma_min })
+        }
         (kind, s) => {
-            let field = if meta.version() >= 7 { "kind" } else { "algo" };
+            let (field, value) = match kind {
+                Some(k) => ("kind", k.name()),
+                None if meta.version() >= 7 => ("kind", "none"),
+                None => ("algo", meta.algo.map_or(UNRECORDED, Trainer::name)),
+            };
             return Err(bad_meta(format!(
-                "{field} {:?} with sigma_min {s:?} is not a known policy kind (deterministic without sigma_min, \
-                 gaussian with it); restore the entry",
-                kind.unwrap_or(&meta.algo)
+                "{field} {value:?} with sigma_min {s:?} is not a known policy kind (deterministic without sigma_min, \
+                 gaussian with it); restore the entry"
             )));
         }
     };
@@ -1192,20 +1229,13 @@ fn read_networks(path: &Path, meta: &ZooMeta) -> Result<(AnyPolicy, Option<Plain
 /// the observation its network reads and its fixtures.
 fn check_recorded_kind(path: &Path, meta: &ZooMeta, policy: &AnyPolicy) -> Result<(), ZooError> {
     let bad_meta = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    if !crate::benchmark::saved::TRAINERS.contains(&meta.algo.as_str()) && meta.algo != UNRECORDED {
-        return Err(bad_meta(format!(
-            "algo {:?} is none of {} or {UNRECORDED}; restore the entry",
-            meta.algo,
-            crate::benchmark::saved::TRAINERS.join(", ")
-        )));
+    if let Some(v) = meta.solver {
+        crate::benchmark::saved::check_solver(v).map_err(|e| bad_meta(format!("{e}; restore the entry")))?;
     }
-    if meta.algo != UNRECORDED && Some(crate::benchmark::saved::kind_trained_by(&meta.algo)) != meta.kind() {
-        return Err(bad_meta(format!(
-            "algo {:?} with kind {:?}: PGGD trains a gaussian policy and every other algorithm a \
-             deterministic one; restore the entry",
-            meta.algo,
-            meta.kind().unwrap_or_default()
-        )));
+    if let Some(a) = meta.trained_by() {
+        a.check_trains(policy.kind()).map_err(|e| {
+            bad_meta(format!("algo {a:?} with kind {:?}: {e}; restore the entry", policy.kind().name()))
+        })?;
     }
     if meta.colour_feature != Some(crate::env::COLOUR_FEATURE) {
         return Err(bad_meta(format!(
@@ -1247,7 +1277,8 @@ fn saved_of(meta: &ZooMeta, policy: AnyPolicy, critic: Option<PlainNet>) -> Save
         epoch: meta.epoch,
         env_steps: meta.env_steps,
         finals_success: meta.finals_success,
-        algo: meta.trained_by().map(str::to_owned),
+        algo: meta.trained_by(),
+        solver: meta.solver,
         obs_mode: meta.obs_mode,
         fixtures: meta.fixtures.clone(),
         policy,

@@ -1,5 +1,6 @@
 //! `blockpuzzle zoo`: list, check and export the shipped policies (src/benchmark/zoo.rs has the format).
 
+use crate::benchmark::saved::Trainer;
 use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 use std::path::{Path, PathBuf};
@@ -31,13 +32,17 @@ pub(super) enum ZooCommand {
         zoo: Option<PathBuf>,
         /// Record the algorithm that trained them (bc, dagger, ddpg, td3, sac, pggd) where they
         /// record none (older entries say `unrecorded`).
-        #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
-        algo: Option<String>,
+        #[arg(long)]
+        algo: Option<Trainer>,
         /// Record the policy they were fine-tuned from (a zoo name, run directory or policy file),
         /// where they record none (entries exported before `train --init-from` recorded it); it
         /// must have their network's layers.
         #[arg(long, value_name = "POLICY")]
         started_from: Option<PathBuf>,
+        /// Record the version of the solver whose actions they learned from (BC, DAgger, runs with
+        /// `--demos`), where they record none (entries exported before policy files recorded it).
+        #[arg(long, value_name = "VERSION")]
+        solver: Option<u32>,
     },
     /// Replace an entry's description (one line on what it is; figures belong in its evaluations
     /// and results/, and are refused), resealed.
@@ -86,8 +91,8 @@ pub(super) struct ZooExportArgs {
     trained_with: String,
     /// The algorithm that trained it (bc, dagger, ddpg, td3, sac, pggd), where the policy file does
     /// not record it (runs before it was recorded).
-    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(crate::benchmark::saved::TRAINERS))]
-    algo: Option<String>,
+    #[arg(long)]
+    algo: Option<Trainer>,
     /// Evaluation results (JSON written by `blockpuzzle eval`) to record with it.
     #[arg(long = "eval")]
     evals: Vec<PathBuf>,
@@ -117,8 +122,8 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
     match c {
         ZooCommand::List { zoo } => list(&folder(zoo)),
         ZooCommand::Check { names, zoo } => check(&folder(zoo), names),
-        ZooCommand::Upgrade { names, zoo, algo, started_from } => {
-            upgrade(&folder(zoo), names, algo.as_deref(), started_from.as_deref())
+        ZooCommand::Upgrade { names, zoo, algo, started_from, solver } => {
+            upgrade(&folder(zoo), names, Records { algo, started_from: started_from.as_deref(), solver })
         }
         ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
         ZooCommand::Describe { name, description, zoo } => describe(&folder(zoo), &name, &description),
@@ -137,10 +142,11 @@ fn list(zoo: &Path) -> Result<()> {
     for name in names {
         let meta = crate::benchmark::zoo::read_meta(&zoo.join(format!("{name}.json")))?;
         let steps = meta.env_steps.map_or("?".into(), |s| format!("{:.2}M", s as f64 / 1e6));
+        let solver = meta.solver.map_or_else(String::new, |v| format!(" of solver version {v}"));
         println!(
-            "{name:<36} {:<24} {} epoch {:>3}, {steps} env steps",
+            "{name:<36} {:<24} {}{solver} epoch {:>3}, {steps} env steps",
             meta.trained_on(),
-            meta.trained_by().unwrap_or("(algorithm unrecorded)"),
+            meta.trained_by().map_or("(algorithm unrecorded)", Trainer::name),
             meta.epoch
         );
         println!("    {}", meta.description);
@@ -190,20 +196,30 @@ fn check(zoo: &Path, names: Vec<String>) -> Result<()> {
         println!(
             "{name}: ok ({} {}, epoch {})",
             meta.trained_on(),
-            meta.trained_by().unwrap_or("(algorithm unrecorded)"),
+            meta.trained_by().map_or("(algorithm unrecorded)", Trainer::name),
             meta.epoch
         );
     }
     Ok(())
 }
 
-/// `zoo upgrade`: entries rewritten in this format and sealed, with the algorithm or the start given.
-fn upgrade(zoo: &Path, names: Vec<String>, algo: Option<&str>, started_from: Option<&Path>) -> Result<()> {
+/// What `zoo upgrade` records where an entry records none.
+struct Records<'a> {
+    algo: Option<Trainer>,
+    started_from: Option<&'a Path>,
+    solver: Option<u32>,
+}
+
+/// `zoo upgrade`: entries rewritten in this format and sealed, with the records given.
+fn upgrade(zoo: &Path, names: Vec<String>, records: Records<'_>) -> Result<()> {
     crate::benchmark::zoo::existing(zoo)?;
-    if started_from.is_some() && names.is_empty() {
+    if records.started_from.is_some() && names.is_empty() {
         bail!("--started-from records one start: name the entries fine-tuned from it");
     }
-    let start = match started_from {
+    if records.solver.is_some() && names.is_empty() {
+        bail!("--solver records the solver one policy learned from: name the entries that learned from it");
+    }
+    let start = match records.started_from {
         Some(p) => {
             let saved =
                 crate::benchmark::load::load_policy(p).with_context(|| format!("--started-from {}", p.display()))?;
@@ -217,14 +233,18 @@ fn upgrade(zoo: &Path, names: Vec<String>, algo: Option<&str>, started_from: Opt
         let path = crate::benchmark::zoo::find_named(zoo, name, "upgrade")?;
         let before = crate::benchmark::zoo::read_meta(&path)?.format;
         crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
-        if let Some(algo) = algo {
+        if let Some(algo) = records.algo {
             crate::benchmark::zoo::record_algo(&path, algo)?;
+        }
+        if let Some(version) = records.solver {
+            crate::benchmark::zoo::record_solver(&path, version)?;
         }
         if let Some((saved, id)) = &start {
             crate::benchmark::zoo::record_started_from(&path, saved, id.clone())?;
         }
         let after = crate::benchmark::zoo::read_meta(&path)?;
-        println!("{name}: {before} -> {}, sealed, trained by {}", after.format, after.algo);
+        let by = after.algo.map_or(crate::benchmark::zoo::UNRECORDED, Trainer::name);
+        println!("{name}: {before} -> {}, sealed, trained by {by}", after.format);
     }
     Ok(())
 }
@@ -445,4 +465,15 @@ fn env_steps_of(policy: &Path, epoch: usize) -> Option<u64> {
         let rows = crate::learn::train::read_progress(&d.join("progress.csv")).ok()?;
         rows.iter().find(|r| r.epoch + 1 == epoch).map(|r| r.env_steps)
     })
+}
+
+/// `--algo`'s values: the trainers' recorded names.
+impl clap::ValueEnum for Trainer {
+    fn value_variants<'a>() -> &'a [Self] {
+        &Trainer::ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.name()))
+    }
 }

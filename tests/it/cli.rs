@@ -809,7 +809,7 @@ fn the_command_line_reference_names_every_command_and_algorithm() {
         );
     }
     let train = help.lines().find(|l| l.trim_start().starts_with("train ")).unwrap().to_lowercase();
-    for algo in blockpuzzle::benchmark::saved::TRAINERS {
+    for algo in blockpuzzle::benchmark::saved::Trainer::ALL.map(|t| t.name()) {
         assert!(train.contains(algo), "`train`'s summary omits {algo}: {train}");
     }
 }

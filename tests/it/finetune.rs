@@ -371,10 +371,7 @@ fn a_blend_lies_between_a_fine_tuned_policy_and_its_start() {
     assert_eq!(record.weight, 0.25);
     assert_eq!(record.base, generalist.policy_id("generalist-bc-entity"));
     assert_eq!(record.tuned, tuned.policy_id(&tuned_file.display().to_string()));
-    assert_eq!(
-        (b.env_id.as_str(), b.epoch, b.algo.as_deref()),
-        (tuned.env_id.as_str(), tuned.epoch, tuned.algo.as_deref())
-    );
+    assert_eq!((b.env_id.as_str(), b.epoch, b.algo), (tuned.env_id.as_str(), tuned.epoch, tuned.algo));
     assert!(b.critic.is_none());
     assert_eq!(b.policy.act(&vec![0.1; b.policy.obs_dim()]).len(), 4);
     // A zoo entry made from it keeps the record, sealed with the rest of its metadata.
@@ -414,8 +411,8 @@ fn a_blend_lies_between_a_fine_tuned_policy_and_its_start() {
     let zeros = format!("sha256:{}", "0".repeat(64));
     type Edit = fn(&mut serde_json::Value, &str);
     let edits: [(&str, Edit); 4] = [
-        ("algo \"ppo\" is none of bc, dagger, ddpg, td3, sac, pggd", |v, _| v["algo"] = "ppo".into()),
-        ("algo \"pggd\" with a deterministic policy", |v, _| v["algo"] = "pggd".into()),
+        ("unknown variant `ppo`, expected one of `bc`, `dagger`", |v, _| v["algo"] = "ppo".into()),
+        ("algo: pggd trains a gaussian policy, and this one is deterministic", |v, _| v["algo"] = "pggd".into()),
         ("its text is not the task its hash", |v, z| v["task"]["hash"] = z.into()),
         ("blend.base records sha256:000", |v, z| v["blend"]["base"]["sha256"] = z.into()),
     ];

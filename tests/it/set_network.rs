@@ -91,13 +91,14 @@ fn a_set_policy_round_trips_through_the_zoo() {
             epoch: 3,
             env_steps: Some(1000),
             finals_success: 0.0,
-            algo: Some("td3".into()),
+            algo: Some(blockpuzzle::benchmark::saved::Trainer::Td3),
             obs_mode: None,
             fixtures: None,
             policy: AnyPolicy::Deterministic(agent.policy()),
             critic: Some(agent.critic.to_plain()),
             blend: None,
             started_from: None,
+            solver: None,
         };
         let info = ExportInfo {
             name: format!("set-{k}"),

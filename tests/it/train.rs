@@ -132,6 +132,8 @@ fn short_run_writes_every_run_directory_file() {
         std::fs::copy(dir.path().join(f), carried.path().join(f)).unwrap();
     }
     assert_eq!(policy_from_checkpoint(carried.path()).unwrap(), last);
+    // DDPG learns from rewards alone: no solver version.
+    assert_eq!(last.solver, None);
     // Through the CLI: `zoo export --from` the carried run.
     let zoo = tempfile::tempdir().unwrap();
     let out = std::process::Command::new(crate::common::CLI)
@@ -1302,6 +1304,14 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     // it, in the layout of the most blocks.
     let saved = load_policy(&straight.path().join("policy.json")).unwrap();
     assert_eq!(policy_from_checkpoint(straight.path()).unwrap(), saved);
+    // DAgger learns from the solver: the policy names the version that labelled it, and so does its
+    // zoo entry.
+    assert_eq!(saved.solver, Some(blockpuzzle::policy::SOLVER_VERSION));
+    let shelf = tempfile::tempdir().unwrap();
+    let info = blockpuzzle::benchmark::zoo::ExportInfo { name: "d".into(), ..Default::default() };
+    let entry = blockpuzzle::benchmark::zoo::export(shelf.path(), &saved, &info).unwrap().with_extension("json");
+    let (meta, loaded) = blockpuzzle::benchmark::zoo::load(&entry).unwrap();
+    assert_eq!((meta.solver, loaded.solver), (saved.solver, saved.solver));
     assert_eq!(saved.env_id, "gripper+push-0-3");
     assert!(saved.tasks.is_empty() && saved.task.is_none() && saved.is_multi_task());
     assert_eq!(saved.stream.as_ref(), Some(&record));
@@ -1440,7 +1450,10 @@ fn a_flat_multi_task_policy_plays_each_of_its_tasks() {
     let choose = blockpuzzle::env::registry::task("BlocksChoose-v0").unwrap().object_count();
     assert_eq!(saved.slots().unwrap(), choose);
     // The policy file records who trained it and what it reads (issue 61); an edited record is refused.
-    assert_eq!((saved.algo.as_deref(), saved.obs_mode), (Some("ddpg"), Some(blockpuzzle::env::ObsMode::Flat)));
+    assert_eq!(
+        (saved.algo, saved.obs_mode),
+        (Some(blockpuzzle::benchmark::saved::Trainer::Ddpg), Some(blockpuzzle::env::ObsMode::Flat))
+    );
     let mut edited: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&policy).unwrap()).unwrap();
     edited["obs_mode"] = "entities".into();
     let file = run.path().join("edited.json");

@@ -4,14 +4,14 @@
 #![cfg(feature = "train")]
 
 use blockpuzzle::benchmark::load::load_policy;
-use blockpuzzle::benchmark::saved::SavedPolicy;
+use blockpuzzle::benchmark::saved::{SavedPolicy, Trainer};
 use blockpuzzle::benchmark::zoo::{self, ExportInfo};
 use blockpuzzle::env::registry;
 use blockpuzzle::learn::agents::arch::Arch;
 use blockpuzzle::learn::agents::ddpg::{Ddpg, DdpgConfig};
 use blockpuzzle::learn::agents::pggd::{Pggd, PggdConfig};
 use blockpuzzle::learn::agents::shared::SharedConfig;
-use blockpuzzle::policy::actor::AnyPolicy;
+use blockpuzzle::policy::actor::{AnyPolicy, PolicyKind};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
@@ -42,13 +42,14 @@ fn ddpg_saved(seed: u64) -> SavedPolicy {
         epoch: 12,
         env_steps: Some(34_000),
         finals_success: 0.5,
-        algo: Some("ddpg".into()),
+        algo: Some(Trainer::Ddpg),
         obs_mode: None,
         fixtures: None,
         policy: AnyPolicy::Deterministic(a.policy()),
         critic: Some(a.critic.to_plain()),
         blend: None,
         started_from: None,
+        solver: None,
     }
 }
 
@@ -75,7 +76,7 @@ fn ddpg_entry_round_trips_and_acts_identically() {
     let path = zoo::export(dir.path(), &saved, &info("ddpg-test")).unwrap();
     assert_eq!(path, dir.path().join("ddpg-test.safetensors"));
     let (meta, loaded) = zoo::load(&path).unwrap();
-    assert_eq!((meta.algo.as_str(), meta.epoch, meta.task.id.as_str()), ("ddpg", 12, ENV));
+    assert_eq!((meta.algo, meta.epoch, meta.task.id.as_str()), (Some(Trainer::Ddpg), 12, ENV));
     assert_eq!(meta.actor.sizes, vec![obs_dim(), 32, 32, 4]);
     assert_eq!(meta.critic.as_ref().unwrap().sizes, vec![obs_dim() + 4, 32, 32, 1]);
     assert_eq!(meta.probes.len(), 3);
@@ -105,12 +106,12 @@ fn pggd_entry_round_trips() {
     let mut p = Pggd::new(Arch::mlp(d), 4, (2, 16), (0.01, 5.0), PggdConfig::default(), &mut rng);
     p.norm.update(&random_obs(&mut rng, 20 * d));
     let saved =
-        SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, algo: Some("pggd".into()), ..ddpg_saved(1) };
+        SavedPolicy { policy: AnyPolicy::Pggd(p.policy()), critic: None, algo: Some(Trainer::Pggd), ..ddpg_saved(1) };
     let path = zoo::export(dir.path(), &saved, &info("pggd-test")).unwrap();
     let (meta, loaded) = zoo::load(&path).unwrap();
-    assert_eq!((meta.algo.as_str(), meta.kind()), ("pggd", Some("gaussian")));
+    assert_eq!((meta.algo, meta.kind()), (Some(Trainer::Pggd), Some(PolicyKind::Gaussian)));
     // PGGD trains a Gaussian and nothing else does: a record that says otherwise is refused.
-    let wrong = SavedPolicy { algo: Some("ddpg".into()), ..saved.clone() };
+    let wrong = SavedPolicy { algo: Some(Trainer::Ddpg), ..saved.clone() };
     let e = err_text(zoo::export(dir.path(), &wrong, &info("pggd-wrong")).unwrap_err());
     assert!(e.contains("ddpg trains a deterministic"), "{e}");
     assert!(meta.sigma_min.is_some() && !meta.actor.tanh_out);
@@ -605,19 +606,19 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     let (meta, saved) = zoo::load(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
     assert_eq!(
         (meta.version(), meta.obs_mode, meta.kind(), meta.trained_by()),
-        (7, Some(ObsMode::Entities), Some("deterministic"), Some("bc"))
+        (7, Some(ObsMode::Entities), Some(PolicyKind::Deterministic), Some(Trainer::Bc))
     );
-    assert_eq!(saved.algo.as_deref(), Some("bc"));
+    assert_eq!(saved.algo, Some(Trainer::Bc));
     assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
     assert_eq!(meta.fixtures.as_deref(), Some(&blockpuzzle::env::Fixture::ALL[..]));
-    assert_eq!(zoo::load(&zoo::dir().join("BlocksChoose-v0-pggd.json")).unwrap().0.kind(), Some("gaussian"));
+    assert_eq!(zoo::load(&zoo::dir().join("BlocksChoose-v0-pggd.json")).unwrap().0.kind(), Some(PolicyKind::Gaussian));
     // Exported: the policy file's record; an --algo that disagrees with it is refused.
     let dir = tempfile::tempdir().unwrap();
     let path = zoo::export(dir.path(), &ddpg_saved(3), &info("e")).unwrap();
     let (meta, _) = zoo::load(&path).unwrap();
-    assert_eq!((meta.trained_by(), meta.obs_mode), (Some("ddpg"), Some(ObsMode::Flat)));
+    assert_eq!((meta.trained_by(), meta.obs_mode), (Some(Trainer::Ddpg), Some(ObsMode::Flat)));
     let e = err_text(
-        zoo::export(dir.path(), &ddpg_saved(3), &ExportInfo { algo: Some("sac".into()), ..info("f") }).unwrap_err(),
+        zoo::export(dir.path(), &ddpg_saved(3), &ExportInfo { algo: Some(Trainer::Sac), ..info("f") }).unwrap_err(),
     );
     assert!(e.contains("records that ddpg trained it"), "{e}");
     // A policy file written before it recorded its observation: exported with the one its network reads.
@@ -630,16 +631,20 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     std::fs::copy(zoo::dir().join("BlocksTouch-v0-ddpg.safetensors"), z.join("old.safetensors")).unwrap();
     let mut old = zoo::read_meta(&zoo::dir().join("BlocksTouch-v0-ddpg.json")).unwrap();
     (old.format, old.algo, old.kind, old.obs_mode, old.colour_feature, old.fixtures, old.name) =
-        ("blockpuzzle-zoo/6".into(), "ddpg".into(), None, None, None, None, "old".into());
+        ("blockpuzzle-zoo/6".into(), Some(Trainer::Ddpg), None, None, None, None, "old".into());
     old.meta_sha256 = Some(old.seal());
     std::fs::write(z.join("old.json"), serde_json::to_vec_pretty(&old).unwrap()).unwrap();
     let (meta, saved) = zoo::load(&z.join("old.json")).unwrap();
-    assert_eq!((meta.version(), meta.kind(), meta.trained_by(), saved.algo), (6, Some("deterministic"), None, None));
+    assert_eq!(
+        (meta.version(), meta.kind(), meta.trained_by(), saved.algo),
+        (6, Some(PolicyKind::Deterministic), None, None)
+    );
     let bp = |args: &[&str]| crate::common::blockpuzzle(args).output().unwrap();
     let o = bp(&["zoo", "upgrade", "old", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let meta = zoo::read_meta(&z.join("old.json")).unwrap();
-    assert_eq!((meta.version(), meta.algo.as_str(), meta.obs_mode), (7, "unrecorded", Some(ObsMode::Flat)));
+    assert_eq!((meta.version(), meta.algo, meta.obs_mode), (7, None, Some(ObsMode::Flat)));
+    assert!(std::fs::read_to_string(z.join("old.json")).unwrap().contains("\"algo\": \"unrecorded\""));
     assert_eq!(meta.colour_feature, Some(blockpuzzle::env::COLOUR_FEATURE));
     assert_eq!(meta.fixtures.as_deref(), Some(&[][..]));
     // An algorithm that does not train this kind of policy is refused, and the entry stays as it was
@@ -647,15 +652,38 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     let before = std::fs::read(z.join("old.json")).unwrap();
     let o = bp(&["zoo", "upgrade", "old", "--algo", "pggd", "--zoo", z.to_str().unwrap()]);
     let e = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && e.contains("holds a deterministic policy, which pggd does not train"), "{e}");
+    assert!(
+        !o.status.success() && e.contains("--algo pggd: pggd trains a gaussian policy, and this one is deterministic"),
+        "{e}"
+    );
     assert_eq!(std::fs::read(z.join("old.json")).unwrap(), before);
     assert!(bp(&["zoo", "check", "old", "--zoo", z.to_str().unwrap()]).status.success());
     let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some("ddpg"));
+    assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some(Trainer::Ddpg));
     let o = bp(&["zoo", "upgrade", "old", "--algo", "td3", "--zoo", z.to_str().unwrap()]);
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("records ddpg"), "{e}");
+    // The solver version a policy learned from (issue 73), recorded once: a version no build has had,
+    // a change of record and an upgrade of every entry at once are refused, and nothing is written.
+    let z_arg = z.to_str().unwrap();
+    let before = std::fs::read(z.join("old.json")).unwrap();
+    for (args, want) in [
+        (&["old", "--solver", "99"][..], "solver 99 is no solver version this build knows (1 to"),
+        (&["--solver", "1"][..], "--solver records the solver one policy learned from: name the entries"),
+    ] {
+        let o = bp(&[&["zoo", "upgrade", "--zoo", z_arg][..], args].concat());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{args:?}: {e}");
+        assert_eq!(std::fs::read(z.join("old.json")).unwrap(), before);
+    }
+    assert!(bp(&["zoo", "upgrade", "old", "--solver", "1", "--zoo", z_arg]).status.success());
+    assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.solver, Some(1));
+    let o = bp(&["zoo", "upgrade", "old", "--solver", "2", "--zoo", z_arg]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("learned from solver version 1; --solver 2 would change"), "{e}");
+    let o = bp(&["zoo", "list", "--zoo", z_arg]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ddpg of solver version 1"));
     // An entry whose fixtures are not this build's is refused, naming both lists.
     let mut edited = zoo::read_meta(&zoo::dir().join("generalist-bc-entity.json")).unwrap();
     edited.fixtures = Some(blockpuzzle::env::Fixture::ALL[..2].to_vec());

@@ -61,6 +61,9 @@ impl<T> AlgorithmConfig for T where
 pub struct Info {
     /// `--algo` value, checkpoint name and its settings' group in `config.json` (lowercase).
     pub name: &'static str,
+    /// What policy files and zoo entries record as the algorithm that trained a policy (DDPG's
+    /// `--td3` makes it TD3: [`crate::learn::train::TrainConfig::trainer`]).
+    pub trainer: crate::benchmark::saved::Trainer,
     /// How it is shown in titles and reports, e.g. "DDPG".
     pub title: &'static str,
     /// One line for `--help`.

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 pub const REGISTRATION: Registration<BcConfig> = Registration {
     info: Info {
         name: "bc",
+        trainer: crate::benchmark::saved::Trainer::Bc,
         title: "BC",
         about: "behaviour cloning of the solver, which plays every exploration episode (--net entity)",
         takes_expert: false,

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 pub const REGISTRATION: Registration<DaggerConfig> = Registration {
     info: Info {
         name: "dagger",
+        trainer: crate::benchmark::saved::Trainer::Dagger,
         title: "DAgger",
         about: "DAgger: the solver labels the learner's own states (--net entity)",
         takes_expert: false,

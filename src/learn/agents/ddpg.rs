@@ -47,6 +47,7 @@ pub const POLICY_DELAY: Bound = Bound::new("--policy-delay", 1, 1_000, "");
 pub const REGISTRATION: Registration<DdpgConfig> = Registration {
     info: Info {
         name: "ddpg",
+        trainer: crate::benchmark::saved::Trainer::Ddpg,
         title: "DDPG",
         about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
         takes_expert: false,

@@ -29,6 +29,7 @@ use tch::Tensor;
 pub const REGISTRATION: Registration<PggdConfig> = Registration {
     info: Info {
         name: "pggd",
+        trainer: crate::benchmark::saved::Trainer::Pggd,
         title: "PGGD",
         about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
         takes_expert: true,

@@ -52,6 +52,7 @@ pub const INIT_STD: f64 = 0.2;
 pub const REGISTRATION: Registration<SacConfig> = Registration {
     info: Info {
         name: "sac",
+        trainer: crate::benchmark::saved::Trainer::Sac,
         title: "SAC",
         about: "soft actor-critic with automatic entropy tuning (twin critics)",
         takes_expert: false,

@@ -55,6 +55,9 @@ pub fn policy_from_checkpoint(run_dir: &Path) -> Result<SavedPolicy> {
             rows.len()
         );
     };
+    // The solver version that labelled its last epoch (`provenance.json`); unknown where the run
+    // directory does not record its builds.
+    let solver = run.read_provenance()?.pop().map(|s| s.build.solver_version());
     let agent = &*loaded.agent;
-    Ok(saved_policy(&config, &loaded.state, row.finals_success, agent.policy(), agent.critic()))
+    Ok(saved_policy(&config, &loaded.state, row.finals_success, agent.policy(), agent.critic(), solver))
 }

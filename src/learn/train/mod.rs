@@ -649,11 +649,17 @@ impl TrainConfig {
         }
     }
 
-    /// The algorithm's name as policy files and zoo entries record it (`ddpg` with `--td3` is `td3`).
-    pub fn algo_label(&self) -> &'static str {
-        match self.algo.name() {
-            "ddpg" if self.algos.ddpg.td3 => "td3",
-            name => name,
+    /// Whether the run learns from the solver's actions (an imitation algorithm, or `--demos`): its
+    /// policy records the solver version ([`crate::benchmark::saved::SavedPolicy::solver`]).
+    pub fn learns_from_solver(&self) -> bool {
+        self.algo.registration().info.imitates || self.finetune.demos.is_some()
+    }
+
+    /// The algorithm as policy files and zoo entries record it (`ddpg` with `--td3` is `td3`).
+    pub fn trainer(&self) -> crate::benchmark::saved::Trainer {
+        match self.algo.registration().info.trainer {
+            crate::benchmark::saved::Trainer::Ddpg if self.algos.ddpg.td3 => crate::benchmark::saved::Trainer::Td3,
+            trainer => trainer,
         }
     }
 

@@ -541,14 +541,16 @@ fn announce_ranks(comm: &Comm, workers: usize, gradient_len: usize) {
 /// The policy file a run writes after an epoch (`policy.json`, snapshots, `best_policy.json`), from
 /// its config, its state after the epoch, the epoch's finals success and the agent's policy and
 /// critic. A multi-task policy names its run's tasks (`config.json` records them) and holds no one
-/// task; a stream run's, its stream's record. [`super::export::policy_from_checkpoint`] writes the
-/// same file from a checkpoint alone.
+/// task; a stream run's, its stream's record. A run that learns from the solver records `solver`, the
+/// version that labelled it, where known. [`super::export::policy_from_checkpoint`] writes the same file from a
+/// checkpoint alone.
 pub(crate) fn saved_policy(
     config: &TrainConfig,
     state: &RunState,
     finals_success: f64,
     policy: AnyPolicy,
     critic: Option<crate::policy::actor::mlp::PlainNet>,
+    solver: Option<u32>,
 ) -> SavedPolicy {
     let (task, tasks, stream) = match (&config.stream, &config.tasks[..]) {
         (Some(stream), _) => (None, Vec::new(), Some(stream.clone())),
@@ -565,7 +567,8 @@ pub(crate) fn saved_policy(
         epoch: state.epoch,
         env_steps: Some(state.env_steps),
         finals_success,
-        algo: Some(config.algo_label().to_owned()),
+        algo: Some(config.trainer()),
+        solver: solver.filter(|_| config.learns_from_solver()),
         obs_mode: Some(config.net.obs_mode()),
         fixtures: Some(config.net.obs_mode().fixtures().to_vec()),
         policy,
@@ -1231,7 +1234,14 @@ impl<'a> Trainer<'a> {
             // A multi-task run's level is the sum of its tasks' levels.
             let max_level = self.max_levels.iter().sum();
             plot::success_curves(&run.plot(), &self.config.title(), &self.rows, max_level)?;
-            let saved = saved_policy(&self.config, state, row.finals_success, policy, self.learner.agent.critic());
+            let saved = saved_policy(
+                &self.config,
+                state,
+                row.finals_success,
+                policy,
+                self.learner.agent.critic(),
+                Some(SOLVER_VERSION),
+            );
             write_json(&run.policy(), &saved)?;
             if self.config.snapshot_every > 0 && state.epoch % self.config.snapshot_every == 0 {
                 std::fs::create_dir_all(run.snapshots())

@@ -179,13 +179,39 @@ impl AnyPolicy {
         }
     }
 
-    /// What acts, in the words of zoo format 7's `kind`: "deterministic" (a tanh actor) or
-    /// "gaussian" (PGGD).
-    pub fn kind(&self) -> &'static str {
+    /// What acts (zoo format 7's `kind`).
+    pub fn kind(&self) -> PolicyKind {
         match self {
-            Self::Deterministic(_) => "deterministic",
-            Self::Pggd(_) => "gaussian",
+            Self::Deterministic(_) => PolicyKind::Deterministic,
+            Self::Pggd(_) => PolicyKind::Gaussian,
         }
+    }
+}
+
+/// What acts, as zoo format 7's `kind` records it: `deterministic` (a tanh actor: DDPG, TD3, SAC's
+/// mean action, BC, DAgger) or `gaussian` (PGGD's μ and σ).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PolicyKind {
+    /// A tanh actor.
+    Deterministic,
+    /// A Gaussian policy (PGGD).
+    Gaussian,
+}
+
+impl PolicyKind {
+    /// The recorded word.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Deterministic => "deterministic",
+            Self::Gaussian => "gaussian",
+        }
+    }
+}
+
+impl std::fmt::Display for PolicyKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
