@@ -394,7 +394,7 @@ impl Student {
 fn train_students(args: &Args, spec: &ObsSpec, train: &Dataset, val: &Dataset) -> Result<Vec<Student>> {
     let flat_dim = ObsSpec::flat(spec.max_objects).dim();
     let set = NetConfig { net: NetKind::Set, ..NetConfig::default() };
-    let set_arch = Arch::of(&ObsSpec::new(ObsMode::Objects, spec.max_objects), &set).map_err(anyhow::Error::msg)?;
+    let set_arch = Arch::of(&ObsSpec::new(ObsMode::Objects, spec.max_objects), &set)?;
     let mut students = [
         Student::new("mlp", Arch::mlp(flat_dim), true, args.seed, train, val),
         Student::new("set", set_arch, false, args.seed, train, val),

@@ -496,7 +496,7 @@ struct Student {
 
 impl Student {
     fn new(spec: &StudentSpec, obs: &ObsSpec, seed: u64, train: &Data, families: usize) -> Result<Self> {
-        let arch = Arch::of(obs, &spec.net).map_err(anyhow::Error::msg)?;
+        let arch = Arch::of(obs, &spec.net)?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         if spec.per_family && spec.heads > 1 {
             bail!("--student {}: family=1 and heads=K are two ways to have several heads; take one", spec.name);

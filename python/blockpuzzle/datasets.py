@@ -93,6 +93,12 @@ def _int(v, least: int) -> bool:
     return type(v) is int and v >= least
 
 
+def _outcomes() -> tuple[str, ...]:
+    """The outcome names the core defines (``_native.facts()``)."""
+    from blockpuzzle.evaluation import OUTCOMES
+    return OUTCOMES
+
+
 def _header(path, raw: bytes) -> dict:
     """The demos file's one metadata entry (version, split, provenance, layout, episodes), each
     field checked; the file's safetensors layout is checked before (``parse_safetensors``)."""
@@ -136,6 +142,9 @@ def _header(path, raw: bytes) -> dict:
                 ok = _int(v, kind)
             if not ok:
                 raise _bad(path, f"field episodes[{i}].{key} is {'missing' if key not in e else repr(v)}, not {what}")
+        outcomes = _outcomes()
+        if e["outcome"] not in outcomes:
+            raise _bad(path, f"field episodes[{i}].outcome is {e['outcome']!r}, not an outcome name ({', '.join(outcomes)})")
         # Recorded since levels were: absent in older files, checked where present.
         if "level" in e and not _int(e["level"], 0):
             raise _bad(path, f"field episodes[{i}].level is {e['level']!r}, not a curriculum level >= 0")

@@ -14,9 +14,14 @@ the checkout's zoo (``names()``); ``load`` also takes the path of an entry elsew
 Inside the package a policy acts through the extension, with the command line's own forward pass
 (``policy.native``), so that it plays exactly the episodes the CLI plays; the numpy forward pass
 here (``policy.act_numpy``) is the reference for reading the format in your own code, equal to it
-to about 1e-6 (float32 sums in another order), which can turn one episode in a few hundred. This
-file imports nothing of blockpuzzle but that extension, and runs on its own without it
-(examples/python/zoo_policy.py loads it by path): then the numpy pass acts.
+to about 1e-6 (float32 sums in another order), which can turn one episode in a few hundred.
+
+Every reader checks an entry the same way: the extension's loader (the command line's ``zoo check``)
+checks it whichever pass acts. This file imports nothing of blockpuzzle but that extension, and runs
+on its own without it (examples/python/zoo_policy.py loads it by path): then the numpy pass acts, and
+the entry is checked by its own checksums only, ``tensors_sha256`` and the metadata's seal
+``meta_sha256`` (so any edit of the metadata but its evaluations, or of the tensors, is refused); its
+evaluation records, which lie outside the seal, are the extension's to check.
 """
 
 from __future__ import annotations
@@ -139,6 +144,57 @@ def _native_actor(path: pathlib.Path, required: bool):
     return _native.ZooActor(str(path))
 
 
+class _Number(str):
+    """A JSON number as written: the seal hashes numbers as the writer wrote them."""
+
+
+def _no_duplicates(pairs):
+    keys = [k for k, _ in pairs]
+    if len(set(keys)) != len(keys):
+        raise ValueError(f"a JSON object has the field {next(k for k in keys if keys.count(k) > 1)!r} twice")
+    return dict(pairs)
+
+
+def _compact(v) -> str:
+    """``v`` as compact JSON, the way the Rust core writes it (serde_json): no spaces, non-ASCII
+    unescaped, numbers as read."""
+    if isinstance(v, _Number):
+        return str(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)
+    if isinstance(v, bool) or v is None:
+        return json.dumps(v)
+    if isinstance(v, list):
+        return "[" + ",".join(_compact(x) for x in v) + "]"
+    return "{" + ",".join(json.dumps(k, ensure_ascii=False) + ":" + _compact(x) for k, x in v.items()) + "}"
+
+
+def seal(meta_bytes: bytes) -> str:
+    """The ``meta_sha256`` of an entry's metadata, as the core computes it (``ZooMeta::seal``): the
+    sha256 of its compact JSON with ``evaluations`` empty and ``meta_sha256`` left out, fields in the
+    order written."""
+    meta = json.loads(meta_bytes, parse_float=_Number, parse_int=_Number, object_pairs_hook=_no_duplicates)
+    meta["evaluations"] = []
+    meta.pop("meta_sha256", None)
+    return "sha256:" + hashlib.sha256(_compact(meta).encode()).hexdigest()
+
+
+def _check_sums(meta_bytes: bytes, tensor_bytes: bytes) -> None:
+    """An entry's own checksums: its tensors are the ones ``tensors_sha256`` names, and its metadata
+    (evaluations aside) the one ``meta_sha256`` seals, which formats 6 and 7 require."""
+    meta = json.loads(meta_bytes)
+    tensors = "sha256:" + hashlib.sha256(tensor_bytes).hexdigest()
+    if meta["tensors_sha256"] != tensors:
+        raise ValueError(f"its tensors are not the ones tensors_sha256 names ({meta['tensors_sha256']}; "
+                         f"the .safetensors file's is {tensors})")
+    version = int(meta["format"].rsplit("/", 1)[1])
+    if version >= 6 and "meta_sha256" not in meta:
+        raise ValueError(f"format {version} seals its metadata, and meta_sha256 is missing")
+    if "meta_sha256" in meta and meta["meta_sha256"] != seal(meta_bytes):
+        raise ValueError(f"its metadata is not the one meta_sha256 sealed ({meta['meta_sha256']}; the "
+                         f"metadata's is {seal(meta_bytes)}): a field was edited")
+
+
 #: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how an entry of
 #: formats 1-6, which does not record its observation, is read (format 7 records ``obs_mode``).
 ENTITY_FEATURES: int = _FACTS["entity_features"]
@@ -231,9 +287,11 @@ class ZooPolicy:
     def __init__(self, path, native: bool | None = None):
         json_path = pathlib.Path(path).with_suffix(".json")
         self.path = json_path
-        #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts. Loaded first:
-        #: it checks the whole entry (checksums, layout, values) and names what is wrong.
-        self.native = None if native is False else _native_actor(json_path, required=bool(native))
+        # The extension's loader first, whichever pass acts: it checks the whole entry (checksums,
+        # seal, layout, values, evaluation records) and names what is wrong.
+        checked = _native_actor(json_path, required=bool(native))
+        #: The extension's actor (the CLI's forward pass), or None: the numpy pass acts.
+        self.native = None if native is False else checked
         meta_bytes = _read_input(json_path)
         tensor_path = json_path.with_suffix(".safetensors")
         tensor_bytes = _read_input(tensor_path)
@@ -243,6 +301,7 @@ class ZooPolicy:
                 raise ValueError(f"unknown format {self.meta['format']!r}")
             self.layers = len(self.meta["actor"]["sizes"]) - 1
             self.set = self.meta["actor"].get("set")
+            _check_sums(meta_bytes, tensor_bytes)
         except (ValueError, KeyError, TypeError, AttributeError) as e:
             raise ValueError(f"zoo entry {json_path} is not usable: {e}; restore it") from e
         self.tensors = parse_safetensors(tensor_bytes, tensor_path, "restore the zoo entry")

@@ -289,26 +289,18 @@ impl Env {
     }
 
     /// Benchmark helper: `steps` steps with uniform random actions (resetting
-    /// when an episode ends) run entirely in Rust, no Python in the loop.
-    /// Returns the seconds taken, to set the binding's per-step cost against.
+    /// when an episode ends) run entirely in Rust, no Python in the loop: the command line's
+    /// benchmark loop (`benchmark::throughput::random_steps`). Returns the seconds taken, to set
+    /// the binding's per-step cost against.
     #[pyo3(signature = (steps, seed = 0))]
     fn bench_steps(&mut self, py: Python<'_>, steps: usize, seed: u64) -> PyResult<f64> {
         let env = self.env()?;
         py.allow_threads(|| {
-            env.reset(Some(seed))?;
-            let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            let mut uniform = || {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                ((state >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-            };
+            let start = |env: &mut BlockEnv, seed: Option<u64>| Ok(env.reset(seed)?.0);
+            let obs = start(env, Some(seed))?;
+            let mut policy = blockpuzzle::policy::RandomPolicy::new(seed);
             let started = std::time::Instant::now();
-            for _ in 0..steps {
-                let action = [uniform(), uniform(), uniform(), uniform()];
-                let s = env.step(&action)?;
-                if s.terminated || s.truncated {
-                    env.reset(None)?;
-                }
-            }
+            blockpuzzle::benchmark::throughput::random_steps(env, &start, &mut policy, obs, steps)?;
             Ok(started.elapsed().as_secs_f64())
         })
         .map_err(to_py)
@@ -528,6 +520,17 @@ fn record_demos(
     done.map(|v| v.to_string()).map_err(|e| PyValueError::new_err(blockpuzzle::support::error::chain(&e)))
 }
 
+/// Reads a demos file with the core's reader (`Demos::read`, what `train --demos` reads) and returns
+/// its episode and step counts as JSON; a file it refuses is a ValueError naming why. The tests run
+/// one corpus of good and edited files through it and through `datasets.load_demos`, which must agree.
+#[pyfunction]
+fn read_demos(py: Python<'_>, path: &str) -> PyResult<String> {
+    let path = std::path::PathBuf::from(path);
+    let read = py.allow_threads(|| blockpuzzle::benchmark::demos::Demos::read(&path));
+    let d = read.map_err(|e| PyValueError::new_err(blockpuzzle::support::error::chain(&e)))?;
+    Ok(serde_json::json!({"episodes": d.episodes.len(), "steps": d.steps()}).to_string())
+}
+
 /// The commands only the Rust command line's training build has (`cli::TRAINING_COMMANDS`).
 #[pyfunction]
 fn training_commands() -> Vec<&'static str> {
@@ -636,6 +639,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(facts, m)?)?;
     m.add_function(wrap_pyfunction!(generate_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(record_demos, m)?)?;
+    m.add_function(wrap_pyfunction!(read_demos, m)?)?;
     m.add_function(wrap_pyfunction!(training_commands, m)?)?;
     m.add_function(wrap_pyfunction!(_mujoco_fatal_error_selftest, m)?)?;
     m.add_function(wrap_pyfunction!(_use_fetch_assets, m)?)?;

@@ -117,8 +117,11 @@ def set_value(header, data, tensor, index, value):
 
 
 def test_a_bad_demos_file_is_a_valueerror_naming_the_file_the_field_and_the_fix(tmp_path):
+    """Every case is also read by the core's reader (what ``train --demos`` reads): the two readers
+    accept and refuse the same files (issue 75)."""
+    from blockpuzzle import _native
     good = record(tmp_path)
-    blockpuzzle.load_demos(good)
+    assert json.loads(_native.read_demos(str(good)))["episodes"] == len(blockpuzzle.load_demos(good).episodes) > 0
     bad = tmp_path / "bad.safetensors"
     fix = "record it again with `blockpuzzle demos`"
 
@@ -132,6 +135,8 @@ def test_a_bad_demos_file_is_a_valueerror_naming_the_file_the_field_and_the_fix(
         assert type(e.value) is ValueError and msg.startswith(str(bad)) and fix in msg, msg
         for w in want:
             assert w in msg, (w, msg)
+        with pytest.raises(ValueError, match="is not a usable demos file|safetensors|demos"):
+            _native.read_demos(str(bad))
         if importlib.util.find_spec("minari"):
             with pytest.raises(ValueError, match="is not a usable"):
                 blockpuzzle.to_minari(bad, "blockpuzzle/bad/solver-v0")
@@ -192,15 +197,22 @@ def test_a_bad_demos_file_is_a_valueerror_naming_the_file_the_field_and_the_fix(
     for e in demos["episodes"]:
         e.pop("level")
     older = blockpuzzle.load_demos(write(tmp_path / "older.safetensors", header, demos, data))
+    json.loads(_native.read_demos(str(tmp_path / "older.safetensors")))
     assert blockpuzzle.datasets.reset_options(older.episode(0)) == {"task": "BlocksTouch-v0",
                                                                     "task_sha256": older.episodes[0]["task_sha256"]}
     case(lambda h, d, data: d["episodes"][0].update(level=-1), "field episodes[0].level is -1, not a curriculum level")
     case(lambda h, d, data: d["episodes"][1].update(distribution=""), "field episodes[1].distribution is ''")
     case(lambda h, d, data: d.update(version=2), "version 2 (this package reads version 1)")
+    # Fields of the right type whose values no recording has: an empty task id or hash, an unknown outcome.
+    case(lambda h, d, data: d["episodes"][0].update(task=""), "field episodes[0].task is ''")
+    case(lambda h, d, data: d["episodes"][1].update(task_sha256=""), "field episodes[1].task_sha256 is ''")
+    case(lambda h, d, data: d["episodes"][0].update(outcome="victory"), "field episodes[0].outcome is 'victory'")
     # Cut short, and a folder.
     bad.write_bytes(good.read_bytes()[:5])
     with pytest.raises(ValueError, match=r"bad.safetensors is not a usable safetensors file: it has 5 bytes.*" + fix):
         blockpuzzle.load_demos(bad)
+    with pytest.raises(ValueError, match=r"bad.safetensors.*5 bytes|bad.safetensors.*safetensors"):
+        _native.read_demos(str(bad))
     with pytest.raises(ValueError, match="is a folder"):
         blockpuzzle.load_demos(tmp_path)
     with pytest.raises(FileNotFoundError, match="nothere"):

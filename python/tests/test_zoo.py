@@ -2,7 +2,9 @@
 evaluations on the package's MuJoCo (test_provenance.py: a zoo policy scores what the command line,
 built on the same MuJoCo, scores)."""
 
+import json
 import os
+import pathlib
 import shutil
 
 import gymnasium as gym
@@ -133,23 +135,107 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
         assert (p.set or {}).get("fixtures", 0) in (0, len(p.fixtures))
     assert zoo.load("BlocksChoose-v0-pggd", native=False).kind == "gaussian"
     assert zoo.load("BlocksTouch-v0-ddpg", native=False).kind == "deterministic"
-    # The record is what the numpy reader uses: an edited mode is what it reports.
+    # An edited mode is refused by the numpy reader as by the extension's, naming the field.
     for ext in ("json", "safetensors"):
         shutil.copy(zoo.FOLDER / f"BlocksTouch-v0-ddpg.{ext}", tmp_path / f"x.{ext}")
     meta = json.loads((tmp_path / "x.json").read_text())
-    meta["obs_mode"] = "objects"
-    (tmp_path / "x.json").write_text(json.dumps(meta))
-    assert zoo.load("x", folder=tmp_path, native=False).obs_mode == "objects"
-    # ...and the extension's reader refuses it, naming the field.
-    with pytest.raises(ValueError, match="obs_mode records `objects`"):
-        zoo.load("x", folder=tmp_path, native=True)
-    # A format-6 entry: read as before.
-    old = dict(meta, format="blockpuzzle-zoo/6", algo="ddpg")
+    (tmp_path / "x.json").write_text(json.dumps(dict(meta, obs_mode="objects")))
+    for native in (False, True):
+        with pytest.raises(ValueError, match="obs_mode records `objects`"):
+            zoo.load("x", folder=tmp_path, native=native)
+    # A format-5 entry (before seals): read as before.
+    old = dict(meta, format="blockpuzzle-zoo/5", algo="ddpg")
     for k in ("obs_mode", "kind", "meta_sha256", "colour_feature", "fixtures"):
         old.pop(k)
     (tmp_path / "x.json").write_text(json.dumps(old))
     p = zoo.load("x", folder=tmp_path, native=False)
-    assert (p.version, p.obs_mode, p.kind, p.algo, p.fixtures) == (6, "flat", "deterministic", None, [])
+    assert (p.version, p.obs_mode, p.kind, p.algo, p.fixtures) == (5, "flat", "deterministic", None, [])
+
+
+def _corpus(folder):
+    """Zoo entries good and edited, each made from ReachAvoid-v0-ddpg by editing its files' bytes (so
+    that every number stays as the core wrote it): {name: whether it is usable}."""
+    base = (zoo.FOLDER / "ReachAvoid-v0-ddpg.json").read_bytes()
+    tensors = (zoo.FOLDER / "ReachAvoid-v0-ddpg.safetensors").read_bytes()
+    meta = json.loads(base)
+
+    def sub(old, new):
+        assert base.count(old.encode()) == 1, old
+        return base.replace(old.encode(), new.encode())
+
+    described = sub(meta["description"], "another description")
+    described = described.replace(meta["meta_sha256"].encode(), zoo.seal(described).encode())
+    rate = '"success_rate": 0.99,'
+    cases = {
+        "good": (base, tensors, True),
+        "resealed-description": (described, tensors, True),  # a free-text field edited and sealed again
+        "edited-description": (sub(meta["description"], "another description"), tensors, False),
+        "edited-obs-mode": (sub('"obs_mode": "flat"', '"obs_mode": "objects"'), tensors, False),
+        "edited-kind": (sub('"kind": "deterministic"', '"kind": "gaussian"'), tensors, False),
+        "edited-algo": (sub('"algo": "ddpg"', '"algo": "pggd"'), tensors, False),
+        "unknown-algo": (sub('"algo": "ddpg"', '"algo": "ppo"'), tensors, False),
+        "added-solver": (sub('"algo": "ddpg",', '"algo": "ddpg",\n  "solver": 4,'), tensors, False),
+        "edited-epoch": (sub('"epoch": 31,', '"epoch": 32,'), tensors, False),
+        "duplicate-field": (sub('"epoch": 31,', '"epoch": 31,\n  "epoch": 31,'), tensors, False),
+        "seal-removed": (sub(f',\n  "meta_sha256": "{meta["meta_sha256"]}"', ""), tensors, False),
+        "tensor-byte": (base, tensors[:-1] + bytes([tensors[-1] ^ 1]), False),
+        "tensors-cut": (base, tensors[:-4], False),
+        # Outside the seal: the evaluation records, which the extension recomputes.
+        "edited-success-rate": (sub(rate, '"success_rate": 0.5,'), tensors, False),
+        # An entry relabelled as older than what it carries.
+        "relabelled-format": (sub('"blockpuzzle-zoo/7"', '"blockpuzzle-zoo/5"').replace(
+            f',\n  "meta_sha256": "{meta["meta_sha256"]}"'.encode(), b""), tensors, False),
+    }
+    for name, (meta_bytes, tensor_bytes, _) in cases.items():
+        (folder / f"{name}.json").write_bytes(meta_bytes)
+        (folder / f"{name}.safetensors").write_bytes(tensor_bytes)
+    return {name: usable for name, (_, _, usable) in cases.items()}
+
+
+#: What zoo.py on its own, without the extension, cannot check (its module docstring): the evaluation
+#: records outside the seal, and a format's fields (an entry relabelled as an older format has no seal).
+STANDALONE_UNCHECKED = {"edited-success-rate", "relabelled-format"}
+
+
+def test_every_zoo_reader_accepts_and_refuses_the_same_entries(tmp_path):
+    """Issue 75: one corpus through every reader: the command line's ``zoo check``, the extension's
+    loader, ``zoo.load`` acting natively and with numpy, and zoo.py on its own (its own checksums)."""
+    import subprocess
+    import sys
+    from blockpuzzle import _native
+    usable = _corpus(tmp_path)
+
+    def accepts(read):
+        try:
+            read()
+            return True
+        except ValueError:
+            return False
+
+    script = pathlib.Path(sys.executable).parent / "blockpuzzle"
+    readers = {
+        "zoo check": lambda n: subprocess.run([str(script), "zoo", "check", n, "--zoo", str(tmp_path)],
+                                              capture_output=True).returncode == 0,
+        "extension": lambda n: accepts(lambda: _native.ZooActor(str(tmp_path / f"{n}.json"))),
+        "native": lambda n: accepts(lambda: zoo.load(n, folder=tmp_path, native=True)),
+        "numpy": lambda n: accepts(lambda: zoo.load(n, folder=tmp_path, native=False)),
+    }
+    for reader, read in readers.items():
+        got = {n: read(n) for n in usable}
+        assert got == usable, (reader, {n: v for n, v in got.items() if v != usable[n]})
+    code = ("import sys, importlib.util, json, pathlib; sys.modules['blockpuzzle'] = None; "
+            f"spec = importlib.util.spec_from_file_location('z', {str(pathlib.Path(zoo.__file__))!r}); "
+            "z = importlib.util.module_from_spec(spec); spec.loader.exec_module(z); out = {}\n"
+            f"for n in {sorted(usable)!r}:\n"
+            "    try:\n"
+            f"        z.load(n, folder={str(tmp_path)!r}); out[n] = True\n"
+            "    except ValueError:\n"
+            "        out[n] = False\n"
+            "print(json.dumps(out))")
+    standalone = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                            check=True).stdout)
+    expected = {n: u or n in STANDALONE_UNCHECKED for n, u in usable.items()}
+    assert standalone == expected, {n: v for n, v in standalone.items() if v != expected[n]}
 
 
 def test_blockpuzzle_zoo_names_the_zoo_as_for_the_command_line(tmp_path, monkeypatch):

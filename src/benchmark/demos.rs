@@ -531,6 +531,13 @@ fn check_values(t: &DemoTensors, episodes: &[DemoEpisode], layout: &DemoLayout) 
         }
     }
     for (i, (e, &start)) in episodes.iter().zip(&step_starts).enumerate() {
+        for (field, value) in
+            [("task", Some(&e.task)), ("task_sha256", Some(&e.task_sha256)), ("distribution", e.distribution.as_ref())]
+        {
+            if value.is_some_and(|v| v.is_empty()) {
+                return Err(format!("field episodes[{i}].{field} is empty; a recording names it"));
+            }
+        }
         if e.steps == 0 {
             return Err(format!("episode {i} has no steps; a recorded episode has at least one"));
         }

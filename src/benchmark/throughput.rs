@@ -36,11 +36,15 @@ pub struct BenchReport {
 /// Makes an environment.
 type MakeEnv<'a> = &'a (dyn Fn() -> Result<BlockEnv, EnvError> + Sync);
 /// Starts an episode (the environment and an episode seed) and returns its first observation.
-type StartEpisode<'a> = &'a (dyn Fn(&mut BlockEnv, Option<u64>) -> Result<Vec<f32>, EnvError> + Sync);
+pub type StartEpisode<'a> = &'a (dyn Fn(&mut BlockEnv, Option<u64>) -> Result<Vec<f32>, EnvError> + Sync);
 
 /// Steps `env` `n` times with random actions from `obs`, starting a new
-/// episode with `start` whenever one ends; returns the last observation.
-fn random_steps(
+/// episode with `start` whenever one ends; returns the last observation. The one stepping loop of
+/// the throughput benchmarks (`blockpuzzle bench`, `align`, Python's `Env.bench_steps`).
+///
+/// # Errors
+/// [`EnvError`] if a step or a new episode fails.
+pub fn random_steps(
     env: &mut BlockEnv,
     start: StartEpisode,
     policy: &mut RandomPolicy,

@@ -141,7 +141,7 @@ pub fn run(c: &TrainBenchConfig) -> Result<TrainBenchReport> {
     let env_config = crate::env::EnvConfig { obs_mode: c.net.obs_mode(), ..crate::env::EnvConfig::new(task) };
     let mut envs = crate::env::vector::VectorEnv::new(&env_config, c.workers, c.workers)?;
     let (obs_dim, act_dim) = (envs.obs_spec().dim(), crate::env::ACTION_DIM);
-    let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(TrainError::Refused)?;
+    let arch = Arch::of(&envs.obs_spec(), &c.net).map_err(|e| TrainError::Refused(e.to_string()))?;
     c.precision.check().map_err(TrainError::Refused)?;
     let gamma = shared.gamma;
     let spec = Spec { arch, act_dim, shared: &shared };

@@ -843,7 +843,8 @@ fn an_entity_set_network_trains_and_its_policy_reads_the_entities() {
     assert!(a.iter().all(|x| x.abs() <= 1.0), "{a:?}");
     let e = blockpuzzle::benchmark::evaluate::trained_policy(&path, saved, &env_of("BlocksAvoid-v0", ObsMode::Objects));
     assert!(e.unwrap_err().to_string().contains("give the environment obs_mode entities"));
-    let wrong = blockpuzzle::learn::agents::arch::Arch::of(&ObsSpec::new(ObsMode::Objects, 3), &c.net).unwrap_err();
+    let wrong =
+        blockpuzzle::learn::agents::arch::Arch::of(&ObsSpec::new(ObsMode::Objects, 3), &c.net).unwrap_err().to_string();
     assert!(wrong.contains("--net entity reads the `entities` observation"), "{wrong}");
 }
 

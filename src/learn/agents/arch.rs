@@ -15,6 +15,27 @@ use crate::support::limits::Bound;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+/// Why [`Arch::of`] builds no networks: the network settings, or an observation the network does not read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ArchError {
+    /// A network setting out of range ([`NetConfig::validate`]'s reason).
+    #[error("{0}")]
+    Settings(String),
+    /// `--net` asked of an observation it does not read.
+    #[error("--net {net} reads the `{reads}` observation, not the `{given}` one")]
+    OtherMode {
+        /// The network kind's flag value.
+        net: &'static str,
+        /// The observation it reads.
+        reads: ObsMode,
+        /// The one it was given.
+        given: ObsMode,
+    },
+    /// The set layout does not fit the observation.
+    #[error(transparent)]
+    Fit(#[from] crate::policy::actor::FitError),
+}
+
 /// Layers of a set network's per-object encoder.
 pub const SET_ENCODER_LAYERS: Bound = Bound::new("--set-encoder-layers", 1, 32, "");
 /// Pre-LayerNorm transformer blocks of a set network's encoder.
@@ -225,24 +246,19 @@ impl Arch {
     /// The networks `net` asks for on observations laid out as `obs`.
     ///
     /// # Errors
-    /// A set network on a flat observation, or the reverse.
-    pub fn of(obs: &ObsSpec, net: &NetConfig) -> Result<Self, String> {
-        net.validate()?;
+    /// Settings out of range, a set network on a flat observation, or the reverse.
+    pub fn of(obs: &ObsSpec, net: &NetConfig) -> Result<Self, ArchError> {
+        net.validate().map_err(ArchError::Settings)?;
         match net.net {
             NetKind::Mlp => match obs.mode {
                 ObsMode::Flat => Ok(Self::mlp(obs.dim())),
                 ObsMode::Objects | ObsMode::Entities => {
-                    Err(format!("--net mlp reads the flat observation, not the `{}` one", obs.mode))
+                    Err(ArchError::OtherMode { net: "mlp", reads: ObsMode::Flat, given: obs.mode })
                 }
             },
             NetKind::Set | NetKind::Entity => {
                 if obs.mode != net.obs_mode() {
-                    return Err(format!(
-                        "--net {} reads the `{}` observation, not the `{}` one",
-                        net.net.name(),
-                        net.obs_mode(),
-                        obs.mode
-                    ));
+                    return Err(ArchError::OtherMode { net: net.net.name(), reads: net.obs_mode(), given: obs.mode });
                 }
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;

@@ -6,7 +6,7 @@
 use super::checkpoint;
 use super::rundir::{read_progress, RunDir};
 use super::trainer::saved_policy;
-use super::{config_seal, Result};
+use super::{check_config_seal, Result};
 use crate::benchmark::saved::SavedPolicy;
 use std::path::Path;
 
@@ -28,13 +28,7 @@ pub fn policy_from_checkpoint(run_dir: &Path) -> Result<SavedPolicy> {
         );
     }
     let state = checkpoint::peek_state(&path)?;
-    if state.config_seal.as_ref().is_some_and(|seal| *seal != config_seal(&config)) {
-        refuse!(
-            "{} is not the configuration {} was written with: restore the run's own config.json and checkpoint together",
-            run.config().display(),
-            path.display()
-        );
-    }
+    check_config_seal(&run, &config, &path, &state, &run.dir.display().to_string())?;
     // Checkpoints from before replay logs hold their buffers inline: those are read with it.
     let loaded = match checkpoint::load_without_replay(&path, &state.env_id, state.obs_dim, state.act_dim) {
         Ok(loaded) => loaded,

@@ -792,6 +792,38 @@ pub(crate) fn config_seal(c: &TrainConfig) -> String {
     crate::benchmark::provenance::sha256(format!("{v}\ntasks {}", tasks.join("+")).as_bytes())
 }
 
+/// Whether the checkpoint at `path` (its header's `state`) was written with `config`, the run's
+/// `config.json`: its seal is the config's, or, at a branch's first resume, the parent's. `what` starts
+/// the message (`--resume`, or the folder a policy is made from). Checkpoints written before seals
+/// pass.
+///
+/// # Errors
+/// Another run's checkpoint, or an edited `config.json`, with both seals and the fix.
+pub(crate) fn check_config_seal(
+    run: &RunDir,
+    config: &TrainConfig,
+    path: &std::path::Path,
+    state: &checkpoint::RunState,
+    what: &str,
+) -> Result<()> {
+    let Some(recorded) = &state.config_seal else { return Ok(()) };
+    let ours = config_seal(config);
+    let branch_start = config
+        .branched_from
+        .as_ref()
+        .is_some_and(|b| b.epoch == state.epoch && b.parent_seal.as_ref() == Some(recorded));
+    if ours != *recorded && !branch_start {
+        refuse!(
+            "{what}: {} is not the configuration {} was written with (its seal {ours}, the checkpoint's \
+             {recorded}): the file was edited, or the checkpoint is another run's; restore the run's own config.json \
+             and checkpoint together, or start a new run with another --run-dir",
+            run.config().display(),
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 /// Fields that may change on `--resume`: the epoch target, thread count and
 /// snapshots, the task and its id (checked by content in [`run_task`]), and
 /// the record of a branch (kept from the run's `config.json`).

@@ -402,21 +402,7 @@ fn resumed(
         // The run's config.json is the one its checkpoint was written with (or, at a branch's first
         // resume, the checkpoint is the parent's, written with the parent's). Checked before the
         // checkpoint's replay is read: another run's checkpoint is named as such.
-        let (ours, branch) = (super::config_seal(&saved), saved.branched_from.clone());
-        let state = checkpoint::peek_state(&path)?;
-        if let Some(recorded) = &state.config_seal {
-            let branch_start =
-                branch.as_ref().is_some_and(|b| b.epoch == state.epoch && b.parent_seal.as_ref() == Some(recorded));
-            if ours != *recorded && !branch_start {
-                refuse!(
-                    "--resume: {} is not the configuration {} was written with (its seal {ours}, the \
-                     checkpoint's {recorded}): the file was edited, or the checkpoint is another run's; restore the \
-                     run's own config.json and checkpoint together, or start a new run with another --run-dir",
-                    run.config().display(),
-                    path.display()
-                );
-            }
-        }
+        super::check_config_seal(run, &saved, &path, &checkpoint::peek_state(&path)?, "--resume")?;
         saved.replay = Some(saved.replay_layout());
         let changed = computation_differences(&saved, config);
         if !changed.is_empty() || (saved.task.is_none() && saved.env != config.env) {
@@ -773,7 +759,7 @@ impl<'a> Trainer<'a> {
         }
         let first = &envs.envs()[0];
         let (obs_dim, act_dim) = (envs.obs_spec().dim(), first.action_space().dim());
-        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(TrainError::Refused)?;
+        let arch = Arch::of(&envs.obs_spec(), &config.net).map_err(|e| TrainError::Refused(e.to_string()))?;
         let max_levels: Vec<usize> = tasks.iter().map(Task::max_level).collect();
         let dims = (arch, act_dim);
         let run_id = config.task_id();

@@ -161,12 +161,9 @@ impl SetLayout {
     ///
     /// # Errors
     /// A flat observation: a set network reads object rows and a mask.
-    pub fn of(spec: &crate::env::ObsSpec, encoder_layers: usize) -> Result<Self, String> {
+    pub fn of(spec: &crate::env::ObsSpec, encoder_layers: usize) -> Result<Self, super::FitError> {
         if !spec.mode.is_set() {
-            return Err(format!(
-                "a set network reads the `objects` observation (obs_mode objects), not the {} one",
-                spec.mode
-            ));
+            return Err(super::FitError::SetOnFlat(spec.mode));
         }
         Ok(Self::new(spec.robot_dim(), spec.object_dim(), spec.rows(), encoder_layers))
     }

@@ -73,16 +73,11 @@ impl AnyPolicy {
     ///
     /// # Errors
     /// No mode, or more than one, fits the network.
-    pub fn legacy_obs_mode(&self) -> Result<crate::env::ObsMode, String> {
+    pub fn legacy_obs_mode(&self) -> Result<crate::env::ObsMode, FitError> {
         let fits: Vec<_> = crate::env::ObsMode::ALL.into_iter().filter(|&m| self.reads(m)).collect();
         match fits[..] {
             [m] => Ok(m),
-            _ => Err(format!(
-                "the file does not record its obs_mode, and its network reads {} of the observations ({}); \
-                 export it again from its run with `blockpuzzle zoo export`",
-                if fits.is_empty() { "none" } else { "several" },
-                crate::env::ObsMode::ALL.map(|m| m.name()).join(", ")
-            )),
+            _ => Err(FitError::NoRecordedMode { several: !fits.is_empty() }),
         }
     }
 
@@ -188,6 +183,46 @@ impl AnyPolicy {
     }
 }
 
+/// Why a network does not fit what it is asked to read or be blended with.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FitError {
+    /// A set network asked to read a flat observation.
+    #[error("a set network reads the `objects` or `entities` observation, not the `{0}` one")]
+    SetOnFlat(crate::env::ObsMode),
+    /// A file that does not record its observation, whose network reads none or several.
+    #[error(
+        "the file does not record its obs_mode, and its network reads {} of the observations ({}); export it \
+         again from its run with `blockpuzzle zoo export`",
+        if *.several { "several" } else { "none" },
+        crate::env::ObsMode::ALL.map(|m| m.name()).join(", ")
+    )]
+    NoRecordedMode {
+        /// Several modes fit (else none).
+        several: bool,
+    },
+    /// A blend weight outside [0, 1].
+    #[error("the weight {0} is outside [0, 1] (0: the base policy, 1: the tuned one)")]
+    BlendWeight(f64),
+    /// Two networks of different layouts asked to blend.
+    #[error(
+        "the base policy's actor is {base}, and the tuned one's is {tuned}: only a policy and the one it was \
+         fine-tuned from (one network) can be blended"
+    )]
+    OtherNetwork {
+        /// The base policy's network, described.
+        base: String,
+        /// The tuned policy's.
+        tuned: String,
+    },
+}
+
+/// Validators that return their reason as text take a [`FitError`] with `?`.
+impl From<FitError> for String {
+    fn from(e: FitError) -> Self {
+        e.to_string()
+    }
+}
+
 /// What acts, as zoo format 7's `kind` records it: `deterministic` (a tanh actor: DDPG, TD3, SAC's
 /// mean action, BC, DAgger) or `gaussian` (PGGD's μ and σ).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -241,17 +276,12 @@ impl DeterministicPolicy {
     ///
     /// # Errors
     /// A `weight` outside [0, 1], or `base` another network (both named).
-    pub fn blend(&self, base: &DeterministicPolicy, weight: f64) -> Result<DeterministicPolicy, String> {
+    pub fn blend(&self, base: &DeterministicPolicy, weight: f64) -> Result<DeterministicPolicy, FitError> {
         if !(0.0..=1.0).contains(&weight) {
-            return Err(format!("the weight {weight} is outside [0, 1] (0: the base policy, 1: the tuned one)"));
+            return Err(FitError::BlendWeight(weight));
         }
         if !self.net.same_network(&base.net) {
-            return Err(format!(
-                "the base policy's actor is {}, and the tuned one's is {}: only a policy and the one it was \
-                 fine-tuned from (one network) can be blended",
-                base.net.describe(),
-                self.net.describe()
-            ));
+            return Err(FitError::OtherNetwork { base: base.net.describe(), tuned: self.net.describe() });
         }
         let mix = |b: &[f32], t: &[f32]| -> Vec<f32> {
             b.iter().zip(t).map(|(&b, &t)| ((1.0 - weight) * f64::from(b) + weight * f64::from(t)) as f32).collect()
