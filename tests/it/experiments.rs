@@ -66,7 +66,7 @@ fn every_recipe_is_a_valid_train_command_line() {
 fn the_study_recipes_are_the_reported_settings_and_flags_win() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/study");
     let c = recipe(&dir.join("ours-nol2-pre-rho9.toml"), &["--workers", "2"]).unwrap();
-    assert_eq!((c.algo, c.env.as_str(), c.snapshot_every), (Algo::DDPG, "BlocksChoose-v0", 10));
+    assert_eq!((c.algo, c.env.as_str(), c.snapshot_every), (Algo::Ddpg, "BlocksChoose-v0", 10));
     let (d, s) = (&c.algos.ddpg, &c.shared);
     assert!(d.td3 && s.n_step == 3 && s.precision == Precision::Bf16, "{d:?} {s:?}");
     assert_eq!(

@@ -39,7 +39,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         level_replay: 0.0,
         challenge_share: 0.0,
         shared: SharedConfig { hidden: 32, layers: 2, ..SharedConfig::default() },
-        algo: Algo::DDPG,
+        algo: Algo::Ddpg,
         algos: Default::default(),
         aggrevated: Default::default(),
         finetune: Default::default(),
@@ -68,7 +68,7 @@ fn stream_run(algo: &str, epochs: usize) -> TrainConfig {
 }
 
 fn tiny_pggd(env: &str, epochs: usize, aggrevated: AggrevatedConfig) -> TrainConfig {
-    TrainConfig { algo: Algo::PGGD, aggrevated, ..tiny(env, epochs) }
+    TrainConfig { algo: Algo::Pggd, aggrevated, ..tiny(env, epochs) }
 }
 
 fn quiet(_: &EpochRow, _: &TrainConfig) {}
@@ -799,7 +799,7 @@ fn attention_pooling_trains_and_its_policy_acts_as_saved() {
 fn set_networks_refuse_what_they_cannot_do() {
     let dir = tempfile::tempdir().unwrap();
     let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
-    c.algo = Algo::PGGD;
+    c.algo = Algo::Pggd;
     c.algos.ddpg.td3 = false;
     c.aggrevated.expert = Some("zoo-name-that-does-not-matter".into());
     let err = train(&c, &dir.path().join("x"), false, &mut quiet).unwrap_err().to_string();
@@ -900,7 +900,7 @@ fn flat_critics_train_a_set_actor_resume_exactly_and_are_refused_where_they_mean
     let err = train(&c, &dir.path().join("mlp"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--flat-critic") && err.contains("--net set"), "{err}");
     let mut c = tiny_set("BlocksChoose-v0", 1, Pooling::MeanMax);
-    (c.algo, c.algos.ddpg.td3, c.shared.flat_critic) = (Algo::PGGD, false, true);
+    (c.algo, c.algos.ddpg.td3, c.shared.flat_critic) = (Algo::Pggd, false, true);
     let err = train(&c, &dir.path().join("pggd"), false, &mut quiet).unwrap_err().to_string();
     assert!(err.contains("--flat-critic") && err.contains("PGGD"), "{err}");
     assert!(!dir.path().join("mlp").exists() && !dir.path().join("pggd").exists(), "nothing written");

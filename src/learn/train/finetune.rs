@@ -132,12 +132,12 @@ impl FinetuneConfig {
     /// # Errors
     /// The first that does not, with its fix.
     pub fn validate(&self, run: &TrainConfig) -> Result<(), ConfigError> {
-        let algo = run.algo.registration().info;
+        let algo = run.algo.info();
         if self.init_from.is_some() && !algo.starts_from_policy {
-            let can: Vec<&str> = crate::learn::agents::registry::ALGORITHMS
+            let can: Vec<&str> = crate::learn::agents::registry::Algo::ALL
                 .iter()
-                .filter(|e| e.info.starts_from_policy)
-                .map(|e| e.info.name)
+                .filter(|a| a.info().starts_from_policy)
+                .map(|a| a.name())
                 .collect();
             return Err(ConfigError(format!(
                 "--init-from: {} cannot start from a trained policy; use --algo {} (ddpg with --td3 for TD3)",

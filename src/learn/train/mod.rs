@@ -109,7 +109,7 @@ pub const PAPER_BATCHES: usize = 40;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, clap::Args)]
 #[serde(remote = "Self")]
 pub struct TrainConfig {
-    /// Algorithm (one of `agents::registry::ALGORITHMS`).
+    /// Algorithm (one of `agents::registry::Algo::ALL`).
     #[arg(long, default_value = "ddpg", value_parser = Algo::parser())]
     #[serde(default)]
     pub algo: Algo,
@@ -652,12 +652,12 @@ impl TrainConfig {
     /// Whether the run learns from the solver's actions (an imitation algorithm, or `--demos`): its
     /// policy records the solver version ([`crate::benchmark::saved::SavedPolicy::solver`]).
     pub fn learns_from_solver(&self) -> bool {
-        self.algo.registration().info.imitates || self.finetune.demos.is_some()
+        self.algo.info().imitates || self.finetune.demos.is_some()
     }
 
     /// The algorithm as policy files and zoo entries record it (`ddpg` with `--td3` is `td3`).
     pub fn trainer(&self) -> crate::benchmark::saved::Trainer {
-        match self.algo.registration().info.trainer {
+        match self.algo.info().trainer {
             crate::benchmark::saved::Trainer::Ddpg if self.algos.ddpg.td3 => crate::benchmark::saved::Trainer::Td3,
             trainer => trainer,
         }

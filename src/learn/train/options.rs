@@ -61,7 +61,7 @@ fn expert(o: &Options) -> bool {
     o.aggrevated.expert.is_some()
 }
 fn actor_critic(o: &Options) -> bool {
-    o.algo.registration().info.reads.contains(&"--flat-critic")
+    o.algo.info().reads.contains(&"--flat-critic")
 }
 
 const SET: &str = "--net set";
@@ -93,7 +93,7 @@ const RULES: &[Rule] = &[
     Rule {
         flag: "--pg-weight",
         given: |o, d| o.aggrevated.pg_weight != d.aggrevated.pg_weight,
-        used: |o| expert(o) && o.algo.registration().info.takes_expert,
+        used: |o| expert(o) && o.algo.info().takes_expert,
         by: "--algo pggd --expert POLICY (AggreVaTeD)",
     },
     // The set network's.
@@ -126,7 +126,7 @@ const RULES: &[Rule] = &[
 /// Refuses what an imitation learner (`--algo bc|dagger`) cannot learn from: a network over
 /// another observation than the solver's, and hindsight colours.
 fn check_imitation(o: &Options) -> Result<(), String> {
-    let info = o.algo.registration().info;
+    let info = o.algo.info();
     if info.imitates && o.net.net != NetKind::Entity {
         return Err(format!(
             "--algo {} imitates the solver, which reads the entities observation (the gripper's, table's and \

@@ -705,7 +705,7 @@ impl<'a> Trainer<'a> {
         let run = RunDir { dir: run_dir.to_owned() };
         let mine = rank_dir(&run, comm.rank());
         if resume {
-            check_resume(comm, &run, config.algo.registration().info.imitates)?;
+            check_resume(comm, &run, config.algo.info().imitates)?;
         }
         if std::fs::metadata(&run.dir).is_ok_and(|m| !m.is_dir()) {
             refuse!(
@@ -754,7 +754,7 @@ impl<'a> Trainer<'a> {
         })?;
         let mut envs = build_envs(&config, &env_configs, &active)?;
         // A stream's tasks passed the solver's check when they were generated.
-        if config.algo.registration().info.imitates && config.stream.is_none() {
+        if config.algo.info().imitates && config.stream.is_none() {
             solver_plays(&mut envs, &tasks, config.seed)?;
         }
         let first = &envs.envs()[0];
