@@ -19,9 +19,11 @@ to about 1e-6 (float32 sums in another order), which can turn one episode in a f
 Every reader checks an entry the same way: the extension's loader (the command line's ``zoo check``)
 checks it whichever pass acts. This file imports nothing of blockpuzzle but that extension, and runs
 on its own without it (examples/python/zoo_policy.py loads it by path): then the numpy pass acts, and
-the entry is checked by its own checksums only, ``tensors_sha256`` and the metadata's seal
-``meta_sha256`` (so any edit of the metadata but its evaluations, or of the tensors, is refused); its
-evaluation records, which lie outside the seal, are the extension's to check.
+the entry is checked as the format (zoo/README.md) says, by what this file can know: its checksums,
+``tensors_sha256`` and the metadata's seal ``meta_sha256`` (any edit of the metadata but its
+evaluations, or of the tensors, is refused); no field of format 7 in an entry of an older format; and
+each evaluation's rate and Wilson interval recomputed from its outcome counts. Whether an
+evaluation's task is a built-in one and its engine one the project runs is the extension's to check.
 """
 
 from __future__ import annotations
@@ -29,8 +31,10 @@ from __future__ import annotations
 import difflib
 import hashlib
 import json
+import math
 import os
 import pathlib
+import statistics
 
 import numpy as np
 
@@ -179,20 +183,69 @@ def seal(meta_bytes: bytes) -> str:
     return "sha256:" + hashlib.sha256(_compact(meta).encode()).hexdigest()
 
 
+#: The fields format 7 introduced (zoo/README.md), which an entry of an older format cannot carry.
+_FORMAT_7_FIELDS = ("kind", "obs_mode", "colour_feature", "fixtures", "blend", "started_from", "solver")
+#: The normal quantile of a two-sided 95% Wilson interval.
+_Z95 = statistics.NormalDist().inv_cdf(0.975)
+
+
+def _wilson95(successes: int, n: int) -> tuple[float, float]:
+    """The Wilson score interval at 95%, as the format records ``ci95``."""
+    p, z2 = successes / n, _Z95 * _Z95
+    denom = 1 + z2 / n
+    centre = (p + z2 / (2 * n)) / denom
+    half = _Z95 * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / denom
+    return max(centre - half, 0.0), min(centre + half, 1.0)
+
+
+def _same(stored, derived: float) -> bool:
+    return isinstance(stored, (int, float)) and abs(stored - derived) <= 1e-9 * max(abs(derived), 1.0)
+
+
+def _check_evaluations(meta: dict) -> None:
+    """Each evaluation's counts add up: its outcomes to its episodes, its success rate and interval
+    recomputed from them (format 1 kept no counts: its rate must be a whole count over its episodes)."""
+    for k, e in enumerate(meta["evaluations"]):
+        n = e["episodes"]
+        if not isinstance(n, int) or n < 1:
+            raise ValueError(f"evaluations[{k}]: episodes {n!r} is not a count of episodes")
+        outcomes = e.get("outcomes")
+        if outcomes is not None:
+            if sum(outcomes.values()) != n:
+                raise ValueError(f"evaluations[{k}]: its outcomes count {sum(outcomes.values())} episodes, and it "
+                                 f"records {n}")
+            successes = outcomes["success"]
+        else:
+            successes = round(e["success_rate"] * n)
+        if not _same(e["success_rate"], successes / n):
+            raise ValueError(f"evaluations[{k}]: success_rate {e['success_rate']}, but its outcomes give "
+                             f"{successes / n} ({successes} of {n} episodes)")
+        low, high = _wilson95(successes, n)
+        if not (_same(e["ci95"][0], low) and _same(e["ci95"][1], high)):
+            raise ValueError(f"evaluations[{k}]: ci95 {e['ci95']}, but {successes} of {n} episodes give "
+                             f"({low}, {high})")
+
+
 def _check_sums(meta_bytes: bytes, tensor_bytes: bytes) -> None:
-    """An entry's own checksums: its tensors are the ones ``tensors_sha256`` names, and its metadata
-    (evaluations aside) the one ``meta_sha256`` seals, which formats 6 and 7 require."""
+    """An entry's own checks: its tensors are the ones ``tensors_sha256`` names, its metadata
+    (evaluations aside) the one ``meta_sha256`` seals (which formats 6 and 7 require), an older
+    format carries none of format 7's fields, and its evaluations' counts add up."""
     meta = json.loads(meta_bytes)
     tensors = "sha256:" + hashlib.sha256(tensor_bytes).hexdigest()
     if meta["tensors_sha256"] != tensors:
         raise ValueError(f"its tensors are not the ones tensors_sha256 names ({meta['tensors_sha256']}; "
                          f"the .safetensors file's is {tensors})")
     version = int(meta["format"].rsplit("/", 1)[1])
+    newer = [f for f in _FORMAT_7_FIELDS if f in meta]
+    if version < 7 and newer:
+        raise ValueError(f"it says format {meta['format']!r}, and carries {newer[0]}, which blockpuzzle-zoo/7 "
+                         "introduced")
     if version >= 6 and "meta_sha256" not in meta:
         raise ValueError(f"format {version} seals its metadata, and meta_sha256 is missing")
     if "meta_sha256" in meta and meta["meta_sha256"] != seal(meta_bytes):
         raise ValueError(f"its metadata is not the one meta_sha256 sealed ({meta['meta_sha256']}; the "
                          f"metadata's is {seal(meta_bytes)}): a field was edited")
+    _check_evaluations(meta)
 
 
 #: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how an entry of
