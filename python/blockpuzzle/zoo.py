@@ -226,7 +226,7 @@ def _check_evaluations(meta: dict) -> None:
                              f"({low}, {high})")
 
 
-def _check_sums(meta_bytes: bytes, tensor_bytes: bytes) -> None:
+def _check_entry(meta_bytes: bytes, tensor_bytes: bytes) -> None:
     """An entry's own checks: its tensors are the ones ``tensors_sha256`` names, its metadata
     (evaluations aside) the one ``meta_sha256`` seals (which formats 6 and 7 require), an older
     format carries none of format 7's fields, and its evaluations' counts add up."""
@@ -354,7 +354,7 @@ class ZooPolicy:
                 raise ValueError(f"unknown format {self.meta['format']!r}")
             self.layers = len(self.meta["actor"]["sizes"]) - 1
             self.set = self.meta["actor"].get("set")
-            _check_sums(meta_bytes, tensor_bytes)
+            _check_entry(meta_bytes, tensor_bytes)
         except (ValueError, KeyError, TypeError, AttributeError) as e:
             raise ValueError(f"zoo entry {json_path} is not usable: {e}; restore it") from e
         self.tensors = parse_safetensors(tensor_bytes, tensor_path, "restore the zoo entry")

@@ -219,6 +219,10 @@ fn upgrade(zoo: &Path, names: Vec<String>, records: Records<'_>) -> Result<()> {
     if records.solver.is_some() && names.is_empty() {
         bail!("--solver records the solver one policy learned from: name the entries that learned from it");
     }
+    // Checked before any entry is rewritten.
+    if let Some(version) = records.solver {
+        crate::benchmark::saved::check_solver(version).map_err(|e| anyhow::anyhow!("--solver: {e}"))?;
+    }
     let start = match records.started_from {
         Some(p) => {
             let saved =
