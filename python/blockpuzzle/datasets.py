@@ -129,6 +129,7 @@ def _header(path, raw: bytes) -> dict:
     fields = {"task": (str, "a task id"), "task_sha256": (str, "a sha256"), "row": (0, "a suite row >= 0"),
               "seed": (0, "a seed >= 0"), "steps": (1, "a step count >= 1"), "outcome": (str, "an outcome name"),
               "episode_return": (float, "a finite number")}
+    outcomes = _outcomes()
     for i, e in enumerate(header["episodes"]):
         if not isinstance(e, dict):
             raise _bad(path, f"episode {i} is a {type(e).__name__}, not an object")
@@ -142,7 +143,6 @@ def _header(path, raw: bytes) -> dict:
                 ok = _int(v, kind)
             if not ok:
                 raise _bad(path, f"field episodes[{i}].{key} is {'missing' if key not in e else repr(v)}, not {what}")
-        outcomes = _outcomes()
         if e["outcome"] not in outcomes:
             raise _bad(path, f"field episodes[{i}].outcome is {e['outcome']!r}, not an outcome name ({', '.join(outcomes)})")
         # Recorded since levels were: absent in older files, checked where present.

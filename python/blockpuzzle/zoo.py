@@ -226,11 +226,11 @@ def _check_evaluations(meta: dict) -> None:
                              f"({low}, {high})")
 
 
-def _check_entry(meta_bytes: bytes, tensor_bytes: bytes) -> None:
-    """An entry's own checks: its tensors are the ones ``tensors_sha256`` names, its metadata
-    (evaluations aside) the one ``meta_sha256`` seals (which formats 6 and 7 require), an older
-    format carries none of format 7's fields, and its evaluations' counts add up."""
-    meta = json.loads(meta_bytes)
+def _check_entry(meta: dict, meta_bytes: bytes, tensor_bytes: bytes) -> None:
+    """An entry's own checks (``meta`` is ``meta_bytes`` read): its tensors are the ones
+    ``tensors_sha256`` names, its metadata (evaluations aside) the one ``meta_sha256`` seals (which
+    formats 6 and 7 require), an older format carries none of format 7's fields, and its evaluations'
+    counts add up."""
     tensors = "sha256:" + hashlib.sha256(tensor_bytes).hexdigest()
     if meta["tensors_sha256"] != tensors:
         raise ValueError(f"its tensors are not the ones tensors_sha256 names ({meta['tensors_sha256']}; "
@@ -242,9 +242,9 @@ def _check_entry(meta_bytes: bytes, tensor_bytes: bytes) -> None:
                          "introduced")
     if version >= 6 and "meta_sha256" not in meta:
         raise ValueError(f"format {version} seals its metadata, and meta_sha256 is missing")
-    if "meta_sha256" in meta and meta["meta_sha256"] != seal(meta_bytes):
+    if "meta_sha256" in meta and meta["meta_sha256"] != (sealed := seal(meta_bytes)):
         raise ValueError(f"its metadata is not the one meta_sha256 sealed ({meta['meta_sha256']}; the "
-                         f"metadata's is {seal(meta_bytes)}): a field was edited")
+                         f"metadata's is {sealed}): a field was edited")
     _check_evaluations(meta)
 
 
@@ -354,7 +354,7 @@ class ZooPolicy:
                 raise ValueError(f"unknown format {self.meta['format']!r}")
             self.layers = len(self.meta["actor"]["sizes"]) - 1
             self.set = self.meta["actor"].get("set")
-            _check_entry(meta_bytes, tensor_bytes)
+            _check_entry(self.meta, meta_bytes, tensor_bytes)
         except (ValueError, KeyError, TypeError, AttributeError) as e:
             raise ValueError(f"zoo entry {json_path} is not usable: {e}; restore it") from e
         self.tensors = parse_safetensors(tensor_bytes, tensor_path, "restore the zoo entry")

@@ -145,7 +145,7 @@ impl Trainer {
     pub const ALL: [Trainer; 6] = [Self::Bc, Self::Dagger, Self::Ddpg, Self::Td3, Self::Sac, Self::Pggd];
 
     /// The recorded name (`bc`, `dagger`, `ddpg`, `td3`, `sac`, `pggd`).
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Self::Bc => "bc",
             Self::Dagger => "dagger",

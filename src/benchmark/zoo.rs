@@ -1234,7 +1234,7 @@ fn check_recorded_kind(path: &Path, meta: &ZooMeta, policy: &AnyPolicy) -> Resul
     }
     if let Some(a) = meta.trained_by() {
         a.check_trains(policy.kind()).map_err(|e| {
-            bad_meta(format!("algo {a:?} with kind {:?}: {e}; restore the entry", policy.kind().name()))
+            bad_meta(format!("algo {:?} with kind {:?}: {e}; restore the entry", a.name(), policy.kind().name()))
         })?;
     }
     if meta.colour_feature != Some(crate::env::COLOUR_FEATURE) {

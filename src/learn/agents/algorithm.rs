@@ -59,10 +59,9 @@ impl<T> AlgorithmConfig for T where
 /// An algorithm's names and the facts about its settings that callers ask for.
 #[derive(Debug, Clone, Copy)]
 pub struct Info {
-    /// `--algo` value, checkpoint name and its settings' group in `config.json` (lowercase).
-    pub name: &'static str,
     /// What policy files and zoo entries record as the algorithm that trained a policy (DDPG's
-    /// `--td3` makes it TD3: [`crate::learn::train::TrainConfig::trainer`]).
+    /// `--td3` makes it TD3: [`crate::learn::train::TrainConfig::trainer`]); its name is the
+    /// algorithm's ([`Info::name`]).
     pub trainer: crate::benchmark::saved::Trainer,
     /// How it is shown in titles and reports, e.g. "DDPG".
     pub title: &'static str,
@@ -85,6 +84,14 @@ pub struct Info {
     /// normaliser taken from the policy ([`Algorithm::init_from`]), its critics (where it has any)
     /// fresh, which a critic warm-up ([`Algorithm::hold_actor`]) fits before the actor moves.
     pub starts_from_policy: bool,
+}
+
+impl Info {
+    /// `--algo` value, checkpoint name and its settings' group in `config.json` (lowercase): the
+    /// name policy files record for it.
+    pub const fn name(&self) -> &'static str {
+        self.trainer.name()
+    }
 }
 
 /// How an algorithm is named, configured and built: declared once in its

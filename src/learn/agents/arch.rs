@@ -249,17 +249,12 @@ impl Arch {
     /// Settings out of range, a set network on a flat observation, or the reverse.
     pub fn of(obs: &ObsSpec, net: &NetConfig) -> Result<Self, ArchError> {
         net.validate().map_err(ArchError::Settings)?;
+        if obs.mode != net.obs_mode() {
+            return Err(ArchError::OtherMode { net: net.net.name(), reads: net.obs_mode(), given: obs.mode });
+        }
         match net.net {
-            NetKind::Mlp => match obs.mode {
-                ObsMode::Flat => Ok(Self::mlp(obs.dim())),
-                ObsMode::Objects | ObsMode::Entities => {
-                    Err(ArchError::OtherMode { net: "mlp", reads: ObsMode::Flat, given: obs.mode })
-                }
-            },
+            NetKind::Mlp => Ok(Self::mlp(obs.dim())),
             NetKind::Set | NetKind::Entity => {
-                if obs.mode != net.obs_mode() {
-                    return Err(ArchError::OtherMode { net: net.net.name(), reads: net.obs_mode(), given: obs.mode });
-                }
                 let mut layout = SetLayout::of(obs, net.set_encoder_layers)?;
                 layout.attention = net.set_pooling == Pooling::Attention;
                 layout.by_colour = net.set_pooling == Pooling::Colour;

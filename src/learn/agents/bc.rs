@@ -9,7 +9,6 @@ use serde::{Deserialize, Serialize};
 /// Behaviour cloning in the list of algorithms (`--algo bc`).
 pub const REGISTRATION: Registration<BcConfig> = Registration {
     info: Info {
-        name: "bc",
         trainer: crate::benchmark::saved::Trainer::Bc,
         title: "BC",
         about: "behaviour cloning of the solver, which plays every exploration episode (--net entity)",

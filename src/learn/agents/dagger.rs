@@ -10,7 +10,6 @@ use serde::{Deserialize, Serialize};
 /// DAgger in the list of algorithms (`--algo dagger`).
 pub const REGISTRATION: Registration<DaggerConfig> = Registration {
     info: Info {
-        name: "dagger",
         trainer: crate::benchmark::saved::Trainer::Dagger,
         title: "DAgger",
         about: "DAgger: the solver labels the learner's own states (--net entity)",

@@ -46,7 +46,6 @@ pub const POLICY_DELAY: Bound = Bound::new("--policy-delay", 1, 1_000, "");
 /// DDPG in the list of algorithms (`--algo ddpg`).
 pub const REGISTRATION: Registration<DdpgConfig> = Registration {
     info: Info {
-        name: "ddpg",
         trainer: crate::benchmark::saved::Trainer::Ddpg,
         title: "DDPG",
         about: "deep deterministic policy gradient (the paper's; --td3 for TD3)",
@@ -475,7 +474,7 @@ impl Ddpg {
 
 impl Algorithm for Ddpg {
     fn name(&self) -> &'static str {
-        REGISTRATION.info.name
+        REGISTRATION.info.name()
     }
 
     fn norm(&self) -> &Normalizer {

@@ -28,7 +28,6 @@ use tch::Tensor;
 /// PGGD in the list of algorithms (`--algo pggd`; with `--expert`, AggreVaTeD).
 pub const REGISTRATION: Registration<PggdConfig> = Registration {
     info: Info {
-        name: "pggd",
         trainer: crate::benchmark::saved::Trainer::Pggd,
         title: "PGGD",
         about: "policy gradient with a Gaussian policy (the paper's; with --expert, AggreVaTeD)",
@@ -230,7 +229,7 @@ impl Pggd {
 
 impl Algorithm for Pggd {
     fn name(&self) -> &'static str {
-        REGISTRATION.info.name
+        REGISTRATION.info.name()
     }
 
     fn norm(&self) -> &Normalizer {

@@ -51,7 +51,6 @@ pub const INIT_STD: f64 = 0.2;
 /// SAC in the list of algorithms (`--algo sac`).
 pub const REGISTRATION: Registration<SacConfig> = Registration {
     info: Info {
-        name: "sac",
         trainer: crate::benchmark::saved::Trainer::Sac,
         title: "SAC",
         about: "soft actor-critic with automatic entropy tuning (twin critics)",
@@ -275,7 +274,7 @@ impl Sac {
 
 impl Algorithm for Sac {
     fn name(&self) -> &'static str {
-        REGISTRATION.info.name
+        REGISTRATION.info.name()
     }
 
     fn norm(&self) -> &Normalizer {

@@ -141,14 +141,14 @@ impl FinetuneConfig {
                 .collect();
             return Err(ConfigError(format!(
                 "--init-from: {} cannot start from a trained policy; use --algo {} (ddpg with --td3 for TD3)",
-                algo.name,
+                algo.name(),
                 can.join(", ")
             )));
         }
         if self.critic_warmup > 0 && algo.imitates {
             return Err(ConfigError(format!(
                 "--critic-warmup {}: {} imitates the solver and has no critic to warm up; leave --critic-warmup out (or 0)",
-                self.critic_warmup, algo.name
+                self.critic_warmup, algo.name()
             )));
         }
         if !self.anchor_alpha.is_finite() || self.anchor_alpha < 0.0 {
@@ -186,7 +186,7 @@ impl FinetuneConfig {
         // TD3 steps the actor on every `--policy-delay`-th update only: the first after the warm-up
         // must fall inside the run.
         let ddpg = &run.algos.ddpg;
-        if self.critic_warmup > 0 && algo.name == "ddpg" && ddpg.td3 {
+        if self.critic_warmup > 0 && algo.name() == "ddpg" && ddpg.td3 {
             let delay = ddpg.policy_delay.max(1) as u64;
             let first = self.critic_warmup.div_ceil(delay) * delay;
             if first >= updates {

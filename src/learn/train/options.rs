@@ -131,14 +131,14 @@ fn check_imitation(o: &Options) -> Result<(), String> {
         return Err(format!(
             "--algo {} imitates the solver, which reads the entities observation (the gripper's, table's and \
              floor's rows too): train with --net entity",
-            info.name
+            info.name()
         ));
     }
     if info.imitates && o.hindsight_colours > 0 {
         return Err(format!(
             "--hindsight-colours: the solver's labels are its actions under the colours it saw, not under others; \
              --algo {} takes none",
-            info.name
+            info.name()
         ));
     }
     Ok(())
