@@ -877,84 +877,87 @@ pub fn record_evaluations(path: &Path, new: Vec<ZooEvaluation>) -> Result<Vec<Re
     })
 }
 
-/// Records `algo` as the algorithm that trained the entry at `path` (upgraded to this format and
-/// sealed, as [`record_evaluations`] rewrites it), where it records none yet.
-///
-/// # Errors
-/// An unknown algorithm, an entry that records another already, or one that does not load.
-pub fn record_algo(path: &Path, algo: Trainer) -> Result<(), ZooError> {
-    let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    rewrite(path, |meta, saved| match meta.trained_by() {
-        Some(a) if a != algo => {
-            Err(bad(format!("it records {a} as the algorithm that trained it; --algo {algo} would change a record")))
-        }
-        _ => {
-            algo.check_trains(saved.policy.kind())
-                .map_err(|e| bad(format!("--algo {algo}: {e}; give the algorithm that trained it")))?;
-            meta.algo = Some(algo);
-            Ok(())
-        }
-    })
+/// What `zoo upgrade` records in an entry that records none yet, beside bringing it to this format.
+#[derive(Default)]
+pub struct Upgrade<'a> {
+    /// The algorithm that trained it (`--algo`), for entries of formats before 7.
+    pub algo: Option<Trainer>,
+    /// The version of the solver whose actions it learned from (`--solver`), for entries exported
+    /// before policy files recorded it.
+    pub solver: Option<u32>,
+    /// The policy it was fine-tuned from and that policy's name and hash (`--started-from`), for
+    /// entries exported before `train --init-from` recorded it.
+    pub started_from: Option<(&'a SavedPolicy, crate::benchmark::provenance::PolicyId)>,
 }
 
-/// Records the version of the solver whose actions the entry at `path` learned from (`zoo upgrade
-/// --solver`), for entries exported before policy files recorded it; an entry that records another is
-/// refused, the same one kept.
+/// Brings the entry at `path` to this format, sealed, with `records` recorded, in one rewrite
+/// ([`rewrite`]): all of them or, where one is refused, none. A record the entry already holds
+/// alike is kept; one that would change what it records is refused. The start must read the entry's
+/// observation through a network of the same layers (fine-tuning changes weights, not shapes).
 ///
 /// # Errors
-/// A version no build has had, another recorded version, or [`rewrite`]'s.
-pub fn record_solver(path: &Path, version: u32) -> Result<(), ZooError> {
+/// [`ZooError::Corrupt`] naming the entry and the record that does not fit (an algorithm that
+/// cannot train its kind, a solver version no build had, another record), or [`rewrite`]'s.
+pub fn upgrade(path: &Path, records: Upgrade<'_>) -> Result<(), ZooError> {
     let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    crate::benchmark::saved::check_solver(version).map_err(|e| bad(format!("--solver: {e}")))?;
-    rewrite(path, |meta, _| match meta.solver {
-        Some(v) if v != version => Err(bad(format!(
-            "it records that it learned from solver version {v}; --solver {version} would change a record"
-        ))),
-        _ => {
-            meta.solver = Some(version);
-            Ok(())
+    if let Some(version) = records.solver {
+        crate::benchmark::saved::check_solver(version).map_err(|e| bad(format!("--solver: {e}")))?;
+    }
+    rewrite(path, |meta, saved| {
+        if let Some(algo) = records.algo {
+            match meta.trained_by() {
+                Some(a) if a != algo => {
+                    return Err(bad(format!(
+                        "it records {a} as the algorithm that trained it; --algo {algo} would change a record"
+                    )))
+                }
+                _ => {
+                    algo.check_trains(saved.policy.kind())
+                        .map_err(|e| bad(format!("--algo {algo}: {e}; give the algorithm that trained it")))?;
+                    meta.algo = Some(algo);
+                }
+            }
         }
-    })
-}
-
-/// Records the policy an entry was fine-tuned from (`zoo upgrade --started-from`), for entries
-/// exported before policy files recorded it (`train --init-from` records it since): `start` must read
-/// the entry's observation through a network of the same layers (fine-tuning changes weights, not
-/// shapes); an entry that records another start is refused, and the same one is kept as it is.
-///
-/// # Errors
-/// [`ZooError::Corrupt`] naming the entry and what does not fit, or [`rewrite`]'s.
-pub fn record_started_from(
-    path: &Path,
-    start: &SavedPolicy,
-    id: crate::benchmark::provenance::PolicyId,
-) -> Result<(), ZooError> {
-    let bad = |reason: String| ZooError::Corrupt { path: path.with_extension("json"), reason };
-    let shapes = |p: &SavedPolicy| -> Vec<(usize, usize)> {
-        p.policy.net().layers.iter().map(|l| (l.n_in, l.b.len())).collect()
-    };
-    rewrite(path, |meta, saved| match &meta.started_from {
-        Some(s) if s.sha256 == id.sha256 => Ok(()),
-        Some(s) => Err(bad(format!(
-            "it records that it was fine-tuned from {} ({}); --started-from {} ({}) would change a record",
-            s.name,
-            s.sha256.as_deref().unwrap_or("no hash"),
-            id.name,
-            id.sha256.as_deref().unwrap_or("no hash")
-        ))),
-        None if start.obs_mode() != saved.obs_mode() || shapes(start) != shapes(saved) => Err(bad(format!(
-            "--started-from {}: it reads `{}` observations through layers {:?}, and this entry `{}` through {:?}; a \
-             policy is fine-tuned from one of its own network, give that one",
-            id.name,
-            start.obs_mode(),
-            shapes(start),
-            saved.obs_mode(),
-            shapes(saved)
-        ))),
-        None => {
-            meta.started_from = Some(id);
-            Ok(())
+        if let Some(version) = records.solver {
+            match meta.solver {
+                Some(v) if v != version => {
+                    return Err(bad(format!(
+                        "it records that it learned from solver version {v}; --solver {version} would change a record"
+                    )))
+                }
+                _ => meta.solver = Some(version),
+            }
         }
+        if let Some((start, id)) = records.started_from {
+            let shapes = |p: &SavedPolicy| -> Vec<(usize, usize)> {
+                p.policy.net().layers.iter().map(|l| (l.n_in, l.b.len())).collect()
+            };
+            match &meta.started_from {
+                Some(s) if s.sha256 == id.sha256 => {}
+                Some(s) => {
+                    return Err(bad(format!(
+                        "it records that it was fine-tuned from {} ({}); --started-from {} ({}) would change a record",
+                        s.name,
+                        s.sha256.as_deref().unwrap_or("no hash"),
+                        id.name,
+                        id.sha256.as_deref().unwrap_or("no hash")
+                    )))
+                }
+                None if start.obs_mode() != saved.obs_mode() || shapes(start) != shapes(saved) => {
+                    return Err(bad(format!(
+                        "--started-from {}: it reads `{}` observations through layers {:?}, and this entry `{}` \
+                         through {:?}; a policy is fine-tuned from one of its own network, give that one",
+                        id.name,
+                        start.obs_mode(),
+                        shapes(start),
+                        saved.obs_mode(),
+                        shapes(saved)
+                    )))
+                }
+                None => meta.started_from = Some(id),
+            }
+        }
+        Ok(())
     })
 }
 

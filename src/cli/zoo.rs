@@ -219,10 +219,6 @@ fn upgrade(zoo: &Path, names: Vec<String>, records: Records<'_>) -> Result<()> {
     if records.solver.is_some() && names.is_empty() {
         bail!("--solver records the solver one policy learned from: name the entries that learned from it");
     }
-    // Checked before any entry is rewritten.
-    if let Some(version) = records.solver {
-        crate::benchmark::saved::check_solver(version).map_err(|e| anyhow::anyhow!("--solver: {e}"))?;
-    }
     let start = match records.started_from {
         Some(p) => {
             let saved =
@@ -236,16 +232,11 @@ fn upgrade(zoo: &Path, names: Vec<String>, records: Records<'_>) -> Result<()> {
     for name in &names {
         let path = crate::benchmark::zoo::find_named(zoo, name, "upgrade")?;
         let before = crate::benchmark::zoo::read_meta(&path)?.format;
-        crate::benchmark::zoo::record_evaluations(&path, Vec::new())?;
-        if let Some(algo) = records.algo {
-            crate::benchmark::zoo::record_algo(&path, algo)?;
-        }
-        if let Some(version) = records.solver {
-            crate::benchmark::zoo::record_solver(&path, version)?;
-        }
-        if let Some((saved, id)) = &start {
-            crate::benchmark::zoo::record_started_from(&path, saved, id.clone())?;
-        }
+        let started_from = start.as_ref().map(|(saved, id)| (saved, id.clone()));
+        crate::benchmark::zoo::upgrade(
+            &path,
+            crate::benchmark::zoo::Upgrade { algo: records.algo, solver: records.solver, started_from },
+        )?;
         let after = crate::benchmark::zoo::read_meta(&path)?;
         let by = after.algo.map_or(crate::benchmark::zoo::UNRECORDED, Trainer::name);
         println!("{name}: {before} -> {}, sealed, trained by {by}", after.format);

@@ -658,6 +658,23 @@ fn an_entry_records_its_mode_kind_and_algorithm() {
     );
     assert_eq!(std::fs::read(z.join("old.json")).unwrap(), before);
     assert!(bp(&["zoo", "check", "old", "--zoo", z.to_str().unwrap()]).status.success());
+    // The records of one upgrade go in one rewrite: where one is refused, none is written (an
+    // acceptable --algo beside a --started-from of another network).
+    let other = zoo::dir().join("generalist-bc-entity.json");
+    let o = bp(&[
+        "zoo",
+        "upgrade",
+        "old",
+        "--algo",
+        "ddpg",
+        "--started-from",
+        other.to_str().unwrap(),
+        "--zoo",
+        z.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("a policy is fine-tuned from one of its own network"), "{e}");
+    assert_eq!(std::fs::read(z.join("old.json")).unwrap(), before);
     let o = bp(&["zoo", "upgrade", "old", "--algo", "ddpg", "--zoo", z.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(zoo::load(&z.join("old.json")).unwrap().0.trained_by(), Some(Trainer::Ddpg));

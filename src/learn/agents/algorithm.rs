@@ -267,9 +267,9 @@ pub trait Algorithm: AsAny + Send {
     ///
     /// # Errors
     /// An algorithm that cannot, or a policy whose network does not fit.
-    fn init_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), String> {
+    fn init_from(&mut self, _policy: &DeterministicPolicy) -> Result<(), StartError> {
         // The interface names no algorithm: `FinetuneConfig::validate` lists those that can, from the registry.
-        Err(format!("{} cannot start from a trained policy (its registration says so)", self.name()))
+        Err(StartError::CannotStart { algo: self.name() })
     }
 
     /// Keeps `policy` (the one the run started from) beside the learner, frozen, for `uses`: the
@@ -282,12 +282,8 @@ pub trait Algorithm: AsAny + Send {
     ///
     /// # Errors
     /// An algorithm that cannot, or a policy that does not fit.
-    fn keep_start(&mut self, _policy: &DeterministicPolicy, uses: StartUses) -> Result<(), String> {
-        Err(format!(
-            "{} keeps a deterministic actor's starting policy beside it (ddpg, with --td3 or not); {} cannot",
-            uses.flags(),
-            self.name()
-        ))
+    fn keep_start(&mut self, _policy: &DeterministicPolicy, uses: StartUses) -> Result<(), StartError> {
+        Err(StartError::CannotKeep { flags: uses.flags(), algo: self.name() })
     }
 
     /// Holds the actor still (`held`), or lets it learn again: while held, updates step the
@@ -316,7 +312,7 @@ pub trait Algorithm: AsAny + Send {
     /// # Errors
     /// A missing or mis-sized part, or one these settings do not have (e.g.
     /// TD3's second critic without `--td3`), named.
-    fn load_state(&mut self, state: &StateDict) -> Result<(), String> {
+    fn load_state(&mut self, state: &StateDict) -> Result<(), StateError> {
         let mut known = Vec::new();
         for (name, part) in self.parts() {
             known.push(name);
@@ -328,7 +324,7 @@ pub trait Algorithm: AsAny + Send {
                         let values = tch::Tensor::of_slice(v).view_as(t);
                         tch::no_grad(|| t.copy_(&values));
                     }
-                    _ => return Err(format!("{name}: expected one array of {} values", t.numel())),
+                    _ => return Err(StateError::Tensor { part: name, values: t.numel() }),
                 },
                 Part::Counter(c) => *c = state.counter(name)?,
             }
@@ -340,7 +336,7 @@ pub trait Algorithm: AsAny + Send {
             .map(|k| k.rsplit_once('.').map_or(k.as_str(), |(part, _)| part))
             .find(|p| !known.contains(p));
         match foreign {
-            Some(p) => Err(format!("the checkpoint holds {p}, which a learner with these settings does not have")),
+            Some(p) => Err(StateError::Foreign(p.to_owned())),
             None => Ok(()),
         }
     }
@@ -392,25 +388,25 @@ impl StateDict {
     ///
     /// # Errors
     /// Missing or mis-sized parameters, naming `name`.
-    pub(crate) fn load_net(&self, name: &str, net: &mut Net) -> Result<(), String> {
-        net.load_vecs(&self.arrays(name)).map_err(|e| format!("{name}: {e}"))
+    pub(crate) fn load_net(&self, name: &str, net: &mut Net) -> Result<(), StateError> {
+        net.load_vecs(&self.arrays(name)).map_err(|shape| StateError::Shape { part: name.to_owned(), shape })
     }
 
     /// Loads `adam` from `name.*` and `name.t`.
     ///
     /// # Errors
     /// Missing or mis-sized moments or step count, naming `name`.
-    pub(crate) fn load_adam(&self, name: &str, adam: &mut Adam) -> Result<(), String> {
+    pub(crate) fn load_adam(&self, name: &str, adam: &mut Adam) -> Result<(), StateError> {
         let t = self.counter(&format!("{name}.t"))?;
-        adam.load_vecs(&self.arrays(name), t).map_err(|e| format!("{name}: {e}"))
+        adam.load_vecs(&self.arrays(name), t).map_err(|shape| StateError::Shape { part: name.to_owned(), shape })
     }
 
     /// The counter `name`.
     ///
     /// # Errors
     /// When it is missing.
-    pub(crate) fn counter(&self, name: &str) -> Result<u64, String> {
-        self.counters.get(name).copied().ok_or_else(|| format!("the counter {name} is missing"))
+    pub(crate) fn counter(&self, name: &str) -> Result<u64, StateError> {
+        self.counters.get(name).copied().ok_or_else(|| StateError::MissingCounter(name.to_owned()))
     }
 }
 
@@ -436,6 +432,103 @@ impl StartUses {
     }
 }
 
+/// Why a learner cannot start from, or keep, a trained policy.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StartError {
+    /// An algorithm that does not start from a trained policy (`train --init-from`).
+    #[error("{algo} cannot start from a trained policy (its registration says so)")]
+    CannotStart {
+        /// The algorithm.
+        algo: &'static str,
+    },
+    /// An algorithm that keeps no starting policy beside it (`--anchor-alpha`, `--ibrl`).
+    #[error(
+        "{flags} keeps a deterministic actor's starting policy beside it (ddpg, with --td3 or not); {algo} cannot"
+    )]
+    CannotKeep {
+        /// The flags that asked for it.
+        flags: String,
+        /// The algorithm.
+        algo: &'static str,
+    },
+    /// A policy whose actor is another network than the learner's.
+    #[error("the policy's actor is {theirs}, and this run's is {ours}: {fix}")]
+    OtherActor {
+        /// The policy's actor, described.
+        theirs: String,
+        /// The learner's actor, described.
+        ours: String,
+        /// What to do.
+        fix: &'static str,
+    },
+    /// A policy whose normaliser reads another observation.
+    #[error("the policy's normaliser reads {theirs} features, and this run's observation has {ours}")]
+    OtherNormalizer {
+        /// The policy's normaliser's features.
+        theirs: usize,
+        /// The run's observation's.
+        ours: usize,
+    },
+    /// The fitted policy's values do not fit the learner's network.
+    #[error("the policy's actor: {0}")]
+    Shape(#[from] super::nets::Shape),
+}
+
+/// Why a checkpoint's state does not load into a learner ([`Algorithm::load_state`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StateError {
+    /// A network's or an optimiser's arrays that do not fit it.
+    #[error("{part}: {shape}")]
+    Shape {
+        /// The part.
+        part: String,
+        /// What does not fit.
+        shape: super::nets::Shape,
+    },
+    /// A tensor part that is not one array of its size.
+    #[error("{part}: expected one array of {values} values")]
+    Tensor {
+        /// The part.
+        part: &'static str,
+        /// Its values.
+        values: usize,
+    },
+    /// A counter the learner needs.
+    #[error("the counter {0} is missing")]
+    MissingCounter(String),
+    /// A part the learner with these settings does not have (e.g. TD3's second critic without `--td3`).
+    #[error("the checkpoint holds {0}, which a learner with these settings does not have")]
+    Foreign(String),
+}
+
+/// The three [`Algorithm`] methods every learner answers alike, from its registration and its
+/// `norm` field: `learner_basics!(REGISTRATION.info.name())` in the `impl Algorithm`, or
+/// `learner_basics!(field name)` for a learner that keeps its name in a field.
+macro_rules! learner_basics {
+    (@norm) => {
+        fn norm(&self) -> &$crate::policy::actor::normalizer::Normalizer {
+            &self.norm
+        }
+
+        fn norm_mut(&mut self) -> &mut $crate::policy::actor::normalizer::Normalizer {
+            &mut self.norm
+        }
+    };
+    (field $name:ident) => {
+        fn name(&self) -> &'static str {
+            self.$name
+        }
+        $crate::learn::agents::algorithm::learner_basics!(@norm);
+    };
+    ($name:expr) => {
+        fn name(&self) -> &'static str {
+            $name
+        }
+        $crate::learn::agents::algorithm::learner_basics!(@norm);
+    };
+}
+pub(crate) use learner_basics;
+
 /// `policy` fitted to a learner whose actor is `ours` and normaliser `norm`: a set network's rows
 /// set to this layout's slots (its weights do not depend on them), and checked to be the same
 /// network (kind, layers, options) reading an observation of the same length.
@@ -446,7 +539,7 @@ pub fn fit_actor(
     ours: &PlainNet,
     norm: &Normalizer,
     policy: &DeterministicPolicy,
-) -> Result<DeterministicPolicy, String> {
+) -> Result<DeterministicPolicy, StartError> {
     let fitted = match (ours.set, policy.net.set) {
         (Some(s), Some(_)) => match AnyPolicy::Deterministic(policy.clone()).with_slots(s.slots) {
             AnyPolicy::Deterministic(p) => p,
@@ -455,29 +548,22 @@ pub fn fit_actor(
         _ => policy.clone(),
     };
     let inputs = |n: &PlainNet| n.layers.first().map_or(0, |l| l.n_in);
+    let other = |fix| StartError::OtherActor { theirs: fitted.net.describe(), ours: ours.describe(), fix };
     if ours.set.is_none() && fitted.net.set.is_none() && inputs(&fitted.net) != inputs(ours) {
-        return Err(format!(
-            "the policy's actor is {}, and this run's is {}: a flat policy reads its own task's layout (its \
-             blocks' rows in order), so it starts only a run of a task with that layout; start from a policy of \
-             this task, or from a set network's (--net set or entity), which reads any number of blocks",
-            fitted.net.describe(),
-            ours.describe()
+        return Err(other(
+            "a flat policy reads its own task's layout (its blocks' rows in order), so it starts only a run of a \
+             task with that layout; start from a policy of this task, or from a set network's (--net set or \
+             entity), which reads any number of blocks",
         ));
     }
     if !fitted.net.same_network(ours) {
-        return Err(format!(
-            "the policy's actor is {}, and this run's is {}: train with the policy's network settings \
-             (--net, --set-width, --hidden, --layers and the set options it was trained with)",
-            fitted.net.describe(),
-            ours.describe()
+        return Err(other(
+            "train with the policy's network settings (--net, --set-width, --hidden, --layers and the set options \
+             it was trained with)",
         ));
     }
     if fitted.norm.dim() != norm.dim() || fitted.norm.set_layout() != norm.set_layout() {
-        return Err(format!(
-            "the policy's normaliser reads {} features, and this run's observation has {}",
-            fitted.norm.dim(),
-            norm.dim()
-        ));
+        return Err(StartError::OtherNormalizer { theirs: fitted.norm.dim(), ours: norm.dim() });
     }
     Ok(fitted)
 }

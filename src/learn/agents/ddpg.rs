@@ -24,7 +24,7 @@
 //!   updated on every `policy_delay`-th critic update only.
 
 use super::algorithm::{
-    param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, StartUses, UpdateStats,
+    param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, StartError, StartUses, UpdateStats,
 };
 use super::arch::Arch;
 use super::nets::{append_grads, Adam, Net};
@@ -473,17 +473,7 @@ impl Ddpg {
 }
 
 impl Algorithm for Ddpg {
-    fn name(&self) -> &'static str {
-        REGISTRATION.info.name()
-    }
-
-    fn norm(&self) -> &Normalizer {
-        &self.norm
-    }
-
-    fn norm_mut(&mut self) -> &mut Normalizer {
-        &mut self.norm
-    }
+    super::algorithm::learner_basics!(REGISTRATION.info.name());
 
     fn gradient(&mut self, batch: &Batch, shard: u64, _weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
         Ddpg::gradient(self, batch, shard)
@@ -506,7 +496,7 @@ impl Algorithm for Ddpg {
         AnyPolicy::Deterministic(Ddpg::policy(self))
     }
 
-    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), StartError> {
         let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
         let vecs = super::algorithm::plain_vecs(&fitted.net);
         self.actor.load_vecs(&vecs)?;
@@ -515,7 +505,7 @@ impl Algorithm for Ddpg {
         Ok(())
     }
 
-    fn keep_start(&mut self, policy: &DeterministicPolicy, uses: StartUses) -> Result<(), String> {
+    fn keep_start(&mut self, policy: &DeterministicPolicy, uses: StartUses) -> Result<(), StartError> {
         let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
         let mut start = self.actor.detached_copy();
         start.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
@@ -657,6 +647,7 @@ fn shard_seed(seed: u64, shard: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::learn::agents::algorithm::StateError;
     use crate::learn::agents::shared::Precision;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
@@ -909,7 +900,7 @@ mod tests {
         assert_eq!(other.state(), td3_agent.state());
         let mut plain = Ddpg::new(6, 4, small(), DdpgConfig::default(), &mut ChaCha8Rng::seed_from_u64(4));
         let e = plain.load_state(&td3_agent.state()).unwrap_err();
-        assert!(e.contains("critic2"), "{e}");
+        assert!(matches!(&e, StateError::Foreign(p) if p.starts_with("critic2")), "{e}");
     }
 
     /// Correlated exploration noise: ρ = 0 is the paper's independent noise

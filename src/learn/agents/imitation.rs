@@ -18,7 +18,7 @@
 //!   learner's own action is taken otherwise, so the solver labels the states
 //!   the learner visits.
 
-use super::algorithm::{param_count, Algorithm, Explorer, Part, Spec, UpdateStats};
+use super::algorithm::{param_count, Algorithm, Explorer, Part, Spec, StartError, UpdateStats};
 use super::nets::{append_grads, Adam, Net};
 use super::replay::Batch;
 use crate::policy::actor::normalizer::Normalizer;
@@ -98,17 +98,7 @@ impl Cloner {
 }
 
 impl Algorithm for Cloner {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-
-    fn norm(&self) -> &Normalizer {
-        &self.norm
-    }
-
-    fn norm_mut(&mut self) -> &mut Normalizer {
-        &mut self.norm
-    }
+    super::algorithm::learner_basics!(field name);
 
     fn gradient(&mut self, batch: &Batch, _shard: u64, _weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
         let n = batch.len() as i64;
@@ -155,7 +145,7 @@ impl Algorithm for Cloner {
 
     /// The actor and the normaliser from a trained policy: imitation then goes on from it (a
     /// generalist specialised on one task by DAgger, say), with a fresh optimiser.
-    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), StartError> {
         let fitted = super::algorithm::fit_actor(&self.actor.to_plain(), &self.norm, policy)?;
         self.actor.load_vecs(&super::algorithm::plain_vecs(&fitted.net))?;
         self.norm = fitted.norm;

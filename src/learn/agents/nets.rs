@@ -7,6 +7,34 @@ use crate::policy::actor::mlp::{Dense, PlainNet, SetLayout, COLOURS, NORM_EPS};
 use rand::Rng;
 use tch::{Kind, Tensor};
 
+/// Saved values that do not fit a network or an optimiser: how many arrays there are, or one
+/// array's size.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Shape {
+    /// Another number of arrays.
+    #[error("expected {expected} {what}, found {found}")]
+    Count {
+        /// What the arrays are.
+        what: &'static str,
+        /// How many the network or optimiser has.
+        expected: usize,
+        /// How many were given.
+        found: usize,
+    },
+    /// An array of another size.
+    #[error("{what} {index} has {found} values, expected {expected}")]
+    Size {
+        /// What the array is.
+        what: &'static str,
+        /// Its place.
+        index: usize,
+        /// The values the network or optimiser has there.
+        expected: usize,
+        /// The values given.
+        found: usize,
+    },
+}
+
 /// The layer sizes of an MLP: `input`, `layers` × `hidden`, `output`.
 pub fn mlp_sizes(input: usize, hidden: usize, layers: usize, output: usize) -> Vec<usize> {
     std::iter::once(input).chain(std::iter::repeat(hidden).take(layers)).chain(std::iter::once(output)).collect()
@@ -403,14 +431,14 @@ impl Net {
     /// Overwrites the parameter values; shapes must match.
     ///
     /// # Errors
-    /// A message naming the first parameter whose size differs.
-    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>]) -> Result<(), String> {
+    /// The first count or size that differs ([`Shape`]).
+    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>]) -> Result<(), Shape> {
         if vecs.len() != self.params.len() {
-            return Err(format!("expected {} parameter tensors, found {}", self.params.len(), vecs.len()));
+            return Err(Shape::Count { what: "parameter tensors", expected: self.params.len(), found: vecs.len() });
         }
         for (i, (p, v)) in self.params.iter_mut().zip(vecs).enumerate() {
             if p.numel() != v.len() {
-                return Err(format!("parameter {i} has {} values, expected {}", v.len(), p.numel()));
+                return Err(Shape::Size { what: "parameter", index: i, expected: p.numel(), found: v.len() });
             }
             let src = Tensor::of_slice(v).view(p.size().as_slice());
             tch::no_grad(|| p.copy_(&src));
@@ -525,15 +553,15 @@ impl Adam {
     /// Restores moments saved by [`Adam::to_vecs`] and the step count.
     ///
     /// # Errors
-    /// A message if the number or sizes of the moments differ.
-    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>], t: u64) -> Result<(), String> {
+    /// The first count or size of the moments that differs ([`Shape`]).
+    pub(crate) fn load_vecs(&mut self, vecs: &[Vec<f32>], t: u64) -> Result<(), Shape> {
         let n = self.m.len();
         if vecs.len() != 2 * n {
-            return Err(format!("expected {} optimiser moments, found {}", 2 * n, vecs.len()));
+            return Err(Shape::Count { what: "optimiser moments", expected: 2 * n, found: vecs.len() });
         }
         for (i, (dst, src)) in self.m.iter_mut().chain(self.v.iter_mut()).zip(vecs).enumerate() {
             if dst.len() != src.len() {
-                return Err(format!("optimiser moment {i} has {} values, expected {}", src.len(), dst.len()));
+                return Err(Shape::Size { what: "optimiser moment", index: i, expected: dst.len(), found: src.len() });
             }
             dst.copy_from_slice(src);
         }
@@ -902,6 +930,10 @@ mod tests {
             ours.iter().map(tensor_to_vec).collect::<Vec<_>>(),
             copy.iter().map(tensor_to_vec).collect::<Vec<_>>()
         );
-        assert!(again.load_vecs(&adam.to_vecs()[1..], 3).unwrap_err().contains("expected 12 optimiser moments"));
+        assert!(again
+            .load_vecs(&adam.to_vecs()[1..], 3)
+            .unwrap_err()
+            .to_string()
+            .contains("expected 12 optimiser moments"));
     }
 }

@@ -228,17 +228,7 @@ impl Pggd {
 }
 
 impl Algorithm for Pggd {
-    fn name(&self) -> &'static str {
-        REGISTRATION.info.name()
-    }
-
-    fn norm(&self) -> &Normalizer {
-        &self.norm
-    }
-
-    fn norm_mut(&mut self) -> &mut Normalizer {
-        &mut self.norm
-    }
+    super::algorithm::learner_basics!(REGISTRATION.info.name());
 
     /// Each transition's weight is `weights` (an expert's advantage) or else the stored return-to-go.
     fn gradient(&mut self, batch: &Batch, _shard: u64, weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {

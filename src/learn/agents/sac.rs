@@ -29,7 +29,9 @@
 //! The ε of update k and shard s come from a ChaCha8 stream of (seed, s, k),
 //! so a run resumes bit for bit and the shards draw independent noise.
 
-use super::algorithm::{param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, Spec, UpdateStats};
+use super::algorithm::{
+    param_count, split_gradient, Algorithm, Explorer, Info, Part, Registration, Spec, StartError, UpdateStats,
+};
 use super::arch::Arch;
 use super::nets::{append_grads, Adam, Net};
 use super::replay::Batch;
@@ -273,17 +275,7 @@ impl Sac {
 }
 
 impl Algorithm for Sac {
-    fn name(&self) -> &'static str {
-        REGISTRATION.info.name()
-    }
-
-    fn norm(&self) -> &Normalizer {
-        &self.norm
-    }
-
-    fn norm_mut(&mut self) -> &mut Normalizer {
-        &mut self.norm
-    }
+    super::algorithm::learner_basics!(REGISTRATION.info.name());
 
     fn gradient(&mut self, batch: &Batch, shard: u64, _weights: Option<&[f32]>) -> (Vec<f32>, UpdateStats) {
         self.compute_gradient(batch, shard)
@@ -314,7 +306,7 @@ impl Algorithm for Sac {
     /// The mean rows of the last layer from the policy's; the log σ rows' weights zero and their
     /// biases ln [`INIT_STD`], so that the first exploration is the policy's action with small noise
     /// (the fresh rows would draw σ about 1, which undoes the policy's skill).
-    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), String> {
+    fn init_from(&mut self, policy: &DeterministicPolicy) -> Result<(), StartError> {
         let ours = self.mean_actor();
         let fitted = super::algorithm::fit_actor(&ours, &self.norm, policy)?;
         let mut vecs = super::algorithm::plain_vecs(&fitted.net);
@@ -487,6 +479,6 @@ mod tests {
         assert!(got.iter().zip(&mean).all(|(a, b)| (a - b).abs() < 1e-6), "{got:?} vs {mean:?}");
         let mut broken = sac.state();
         broken.tensors.remove("critic2_adam.0");
-        assert!(other.load_state(&broken).unwrap_err().contains("critic2_adam"));
+        assert!(other.load_state(&broken).unwrap_err().to_string().contains("critic2_adam"));
     }
 }

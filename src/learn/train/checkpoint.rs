@@ -580,7 +580,7 @@ fn load_agent(
     let spec = Spec { arch, act_dim, shared: &header.shared };
     let mut agent = header.algo.build(&spec, &header.algos, &mut rng);
     let state = StateDict { tensors: tensors.into_iter().collect(), counters: counters(header) };
-    agent.load_state(&state).map_err(&mismatch)?;
+    agent.load_state(&state).map_err(|e| mismatch(e.to_string()))?;
     *agent.norm_mut() = header.normalizer.clone();
     Ok(agent)
 }

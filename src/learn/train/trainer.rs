@@ -374,7 +374,7 @@ fn fresh(
 fn keep_policy(agent: &mut dyn Algorithm, config: &TrainConfig, policy: &DeterministicPolicy) -> Result<()> {
     let uses = config.finetune.start_uses();
     if uses.any() {
-        agent.keep_start(policy, uses).map_err(TrainError::Refused)?;
+        agent.keep_start(policy, uses).map_err(|e| TrainError::Refused(e.to_string()))?;
     }
     Ok(())
 }
