@@ -62,3 +62,8 @@ int bp_make_data(const mjModel *m, mjData **out) {
     *out = NULL;
     GUARDED(*out = mj_makeData(m));
 }
+
+int bp_copy_model(const mjModel *m, mjModel **out) {
+    *out = NULL;
+    GUARDED(*out = mj_copyModel(NULL, m));
+}

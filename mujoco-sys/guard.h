@@ -9,3 +9,4 @@ int bp_kinematics(const mjModel *m, mjData *d, int contacts);
 int bp_reset_data(const mjModel *m, mjData *d);
 int bp_copy_data(mjData *dest, const mjModel *m, const mjData *src);
 int bp_make_data(const mjModel *m, mjData **out);
+int bp_copy_model(const mjModel *m, mjModel **out);

@@ -17,7 +17,7 @@ BIN="${BIN:-$ROOT/target/release/blockpuzzle}"
 ENGINE="$("$BIN" info | sed -n 's/^MuJoCo \([0-9.]*\).*/\1/p')"
 [ -n "$ENGINE" ] || { echo "$BIN info names no MuJoCo version" >&2; exit 1; }
 OUT="$ROOT/results/generalization/mujoco-$ENGINE"
-SUITES="${SUITES:-colour layout cross-task count obstacles procgen compose cross-task-v2 procgen-v2}"
+SUITES="${SUITES:-colour layout cross-task count obstacles procgen compose cross-task-v2 procgen-v2 physics}"
 mkdir -p "$OUT"
 if [ -n "${AGENTS:-}" ]; then
     POLICIES="${POLICIES:-}"

@@ -28,12 +28,15 @@ class BlockPuzzleEnv(gymnasium.Env):
 
     ``reset(options=...)`` takes ``level`` (curriculum level), ``challenge`` (bool) and
     ``distribution`` (a name from the task file, listed in ``distributions``); they stay in force
-    for later resets until changed. ``task`` and ``task_sha256`` are checks: a recorded episode's
+    for later resets until changed. ``physics`` (a dict, parameter name to value) pins parameters
+    of the task's ``[physics]`` table for this episode only; a task without one refuses it.
+    ``task`` and ``task_sha256`` are checks: a recorded episode's
     options (``blockpuzzle.datasets.reset_options``) name its task, and another task is refused.
     ``info`` has ``is_success``, ``is_failure``, ``level``, ``challenge``,
     ``distribution``, ``touching`` (object index pairs touching during the step),
     ``contact_matrix`` (int8, 0 never touched, 1 touched before, 2 touching now),
-    ``elapsed_steps`` and ``unstable``; ``env.unwrapped.objects`` names the indices.
+    ``elapsed_steps`` and ``unstable``, and for a task with a ``[physics]`` table ``physics``
+    (the episode's drawn values, parameter name to value); ``env.unwrapped.objects`` names the indices.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 25}
@@ -63,10 +66,10 @@ class BlockPuzzleEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
         options = dict(options or {})
-        unknown = set(options) - {"level", "challenge", "distribution", "task", "task_sha256"}
+        unknown = set(options) - {"level", "challenge", "distribution", "task", "task_sha256", "physics"}
         if unknown:
             raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution, "
-                             "task, task_sha256")
+                             "task, task_sha256, physics")
         self._check_task(options)
         if seed is not None and not (0 <= int(seed) < 2**64):
             raise ValueError(f"seed {seed} is outside [0, 2**64)")
@@ -80,6 +83,7 @@ class BlockPuzzleEnv(gymnasium.Env):
             options.get("level"),
             options.get("challenge"),
             options.get("distribution"),
+            physics_option(options.get("physics")),
         )
         return observation.split(obs, self.obs_layout), info
 
@@ -122,3 +126,20 @@ class BlockPuzzleEnv(gymnasium.Env):
 
     def close(self):
         self._env.close()
+
+
+def physics_option(given: Any) -> list[tuple[str, float]] | None:
+    """``reset``'s ``physics`` option (parameter name to value, pinned for the episode) as the
+    extension takes it; the extension checks the names and values against the task's table."""
+    if given is None:
+        return None
+    if not isinstance(given, dict):
+        raise ValueError(f"options['physics'] must be a dict of parameter name to value, not {given!r}")
+    pairs = []
+    for name, value in given.items():
+        if not isinstance(name, str):
+            raise ValueError(f"options['physics'] key {name!r} is not a parameter name (a str)")
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"options['physics'][{name!r}] must be a number, not {value!r}")
+        pairs.append((name, float(value)))
+    return pairs

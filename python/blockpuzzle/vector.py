@@ -13,6 +13,7 @@ from gymnasium.vector.utils import batch_space
 
 from . import observation
 from ._checks import whole
+from .env import physics_option
 from ._native import Env as _NativeEnv
 from ._native import max_episode_steps as _native_max_steps
 from ._native import VecEnv as _NativeVecEnv
@@ -46,8 +47,11 @@ class BlockPuzzleVectorEnv(VectorEnv):
     environment reset by autoreset continues its own seed sequence. ``reset(seed=s)`` seeds
     environment i with ``s + i`` (or ``seed[i]`` for a list); environment i's trajectory depends
     only on its own seeds and actions, so it is the same whatever ``num_envs`` and ``threads`` are. ``reset(options=...)`` takes
-    ``level``, ``challenge``, ``distribution`` (for every environment reset) and ``reset_mask`` (a
-    bool array: reset only those environments). ``obs_mode="objects"`` gives ``Dict`` observations
+    ``level``, ``challenge``, ``distribution`` (for every environment reset), ``physics`` (parameters
+    of the task's ``[physics]`` table pinned, name to value, for the episodes of the environments reset,
+    autoresets included, until the next ``reset``) and ``reset_mask`` (a bool array: reset only those
+    environments). A task with a ``[physics]`` table reports each environment's drawn values in
+    ``info["physics"]`` (parameter name to an array). ``obs_mode="objects"`` gives ``Dict`` observations
     (``robot``, ``objects``, ``mask``; see ``BlockPuzzleEnv``).
     """
 
@@ -115,9 +119,10 @@ class BlockPuzzleVectorEnv(VectorEnv):
             if len(seeds) != n:
                 raise ValueError(f"seed has {len(seeds)} entries; the vector has {n} environments")
         options = dict(options or {})
-        unknown = set(options) - {"level", "challenge", "distribution", "reset_mask"}
+        unknown = set(options) - {"level", "challenge", "distribution", "reset_mask", "physics"}
         if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution, reset_mask")
+            raise ValueError(f"unknown reset options {sorted(unknown)}; known: level, challenge, distribution, "
+                             "reset_mask, physics")
         mask = options.get("reset_mask")
         if mask is not None:
             given = np.asarray(mask)
@@ -128,7 +133,8 @@ class BlockPuzzleVectorEnv(VectorEnv):
         level = options.get("level")
         if level is not None and (isinstance(level, bool) or not isinstance(level, (int, np.integer)) or level < 0):
             raise ValueError(f"options['level'] must be an int >= 0, not {level!r}")
-        info = self._native.reset(self._obs, seeds, mask, level, options.get("challenge"), options.get("distribution"))
+        info = self._native.reset(self._obs, seeds, mask, level, options.get("challenge"), options.get("distribution"),
+                                  physics_option(options.get("physics")))
         if mask is None:
             self._ended[:] = False
         else:

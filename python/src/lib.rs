@@ -30,7 +30,8 @@ pub(crate) fn to_py(e: EnvError) -> PyErr {
         | EnvError::BadAction { .. }
         | EnvError::LevelOutOfRange { .. }
         | EnvError::NoChallenge { .. }
-        | EnvError::NoDistribution { .. } => PyValueError::new_err(msg),
+        | EnvError::NoDistribution { .. }
+        | EnvError::Physics(_) => PyValueError::new_err(msg),
         _ => PyRuntimeError::new_err(msg),
     }
 }
@@ -96,6 +97,21 @@ impl<T> Drop for OnThread<T> {
     }
 }
 
+/// An episode's drawn dynamics as a dict, name to value (`latency` an int).
+pub(crate) fn physics_dict<'py>(
+    py: Python<'py>,
+    drawn: &blockpuzzle::task::physics::PhysicsDraw,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, v) in drawn.values() {
+        match name {
+            "latency" => d.set_item(name, v as u64)?,
+            _ => d.set_item(name, v)?,
+        }
+    }
+    Ok(d)
+}
+
 /// `info` as a dict: success and failure of this step, level, distribution,
 /// the touching pairs (object indices) and the contact matrix (0 never
 /// touched, 1 touched before, 2 touching now).
@@ -109,6 +125,9 @@ fn info_dict<'py>(py: Python<'py>, info: &Info, env: &BlockEnv) -> PyResult<Boun
     d.set_item("touching", PyList::new(py, info.touching.iter().map(|&(a, b)| (a, b)))?)?;
     d.set_item("elapsed_steps", info.elapsed_steps)?;
     d.set_item("unstable", info.unstable)?;
+    if let Some(drawn) = &info.physics {
+        d.set_item("physics", physics_dict(py, drawn)?)?;
+    }
     let n = env.objects().len();
     let m = env.contact_matrix();
     let mut cells = Vec::with_capacity(n * n);
@@ -214,12 +233,13 @@ impl Env {
         Ok(self.env()?.config().task.spec.distributions.keys().cloned().collect())
     }
 
-    /// `reset(seed=None, level=None, challenge=None, distribution=None)` ->
+    /// `reset(seed=None, level=None, challenge=None, distribution=None, physics=None)` ->
     /// (observation, info). A seed makes the episode reproducible; without
     /// one the environment's own generator continues. `level` sets the
     /// curriculum level, `challenge` / `distribution` an evaluation distribution
-    /// (kept for later resets until changed).
-    #[pyo3(signature = (seed = None, level = None, challenge = None, distribution = None))]
+    /// (kept for later resets until changed); `physics` pins parameters of the
+    /// task's `[physics]` table (name to value) for this episode.
+    #[pyo3(signature = (seed = None, level = None, challenge = None, distribution = None, physics = None))]
     fn reset<'py>(
         &mut self,
         py: Python<'py>,
@@ -227,8 +247,10 @@ impl Env {
         level: Option<usize>,
         challenge: Option<bool>,
         distribution: Option<String>,
+        physics: Option<Vec<(String, f64)>>,
     ) -> PyResult<(Bound<'py, PyArray1<f32>>, Bound<'py, PyDict>)> {
         let env = self.env()?;
+        env.pin_physics(&physics.unwrap_or_default()).map_err(to_py)?;
         if let Some(l) = level {
             env.set_level(l).map_err(to_py)?;
         }

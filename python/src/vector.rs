@@ -81,6 +81,19 @@ impl VecEnv {
             }
         }
         d.set_item("contact_matrix", PyArray1::from_vec(py, cells).reshape([reports.len(), n, n])?)?;
+        // A task with a `[physics]` table: each parameter's value per environment (NaN where the
+        // call did not reach it).
+        if engine.envs().first().is_some_and(|e| e.physics().is_some()) {
+            let physics = PyDict::new(py);
+            for (k, p) in blockpuzzle::task::physics::PARAMS.iter().enumerate() {
+                let values: Vec<f64> = infos
+                    .iter()
+                    .map(|i| i.and_then(|i| i.physics).map_or(f64::NAN, |d| d.values()[k].1))
+                    .collect();
+                physics.set_item(p.name, PyArray1::from_vec(py, values))?;
+            }
+            d.set_item("physics", physics)?;
+        }
         // The single environment's other keys, as Gymnasium's vector info holds values that are not
         // numbers: one-dimensional object arrays (None for the environments the call did not reach).
         let objects = |values: Vec<PyObject>| -> PyResult<Bound<'py, PyAny>> {
@@ -162,7 +175,7 @@ impl VecEnv {
     /// generator goes on), after applying `level`, `challenge` and
     /// `distribution` to them; writes their observations into `obs`
     /// (`num_envs × obs_dim` float32). Returns the infos.
-    #[pyo3(signature = (obs, seeds, mask = None, level = None, challenge = None, distribution = None))]
+    #[pyo3(signature = (obs, seeds, mask = None, level = None, challenge = None, distribution = None, physics = None))]
     #[allow(clippy::too_many_arguments)]
     fn reset<'py>(
         &mut self,
@@ -173,10 +186,12 @@ impl VecEnv {
         level: Option<usize>,
         challenge: Option<bool>,
         distribution: Option<String>,
+        physics: Option<Vec<(String, f64)>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let engine = self.engine()?;
         let out = obs.as_slice_mut().map_err(|e| PyValueError::new_err(format!("obs buffer: {e}")))?;
-        let options = ResetOptions { level, challenge, distribution };
+        // Pins hold for the episodes these environments play until the next reset (autoresets too).
+        let options = ResetOptions { level, challenge, distribution, physics: Some(physics.unwrap_or_default()) };
         py.allow_threads(|| engine.reset(&seeds, mask.as_deref(), &options, out).map(|_| ())).map_err(vec_to_py)?;
         self.infos(py)
     }

@@ -50,6 +50,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("compose", include_str!("../../suites/compose.toml")),
     ("cross-task-v2", include_str!("../../suites/cross-task-v2.toml")),
     ("procgen-v2", include_str!("../../suites/procgen-v2.toml")),
+    ("physics", include_str!("../../suites/physics.toml")),
 ];
 
 /// The built-in suites' names, comma-separated (what help texts list).
@@ -64,6 +65,9 @@ struct SuiteSpec {
     version: u32,
     name: String,
     summary: String,
+    /// Named `[physics]` tables (`[physics.test]`) that rows give their tasks (`physics = "test"`).
+    #[serde(default)]
+    physics: BTreeMap<String, crate::task::physics::PhysicsSpec>,
     splits: BTreeMap<String, Vec<RowSpec>>,
 }
 
@@ -92,6 +96,9 @@ struct RowSpec {
     family_sha256: Option<String>,
     distribution: Option<String>,
     level: Option<usize>,
+    /// One of the suite's `[physics.NAME]` tables, given to the row's tasks (in place of theirs).
+    #[serde(default)]
+    physics: Option<String>,
     seed: u64,
     episodes: usize,
 }
@@ -142,6 +149,18 @@ pub struct Row {
     pub seed: u64,
     /// Episodes.
     pub episodes: usize,
+}
+
+impl Row {
+    /// The row's task with `table` as its `[physics]` table (the suite's `[physics.LABEL]`): another
+    /// task by content, so its hash and every result that records it say so.
+    fn with_physics(&mut self, table: &crate::task::physics::PhysicsSpec, label: &str) -> Result<(), String> {
+        let mut spec = self.task.spec.clone();
+        spec.physics = Some(table.clone());
+        self.task = Task::from_spec(spec).map_err(|e| e.to_string())?;
+        self.source = format!("{} with the suite's [physics.{label}]", self.source);
+        Ok(())
+    }
 }
 
 impl Suite {
@@ -277,6 +296,9 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
             crate::support::limits::cut_long_lines(&spec.name)
         )));
     }
+    for (label, table) in &spec.physics {
+        table.check().map_err(|e| invalid(format!("[physics.{label}]: {e}")))?;
+    }
     let kind = SuiteKind::of(|n| spec.splits.contains_key(n));
     for required in ["train", kind.scored_split()] {
         if !spec.splits.contains_key(required) {
@@ -299,6 +321,18 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
         for (i, r) in rows.iter().enumerate() {
             let what = r.task.as_deref().or(r.family.as_deref()).unwrap_or("?");
             let at = |m: String| invalid(format!("splits.{name}[{i}] ({what}): {m}"));
+            let physics = match &r.physics {
+                None => None,
+                Some(p) => Some(spec.physics.get(p).ok_or_else(|| {
+                    let known: Vec<&str> = spec.physics.keys().map(String::as_str).collect();
+                    at(format!(
+                        "physics = {p:?} names no [physics.{p}] table of the suite (it has: {}); add the table or name \
+                         one it has",
+                        if known.is_empty() { "none".to_owned() } else { known.join(", ") }
+                    ))
+                })?),
+            };
+            let first = out.len();
             match (&r.task, &r.family, r.generator_seeds) {
                 (Some(_), None, None) if r.choose.is_none() && r.candidates.is_none() && r.family_sha256.is_none() => {
                     out.push(row(r, dir).map_err(at)?)
@@ -324,6 +358,11 @@ pub fn parse(text: &str, origin: &str, dir: Option<&Path>) -> Result<Suite, Suit
                         "a row names a `task`, or a `family` with `generator_seeds = [first, end]` (and `choose`, `candidates`, `family_sha256`), not both"
                             .into(),
                     ))
+                }
+            }
+            if let (Some(table), Some(label)) = (physics, &r.physics) {
+                for row in &mut out[first..] {
+                    row.with_physics(table, label).map_err(at)?;
                 }
             }
         }

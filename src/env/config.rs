@@ -142,4 +142,8 @@ pub enum EnvError {
     /// An invalid setting.
     #[error("invalid environment setting: {0}")]
     Config(String),
+    /// Physics options the task's `[physics]` table does not take (none, an unknown parameter, one
+    /// it does not vary, a value outside its range).
+    #[error("{0}")]
+    Physics(String),
 }

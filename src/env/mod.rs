@@ -5,6 +5,7 @@
 //! | `config` | [`EnvConfig`] and the environment API's errors ([`EnvError`]) |
 //! | `obs` | the observation modes ([`ObsSpec`]) and how each is read off the simulation |
 //! | `reset` | the reset pipeline: roles dealt, a layout drawn, the settled robot restored |
+//! | `physics` | a task's `[physics]` table at work: the episode's dynamics drawn and applied, action noise and latency, observation noise |
 //! | [`registry`] | the versioned environment ids, each a task file in `tasks/` |
 //! | [`vector`] | the vector engine: N environments stepped on K threads |
 //! | [`hindsight`] | hindsight colour relabelling of an episode's contacts |
@@ -22,6 +23,7 @@
 mod config;
 pub mod hindsight;
 mod obs;
+mod physics;
 pub mod registry;
 mod reset;
 pub mod vector;
@@ -88,6 +90,9 @@ pub struct Info {
     pub unstable: bool,
     /// Steps taken in this episode.
     pub elapsed_steps: usize,
+    /// The episode's dynamics, drawn at reset (a task with a `[physics]` table; absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<crate::task::physics::PhysicsDraw>,
 }
 
 /// What resets have cost so far: how often the sampler and the physics
@@ -174,6 +179,8 @@ pub struct BlockEnv {
     /// The contacts of every substep of the last step, when recording (hindsight relabelling).
     substeps: Option<Vec<Touching>>,
     physics: std::time::Duration,
+    /// The per-episode dynamics of a task with a `[physics]` table.
+    dynamics: Option<physics::Dynamics>,
 }
 
 impl BlockEnv {
@@ -211,6 +218,18 @@ impl BlockEnv {
         data.forward()?;
         let initial_grip = data.site_xpos()[scene.grip_site];
         let initial = data.try_clone()?;
+        // A task whose dynamics vary steps a copy of the model that its state alone holds, set
+        // from the scene's nominal one at every reset.
+        let dynamics = match &task.physics {
+            Some(p) => {
+                let mut own = Data::new(std::sync::Arc::new(scene.model.try_clone()?))?;
+                own.copy_from(&initial)?;
+                data = own;
+                let blocks: Vec<usize> = scene.blocks.iter().map(|b| b.body).collect();
+                Some(physics::Dynamics::new(p.clone(), &scene.model, &blocks))
+            }
+            None => None,
+        };
         let model = scene.model.clone();
         let finger_ctrl: Vec<usize> =
             model.actuator_joint().iter().map(|&j| model.jnt_qposadr()[j as usize] as usize).collect();
@@ -243,6 +262,7 @@ impl BlockEnv {
             varies,
             substeps: None,
             physics: std::time::Duration::ZERO,
+            dynamics,
         })
     }
 
@@ -272,6 +292,7 @@ impl BlockEnv {
     }
     /// Writes the current observation into `self.obs`.
     fn write_obs(&mut self) {
+        self.draw_obs_noise();
         let mut obs = std::mem::take(&mut self.obs);
         self.observe(self.config.obs_mode, &mut obs);
         self.obs = obs;
@@ -298,6 +319,7 @@ impl BlockEnv {
             sizes: &self.sizes,
             present: &self.present,
             fixtures,
+            noise: self.dynamics.as_ref().map_or(&[], |d| &d.obs_offsets),
         };
         obs::write(&ctx, &self.scene, &self.data, dt, out);
     }
@@ -499,7 +521,8 @@ impl BlockEnv {
         }
 
         let bad_before = self.bad_number_warnings();
-        self.apply_action(action);
+        let applied = self.acting(action);
+        self.apply_action(&applied);
         self.step_touching.clear();
         if let Some(record) = &mut self.substeps {
             record.clear();
@@ -579,6 +602,7 @@ impl BlockEnv {
             touching,
             unstable: false,
             elapsed_steps: self.steps,
+            physics: self.physics(),
         }
     }
 
@@ -587,10 +611,10 @@ impl BlockEnv {
     fn apply_action(&mut self, action: &[f32]) {
         let body = self.scene.gripper_body;
         let (pos, quat) = (self.data.xpos()[body], self.data.xquat()[body]);
-        let m = self.scene.mocap;
+        let (m, scale) = (self.scene.mocap, self.action_scale());
         let mp = &mut self.data.mocap_pos_mut()[m];
         for k in 0..3 {
-            mp[k] = pos[k] + f64::from(action[k].clamp(-1.0, 1.0)) * ACTION_SCALE;
+            mp[k] = pos[k] + f64::from(action[k].clamp(-1.0, 1.0)) * scale;
         }
         let mq = &mut self.data.mocap_quat_mut()[m];
         for k in 0..4 {

@@ -362,6 +362,9 @@ pub struct ObsContext<'a> {
     pub present: &'a [bool],
     /// The gripper's, table's and floor's colours this episode.
     pub fixtures: FixtureColours,
+    /// Offsets (m) of the positions reported this step: the grip's, then each block's (a task's
+    /// `physics.obs_noise`); empty: none.
+    pub noise: &'a [[f64; 3]],
 }
 
 /// The half extents of the world-aligned box around box geom `g`.
@@ -374,7 +377,9 @@ fn box_extents(scene: &Scene, data: &Data, g: usize) -> ([f64; 3], [f64; 3]) {
 pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Vec<f32>) {
     let (spec, colours) = (ctx.spec, ctx.colours);
     out.clear();
-    let grip = data.site_xpos()[scene.grip_site];
+    let offset = |k: usize| ctx.noise.get(k).copied().unwrap_or([0.0; 3]);
+    let shift = |p: [f64; 3], k: usize| -> [f64; 3] { std::array::from_fn(|i| p[i] + offset(k)[i]) };
+    let grip = shift(data.site_xpos()[scene.grip_site], 0);
     let gv = site_velocity(data, scene.grip_site);
     let grip_velp = [gv[3] * dt, gv[4] * dt, gv[5] * dt];
     let (q, v) = (data.qpos(), data.qvel());
@@ -401,8 +406,11 @@ pub fn write(ctx: &ObsContext, scene: &Scene, data: &Data, dt: f64, out: &mut Ve
             continue;
         }
         let size = ctx.sizes.get(k).map_or([0.0; 3], |s| s.map(|v| v as f32));
-        let (pos, xmat, vel) =
-            (data.site_xpos()[block.site], &data.site_xmat()[block.site], site_velocity(data, block.site));
+        let (pos, xmat, vel) = (
+            shift(data.site_xpos()[block.site], k + 1),
+            &data.site_xmat()[block.site],
+            site_velocity(data, block.site),
+        );
         match spec.mode {
             ObsMode::Flat => put(out, pos, xmat, vel, colour, &[]),
             ObsMode::Objects => put(out, pos, xmat, vel, colour, &size),

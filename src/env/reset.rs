@@ -23,6 +23,7 @@ impl BlockEnv {
     pub fn reset(&mut self, seed: Option<u64>) -> Result<(Vec<f32>, Info), EnvError> {
         if let Some(s) = seed {
             self.rng = ChaCha8Rng::seed_from_u64(s);
+            self.seed_physics(s);
         }
         self.phase = Phase::NeedsReset;
         let task = &self.config.task;
@@ -69,6 +70,7 @@ impl BlockEnv {
     /// reset state is unusable, if it is.
     fn try_layout(&mut self) -> Result<Option<String>, EnvError> {
         self.data.copy_from(&self.initial)?;
+        self.draw_physics()?;
         let roles = self.draw_roles()?;
         let origin = [self.initial_grip[0], self.initial_grip[1]];
         let placed = self.config.task.sample_counted(

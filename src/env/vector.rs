@@ -64,6 +64,9 @@ pub struct ResetOptions {
     pub challenge: Option<bool>,
     /// A named distribution of the task.
     pub distribution: Option<String>,
+    /// Parameters of the task's `[physics]` table pinned to values (name, value) for the episodes
+    /// that follow ([`BlockEnv::pin_physics`]; an empty list draws them all again).
+    pub physics: Option<Vec<(String, f64)>>,
 }
 
 /// An environment's error, with its index.
@@ -196,6 +199,9 @@ impl VectorEnv {
             }
             if let Some(name) = &options.distribution {
                 env.set_distribution(Some(name))?;
+            }
+            if let Some(fixed) = &options.physics {
+                env.pin_physics(fixed)?;
             }
             reset_one(env, seeds[i], row, ended, report)
         })?;

@@ -306,6 +306,7 @@ mod tests {
             success: false,
             failure: false,
             episode_return: 0.0,
+            physics: None,
         }
     }
 

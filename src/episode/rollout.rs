@@ -115,6 +115,9 @@ pub struct EpisodeRecord {
     pub failure: bool,
     /// Sum of rewards.
     pub episode_return: f32,
+    /// The episode's dynamics (a task with a `[physics]` table).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<crate::task::physics::PhysicsDraw>,
 }
 
 fn state(env: &BlockEnv) -> StateRecord {
@@ -223,6 +226,7 @@ fn record_episode(
                 success: false,
                 failure: false,
                 episode_return: 0.0,
+                physics: env.physics(),
             })
         }
         Event::Step { env, action, step: s, .. } => {

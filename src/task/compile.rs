@@ -252,6 +252,9 @@ fn check_settings(c: &Checker, spec: &TaskSpec) -> Result<(), TaskError> {
             .check_usize(v)
             .map_err(|e| c.err(field_span(text, name), format!("placement.{name}: {e}")))?;
     }
+    if let Some(physics) = &spec.physics {
+        physics.check().map_err(|e| c.err(None, e))?;
+    }
     Ok(())
 }
 

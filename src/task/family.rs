@@ -102,6 +102,9 @@ pub struct FamilySpec {
     pub shuffle: Vec<Vec<String>>,
     /// The block groups, placed in this order.
     pub blocks: Vec<Spanned<BlockGroup>>,
+    /// Every generated task's `[physics]` table: dynamics drawn per episode (absent: nominal).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<super::physics::PhysicsSpec>,
 }
 
 fn default_steps() -> usize {
@@ -297,6 +300,9 @@ impl Family {
                 "family format version {} is not one this build reads (it reads version {FAMILY_VERSION})",
                 spec.version
             )));
+        }
+        if let Some(physics) = &spec.physics {
+            physics.check().map_err(err)?;
         }
         // A group's block shape is `size` (cubes) or `half_extents` (boxes): both would drop one silently.
         if let Ok(raw) = text.parse::<toml::Table>() {
@@ -567,6 +573,7 @@ impl Family {
             placement: s.placement.clone(),
             objects,
             distributions: BTreeMap::new(),
+            physics: s.physics.clone(),
         };
         let body = toml::to_string(&spec).map_err(|e| TaskError {
             origin: id.clone(),

@@ -10,6 +10,7 @@
 //! | [`sampler`] | layouts drawn from a task's start specs |
 //! | [`counts`] | count ranges given from outside a file (`train --counts grey=0-2`) |
 //! | [`family`] | task families: ranges over the framework that generate tasks |
+//! | [`physics`] | a task's `[physics]` table: per-episode ranges of the dynamics, their bounds and the draw |
 //!
 //! Tasks as data: a task file (TOML, [`spec`]) describes the objects, their
 //! colours and sizes, where each starts (samplers over the curriculum
@@ -25,6 +26,7 @@ mod diagnostics;
 pub(crate) mod exact;
 pub mod expr;
 pub mod family;
+pub mod physics;
 pub mod sampler;
 pub mod spec;
 

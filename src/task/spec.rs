@@ -65,6 +65,9 @@ pub struct TaskSpec {
     /// Named evaluation distributions (e.g. `challenge`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub distributions: BTreeMap<String, DistributionSpec>,
+    /// Dynamics drawn per episode from its seed (absent: nominal physics, as every built-in task).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<super::physics::PhysicsSpec>,
 }
 
 fn default_max_episode_steps() -> usize {
@@ -386,6 +389,7 @@ impl TaskSpec {
             placement: PlacementSpec::default(),
             objects,
             distributions: BTreeMap::new(),
+            physics: None,
         };
         spec.with_fixed_layout(positions)
     }

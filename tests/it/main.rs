@@ -26,6 +26,7 @@ mod limits;
 mod mpi;
 mod mujoco_wrapper;
 mod obs_spec;
+mod physics;
 mod provenance;
 mod render;
 mod rules_in_simulation;

@@ -89,6 +89,15 @@ impl Data {
         &self.model
     }
 
+    /// The model, to change its parameters, where this state is the only holder of it (a
+    /// [`Model::try_clone`] given to this state alone).
+    ///
+    /// # Errors
+    /// [`MjError::ModelShared`] where another holds it too.
+    pub fn model_mut(&mut self) -> Result<&mut Model, MjError> {
+        Arc::get_mut(&mut self.model).ok_or(MjError::ModelShared)
+    }
+
     fn m(&self) -> *const sys::mjModel {
         self.model.as_ptr()
     }
@@ -154,11 +163,12 @@ impl Data {
     /// # Errors
     /// [`MjError::ModelMismatch`] if the two states belong to different models.
     pub fn copy_from(&mut self, src: &Data) -> Result<(), MjError> {
-        if !Arc::ptr_eq(&self.model, &src.model) {
+        if !self.model.same_lineage(&src.model) {
             return Err(MjError::ModelMismatch);
         }
-        // SAFETY: both states were made for this very model, so their buffers
-        // have the same sizes; `self` is exclusively borrowed.
+        // SAFETY: both states were made for this model or a copy of the same load, whose sizes
+        // are the same (nothing changes a model's sizes), so their buffers have the same sizes;
+        // `self` is exclusively borrowed.
         super::guarded(unsafe { sys::bp_copy_data(self.ptr.as_ptr(), self.m(), src.ptr.as_ptr()) })
     }
 

@@ -21,9 +21,14 @@ pub enum MjError {
     /// MuJoCo's virtual file system refused a file.
     #[error("MuJoCo's virtual file system refused {name:?}: {reason}")]
     Vfs { name: String, reason: &'static str },
-    /// MuJoCo could not allocate an `mjData`.
-    #[error("MuJoCo could not allocate mjData for the model")]
+    /// MuJoCo could not allocate an `mjData` or a model copy.
+    #[error("MuJoCo could not allocate mjData or a model copy")]
     Alloc,
+    /// A model's parameters were to change while others hold it too.
+    #[error(
+        "the model is shared by other states or scenes; give the state its own copy (Model::try_clone) to change it"
+    )]
+    ModelShared,
     /// Two states of different models were mixed.
     #[error("the two mjData belong to different models")]
     ModelMismatch,

@@ -12,7 +12,13 @@ pub const NEQDATA: usize = sys::mjNEQDATA as usize;
 /// A compiled MuJoCo model. Freed with `mj_deleteModel` on drop.
 pub struct Model {
     ptr: NonNull<sys::mjModel>,
+    /// Which load this model is, or is a copy of ([`Model::try_clone`]): models of one lineage
+    /// have the same sizes (nothing here changes a size), so their states' buffers match.
+    lineage: u64,
 }
+
+/// The next model load's lineage.
+static LINEAGE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 // SAFETY: an mjModel is a self-contained heap block; MuJoCo only reads it
 // during simulation, and every mutation here goes through `&mut self`, so
@@ -72,7 +78,7 @@ impl Model {
             raw
         };
         match NonNull::new(raw) {
-            Some(ptr) => Ok(Self { ptr }),
+            Some(ptr) => Ok(Self { ptr, lineage: LINEAGE.fetch_add(1, std::sync::atomic::Ordering::Relaxed) }),
             None => {
                 // SAFETY: `err` is NUL-terminated: it was zeroed and MuJoCo
                 // writes at most ERROR_BUF-1 characters plus a NUL.
@@ -80,6 +86,25 @@ impl Model {
                 Err(MjError::Load { path: path.to_owned(), message })
             }
         }
+    }
+
+    /// A deep copy (`mj_copyModel`) of the same lineage: a state of either model may be copied
+    /// into a state of the other ([`super::Data::copy_from`]). What varies per episode
+    /// ([`crate::sim::dynamics`]) is set on a copy that one state owns.
+    ///
+    /// # Errors
+    /// [`MjError::Alloc`] if MuJoCo cannot allocate it.
+    pub fn try_clone(&self) -> Result<Self, MjError> {
+        let mut raw = std::ptr::null_mut();
+        // SAFETY: `self` is a live model; bp_copy_model writes a new model (or null) into `raw`.
+        super::guarded(unsafe { sys::bp_copy_model(self.as_ptr(), &mut raw) })?;
+        let ptr = NonNull::new(raw).ok_or(MjError::Alloc)?;
+        Ok(Self { ptr, lineage: self.lineage })
+    }
+
+    /// Whether `other` is this model or a copy of the same load (same sizes).
+    pub(crate) fn same_lineage(&self, other: &Model) -> bool {
+        self.lineage == other.lineage
     }
 
     pub(crate) fn as_ptr(&self) -> *const sys::mjModel {
@@ -296,6 +321,79 @@ impl Model {
         unsafe { std::slice::from_raw_parts(p as *const [f32; 4], n) }
     }
 
+    /// Friction of each geom (`geom_friction`: sliding, torsional, rolling).
+    pub fn geom_friction(&self) -> &[[f64; 3]] {
+        let (p, n) = (self.raw().geom_friction, self.ngeom());
+        // SAFETY: MuJoCo sizes geom_friction as ngeom × 3 reals; the model outlives `&self`.
+        unsafe { rows(p, n) }
+    }
+    /// Mutable `geom_friction`.
+    pub fn geom_friction_mut(&mut self) -> &mut [[f64; 3]] {
+        let (p, n) = (self.raw_mut().geom_friction, self.ngeom());
+        // SAFETY: as in `geom_friction`; `&mut self` gives exclusive access.
+        unsafe { rows_mut(p, n) }
+    }
+    /// Contact reference of each geom (`geom_solref`: time constant, damping ratio).
+    pub fn geom_solref(&self) -> &[[f64; 2]] {
+        let (p, n) = (self.raw().geom_solref, self.ngeom());
+        // SAFETY: MuJoCo sizes geom_solref as ngeom × mjNREF (2) reals.
+        unsafe { rows(p, n) }
+    }
+    /// Mutable `geom_solref`.
+    pub fn geom_solref_mut(&mut self) -> &mut [[f64; 2]] {
+        let (p, n) = (self.raw_mut().geom_solref, self.ngeom());
+        // SAFETY: as in `geom_solref`; `&mut self` gives exclusive access.
+        unsafe { rows_mut(p, n) }
+    }
+    /// Contact impedance of each geom (`geom_solimp`: dmin, dmax, width, midpoint, power).
+    pub fn geom_solimp(&self) -> &[[f64; 5]] {
+        let (p, n) = (self.raw().geom_solimp, self.ngeom());
+        // SAFETY: MuJoCo sizes geom_solimp as ngeom × mjNIMP (5) reals.
+        unsafe { rows(p, n) }
+    }
+    /// Mutable `geom_solimp`.
+    pub fn geom_solimp_mut(&mut self) -> &mut [[f64; 5]] {
+        let (p, n) = (self.raw_mut().geom_solimp, self.ngeom());
+        // SAFETY: as in `geom_solimp`; `&mut self` gives exclusive access.
+        unsafe { rows_mut(p, n) }
+    }
+    /// Damping of each degree of freedom (`dof_damping`).
+    pub fn dof_damping(&self) -> &[f64] {
+        let (p, n) = (self.raw().dof_damping, self.nv());
+        // SAFETY: MuJoCo sizes dof_damping as nv reals.
+        unsafe { rows::<1>(p, n) }.as_flattened()
+    }
+    /// Mutable `dof_damping`.
+    pub fn dof_damping_mut(&mut self) -> &mut [f64] {
+        let (p, n) = (self.raw_mut().dof_damping, self.nv());
+        // SAFETY: as in `dof_damping`; `&mut self` gives exclusive access.
+        unsafe { rows_mut::<1>(p, n) }.as_flattened_mut()
+    }
+    /// Mass of each body (`body_mass`).
+    pub fn body_mass(&self) -> &[f64] {
+        let (p, n) = (self.raw().body_mass, self.nbody());
+        // SAFETY: MuJoCo sizes body_mass as nbody reals.
+        unsafe { rows::<1>(p, n) }.as_flattened()
+    }
+    /// Mutable `body_mass`.
+    pub fn body_mass_mut(&mut self) -> &mut [f64] {
+        let (p, n) = (self.raw_mut().body_mass, self.nbody());
+        // SAFETY: as in `body_mass`; `&mut self` gives exclusive access.
+        unsafe { rows_mut::<1>(p, n) }.as_flattened_mut()
+    }
+    /// Diagonal inertia of each body in its inertial frame (`body_inertia`).
+    pub fn body_inertia(&self) -> &[[f64; 3]] {
+        let (p, n) = (self.raw().body_inertia, self.nbody());
+        // SAFETY: MuJoCo sizes body_inertia as nbody × 3 reals.
+        unsafe { rows(p, n) }
+    }
+    /// Mutable `body_inertia`.
+    pub fn body_inertia_mut(&mut self) -> &mut [[f64; 3]] {
+        let (p, n) = (self.raw_mut().body_inertia, self.nbody());
+        // SAFETY: as in `body_inertia`; `&mut self` gives exclusive access.
+        unsafe { rows_mut(p, n) }
+    }
+
     fn ints(&self, p: *const i32, n: usize) -> &[i32] {
         if n == 0 || p.is_null() {
             return &[];
@@ -304,6 +402,31 @@ impl Model {
         // model count that MuJoCo sized it with; the model outlives `&self`.
         unsafe { std::slice::from_raw_parts(p, n) }
     }
+}
+
+/// `n` rows of `K` reals at `p` (empty for none).
+///
+/// # Safety
+/// `p` is null or points to at least `n × K` initialised reals that live, unchanged, as long as
+/// the returned slice (a model array with the count MuJoCo sized it with).
+unsafe fn rows<'a, const K: usize>(p: *const f64, n: usize) -> &'a [[f64; K]] {
+    if n == 0 || p.is_null() {
+        return &[];
+    }
+    // SAFETY: by the caller; [f64; K] has the layout of K f64s.
+    unsafe { std::slice::from_raw_parts(p as *const [f64; K], n) }
+}
+
+/// As [`rows`], mutable.
+///
+/// # Safety
+/// As [`rows`], and nothing else reads or writes the reals while the slice lives.
+unsafe fn rows_mut<'a, const K: usize>(p: *mut f64, n: usize) -> &'a mut [[f64; K]] {
+    if n == 0 || p.is_null() {
+        return &mut [];
+    }
+    // SAFETY: by the caller; [f64; K] has the layout of K f64s.
+    unsafe { std::slice::from_raw_parts_mut(p as *mut [f64; K], n) }
 }
 
 impl Drop for Model {
