@@ -42,5 +42,6 @@ for line in sys.stdin:
     which, rest = line.split(" ", 1)
     rates[which].append(json.loads(rest)["env_steps_per_s"])
 off, on = statistics.median(rates["off"]), statistics.median(rates["on"])
-print(f"median env steps/s: off {off:.0f}, on {on:.0f}; on / off = {on / off:.3f} ({len(rates[\"on\"])} rounds)")
+rounds = len(rates["on"])
+print(f"median env steps/s: off {off:.0f}, on {on:.0f}; on / off = {on / off:.3f} ({rounds} rounds)")
 '
