@@ -97,16 +97,17 @@ impl<T> Drop for OnThread<T> {
     }
 }
 
-/// An episode's drawn dynamics as a dict, name to value (`latency` an int).
+/// An episode's drawn dynamics as a dict, name to value (a count of steps, latency, an int).
 pub(crate) fn physics_dict<'py>(
     py: Python<'py>,
     drawn: &blockpuzzle::task::physics::PhysicsDraw,
 ) -> PyResult<Bound<'py, PyDict>> {
+    use blockpuzzle::task::physics::{Draw, PARAMS};
     let d = PyDict::new(py);
-    for (name, v) in drawn.values() {
-        match name {
-            "latency" => d.set_item(name, v as u64)?,
-            _ => d.set_item(name, v)?,
+    for ((name, v), p) in drawn.values().into_iter().zip(PARAMS) {
+        match p.draw {
+            Draw::Steps => d.set_item(name, v as u64)?,
+            Draw::Scale | Draw::Level => d.set_item(name, v)?,
         }
     }
     Ok(d)

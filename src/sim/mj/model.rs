@@ -240,12 +240,8 @@ impl Model {
 
     /// Bounding-sphere radius of each geom (`geom_rbound`).
     pub fn geom_rbound(&self) -> &[f64] {
-        let n = self.ngeom();
-        if n == 0 {
-            return &[];
-        }
         // SAFETY: geom_rbound holds ngeom reals owned by the model.
-        unsafe { std::slice::from_raw_parts(self.raw().geom_rbound, n) }
+        unsafe { rows::<f64, 1>(self.raw().geom_rbound, self.ngeom()) }.as_flattened()
     }
 
     /// Contact type bits of each geom (`geom_contype`).
@@ -263,24 +259,15 @@ impl Model {
 
     /// Numeric data of each equality constraint (`eq_data`, `mjNEQDATA` reals each).
     pub fn eq_data(&self) -> &[[f64; NEQDATA]] {
-        let n = self.neq();
-        if n == 0 {
-            return &[];
-        }
-        // SAFETY: eq_data holds neq*mjNEQDATA contiguous f64 owned by the
-        // model; [f64; NEQDATA] has the same layout as NEQDATA f64s.
-        unsafe { std::slice::from_raw_parts(self.raw().eq_data as *const [f64; NEQDATA], n) }
+        // SAFETY: eq_data holds neq × mjNEQDATA contiguous f64 owned by the model.
+        unsafe { rows(self.raw().eq_data, self.neq()) }
     }
 
     /// Mutable `eq_data`, e.g. to reset a weld's relative pose.
     pub fn eq_data_mut(&mut self) -> &mut [[f64; NEQDATA]] {
-        let n = self.neq();
-        if n == 0 {
-            return &mut [];
-        }
-        let p = self.raw_mut().eq_data as *mut [f64; NEQDATA];
+        let (p, n) = (self.raw_mut().eq_data, self.neq());
         // SAFETY: as in `eq_data`; `&mut self` gives exclusive access.
-        unsafe { std::slice::from_raw_parts_mut(p, n) }
+        unsafe { rows_mut(p, n) }
     }
 
     /// Changes the material of geom `geom` (affects rendering only).
@@ -303,22 +290,14 @@ impl Model {
 
     /// Size parameters of each geom (`geom_size`: a box's half extents).
     pub fn geom_size(&self) -> &[[f64; 3]] {
-        let (p, n) = (self.raw().geom_size, self.ngeom());
-        if n == 0 || p.is_null() {
-            return &[];
-        }
         // SAFETY: MuJoCo sizes geom_size as ngeom × 3 reals; the model outlives `&self`.
-        unsafe { std::slice::from_raw_parts(p as *const [f64; 3], n) }
+        unsafe { rows(self.raw().geom_size, self.ngeom()) }
     }
 
     /// RGBA of each material (`mat_rgba`).
     pub fn mat_rgba(&self) -> &[[f32; 4]] {
-        let (p, n) = (self.raw().mat_rgba, self.nmat());
-        if n == 0 || p.is_null() {
-            return &[];
-        }
         // SAFETY: MuJoCo sizes mat_rgba as nmat × 4 floats; the model outlives `&self`.
-        unsafe { std::slice::from_raw_parts(p as *const [f32; 4], n) }
+        unsafe { rows(self.raw().mat_rgba, self.nmat()) }
     }
 
     /// Friction of each geom (`geom_friction`: sliding, torsional, rolling).
@@ -361,25 +340,25 @@ impl Model {
     pub fn dof_damping(&self) -> &[f64] {
         let (p, n) = (self.raw().dof_damping, self.nv());
         // SAFETY: MuJoCo sizes dof_damping as nv reals.
-        unsafe { rows::<1>(p, n) }.as_flattened()
+        unsafe { rows::<f64, 1>(p, n) }.as_flattened()
     }
     /// Mutable `dof_damping`.
     pub fn dof_damping_mut(&mut self) -> &mut [f64] {
         let (p, n) = (self.raw_mut().dof_damping, self.nv());
         // SAFETY: as in `dof_damping`; `&mut self` gives exclusive access.
-        unsafe { rows_mut::<1>(p, n) }.as_flattened_mut()
+        unsafe { rows_mut::<f64, 1>(p, n) }.as_flattened_mut()
     }
     /// Mass of each body (`body_mass`).
     pub fn body_mass(&self) -> &[f64] {
         let (p, n) = (self.raw().body_mass, self.nbody());
         // SAFETY: MuJoCo sizes body_mass as nbody reals.
-        unsafe { rows::<1>(p, n) }.as_flattened()
+        unsafe { rows::<f64, 1>(p, n) }.as_flattened()
     }
     /// Mutable `body_mass`.
     pub fn body_mass_mut(&mut self) -> &mut [f64] {
         let (p, n) = (self.raw_mut().body_mass, self.nbody());
         // SAFETY: as in `body_mass`; `&mut self` gives exclusive access.
-        unsafe { rows_mut::<1>(p, n) }.as_flattened_mut()
+        unsafe { rows_mut::<f64, 1>(p, n) }.as_flattened_mut()
     }
     /// Diagonal inertia of each body in its inertial frame (`body_inertia`).
     pub fn body_inertia(&self) -> &[[f64; 3]] {
@@ -395,38 +374,35 @@ impl Model {
     }
 
     fn ints(&self, p: *const i32, n: usize) -> &[i32] {
-        if n == 0 || p.is_null() {
-            return &[];
-        }
         // SAFETY: every caller passes a model array pointer together with the
         // model count that MuJoCo sized it with; the model outlives `&self`.
-        unsafe { std::slice::from_raw_parts(p, n) }
+        unsafe { rows::<i32, 1>(p, n) }.as_flattened()
     }
 }
 
-/// `n` rows of `K` reals at `p` (empty for none).
+/// `n` rows of `K` values at `p` (empty for none): a model array as MuJoCo lays it out.
 ///
 /// # Safety
-/// `p` is null or points to at least `n × K` initialised reals that live, unchanged, as long as
+/// `p` is null or points to at least `n × K` initialised values that live, unchanged, as long as
 /// the returned slice (a model array with the count MuJoCo sized it with).
-unsafe fn rows<'a, const K: usize>(p: *const f64, n: usize) -> &'a [[f64; K]] {
+unsafe fn rows<'a, T, const K: usize>(p: *const T, n: usize) -> &'a [[T; K]] {
     if n == 0 || p.is_null() {
         return &[];
     }
-    // SAFETY: by the caller; [f64; K] has the layout of K f64s.
-    unsafe { std::slice::from_raw_parts(p as *const [f64; K], n) }
+    // SAFETY: by the caller; [T; K] has the layout of K Ts.
+    unsafe { std::slice::from_raw_parts(p as *const [T; K], n) }
 }
 
 /// As [`rows`], mutable.
 ///
 /// # Safety
-/// As [`rows`], and nothing else reads or writes the reals while the slice lives.
-unsafe fn rows_mut<'a, const K: usize>(p: *mut f64, n: usize) -> &'a mut [[f64; K]] {
+/// As [`rows`], and nothing else reads or writes the values while the slice lives.
+unsafe fn rows_mut<'a, T, const K: usize>(p: *mut T, n: usize) -> &'a mut [[T; K]] {
     if n == 0 || p.is_null() {
         return &mut [];
     }
-    // SAFETY: by the caller; [f64; K] has the layout of K f64s.
-    unsafe { std::slice::from_raw_parts_mut(p as *mut [f64; K], n) }
+    // SAFETY: by the caller; [T; K] has the layout of K Ts.
+    unsafe { std::slice::from_raw_parts_mut(p as *mut [T; K], n) }
 }
 
 impl Drop for Model {
