@@ -1,3 +1,7 @@
+//! `blockpuzzle`, the command line. In the training build it links none of the training stack and
+//! starts in milliseconds; the commands that need the stack run in `blockpuzzle-train`, which it
+//! starts in its place (src/cli/halves.rs).
+
 fn main() {
     // A closed pipe ends the program quietly, as it does `cat` and `ls` (`blockpuzzle info | head -1`),
     // rather than as a panic in the next `println!`: Rust starts programs with SIGPIPE ignored.
@@ -6,11 +10,13 @@ fn main() {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
-    // libtorch's OpenBLAS kernels (only the training build loads them), for the commands that use
-    // or report them: a second start costs every other command as much again.
     #[cfg(feature = "train")]
-    if blockpuzzle::cli::wants_fast_kernels(&args) {
-        blockpuzzle::learn::blas::ensure_fast_kernels();
+    {
+        if blockpuzzle::cli::runs_in_training_half(&args) {
+            std::process::exit(blockpuzzle::cli::exec_training_half(args));
+        }
+        std::process::exit(blockpuzzle::cli::run_core(args));
     }
+    #[cfg(not(feature = "train"))]
     std::process::exit(blockpuzzle::cli::run(args));
 }

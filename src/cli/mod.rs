@@ -12,9 +12,11 @@
 //! | `runs` (`train`) | `train` (one process or an MPI rank), `plot`, `report` |
 //! | `experiment` (`train`) | `train --config FILE` recipes |
 //! | `bench` (`train`) | `bench` and `align` |
+//! | `halves` (`train`) | `blockpuzzle` hands the training commands to `blockpuzzle-train` |
 //!
 //! With the `cli` feature alone, the commands that need no
-//! libtorch (the Python package's `blockpuzzle`); with `train`, every command.
+//! libtorch (the Python package's `blockpuzzle`); with `train`, every command, in two binaries
+//! (`halves`): `blockpuzzle` runs those [`run_core`] runs and starts `blockpuzzle-train` for the rest.
 
 use anyhow::{bail, Result};
 use clap::{Parser, Subcommand};
@@ -30,6 +32,8 @@ mod episodes;
 mod eval;
 #[cfg(feature = "train")]
 mod experiment;
+#[cfg(feature = "train")]
+mod halves;
 mod results;
 #[cfg(feature = "train")]
 mod runs;
@@ -40,6 +44,8 @@ use bench::BenchArgs;
 use episodes::{policy_task, DemosArgs, RenderArgs, RolloutArgs};
 use eval::EvalArgs;
 use eval::TableArgs;
+#[cfg(feature = "train")]
+pub use halves::{check_front, exec_training_half, runs_in_training_half, BUILD_ID, TRAINING_BINARY};
 use results::ResultsCommand;
 #[cfg(feature = "train")]
 pub use runs::train_config;
@@ -258,8 +264,27 @@ pub fn check_args(args: Vec<std::ffi::OsString>) -> Result<()> {
 
 /// Runs the command line `args` (from the program name on) and returns the process's exit
 /// status: 0; 1 with the error on stderr; clap's status for help, version and usage errors,
-/// printed as clap prints them. The `blockpuzzle` binary and the Python package's command call it.
+/// printed as clap prints them. Every command this build has: `blockpuzzle-train` and the Python
+/// package's command call it.
 pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
+    #[cfg(feature = "train")]
+    return run_with(args, dispatch_training);
+    #[cfg(not(feature = "train"))]
+    run_with(args, |_| unreachable!("a build without `train` has no training command"))
+}
+
+/// [`run`] for the commands that need no training stack, which the `blockpuzzle` binary runs
+/// itself (it links no libtorch, so it starts in milliseconds); it hands the others to
+/// `blockpuzzle-train` ([`exec_training_half`]) before calling this.
+#[cfg(feature = "train")]
+pub fn run_core(args: Vec<std::ffi::OsString>) -> i32 {
+    run_with(args, |command| {
+        bail!("`{command:?}` runs in {TRAINING_BINARY}, not in this binary: start it through `blockpuzzle`")
+    })
+}
+
+/// [`run`], the commands of the training stack run by `training` (what links the stack in).
+fn run_with(args: Vec<std::ffi::OsString>, training: fn(Command) -> Result<()>) -> i32 {
     let failed = |e: anyhow::Error| {
         eprintln!("error: {}", error_text(&e));
         1
@@ -274,43 +299,33 @@ pub fn run(args: Vec<std::ffi::OsString>) -> i32 {
             Err(e) => return failed(e),
         },
     };
-    match dispatch(cli.command) {
+    match dispatch(cli.command, training) {
         Ok(()) => 0,
         Err(e) => failed(e),
     }
 }
 
-/// Runs one parsed command.
-fn dispatch(command: Command) -> Result<()> {
+/// Runs one parsed command: the training build's training commands ([`TRAINING_COMMANDS`] and
+/// `info`, which reports libtorch's libraries) through `training`, every other one here.
+fn dispatch(command: Command, training: fn(Command) -> Result<()>) -> Result<()> {
+    #[cfg(not(feature = "train"))]
+    let _ = training;
     match command {
         Command::Envs => envs(),
+        #[cfg(not(feature = "train"))]
         Command::Info => info(),
         Command::Rollout(a) => episodes::rollout(a),
         Command::Demos(a) => episodes::demos(a),
-        #[cfg(feature = "train")]
-        Command::Train(a) => runs::train(a),
         Command::Eval(a) => eval::eval(a),
         Command::Blend(a) => blend::run(a),
         Command::Render(a) => episodes::render(a),
+        #[cfg(feature = "train")]
+        Command::Zoo(c @ ZooCommand::Export(_)) => training(Command::Zoo(c)),
         Command::Zoo(c) => zoo::run(c),
         Command::Results(c) => results::run(c),
-        #[cfg(feature = "train")]
-        Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
         Command::Table(a) => eval::table(a),
         Command::Task(TaskCommand::Check(a)) => task::check(a),
         Command::Task(TaskCommand::Generate(a)) => task::generate(a),
-        #[cfg(feature = "train")]
-        Command::Plot(a) => runs::plot(a),
-        #[cfg(feature = "train")]
-        Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
-            bench::align_bench(&reference, steps, threads)
-        }
-        #[cfg(feature = "train")]
-        Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
-            bail!("--plot draws the replay; leave it out with --bench-steps")
-        }
-        #[cfg(feature = "train")]
-        Command::Align { reference, plot, .. } => bench::align(&reference, plot.as_deref()),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             // Its includes are relative to the assets folder: save it there to load it elsewhere.
@@ -318,9 +333,34 @@ fn dispatch(command: Command) -> Result<()> {
             Ok(())
         }
         #[cfg(feature = "train")]
+        c @ (Command::Info
+        | Command::Train(_)
+        | Command::Report { .. }
+        | Command::Plot(_)
+        | Command::Align { .. }
+        | Command::Bench(_)) => training(c),
+    }
+}
+
+/// Runs a command of the training stack (what only `blockpuzzle-train` links).
+#[cfg(feature = "train")]
+fn dispatch_training(command: Command) -> Result<()> {
+    match command {
+        Command::Info => info(),
+        Command::Train(a) => runs::train(a),
+        Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
+        Command::Zoo(ZooCommand::Export(a)) => zoo::run_export(a),
+        Command::Plot(a) => runs::plot(a),
+        Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
+            bench::align_bench(&reference, steps, threads)
+        }
+        Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
+            bail!("--plot draws the replay; leave it out with --bench-steps")
+        }
+        Command::Align { reference, plot, .. } => bench::align(&reference, plot.as_deref()),
         Command::Bench(a) if a.train => bench::train(a),
-        #[cfg(feature = "train")]
         Command::Bench(a) => bench::run(&a),
+        other => dispatch(other, |c| bail!("`{c:?}` is not a command of the training stack")),
     }
 }
 

@@ -127,9 +127,16 @@ pub(super) fn run(c: ZooCommand) -> Result<()> {
         }
         ZooCommand::Evaluate { names, zoo, threads } => evaluate_entries(&folder(zoo), names, threads),
         ZooCommand::Describe { name, description, zoo } => describe(&folder(zoo), &name, &description),
+        // The training stack's (it reads checkpoints with libtorch): `blockpuzzle-train` runs it.
         #[cfg(feature = "train")]
-        ZooCommand::Export(a) => export(&folder(a.zoo.clone()), a),
+        ZooCommand::Export(_) => anyhow::bail!("`zoo export` runs in {}", super::TRAINING_BINARY),
     }
+}
+
+/// Runs `blockpuzzle zoo export` (the training stack's part of `zoo`).
+#[cfg(feature = "train")]
+pub(super) fn run_export(a: ZooExportArgs) -> Result<()> {
+    export(&a.zoo.clone().unwrap_or_else(crate::benchmark::zoo::dir), a)
 }
 
 /// `zoo list`: every entry, with its evaluations on this build's engine.

@@ -85,7 +85,13 @@ pub fn ensure_fast_kernels() {
     }
     let Ok(exe) = std::env::current_exe() else { return };
     use std::os::unix::process::CommandExt;
-    let err = std::process::Command::new(exe).args(std::env::args_os().skip(1)).envs(missing.iter().cloned()).exec();
+    // The name it was started by, kept (`blockpuzzle`, when that started `blockpuzzle-train`).
+    let name = std::env::args_os().next().unwrap_or_else(|| exe.clone().into_os_string());
+    let err = std::process::Command::new(exe)
+        .arg0(name)
+        .args(std::env::args_os().skip(1))
+        .envs(missing.iter().cloned())
+        .exec();
     let names: Vec<String> = missing.iter().map(|(k, v)| format!("{k}={v}")).collect();
     eprintln!("note: restarting with {} failed ({err}); training may be slower", names.join(" "));
 }

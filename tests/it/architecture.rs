@@ -103,9 +103,15 @@ fn lib_lists_the_layers_bottom_to_top_and_src_holds_nothing_else() {
         std::fs::read_dir(&src).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     top.sort();
     let mut want: Vec<String> =
-        LAYERS.iter().map(|l| l.to_string()).chain(["lib.rs".into(), "main.rs".into()]).collect();
+        LAYERS.iter().map(|l| l.to_string()).chain(["lib.rs".into(), "main.rs".into(), "bin".into()]).collect();
     want.sort();
-    assert_eq!(top, want, "src/ holds the layers' folders, lib.rs and main.rs");
+    assert_eq!(top, want, "src/ holds the layers' folders, lib.rs, main.rs and bin/");
+    // bin/ holds the other binary, the training half of the command line (src/cli/halves.rs).
+    let bins: Vec<String> = std::fs::read_dir(src.join("bin"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(bins, ["blockpuzzle-train.rs"], "src/bin/ holds the training half's main");
     // Each layer's mod.rs opens with its part of the map: its number and name as ARCHITECTURE.md has
     // them, then a table with a row for each of its modules.
     for (i, l) in LAYERS.iter().enumerate() {

@@ -624,6 +624,89 @@ fn training_commands_are_named_once() {
     // python/tests/test_cli.py.
 }
 
+/// The shared libraries an executable names (`readelf -d`), and whether lld linked it (its
+/// `.comment`): rust-lld, Rust's default linker on x86-64 Linux since 1.90, drops a library that
+/// only unreachable code refers to; GNU ld keeps it.
+fn needed_libraries(exe: &str) -> (Vec<String>, bool) {
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new("readelf").args(args).arg(exe).output().expect("readelf (binutils)");
+        assert!(o.status.success(), "readelf {args:?} {exe}: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let needed = run(&["-d"])
+        .lines()
+        .filter(|l| l.contains("(NEEDED)"))
+        .filter_map(|l| l.split('[').nth(1)?.split(']').next().map(str::to_owned))
+        .collect();
+    (needed, run(&["-p", ".comment"]).contains("LLD"))
+}
+
+/// `blockpuzzle` links no libtorch (the commands without it start in milliseconds) and hands the
+/// training commands to `blockpuzzle-train` beside it, in its place; one of another build, or none,
+/// is refused, naming the fix, before anything is written.
+#[test]
+fn the_command_line_starts_without_libtorch_and_hands_training_to_its_other_half() {
+    let front = crate::common::CLI;
+    let back = env!("CARGO_BIN_EXE_blockpuzzle-train");
+    let (needed, lld) = needed_libraries(front);
+    let torch = |libs: &[String]| libs.iter().any(|l| l.starts_with("libtorch") || l.starts_with("libc10"));
+    if lld {
+        assert!(!torch(&needed), "blockpuzzle links libtorch: {needed:?}");
+    } else {
+        eprintln!("note: blockpuzzle was not linked by lld, which alone drops libtorch from it: {needed:?}");
+    }
+    assert!(torch(&needed_libraries(back).0), "blockpuzzle-train links no libtorch");
+    // Through the front: the training commands' help and a refusal of theirs, as the whole command
+    // line gives them; the top-level help lists them.
+    let o = bp(&["train", "--help"]);
+    assert!(
+        o.status.success() && text(&o).contains("--algo") && text(&o).contains("Usage: blockpuzzle train"),
+        "{}",
+        text(&o)
+    );
+    let o = bp(&["--help"]);
+    assert!(o.status.success() && text(&o).contains("train") && text(&o).contains("rollout"), "{}", text(&o));
+    let o = bp(&["info"]);
+    assert!(o.status.success() && text(&o).contains("OpenBLAS kernels"), "{}", text(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let run = run.to_str().unwrap();
+    // The other half from another build: refused before anything is written.
+    let o = std::process::Command::new(back)
+        .args(["train", "--env", "GripperTouch-v0", "--epochs", "1", "--run-dir", run])
+        .env("BLOCKPUZZLE_FRONT_BUILD", "0000000000000000")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    for want in ["built from other sources", "0000000000000000", blockpuzzle::cli::BUILD_ID, "cargo build --release"] {
+        assert!(text(&o).contains(want), "{want:?} missing from: {}", text(&o));
+    }
+    assert!(!Path::new(run).exists(), "nothing written");
+    // Alone, without its other half: the core's commands run, the training ones name what is missing.
+    let alone = dir.path().join("alone");
+    std::fs::create_dir(&alone).unwrap();
+    let copy = alone.join("blockpuzzle");
+    std::fs::copy(front, &copy).unwrap();
+    let o = std::process::Command::new(&copy).arg("envs").output().unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let o = std::process::Command::new(&copy)
+        .args(["train", "--env", "GripperTouch-v0", "--run-dir", run])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let missing = alone.join("blockpuzzle-train").display().to_string();
+    for want in [
+        "`train` runs in blockpuzzle-train",
+        &missing,
+        "does not exist",
+        "cargo build --release",
+        "cargo install --path .",
+    ] {
+        assert!(text(&o).contains(want), "{want:?} missing from: {}", text(&o));
+    }
+    assert!(!Path::new(run).exists(), "nothing written");
+}
+
 /// `plot --scaling`: suite results against a number (the Procgen curve), with a table of the points;
 /// malformed points, an x the logarithmic axis cannot take, and results of several suites refused.
 #[test]

@@ -42,7 +42,13 @@ macro_rules! algorithms {
             /// Its names and settings facts.
             pub fn info(self) -> &'static Info {
                 match self {
-                    $(Algo::$variant => &super::$module::REGISTRATION.info,)+
+                    // A constant of the facts alone: a reference into the registration would
+                    // keep its functions (and with them libtorch) in every binary that reads a
+                    // name, `blockpuzzle`'s argument parser included (src/cli/halves.rs).
+                    $(Algo::$variant => {
+                        const INFO: Info = super::$module::REGISTRATION.info;
+                        &INFO
+                    },)+
                 }
             }
 
