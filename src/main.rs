@@ -12,7 +12,7 @@ fn main() {
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     #[cfg(feature = "train")]
     {
-        if blockpuzzle::cli::runs_in_training_half(&args) {
+        if blockpuzzle::cli::runs_in_training_half(&args).is_some() {
             std::process::exit(blockpuzzle::cli::exec_training_half(args));
         }
         std::process::exit(blockpuzzle::cli::run_core(args));

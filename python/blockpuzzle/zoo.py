@@ -22,8 +22,9 @@ on its own without it (examples/python/zoo_policy.py loads it by path): then the
 the entry is checked as the format (zoo/README.md) says, by what this file can know: its checksums,
 ``tensors_sha256`` and the metadata's seal ``meta_sha256`` (any edit of the metadata but its
 evaluations, or of the tensors, is refused); no field of format 7 in an entry of an older format; and
-each evaluation's rate and Wilson interval recomputed from its outcome counts. Whether an
-evaluation's task is a built-in one and its engine one the project runs is the extension's to check.
+each evaluation's rate and Wilson interval recomputed from its outcome counts; and each evaluation's
+task and engine, against the core's facts (the built-in tasks' hashes, the engines), which it reads
+from ``facts.json`` beside it, a copy the core's tests keep equal to ``_native.facts()``.
 """
 
 from __future__ import annotations
@@ -41,15 +42,13 @@ import numpy as np
 
 def _facts() -> dict:
     """The facts the Rust core defines (``_native.facts()``). Run on its own, without the extension,
-    this file takes the zoo format's documented values (zoo/README.md), which the package's tests
-    check against the core's (python/tests/test_facts.py)."""
+    this file reads the same document from ``facts.json`` beside it, which the core's tests keep
+    equal to its facts (tests/it/provenance.rs)."""
     try:
         from blockpuzzle import _native
         return _native.facts()
     except ImportError:
-        # Standalone fallback: the format's documented values (checked equal to the core's in the tests).
-        return {"zoo_formats": tuple(f"blockpuzzle-zoo/{v}" for v in range(1, 8)), "colour_feature": 15,
-                "entity_features": 26}
+        return json.loads((pathlib.Path(__file__).resolve().parent / "facts.json").read_text())
 
 
 _FACTS = _facts()
@@ -246,6 +245,26 @@ def _check_entry(meta: dict, meta_bytes: bytes, tensor_bytes: bytes) -> None:
         raise ValueError(f"its metadata is not the one meta_sha256 sealed ({meta['meta_sha256']}; the "
                          f"metadata's is {sealed}): a field was edited")
     _check_evaluations(meta)
+    _check_records(meta)
+
+
+def _check_records(meta: dict) -> None:
+    """Each evaluation names a task the core knows, with its content: the entry's own (or one of a
+    multi-task run's) or a built-in one, whose hash its ``task_sha256`` must be; and an engine the
+    project runs (the core's facts: ``tasks`` and ``engines``)."""
+    own = {t["id"]: t["hash"] for t in [meta["task"], *((meta.get("multi_task") or {}).get("tasks") or [])]}
+    for k, e in enumerate(meta["evaluations"]):
+        env = e["env"]
+        known = own.get(env) or _FACTS["tasks"].get(env)
+        if known is None:
+            raise ValueError(f"evaluations[{k}]: env {env!r} is neither a built-in task nor this entry's own "
+                             f"({meta['task']['id']})")
+        if e.get("task_sha256") not in (None, known):
+            raise ValueError(f"evaluations[{k}]: task_sha256 {e['task_sha256']}, and task {env}'s hash is {known}")
+        engine = (e.get("provenance") or {}).get("mujoco")
+        if engine is not None and engine not in _FACTS["engines"]:
+            raise ValueError(f"evaluations[{k}]: MuJoCo {engine!r} is no engine this project runs "
+                             f"({', '.join(_FACTS['engines'])})")
 
 
 #: Features of an ``entities`` row (an ``objects`` row's 22 and the type one-hot): how an entry of

@@ -564,21 +564,13 @@ fn training_commands() -> Vec<&'static str> {
 /// 75): where an object row's colour one-hot begins and an `entities` row's width (entries of zoo
 /// formats 1-6 do not record them), the colours in one-hot order, the outcome names in the order
 /// they are tested, the zoo formats this build reads and the one it writes, and the engines numbers
-/// are made on. `python/tests/test_facts.py` fails on one of them written by hand in the package.
+/// are made on, and each built-in task's content hash. `python/tests/test_facts.py` fails on one of
+/// them written by hand in the package.
 #[pyfunction]
-fn facts(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    use blockpuzzle::env::{ObsSpec, COLOUR_FEATURE};
-    let d = PyDict::new(py);
-    d.set_item("colour_feature", COLOUR_FEATURE)?;
-    d.set_item("entity_features", ObsSpec::new(ObsMode::Entities, 1).object_dim())?;
-    let colours: Vec<&str> = blockpuzzle::sim::rules::Colour::ALL.iter().map(|c| c.name()).collect();
-    d.set_item("colours", PyTuple::new(py, colours)?)?;
-    let outcomes: Vec<&str> = blockpuzzle::episode::outcome::Outcome::ALL.iter().map(|o| o.name()).collect();
-    d.set_item("outcomes", PyTuple::new(py, outcomes)?)?;
-    d.set_item("zoo_formats", PyTuple::new(py, blockpuzzle::benchmark::zoo::READS)?)?;
-    d.set_item("zoo_format", blockpuzzle::benchmark::zoo::FORMAT)?;
-    d.set_item("engines", PyTuple::new(py, blockpuzzle::benchmark::provenance::ENGINES)?)?;
-    Ok(d)
+fn facts(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    // The core's one document (benchmark::facts), which python/blockpuzzle/facts.json also holds.
+    let text = blockpuzzle::benchmark::facts::facts_file().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    py.import("json")?.call_method1("loads", (text,))
 }
 
 /// The observation modes, by name (`obs_mode`): the core's closed set, in its order.

@@ -1,6 +1,7 @@
 """Issue 75: one source of truth. The facts the Rust core defines (``_native.facts()``) and the pins
 pyproject.toml holds are read, not written again by hand in the package."""
 
+import json
 import pathlib
 import re
 import subprocess
@@ -24,7 +25,10 @@ def test_the_package_uses_the_cores_facts():
 
 
 def test_zoo_py_on_its_own_reads_the_format_as_the_core_defines_it():
-    """zoo.py runs without the extension (a reader to copy); its documented values are the core's."""
+    """zoo.py runs without the extension (a reader to copy): it reads the core's facts from facts.json
+    beside it, the very document ``_native.facts()`` gives (the core's tests write and check the file)."""
+    assert json.loads((PACKAGE / "facts.json").read_text()) == _native.facts()
+    assert sorted(_native.facts()["tasks"]) == sorted(blockpuzzle.env_ids())
     code = ("import sys, importlib.util, json; sys.modules['blockpuzzle'] = None; "
             f"spec = importlib.util.spec_from_file_location('z', {str(PACKAGE / 'zoo.py')!r}); "
             "z = importlib.util.module_from_spec(spec); spec.loader.exec_module(z); "
@@ -35,8 +39,7 @@ def test_zoo_py_on_its_own_reads_the_format_as_the_core_defines_it():
 
 
 def test_no_fact_is_written_again_in_the_package():
-    """Each fact's value, as a literal in the package's source, is a second copy (zoo.py's standalone
-    fallback, checked above, aside)."""
+    """Each fact's value, as a literal in the package's source, is a second copy."""
     f = _native.facts()
     literals = {
         "the MuJoCo pin": f'"{blockpuzzle.MUJOCO_PIN}"',
@@ -50,9 +53,6 @@ def test_no_fact_is_written_again_in_the_package():
     found = []
     for path in sorted(PACKAGE.glob("*.py")):
         text = path.read_text()
-        if path.name == "zoo.py":
-            start = text.index("    except ImportError:\n        # Standalone fallback")
-            text = text[:start] + text[text.index("\n\n", start):]
         found += [f"{path.name}: {what}" for what, lit in literals.items() if lit in text]
         found += [f"{path.name}: {m.group(0).strip()}" for m in features.finditer(text)]
     assert not found, f"facts written by hand (read them from _native.facts() or the package metadata): {found}"

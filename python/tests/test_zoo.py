@@ -197,11 +197,6 @@ def _corpus(folder):
     return {name: usable for name, (_, _, usable) in cases.items()}
 
 
-#: What zoo.py on its own, without the extension, cannot check (its module docstring): whether an
-#: evaluation's task is built in and its engine one the project runs, which only the core knows.
-STANDALONE_UNCHECKED = {"unknown-task", "unknown-engine"}
-
-
 def test_every_zoo_reader_accepts_and_refuses_the_same_entries(tmp_path):
     """Issue 75: one corpus through every reader: the command line's ``zoo check``, the extension's
     loader, ``zoo.load`` acting natively and with numpy, and zoo.py on its own (its own checksums)."""
@@ -239,8 +234,7 @@ def test_every_zoo_reader_accepts_and_refuses_the_same_entries(tmp_path):
             "print(json.dumps(out))")
     standalone = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                             check=True).stdout)
-    expected = {n: u or n in STANDALONE_UNCHECKED for n, u in usable.items()}
-    assert standalone == expected, {n: v for n, v in standalone.items() if v != expected[n]}
+    assert standalone == usable, {n: v for n, v in standalone.items() if v != usable[n]}
 
 
 def test_blockpuzzle_zoo_names_the_zoo_as_for_the_command_line(tmp_path, monkeypatch):

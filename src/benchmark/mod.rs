@@ -2,6 +2,7 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`facts`] | what readers of the project's files need from the core, as one JSON document |
 //! | [`suite`] | evaluation suites: splits of rows (tasks or families' generator seeds) |
 //! | [`stream`] | task streams: families over a generator-seed range, their record and cache |
 //! | [`provenance`] | what made a number: build, engine, policy and task hashes |
@@ -16,6 +17,7 @@
 
 pub mod demos;
 pub mod evaluate;
+pub mod facts;
 pub mod load;
 pub mod provenance;
 pub mod results;

@@ -5,9 +5,9 @@
 //! command line, found beside it and started in its place (`exec`: the same process, so an MPI
 //! rank or a caller waiting on the PID sees no difference).
 //!
-//! Both are built by every `cargo build` and installed by `cargo install`; `cargo run` builds only
-//! the binary it runs, so `blockpuzzle-train` may be missing or stale there. The two carry their
-//! build's identity (a digest of the sources, features and profile, `build.rs`), and a
+//! Both are built by every `cargo build` and installed by `cargo install`; `cargo run` builds and
+//! runs `blockpuzzle-train` alone (the crate's `default-run`), which leaves a `blockpuzzle` built
+//! before it stale. The two carry their build's identity (a digest of the sources, features and profile, `build.rs`), and a
 //! `blockpuzzle-train` from other sources is refused, naming the command that builds both.
 
 use std::ffi::OsString;
@@ -22,10 +22,14 @@ const BUILD_VARIABLE: &str = "BLOCKPUZZLE_FRONT_BUILD";
 /// This build's identity (build.rs: the sources' digest, the features and the profile).
 pub const BUILD_ID: &str = env!("BLOCKPUZZLE_BUILD_ID");
 
-/// Whether the command line `args` (from the program name on) runs in `blockpuzzle-train`: a
-/// command of [`super::TRAINING_COMMANDS`], or `info`, which reports libtorch's libraries.
-pub fn runs_in_training_half(args: &[OsString]) -> bool {
-    super::training_command(args).is_some() || super::command_words(args).first() == Some(&"info")
+/// The commands that run in `blockpuzzle-train`: those that run libtorch, and `info`, which reports
+/// its libraries. The training build's other commands (`plot`, `report`, `align`) run no libtorch.
+pub const TRAINING_HALF: &[&str] = &["train", "bench", "zoo export", "info"];
+
+/// The entry of [`TRAINING_HALF`] the command line `args` (from the program name on) runs, if any:
+/// `blockpuzzle` starts `blockpuzzle-train` for it.
+pub fn runs_in_training_half(args: &[OsString]) -> Option<&'static str> {
+    super::command_in(TRAINING_HALF, args)
 }
 
 /// Where `blockpuzzle-train` should be: beside this program.
@@ -37,9 +41,9 @@ fn training_binary() -> std::io::Result<PathBuf> {
 /// it cannot (the exit status 1, the reason and the fix on stderr).
 pub fn exec_training_half(args: Vec<OsString>) -> i32 {
     use std::os::unix::process::CommandExt;
-    let command = super::training_command(&args).unwrap_or("info");
-    let fix = "build both halves of the command line with `cargo build --release` (`make build`; `cargo run` \
-               builds only `blockpuzzle`), or install both with `cargo install --path .`";
+    let command = runs_in_training_half(&args).unwrap_or("info");
+    let fix = "build both halves of the command line with `cargo build --release` (`make build`), or install \
+               both with `cargo install --path .`";
     let path = match training_binary() {
         Ok(path) if path.is_file() => path,
         Ok(path) => {
@@ -69,7 +73,7 @@ pub fn exec_training_half(args: Vec<OsString>) -> i32 {
 ///
 /// # Errors
 /// The two builds differ: the message names the fix.
-pub fn check_front() -> Result<(), String> {
+pub fn check_front() -> anyhow::Result<()> {
     let Some(front) = std::env::var_os(BUILD_VARIABLE) else { return Ok(()) };
     // Called first thing in `main`, before any thread exists that could read the environment.
     std::env::remove_var(BUILD_VARIABLE);
@@ -77,10 +81,10 @@ pub fn check_front() -> Result<(), String> {
         return Ok(());
     }
     let here = std::env::current_exe().map_or_else(|_| TRAINING_BINARY.into(), |p| p.display().to_string());
-    Err(format!(
+    anyhow::bail!(
         "{here} was built from other sources than the `blockpuzzle` beside it (build {} there, {BUILD_ID} here): \
          build both halves again with `cargo build --release` (`make build`; `cargo run` builds only \
-         `blockpuzzle`), or install both with `cargo install --path .`",
+         `blockpuzzle-train`), or install both with `cargo install --path .`",
         front.to_string_lossy()
-    ))
+    )
 }

@@ -45,7 +45,7 @@ use episodes::{policy_task, DemosArgs, RenderArgs, RolloutArgs};
 use eval::EvalArgs;
 use eval::TableArgs;
 #[cfg(feature = "train")]
-pub use halves::{check_front, exec_training_half, runs_in_training_half, BUILD_ID, TRAINING_BINARY};
+pub use halves::{check_front, exec_training_half, runs_in_training_half, BUILD_ID, TRAINING_BINARY, TRAINING_HALF};
 use results::ResultsCommand;
 #[cfg(feature = "train")]
 pub use runs::train_config;
@@ -68,8 +68,14 @@ fn command_words(args: &[std::ffi::OsString]) -> Vec<&str> {
 /// The entry of [`TRAINING_COMMANDS`] the command line `args` (from the program name on) runs, if
 /// any.
 pub fn training_command(args: &[std::ffi::OsString]) -> Option<&'static str> {
+    command_in(TRAINING_COMMANDS, args)
+}
+
+/// The entry of `commands` (each a command, or a command and its subcommand) the command line
+/// `args` (from the program name on) runs, if any.
+fn command_in(commands: &[&'static str], args: &[std::ffi::OsString]) -> Option<&'static str> {
     let words = command_words(args);
-    TRAINING_COMMANDS.iter().copied().find(|c| {
+    commands.iter().copied().find(|c| {
         let c: Vec<&str> = c.split(' ').collect();
         words.len() >= c.len() && words[..c.len()] == c[..]
     })
@@ -305,8 +311,8 @@ fn run_with(args: Vec<std::ffi::OsString>, training: fn(Command) -> Result<()>) 
     }
 }
 
-/// Runs one parsed command: the training build's training commands ([`TRAINING_COMMANDS`] and
-/// `info`, which reports libtorch's libraries) through `training`, every other one here.
+/// Runs one parsed command: those of the training build that need libtorch
+/// ([`halves::TRAINING_HALF`]: `info` reports its libraries) through `training`, every other one here.
 fn dispatch(command: Command, training: fn(Command) -> Result<()>) -> Result<()> {
     #[cfg(not(feature = "train"))]
     let _ = training;
@@ -332,13 +338,23 @@ fn dispatch(command: Command, training: fn(Command) -> Result<()>) -> Result<()>
             print!("{}", crate::sim::scene::mjcf(&c.scene_spec())?.0);
             Ok(())
         }
+        // Commands of the training build that run no libtorch.
         #[cfg(feature = "train")]
-        c @ (Command::Info
-        | Command::Train(_)
-        | Command::Report { .. }
-        | Command::Plot(_)
-        | Command::Align { .. }
-        | Command::Bench(_)) => training(c),
+        Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
+        #[cfg(feature = "train")]
+        Command::Plot(a) => runs::plot(a),
+        #[cfg(feature = "train")]
+        Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
+            bench::align_bench(&reference, steps, threads)
+        }
+        #[cfg(feature = "train")]
+        Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
+            bail!("--plot draws the replay; leave it out with --bench-steps")
+        }
+        #[cfg(feature = "train")]
+        Command::Align { reference, plot, .. } => bench::align(&reference, plot.as_deref()),
+        #[cfg(feature = "train")]
+        c @ (Command::Info | Command::Train(_) | Command::Bench(_)) => training(c),
     }
 }
 
@@ -348,16 +364,7 @@ fn dispatch_training(command: Command) -> Result<()> {
     match command {
         Command::Info => info(),
         Command::Train(a) => runs::train(a),
-        Command::Report { run_dirs, target } => runs::report(&run_dirs, target),
         Command::Zoo(ZooCommand::Export(a)) => zoo::run_export(a),
-        Command::Plot(a) => runs::plot(a),
-        Command::Align { reference, plot: None, bench_steps: Some(steps), threads } => {
-            bench::align_bench(&reference, steps, threads)
-        }
-        Command::Align { plot: Some(_), bench_steps: Some(_), .. } => {
-            bail!("--plot draws the replay; leave it out with --bench-steps")
-        }
-        Command::Align { reference, plot, .. } => bench::align(&reference, plot.as_deref()),
         Command::Bench(a) if a.train => bench::train(a),
         Command::Bench(a) => bench::run(&a),
         other => dispatch(other, |c| bail!("`{c:?}` is not a command of the training stack")),

@@ -612,6 +612,15 @@ fn training_commands_are_named_once() {
     // The paper's table evaluates saved policies: no libtorch, so the Python package's command has it too.
     assert_eq!(training_command(&line(&["table", "--zoo"])), None);
     assert_eq!(training_command(&line(&["--version"])), None);
+    // Of them, those that run libtorch start `blockpuzzle-train`; `plot`, `report` and `align` run in
+    // `blockpuzzle`, as does every core command.
+    use blockpuzzle::cli::{runs_in_training_half, TRAINING_HALF};
+    assert_eq!(runs_in_training_half(&line(&["zoo", "export", "--from", "x"])), Some("zoo export"));
+    assert_eq!(runs_in_training_half(&line(&["info"])), Some("info"));
+    for core in ["plot", "report", "align", "rollout", "zoo", "--help"] {
+        assert_eq!(runs_in_training_half(&line(&[core])), None, "{core}");
+    }
+    assert!(TRAINING_HALF.iter().all(|c| *c == "info" || TRAINING_COMMANDS.contains(c)));
     // Every entry is a command of this (the training) build: its help prints.
     for c in TRAINING_COMMANDS {
         let mut words: Vec<&str> = c.split(' ').collect();

@@ -532,3 +532,26 @@ fn a_leaderboard_footnote_names_each_files_build() {
     assert!(note.contains(&format!("made by {own}; `{}`", good.display())), "{note}");
     assert!(note.contains("(commit `0123456789abcdef0123456789abcdef01234567`); `elsewhere/"), "{note}");
 }
+
+/// Issue 75, one truth: the Python package's zoo reader, run without the extension, reads the core's
+/// facts from python/blockpuzzle/facts.json (with the extension, `_native.facts()` gives the same
+/// document); the file is the core's, byte for byte.
+/// `BLOCKPUZZLE_WRITE_FACTS=1 cargo test --test it provenance::the_python` writes it.
+#[test]
+fn the_python_packages_facts_file_is_the_cores() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("python/blockpuzzle/facts.json");
+    let want = blockpuzzle::benchmark::facts::facts_file().unwrap();
+    if std::env::var_os("BLOCKPUZZLE_WRITE_FACTS").is_some() {
+        std::fs::write(&path, &want).unwrap();
+    }
+    let have = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        have == want,
+        "{} is not the core's facts: write it with `BLOCKPUZZLE_WRITE_FACTS=1 cargo test --test it \
+         provenance::the_python` (a new built-in task, format or engine changes it)",
+        path.display()
+    );
+    let facts: serde_json::Value = serde_json::from_str(&want).unwrap();
+    assert_eq!(facts["tasks"].as_object().unwrap().len(), blockpuzzle::env::registry::ids().len());
+    assert_eq!(facts["zoo_format"], blockpuzzle::benchmark::zoo::FORMAT);
+}

@@ -12,7 +12,10 @@ use serde::{Deserialize, Serialize};
 
 /// Lists the algorithms: `Variant: module: SettingsType`, the first the default. From the list come
 /// [`AlgoConfigs`] and [`Algo`], whose methods call the algorithm's [`super::algorithm::Registration`]
-/// with its own settings.
+/// with its own settings. Each method takes the one field it uses as a constant of its own: a read
+/// of the registration's field would keep the whole registration, every function in it and with
+/// them libtorch, in a binary that only names or describes an algorithm (`blockpuzzle`, whose
+/// argument parser and `report` do: src/cli/halves.rs).
 macro_rules! algorithms {
     ($($variant:ident: $module:ident: $config:ty),+ $(,)?) => {
         /// Every algorithm's own settings, one group each (flags; `config.json` keys by algorithm name).
@@ -42,9 +45,7 @@ macro_rules! algorithms {
             /// Its names and settings facts.
             pub fn info(self) -> &'static Info {
                 match self {
-                    // A constant of the facts alone: a reference into the registration would
-                    // keep its functions (and with them libtorch) in every binary that reads a
-                    // name, `blockpuzzle`'s argument parser included (src/cli/halves.rs).
+                    // The facts alone (the list's comment above).
                     $(Algo::$variant => {
                         const INFO: Info = super::$module::REGISTRATION.info;
                         &INFO
@@ -55,21 +56,30 @@ macro_rules! algorithms {
             /// A fresh learner of this algorithm; `rng` fixes the initial weights.
             pub fn build(self, spec: &Spec, algos: &AlgoConfigs, rng: &mut ChaCha8Rng) -> Box<dyn Algorithm> {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.new)(spec, &algos.$module, rng),)+
+                    $(Algo::$variant => {
+                        const F: fn(&Spec, &$config, &mut ChaCha8Rng) -> Box<dyn Algorithm> = super::$module::REGISTRATION.new;
+                        F(spec, &algos.$module, rng)
+                    },)+
                 }
             }
 
             /// Whether its own settings are in range.
             fn validate_own(self, algos: &AlgoConfigs) -> Result<(), String> {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.validate)(&algos.$module),)+
+                    $(Algo::$variant => {
+                        const F: fn(&$config) -> Result<(), String> = super::$module::REGISTRATION.validate;
+                        F(&algos.$module)
+                    },)+
                 }
             }
 
             /// Its own settings these settings would ignore, as (flag, the flags that use it).
             fn unused_own(self, algos: &AlgoConfigs) -> Vec<(&'static str, &'static str)> {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.unused)(&algos.$module),)+
+                    $(Algo::$variant => {
+                        const F: fn(&$config) -> Vec<(&'static str, &'static str)> = super::$module::REGISTRATION.unused;
+                        F(&algos.$module)
+                    },)+
                 }
             }
 
@@ -83,14 +93,20 @@ macro_rules! algorithms {
             /// The bytes a learner of this algorithm takes ([`super::algorithm::Registration::memory`]).
             pub fn memory(self, spec: &Spec, algos: &AlgoConfigs) -> u64 {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.memory)(spec, &algos.$module),)+
+                    $(Algo::$variant => {
+                        const F: fn(&Spec, &$config) -> u64 = super::$module::REGISTRATION.memory;
+                        F(spec, &algos.$module)
+                    },)+
                 }
             }
 
             /// Its own settings away from the paper's, in words ([`super::algorithm::Registration::describe`]).
             pub fn describe(self, algos: &AlgoConfigs) -> Vec<String> {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.describe)(&algos.$module),)+
+                    $(Algo::$variant => {
+                        const F: fn(&$config) -> Vec<String> = super::$module::REGISTRATION.describe;
+                        F(&algos.$module)
+                    },)+
                 }
             }
 
@@ -100,7 +116,10 @@ macro_rules! algorithms {
             /// An agent of another algorithm than these settings'.
             pub(crate) fn take_branch_settings(self, agent: &mut dyn Algorithm, algos: &AlgoConfigs) -> Result<(), String> {
                 match self {
-                    $(Algo::$variant => (super::$module::REGISTRATION.take_branch)(agent, &algos.$module),)+
+                    $(Algo::$variant => {
+                        const F: fn(&mut dyn Algorithm, &$config) -> Result<(), String> = super::$module::REGISTRATION.take_branch;
+                        F(agent, &algos.$module)
+                    },)+
                 }
             }
         }
