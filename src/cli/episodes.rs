@@ -14,6 +14,8 @@ pub const FRAME_PIXELS: Bound =
     Bound::new("--width/--height", 1, 16_384, "the renderer then checks the model's offscreen buffer");
 /// GIF frames per second.
 pub const FPS: Bound = Bound::new("--fps", 1, 100, "GIF frame delays are whole hundredths of a second");
+/// Frames a GIF keeps at most.
+pub const GIF_FRAMES: Bound = Bound::new("--max-frames", 2, 100_000, "");
 /// Frames of a filmstrip.
 pub const FILMSTRIP: Bound =
     Bound::new("--filmstrip", 1, 64, "a strip is one row of frames: 64 frames of 480 px are 30,720 px wide");
@@ -126,6 +128,9 @@ pub(super) struct ViewArgs {
     /// Camera elevation (degrees, negative looks down).
     #[arg(long, default_value_t = -14.0, allow_negative_numbers = true)]
     elevation: f64,
+    /// Leave out the caption (task, step, outcome) that each frame carries in its corner.
+    #[arg(long)]
+    no_caption: bool,
 }
 
 /// What a rendered episode is written as (`rollout --render`, `render`).
@@ -137,6 +142,17 @@ pub(super) struct MovieArgs {
     /// Write a filmstrip PNG of this many evenly spaced frames (--out FILE.png).
     #[arg(long, value_parser = FILMSTRIP.parser::<usize>())]
     filmstrip: Option<usize>,
+    /// A GIF of at most this many evenly spaced frames, the first and last included (a smaller
+    /// file that plays the episode faster at the same --fps).
+    #[arg(long, value_parser = GIF_FRAMES.parser::<usize>())]
+    max_frames: Option<usize>,
+}
+
+impl MovieArgs {
+    /// What `out` is written as.
+    fn output(&self, out: &std::path::Path) -> Result<crate::render::replay::Output> {
+        Ok(crate::render::replay::Output::for_path(out, self.filmstrip, self.fps, self.max_frames)?)
+    }
 }
 
 impl ViewArgs {
@@ -148,6 +164,7 @@ impl ViewArgs {
             distance: self.distance,
             azimuth: self.azimuth,
             elevation: self.elevation,
+            caption: !self.no_caption,
             ..Default::default()
         };
         view.check().map_err(anyhow::Error::msg)?;
@@ -188,11 +205,7 @@ pub(super) struct RenderArgs {
 /// `blockpuzzle rollout`.
 pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     // Check the --render output before spending time on the episodes.
-    let render_kind = a
-        .render
-        .as_deref()
-        .map(|out| crate::render::replay::Output::for_path(out, a.movie.filmstrip, a.movie.fps))
-        .transpose()?;
+    let render_kind = a.render.as_deref().map(|out| a.movie.output(out)).transpose()?;
     if a.render.is_some() {
         a.view.view()?;
     }
@@ -269,7 +282,7 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
 }
 
 pub(super) fn render(a: RenderArgs) -> Result<()> {
-    let kind = crate::render::replay::Output::for_path(&a.out, a.movie.filmstrip, a.movie.fps)?;
+    let kind = a.movie.output(&a.out)?;
     let view = a.view.view()?;
     let (frames, fps, what) = match (&a.traj, &a.policy) {
         (Some(traj), _) => {

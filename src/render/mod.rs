@@ -127,6 +127,8 @@ pub struct View {
     pub azimuth: f64,
     /// Elevation in degrees (negative: looking down).
     pub elevation: f64,
+    /// Whether a replayed episode's frames carry its caption (task, step, outcome) in a corner.
+    pub caption: bool,
 }
 
 impl View {
@@ -166,9 +168,17 @@ impl View {
 }
 
 impl Default for View {
-    /// 480 × 480, the Fetch tasks' viewer camera: the table from the front-side.
+    /// 480 × 480, the Fetch tasks' viewer camera: the table from the front-side, with captions.
     fn default() -> Self {
-        Self { width: 480, height: 480, lookat: [1.3, 0.75, 0.55], distance: 2.5, azimuth: 132.0, elevation: -14.0 }
+        Self {
+            width: 480,
+            height: 480,
+            lookat: [1.3, 0.75, 0.55],
+            distance: 2.5,
+            azimuth: 132.0,
+            elevation: -14.0,
+            caption: true,
+        }
     }
 }
 

@@ -96,6 +96,15 @@ pub enum ReplayError {
     /// A GIF of 0 frames per second.
     #[error("--fps must be at least 1 (frames per second of the GIF)")]
     ZeroFps,
+    /// `--max-frames` for another output than a GIF.
+    #[error("--max-frames N keeps N frames of a GIF: give --out FILE.gif, without --filmstrip")]
+    MaxFramesNotGif,
+    /// `--max-frames` below 2.
+    #[error("--max-frames {asked} keeps too few frames for an animation: give at least 2 (the first and last step)")]
+    MaxFramesTooFew {
+        /// What was asked.
+        asked: usize,
+    },
     /// A `.png` output without `--filmstrip`.
     #[error("{} is a PNG file: add --filmstrip N, or give a folder for one PNG per frame", path.display())]
     PngWithoutFilmstrip {
@@ -209,7 +218,8 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
         data.forward()?;
         let reached = if k == n { outcome } else { "" };
         let caption = (format!("{}\nstep\n{reached}", ep.env_id), format!("\n{k}/{n}\n"));
-        frames.push(renderer.render(env.data_mut(), Some((&caption.0, &caption.1))));
+        let caption = renderer.view().caption.then_some((caption.0.as_str(), caption.1.as_str()));
+        frames.push(renderer.render(env.data_mut(), caption));
     }
     Ok((frames, started.elapsed().as_secs_f64()))
 }
@@ -217,8 +227,14 @@ pub fn episode_frames(ep: &EpisodeRecord, view: &View) -> Result<(Vec<RgbImage>,
 /// Where frames go: an animated GIF, a filmstrip PNG, or a folder of PNGs.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Output {
-    /// `.gif`: animated, looping, at the given frames per second.
-    Gif { fps: u32 },
+    /// `.gif`: animated, looping, at the given frames per second; with `max_frames`, at most that
+    /// many evenly spaced frames, the first and last included.
+    Gif {
+        /// Frames per second.
+        fps: u32,
+        /// The most frames it keeps (all where `None`).
+        max_frames: Option<usize>,
+    },
     /// A PNG of this many evenly spaced frames side by side.
     Filmstrip(usize),
     /// A folder of `frame_00000.png`, ...
@@ -226,19 +242,33 @@ pub enum Output {
 }
 
 impl Output {
-    /// The output kind for `out` and the `--filmstrip` option.
+    /// The output kind for `out` and the `--filmstrip`, `--fps` and `--max-frames` options.
     ///
     /// # Errors
     /// A filmstrip not written to `.png`, a `.png` without `--filmstrip`, a
-    /// GIF at 0 frames per second, or a file name of another kind (an
-    /// extension other than `.gif` or `.png` on a path that is not a folder).
-    pub fn for_path(out: &Path, filmstrip: Option<usize>, fps: u32) -> Result<Self, ReplayError> {
+    /// GIF at 0 frames per second, `--max-frames` below 2 or for another output than a GIF, or a
+    /// file name of another kind (an extension other than `.gif` or `.png` on a path that is not a
+    /// folder).
+    pub fn for_path(
+        out: &Path,
+        filmstrip: Option<usize>,
+        fps: u32,
+        max_frames: Option<usize>,
+    ) -> Result<Self, ReplayError> {
         let ext = out.extension().map(|e| e.to_string_lossy().to_lowercase());
+        if let Some(n) = max_frames {
+            if ext.as_deref() != Some("gif") || filmstrip.is_some() {
+                return Err(ReplayError::MaxFramesNotGif);
+            }
+            if n < 2 {
+                return Err(ReplayError::MaxFramesTooFew { asked: n });
+            }
+        }
         match (ext.as_deref(), filmstrip) {
             (Some("png"), Some(n)) if n > 0 => Ok(crate::support::io::check_output(out).map(|_| Self::Filmstrip(n))?),
             (_, Some(_)) => Err(ReplayError::FilmstripNotPng),
             (Some("gif"), None) if fps == 0 => Err(ReplayError::ZeroFps),
-            (Some("gif"), None) => Ok(crate::support::io::check_output(out).map(|_| Self::Gif { fps })?),
+            (Some("gif"), None) => Ok(crate::support::io::check_output(out).map(|_| Self::Gif { fps, max_frames })?),
             (Some("png"), None) => Err(ReplayError::PngWithoutFilmstrip { path: out.to_owned() }),
             (Some(other), None) if !out.is_dir() => {
                 Err(ReplayError::OtherKind { path: out.to_owned(), ext: other.to_owned() })
@@ -256,7 +286,12 @@ impl Output {
     /// I/O and encoding errors.
     pub fn write(&self, out: &Path, frames: &[RgbImage]) -> Result<(), output::OutputError> {
         match self {
-            Self::Gif { fps } => output::gif(out, frames, *fps),
+            Self::Gif { fps, max_frames: None } => output::gif(out, frames, *fps),
+            Self::Gif { fps, max_frames: Some(n) } => {
+                let kept: Vec<RgbImage> =
+                    output::filmstrip_indices(frames.len(), *n).into_iter().map(|k| frames[k].clone()).collect();
+                output::gif(out, &kept, *fps)
+            }
             Self::Filmstrip(n) => output::filmstrip(out, frames, *n),
             Self::Folder => output::png_folder(out, frames),
         }

@@ -18,9 +18,14 @@ fn blueish(p: &Rgb<u8>) -> bool {
 }
 
 fn greenish(p: &Rgb<u8>) -> bool {
-    // The Fetch skybox is a light green (about 112, 217, 143): the block is darker and purer.
     let [r, g, b] = p.0.map(i32::from);
     g > r + 40 && g > b + 40 && r < 80
+}
+
+/// No rule colour: the three channels within a few levels of each other.
+fn grey(p: &Rgb<u8>) -> bool {
+    let [r, g, b] = p.0.map(i32::from);
+    r.max(g).max(b) - r.min(g).min(b) <= 12
 }
 
 #[test]
@@ -36,6 +41,11 @@ fn blocks_appear_where_the_camera_projects_them() {
     assert_eq!(img.dimensions(), (320, 240));
     let first = *img.get_pixel(0, 0);
     assert!(img.pixels().any(|p| *p != first), "the image is uniform");
+    // Only rule objects wear rule colours: the backdrop above the horizon is grey (the Fetch files'
+    // skybox is a light green, the goal's colour; models/scene.xml draws a grey one).
+    for (x, y) in [(0, 0), (319, 0), (160, 0)] {
+        assert!(grey(img.get_pixel(x, y)), "backdrop pixel ({x}, {y}) is {:?}", img.get_pixel(x, y));
+    }
     let blocks = env.block_positions();
     for (pos, (is_colour, name)) in blocks.iter().zip([(blueish as fn(&Rgb<u8>) -> bool, "blue"), (greenish, "green")])
     {
@@ -109,6 +119,36 @@ mod cli {
         );
         assert!(o.status.success(), "{}", text(&o));
         assert_eq!(image::open(&strip).unwrap().to_rgb8().dimensions(), (3 * 40, 30));
+
+        // --max-frames: a GIF of that many evenly spaced frames; --no-caption: frames without the
+        // caption's dark box in the top-left corner.
+        let (short, bare) = (path("short.gif"), path("bare.gif"));
+        let frames_of = |gif: &str| {
+            let decoder = image::codecs::gif::GifDecoder::new(std::fs::File::open(gif).unwrap()).unwrap();
+            decoder.into_frames().collect_frames().unwrap()
+        };
+        let o = bp(
+            &["render", "--traj", &traj, "--max-frames", "3", "--width", "64", "--height", "48", "--out", &short],
+            false,
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let captioned = frames_of(&short);
+        assert_eq!(captioned.len(), 3.min(steps + 1), "at most --max-frames frames");
+        let args = ["render", "--traj", &traj, "--max-frames", "3", "--width", "64", "--height", "48", "--no-caption"];
+        let o = bp(&args.iter().copied().chain(["--out", &bare]).collect::<Vec<_>>(), false);
+        assert!(o.status.success(), "{}", text(&o));
+        // The caption's box is dark: without it the top-left quarter is brighter.
+        let luma = |f: &image::Frame| -> u64 {
+            let img = f.buffer();
+            let (w, h) = img.dimensions();
+            let quarter = img.enumerate_pixels().filter(|(x, y, _)| *x < w / 2 && *y < h / 2);
+            quarter.map(|(_, _, p)| u64::from(p[0]) + u64::from(p[1]) + u64::from(p[2])).sum()
+        };
+        let (b, c) = (luma(&frames_of(&bare)[0]), luma(&captioned[0]));
+        assert!(b > c + c / 10, "the caption's box darkens the corner: {b} without, {c} with");
+        let o =
+            bp(&["render", "--traj", &traj, "--max-frames", "3", "--filmstrip", "2", "--out", &path("x.png")], false);
+        assert!(!o.status.success() && text(&o).contains("--max-frames N keeps N frames of a GIF"), "{}", text(&o));
 
         let o = bp(&["render", "--traj", &traj, "--episode", "5", "--out", &path("x.gif")], false);
         assert!(!o.status.success() && text(&o).contains("holds 1 episodes"), "{}", text(&o));
