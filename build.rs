@@ -20,6 +20,9 @@ fn main() {
     println!("cargo:rerun-if-env-changed=BLOCKPUZZLE_SOURCE_COMMIT");
     let commit = commit(Path::new(&manifest)).or_else(|| std::env::var("BLOCKPUZZLE_SOURCE_COMMIT").ok());
     println!("cargo:rustc-env=BLOCKPUZZLE_COMMIT={}", commit.unwrap_or_default());
+    for input in INPUTS {
+        println!("cargo:rerun-if-changed={input}");
+    }
     println!("cargo:rustc-env=BLOCKPUZZLE_BUILD_ID={:016x}", build_id(Path::new(&manifest)));
     // `blockpuzzle` runs no training code (src/cli/halves.rs), yet the archives it links hold some
     // (a code unit that mixes both, libtch's C++ wrapper). Hidden from its dynamic symbol table,
@@ -71,7 +74,6 @@ fn build_id(manifest: &Path) -> u64 {
     }
     let mut files = Vec::new();
     for input in INPUTS {
-        println!("cargo:rerun-if-changed={input}");
         walk(&manifest.join(input), &mut files);
     }
     // SipHash with fixed keys: the same digest wherever the script runs (for one compiler).
@@ -92,7 +94,6 @@ fn build_id(manifest: &Path) -> u64 {
 /// `-dirty` when a file that goes into the build differs from it. The script runs again when
 /// HEAD moves or one of those files changes (a folder is watched as a whole).
 fn commit(manifest: &Path) -> Option<String> {
-    let inputs = INPUTS;
     let git = |args: &[&str]| -> Option<String> {
         let out = std::process::Command::new("git").args(args).current_dir(manifest).output().ok()?;
         out.status.success().then(|| String::from_utf8_lossy(&out.stdout).trim().to_owned())
@@ -112,7 +113,7 @@ fn commit(manifest: &Path) -> Option<String> {
     }
     let head = git(&["rev-parse", "HEAD"])?;
     let mut args = vec!["status", "--porcelain", "--untracked-files=no", "--"];
-    args.extend(inputs);
+    args.extend(INPUTS);
     let dirty = !git(&args)?.is_empty();
     Some(if dirty { format!("{head}-dirty") } else { head })
 }

@@ -7,8 +7,9 @@
 //!
 //! Both are built by every `cargo build` and installed by `cargo install`; `cargo run` builds and
 //! runs `blockpuzzle-train` alone (the crate's `default-run`), which leaves a `blockpuzzle` built
-//! before it stale. The two carry their build's identity (a digest of the sources, features and profile, `build.rs`), and a
-//! `blockpuzzle-train` from other sources is refused, naming the command that builds both.
+//! before it stale. The two carry their build's identity (a digest of the sources, features and
+//! profile, `build.rs`), and a `blockpuzzle-train` from other sources is refused, naming the
+//! command that builds both.
 
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -21,6 +22,10 @@ const BUILD_VARIABLE: &str = "BLOCKPUZZLE_FRONT_BUILD";
 
 /// This build's identity (build.rs: the sources' digest, the features and the profile).
 pub const BUILD_ID: &str = env!("BLOCKPUZZLE_BUILD_ID");
+
+/// How to get two halves that belong together, for every refusal here.
+const FIX: &str = "build both halves of the command line with `cargo build --release` (`make build`; `cargo run` \
+                   builds only `blockpuzzle-train`), or install both with `cargo install --path .`";
 
 /// The commands that run in `blockpuzzle-train`: those that run libtorch, and `info`, which reports
 /// its libraries. The training build's other commands (`plot`, `report`, `align`) run no libtorch.
@@ -42,20 +47,18 @@ fn training_binary() -> std::io::Result<PathBuf> {
 pub fn exec_training_half(args: Vec<OsString>) -> i32 {
     use std::os::unix::process::CommandExt;
     let command = runs_in_training_half(&args).unwrap_or("info");
-    let fix = "build both halves of the command line with `cargo build --release` (`make build`), or install \
-               both with `cargo install --path .`";
     let path = match training_binary() {
         Ok(path) if path.is_file() => path,
         Ok(path) => {
             eprintln!(
                 "error: `{command}` runs in {TRAINING_BINARY}, the training half of this command line, and {} \
-                 does not exist: {fix}",
+                 does not exist: {FIX}",
                 path.display()
             );
             return 1;
         }
         Err(e) => {
-            eprintln!("error: `{command}` runs in {TRAINING_BINARY}, which is found beside this program, whose path is unknown ({e}): {fix}");
+            eprintln!("error: `{command}` runs in {TRAINING_BINARY}, which is found beside this program, whose path is unknown ({e}): {FIX}");
             return 1;
         }
     };
@@ -64,7 +67,7 @@ pub fn exec_training_half(args: Vec<OsString>) -> i32 {
         .args(args.iter().skip(1))
         .env(BUILD_VARIABLE, BUILD_ID)
         .exec();
-    eprintln!("error: cannot start {} for `{command}` ({err}): {fix}", path.display());
+    eprintln!("error: cannot start {} for `{command}` ({err}): {FIX}", path.display());
     1
 }
 
@@ -82,9 +85,7 @@ pub fn check_front() -> anyhow::Result<()> {
     }
     let here = std::env::current_exe().map_or_else(|_| TRAINING_BINARY.into(), |p| p.display().to_string());
     anyhow::bail!(
-        "{here} was built from other sources than the `blockpuzzle` beside it (build {} there, {BUILD_ID} here): \
-         build both halves again with `cargo build --release` (`make build`; `cargo run` builds only \
-         `blockpuzzle-train`), or install both with `cargo install --path .`",
+        "{here} was built from other sources than the `blockpuzzle` beside it (build {} there, {BUILD_ID} here): {FIX}",
         front.to_string_lossy()
     )
 }

@@ -367,7 +367,7 @@ fn dispatch_training(command: Command) -> Result<()> {
         Command::Zoo(ZooCommand::Export(a)) => zoo::run_export(a),
         Command::Bench(a) if a.train => bench::train(a),
         Command::Bench(a) => bench::run(&a),
-        other => dispatch(other, |c| bail!("`{c:?}` is not a command of the training stack")),
+        other => bail!("`{other:?}` is not a command of the training stack"),
     }
 }
 
