@@ -7,6 +7,8 @@
 #    slower, and the pthread OpenBLAS fights libtorch's OpenMP threads); libegl1, libegl-mesa0
 #    and libgl1-mesa-dri (headless rendering through EGL with Mesa's software rasteriser); fonts-dejavu-core
 #    for the labels of the training plots; python3-venv (the Python check of the zoo and the benchmarks' venvs).
+#    chromium and chromium-driver: the browser test of `blockpuzzle serve` (tests/it/serve.rs) drives
+#    Debian's headless Chromium through its ChromeDriver.
 # 2. The Fetch robot assets from the PyPI wheel gymnasium-robotics==1.4.2: downloaded with
 #    `python3 -m pip download --no-deps`, checked against a pinned sha256, and only the Fetch
 #    files (robot.xml, shared.xml, stls/fetch/*.stl, textures/*) unpacked into the git-ignored
@@ -21,7 +23,7 @@ WHEEL_SHA256="a1743530431cb377e6b3b956d284bc96436fc68bac1648ef205054c178e7dc4b"
 ASSETS_DIR="$ROOT/models/gymnasium_robotics"
 CACHE_DIR="${BLOCKPUZZLE_CACHE:-$HOME/.cache/blockpuzzle}"
 APT_PACKAGES=(libmujoco-dev libclang-dev libtorch-dev libopenblas0-openmp fonts-dejavu-core
-    libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv openmpi-bin libopenmpi-dev)
+    libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv openmpi-bin libopenmpi-dev chromium chromium-driver)
 
 log() { printf '[setup] %s\n' "$*"; }
 

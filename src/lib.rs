@@ -7,7 +7,7 @@
 //!
 //! Without cargo features the crate is the environment core, trained
 //! policies and their evaluation (no libtorch, EGL or plotting); `render` adds headless rendering, `train` the training
-//! stack and command line, `mpi` training under `mpirun`.
+//! stack and command line, `mpi` training under `mpirun`, `serve` the browser app.
 
 // The layers, bottom to top: a module uses only its own layer and the ones listed before it
 // (tests/it/architecture.rs checks it). Each layer's mod.rs opens with its part of the map;
@@ -21,6 +21,8 @@ pub mod episode;
 pub mod benchmark;
 #[cfg(feature = "render")]
 pub mod render;
+#[cfg(feature = "serve")]
+pub mod serve;
 #[cfg(feature = "train")]
 pub mod learn;
 #[cfg(feature = "cli")]

@@ -37,6 +37,8 @@ def test_help_usage_errors_and_training_commands_say_what_to_do():
     for args in (["train", "--env", "BlocksTouch-v0"], ["zoo", "export", "--name", "x"]):
         t = run(*args)
         assert t.returncode == 2 and "Rust command line" in t.stderr and "cargo run --release" in t.stderr, t.stderr
+    # The browser app is the package's too (docs/serve.md).
+    assert any(line.strip().startswith("serve ") for line in h.stdout.splitlines()), h.stdout
     # The paper's table needs no libtorch: the package's command has it.
     table = run("table", "--help")
     assert table.returncode == 0 and "--zoo" in table.stdout, table.stderr

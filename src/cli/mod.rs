@@ -1,4 +1,4 @@
-//! Layer 10, cli (the `cli` feature): the `blockpuzzle` command line.
+//! Layer 11, cli (the `cli` feature): the `blockpuzzle` command line.
 //!
 //! | module | what |
 //! |---|---|
@@ -12,6 +12,7 @@
 //! | `runs` (`train`) | `train` (one process or an MPI rank), `plot`, `report` |
 //! | `experiment` (`train`) | `train --config FILE` recipes |
 //! | `bench` (`train`) | `bench` and `align` |
+//! | `serve` (`serve`) | `serve`, the browser app |
 //! | `halves` (`train`) | `blockpuzzle` hands the training commands to `blockpuzzle-train` |
 //!
 //! With the `cli` feature alone, the commands that need no
@@ -37,6 +38,8 @@ mod halves;
 mod results;
 #[cfg(feature = "train")]
 mod runs;
+#[cfg(feature = "serve")]
+mod serve;
 mod task;
 mod zoo;
 #[cfg(feature = "train")]
@@ -150,6 +153,10 @@ enum Command {
     /// different engines, suites or task contents are never put in one column.
     #[command(subcommand)]
     Results(ResultsCommand),
+    #[cfg(feature = "serve")]
+    /// The browser app on a local address: browse tasks, families, suites, the zoo and the
+    /// leaderboard, watch any policy play, build tasks in an editor.
+    Serve(serve::ServeArgs),
     /// Print the generated MuJoCo XML of an environment's scene (save it in
     /// models/ to load it in other MuJoCo tools).
     Scene {
@@ -332,6 +339,8 @@ fn dispatch(command: Command, training: fn(Command) -> Result<()>) -> Result<()>
         Command::Table(a) => eval::table(a),
         Command::Task(TaskCommand::Check(a)) => task::check(a),
         Command::Task(TaskCommand::Generate(a)) => task::generate(a),
+        #[cfg(feature = "serve")]
+        Command::Serve(a) => serve::serve(a),
         Command::Scene { env } => {
             let c = registry::config(&env)?;
             // Its includes are relative to the assets folder: save it there to load it elsewhere.

@@ -1,4 +1,4 @@
-//! Layer 9, learn (the `train` feature, the only layer that links libtorch): the algorithms and
+//! Layer 10, learn (the `train` feature, the only layer that links libtorch): the algorithms and
 //! the training loop. What needs no libtorch lives below (the paper's table and the environment
 //! throughput benchmark are in `benchmark/`).
 //!

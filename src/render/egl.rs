@@ -19,13 +19,27 @@ pub const DISABLE_VAR: &str = "BLOCKPUZZLE_NO_EGL";
 /// A current OpenGL context on this thread (on the process's surfaceless
 /// EGL display). Released on drop.
 pub struct GlContext {
-    egl: egl::DynamicInstance<egl::EGL1_5>,
+    egl: &'static egl::DynamicInstance<egl::EGL1_5>,
     display: egl::Display,
     context: egl::Context,
 }
 
 fn call(what: &'static str) -> impl Fn(egl::Error) -> RenderError {
     move |e| RenderError::Egl { call: what, reason: e.to_string() }
+}
+
+/// libEGL, loaded once a process and never unloaded. Loading it for each context and letting the
+/// last one's drop unload it unloads Mesa's driver and its LLVM with it; loading them again in the
+/// same process then crashed llvmpipe (a segfault in libLLVM after a few dozen renderers made and
+/// dropped one after another, as `blockpuzzle serve` does).
+fn instance() -> Result<&'static egl::DynamicInstance<egl::EGL1_5>, RenderError> {
+    static LOADED: std::sync::OnceLock<Result<egl::DynamicInstance<egl::EGL1_5>, String>> = std::sync::OnceLock::new();
+    // SAFETY: loading libEGL runs its initialisers; it is the system's EGL loader (libglvnd or Mesa),
+    // loaded once and kept for the process's life, and its functions are resolved by name against
+    // the EGL 1.5 signatures khronos-egl declares.
+    let loaded = LOADED
+        .get_or_init(|| unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| e.to_string()));
+    loaded.as_ref().map_err(|e| RenderError::EglUnavailable { reason: e.clone() })
 }
 
 impl GlContext {
@@ -39,10 +53,7 @@ impl GlContext {
         if std::env::var_os(DISABLE_VAR).is_some() {
             return Err(RenderError::EglUnavailable { reason: format!("disabled by {DISABLE_VAR}") });
         }
-        // SAFETY: loads the system's libEGL.so.1 and resolves the EGL 1.5
-        // entry points by name; the library follows the EGL API.
-        let egl = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }
-            .map_err(|e| RenderError::EglUnavailable { reason: e.to_string() })?;
+        let egl = instance()?;
         // SAFETY: the surfaceless platform takes no native display (null) and
         // an attribute list holding only the terminator.
         let display =
@@ -67,6 +78,29 @@ impl GlContext {
         // under renderers on other threads. It lives as long as the process.
         made.map(|context| Self { egl, display, context })
     }
+}
+
+thread_local! {
+    /// The calling thread's context, made at its first renderer and kept until the thread ends.
+    static THREAD_CONTEXT: std::cell::RefCell<Option<std::rc::Rc<GlContext>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The calling thread's OpenGL context, made current: one per thread, shared by every renderer the
+/// thread makes. Making and destroying a context for each renderer made Mesa's llvmpipe crash in
+/// libLLVM after some dozens of them on one thread (`blockpuzzle serve` renders every episode on
+/// one thread), and compiled its shaders anew each time.
+///
+/// # Errors
+/// As [`GlContext::new`], the first time on a thread.
+pub fn thread_context() -> Result<std::rc::Rc<GlContext>, RenderError> {
+    THREAD_CONTEXT.with(|slot| {
+        if let Some(gl) = slot.borrow().as_ref() {
+            return Ok(std::rc::Rc::clone(gl));
+        }
+        let gl = std::rc::Rc::new(GlContext::new()?);
+        *slot.borrow_mut() = Some(std::rc::Rc::clone(&gl));
+        Ok(gl)
+    })
 }
 
 impl Drop for GlContext {

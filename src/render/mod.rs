@@ -190,7 +190,7 @@ pub struct Renderer {
     /// Colours drawn instead of the model's, by geom id.
     recolour: Vec<(usize, [f32; 4])>,
     // Declared last: dropped after the MuJoCo objects that use it.
-    _gl: egl::GlContext,
+    _gl: std::rc::Rc<egl::GlContext>,
 }
 
 impl Renderer {
@@ -203,7 +203,7 @@ impl Renderer {
             return Err(RenderError::Empty { width: view.width, height: view.height });
         }
         view.check().map_err(RenderError::Camera)?;
-        let gl = egl::GlContext::new()?;
+        let gl = egl::thread_context()?;
         let (max_width, max_height) = model.offscreen_size();
         if view.width > max_width || view.height > max_height {
             return Err(RenderError::TooLarge { width: view.width, height: view.height, max_width, max_height });
@@ -214,9 +214,9 @@ impl Renderer {
             azimuth: view.azimuth,
             elevation: view.elevation,
         };
-        // SAFETY: `gl` was made current on this thread above; it is stored in
-        // the same struct and declared after `visual`, so it stays current and
-        // alive until `visual` is dropped.
+        // SAFETY: `gl` is this thread's one context, current on it since it was made (nothing
+        // here makes another current); the struct holds a reference to it declared after `visual`,
+        // so it stays alive until `visual` is dropped.
         let visual = unsafe { Visual::new(model, &camera) };
         Ok(Self { visual, view: view.clone(), recolour: Vec::new(), _gl: gl })
     }

@@ -7,8 +7,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The layers, bottom to top.
-const LAYERS: [&str; 10] =
-    ["support", "sim", "task", "env", "policy", "episode", "benchmark", "render", "learn", "cli"];
+const LAYERS: [&str; 11] =
+    ["support", "sim", "task", "env", "policy", "episode", "benchmark", "render", "serve", "learn", "cli"];
 /// The layers that are folders of modules (the others are one module each).
 const GROUPS: [&str; 5] = ["support", "sim", "episode", "benchmark", "learn"];
 

@@ -30,6 +30,8 @@ mod physics;
 mod provenance;
 mod render;
 mod rules_in_simulation;
+#[cfg(feature = "serve")]
+mod serve;
 mod set_network;
 mod suites;
 mod task_files;
