@@ -70,4 +70,8 @@ EOF
     done
 } > "$PAGE.tmp"
 mv "$PAGE.tmp" "$PAGE"
+# The README's opening picture: four of the tasks side by side in one GIF (examples/reel.rs).
+REEL=()
+for id in BlocksAvoid-v0 ToppleTower-v0 BlocksStack-v0 BlocksGather-v0; do REEL+=("$OUT/$id.gif"); done
+(cd "$ROOT" && cargo run --release --quiet --example reel -- "$OUT/reel.gif" 5 "${REEL[@]}")
 echo "wrote $PAGE and $(ls "$OUT"/*.gif | wc -l) GIFs ($(du -sh "$OUT" | cut -f1)) in $OUT"

@@ -110,8 +110,25 @@ fn accept(listener: &TcpListener, tx: &SyncSender<TcpStream>) {
             let busy = Answer::error(503, format!("the app is busy ({WAITING} connections waiting); try again"));
             eprintln!("serve: {}", busy.body["error"]);
             let _ = write_json(&mut stream, &busy, false);
+            // Off the accept thread: lingering takes up to LINGER_TIME.
+            let _ = std::thread::Builder::new().name("linger".into()).spawn(move || linger(stream));
         }
     }
+}
+
+/// How much of a refused request's unread body is read and dropped before its connection closes.
+pub const LINGER_BYTES: u64 = 1 << 20;
+/// How long that may take.
+pub const LINGER_TIME: Duration = Duration::from_secs(2);
+
+/// Closes a connection whose request was answered without being read whole (a body over the bound,
+/// a busy server): the answer is sent, then what the client still sends is read and dropped, up to
+/// [`LINGER_BYTES`] or [`LINGER_TIME`]. Closing with unread input would make the kernel reset the
+/// connection, and the client would lose the answer before it read it.
+fn linger(mut stream: TcpStream) {
+    let _ = stream.shutdown(std::net::Shutdown::Write);
+    let _ = stream.set_read_timeout(Some(LINGER_TIME));
+    let _ = std::io::copy(&mut (&mut stream).take(LINGER_BYTES), &mut std::io::sink());
 }
 
 struct App {
@@ -129,6 +146,7 @@ fn worker(rx: &Mutex<Receiver<TcpStream>>, app: &App) {
             Err(Some((mut stream, a))) => {
                 eprintln!("serve: a request refused: {} {}", a.status, a.body["error"]);
                 let _ = write_json(&mut stream, &a, false);
+                linger(stream);
                 continue;
             }
         };

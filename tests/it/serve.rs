@@ -601,6 +601,30 @@ fn a_browser_browses_the_gallery_plays_builds_and_watches_a_leaderboard_row() {
     assert!(text.contains("colour = \"red\""), "{text}");
     let out = blockpuzzle(&["task", "check", saved.to_str().unwrap(), "--samples", "2"]).output().unwrap();
     assert!(out.status.success(), "{}\n{text}", String::from_utf8_lossy(&out.stderr));
+    // The same blocks as a family (size ranges, counts, `[check]`), saved and generated from.
+    browser.js("ed.blocks = ed.blocks.filter(b => b.name !== 'wall'); document.getElementById('ed-kind').value = 'family'; refresh(); document.getElementById('ed-name').value = 'built-family.toml'; return true");
+    browser.until(
+        &app,
+        "the family checks",
+        "return document.getElementById('ed-status').textContent.startsWith('valid family')",
+        "return document.getElementById('ed-status').textContent",
+    );
+    browser.js("document.getElementById('ed-save').click(); return true");
+    browser.until(
+        &app,
+        "the family is saved",
+        "return document.getElementById('ed-status').textContent.startsWith('saved')",
+        "return document.getElementById('ed-status').textContent",
+    );
+    let family = dir.path().join("built-family.toml");
+    let generated = temp();
+    let out = blockpuzzle(&["task", "generate", family.to_str().unwrap(), "--seed", "1", "--count", "1", "--out"])
+        .arg(generated.path())
+        .output()
+        .unwrap();
+    let text = std::fs::read_to_string(&family).unwrap();
+    assert!(out.status.success(), "{}\n{text}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("[check]") && text.contains("size = ["), "{text}");
     // A leaderboard row: the solver's failures on a suite, watched.
     browser.js("document.querySelector('[data-tab=leaderboard]').click(); return true");
     browser.until(
