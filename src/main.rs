@@ -3,12 +3,7 @@
 //! starts in its place (src/cli/halves.rs).
 
 fn main() {
-    // A closed pipe ends the program quietly, as it does `cat` and `ls` (`blockpuzzle info | head -1`),
-    // rather than as a panic in the next `println!`: Rust starts programs with SIGPIPE ignored.
-    // SAFETY: restoring a signal's default disposition at startup, before any thread exists.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
+    blockpuzzle::cli::default_sigpipe();
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     #[cfg(feature = "train")]
     {

@@ -568,8 +568,12 @@ fn training_commands() -> Vec<&'static str> {
 /// them written by hand in the package.
 #[pyfunction]
 fn facts(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
-    // The core's one document (benchmark::facts), which python/blockpuzzle/facts.json also holds.
-    let text = blockpuzzle::benchmark::facts::facts_file().map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // The core's one document (benchmark::facts), which python/blockpuzzle/facts.json also holds. It
+    // is made once a process (it compiles every built-in task for its hash; the package reads it
+    // three times at import); each call returns a fresh dict, so no caller can edit another's.
+    static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
+    let text = TEXT.get_or_init(|| blockpuzzle::benchmark::facts::facts_file().map_err(|e| e.to_string()));
+    let text = text.as_deref().map_err(|e| PyValueError::new_err(e.to_owned()))?;
     py.import("json")?.call_method1("loads", (text,))
 }
 

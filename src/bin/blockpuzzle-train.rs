@@ -3,11 +3,7 @@
 //! too (src/cli/halves.rs).
 
 fn main() {
-    // As in main.rs: a closed pipe ends the program quietly.
-    // SAFETY: restoring a signal's default disposition at startup, before any thread exists.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
+    blockpuzzle::cli::default_sigpipe();
     if let Err(e) = blockpuzzle::cli::check_front() {
         eprintln!("error: {e}");
         std::process::exit(1);

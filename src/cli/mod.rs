@@ -203,6 +203,18 @@ fn command() -> clap::Command {
     cmd
 }
 
+/// Makes a closed pipe end the program quietly, as it ends `cat` and `ls` (`blockpuzzle info |
+/// head -1`), rather than as a panic in the next `println!`: Rust starts programs with SIGPIPE
+/// ignored. Both binaries call it first thing in `main`. Sockets are unaffected: the standard
+/// library sends with `MSG_NOSIGNAL`, so `serve` sees a closed connection as an error, not a signal.
+pub fn default_sigpipe() {
+    // SAFETY: restoring a signal's default disposition, which the binaries do at startup, before any
+    // thread exists; no handler is installed.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 /// An error and its causes on one line, each cause once: a cause whose text
 /// the message already holds (`cannot read X: No such file`) is not repeated.
 pub fn error_text(e: &anyhow::Error) -> String {

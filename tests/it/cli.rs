@@ -24,6 +24,26 @@ fn envs_lists_one_line_per_id() {
 }
 
 /// Three scripted BlocksTouch-v0 episodes at level 0 from seed 5.
+/// A reader that goes away (`blockpuzzle info | head -0`) ends the command quietly: killed by
+/// SIGPIPE as `cat` would be, or done before it noticed; never a panic in `println!`. `info` runs in
+/// the training half (it loads libtorch first, so the pipe is closed before it writes).
+#[test]
+fn a_closed_pipe_ends_the_command_line_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    for args in [["info"], ["envs"]] {
+        let mut child = super::common::blockpuzzle(&args)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{args:?}: {err}");
+        assert!(out.status.success() || out.status.signal() == Some(libc::SIGPIPE), "{args:?}: {:?} {err}", out.status);
+    }
+}
+
 fn scripted_rollout(out: &Path) -> Output {
     let out = out.to_str().unwrap();
     let args = "rollout --env BlocksTouch-v0 --policy scripted --episodes 3 --seed 5 --level 0 --out";
