@@ -41,6 +41,12 @@ def test_each_egl_failure_names_the_missing_package_and_the_apt_line(call, reaso
 
 
 def test_rendering_switched_off_says_which_variable_to_unset(monkeypatch):
+    env = gym.make("BlockPuzzle/BlocksTouch-v0", render_mode="rgb_array", width=16, height=16)
+    env.reset(seed=0)
+    # This thread renders first: the switch holds for a thread that has rendered before (its OpenGL
+    # context is kept for the next renderer).
+    assert env.render().shape == (16, 16, 3)
+    env.close()
     monkeypatch.setenv("BLOCKPUZZLE_NO_EGL", "1")
     env = gym.make("BlockPuzzle/BlocksTouch-v0", render_mode="rgb_array", width=16, height=16)
     env.reset(seed=0)

@@ -50,9 +50,7 @@ impl GlContext {
     /// disabled by [`DISABLE_VAR`]; [`RenderError::Egl`] naming the EGL call
     /// that failed.
     pub fn new() -> Result<Self, RenderError> {
-        if std::env::var_os(DISABLE_VAR).is_some() {
-            return Err(RenderError::EglUnavailable { reason: format!("disabled by {DISABLE_VAR}") });
-        }
+        switched_off()?;
         let egl = instance()?;
         // SAFETY: the surfaceless platform takes no native display (null) and
         // an attribute list holding only the terminator.
@@ -80,6 +78,14 @@ impl GlContext {
     }
 }
 
+/// [`RenderError::EglUnavailable`] while [`DISABLE_VAR`] is set.
+fn switched_off() -> Result<(), RenderError> {
+    match std::env::var_os(DISABLE_VAR) {
+        Some(_) => Err(RenderError::EglUnavailable { reason: format!("disabled by {DISABLE_VAR}") }),
+        None => Ok(()),
+    }
+}
+
 thread_local! {
     /// The calling thread's context, made at its first renderer and kept until the thread ends.
     static THREAD_CONTEXT: std::cell::RefCell<Option<std::rc::Rc<GlContext>>> = const { std::cell::RefCell::new(None) };
@@ -93,6 +99,9 @@ thread_local! {
 /// # Errors
 /// As [`GlContext::new`], the first time on a thread.
 pub fn thread_context() -> Result<std::rc::Rc<GlContext>, RenderError> {
+    // Asked at every renderer, as when each made its own context: switching rendering off holds
+    // for a thread that has rendered before.
+    switched_off()?;
     THREAD_CONTEXT.with(|slot| {
         if let Some(gl) = slot.borrow().as_ref() {
             return Ok(std::rc::Rc::clone(gl));
