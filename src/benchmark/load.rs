@@ -56,6 +56,36 @@ pub enum Named {
 }
 
 impl Named {
+    /// Fits `config` to what the policy reads: a trained policy's observation mode and block slots
+    /// (random actions and the baselines play any layout, and leave it as it is).
+    ///
+    /// # Errors
+    /// A policy file whose recorded tasks do not compile.
+    pub fn fit(&self, config: &mut crate::env::EnvConfig) -> Result<(), crate::task::TaskError> {
+        if let Named::Saved(_, saved) = self {
+            config.obs_mode = saved.obs_mode();
+            config.slots = saved.slots()?;
+        }
+        Ok(())
+    }
+
+    /// The policy that plays `env` (made from a config [`Named::fit`] fitted): random actions seeded
+    /// with `seed`, a baseline, or the trained policy fitted to `env`'s observation.
+    ///
+    /// # Errors
+    /// A trained policy whose observation fits `env` neither directly nor with grey blocks removed.
+    pub fn into_player(
+        self,
+        env: &crate::env::BlockEnv,
+        seed: u64,
+    ) -> Result<Box<dyn crate::policy::Policy>, crate::benchmark::evaluate::EvalError> {
+        Ok(match self {
+            Named::Random => Box::new(crate::policy::RandomPolicy::new(seed)),
+            Named::Baseline(baseline) => baseline.policy(env),
+            Named::Saved(path, saved) => Box::new(crate::benchmark::evaluate::trained_policy(&path, saved, env)?),
+        })
+    }
+
     /// What suites and evaluations play: a trained policy or a baseline (random actions are no
     /// subject of an evaluation: None).
     pub fn subject(&self) -> Option<Subject<'_>> {

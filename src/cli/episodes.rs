@@ -4,7 +4,6 @@
 use crate::env::{registry, BlockEnv};
 use crate::episode::outcome::{Outcome, Outcomes};
 use crate::episode::rollout::{run_episode, DumpWriter};
-use crate::policy::{Policy, RandomPolicy};
 use crate::support::limits::Bound;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -212,20 +211,15 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     // A trained policy is loaded first: the environment shows its layout (its observation mode and,
     // for one of several tasks, its training tasks' block slots).
     let named = crate::benchmark::load::resolve(Path::new(&a.policy))?;
-    let saved = match &named {
-        crate::benchmark::load::Named::Saved(_, saved) => Some(saved),
-        _ => None,
-    };
     let mut config = registry::config(&a.env)?;
     config.obs_mode = a.obs_mode.unwrap_or_default();
-    if let Some(saved) = &saved {
+    if let crate::benchmark::load::Named::Saved(_, saved) = &named {
         let reads = saved.obs_mode();
         if let Some(mode) = a.obs_mode.filter(|&m| m != reads) {
             bail!("policy {} reads the `{reads}` observation, not the `{mode}` one: leave --obs-mode out", a.policy);
         }
-        config.obs_mode = reads;
-        config.slots = saved.slots()?;
     }
+    named.fit(&mut config)?;
     let mut env = BlockEnv::new(config)?;
     if a.challenge {
         env.set_challenge(true)?;
@@ -235,13 +229,7 @@ pub(super) fn rollout(a: RolloutArgs) -> Result<()> {
     env.set_level(level)?;
     crate::support::limits::seed_range(a.seed, a.episodes as u64).map_err(anyhow::Error::msg)?;
     let mut writer = DumpWriter::create(&a.out)?;
-    let mut policy: Box<dyn Policy> = match named {
-        crate::benchmark::load::Named::Random => Box::new(RandomPolicy::new(a.seed)),
-        crate::benchmark::load::Named::Baseline(baseline) => baseline.policy(&env),
-        crate::benchmark::load::Named::Saved(path, saved) => {
-            Box::new(crate::benchmark::evaluate::trained_policy(&path, saved, &env)?)
-        }
-    };
+    let mut policy = named.into_player(&env, a.seed)?;
     let (mut outcomes, mut steps) = (Outcomes::default(), 0usize);
     for k in 0..a.episodes {
         let seed = a.seed + k as u64;

@@ -55,15 +55,7 @@ impl Running {
 /// See [`super::start`].
 pub(super) fn start(options: Options) -> Result<Running, ServeError> {
     let roots = super::files::Roots::new(&options.dirs)?;
-    let mut results = Vec::new();
-    for r in &options.results {
-        let folder = |why: String| ServeError::Folder { path: r.clone(), why };
-        let canon = r.canonicalize().map_err(|e| folder(format!("cannot open it ({e})")))?;
-        if !canon.is_dir() {
-            return Err(folder("it is not a folder".into()));
-        }
-        results.push(canon);
-    }
+    let results = super::files::Roots::new(&options.results)?.folders().to_vec();
     for p in &options.policies {
         crate::benchmark::load::resolve(p).map_err(|source| ServeError::Policy { path: p.clone(), source })?;
     }

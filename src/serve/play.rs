@@ -7,10 +7,10 @@
 //! when the page goes away mid-episode the sends fail, the job stops rendering and the thread takes
 //! the next one.
 
-use crate::benchmark::load::{resolve, Named};
+use crate::benchmark::load::resolve;
 use crate::env::{BlockEnv, EnvConfig};
 use crate::episode::rollout::{play_episode, Event};
-use crate::policy::{Policy, RandomPolicy};
+use crate::policy::Policy;
 use crate::render::{Renderer, View};
 use crate::sim::mj::Data;
 use crate::task::Task;
@@ -122,9 +122,14 @@ impl Queue {
     }
 }
 
-fn png(image: &image::RgbImage) -> Result<Vec<u8>, String> {
+/// `env`'s current state drawn by `renderer` (through `data`, a state of the same model that the
+/// renderer may write its scene into), as a PNG.
+fn snapshot(env: &BlockEnv, renderer: &mut Renderer, data: &mut Data) -> Result<Vec<u8>, String> {
+    data.qpos_mut().copy_from_slice(env.data().qpos());
+    data.forward().map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
-    image
+    renderer
+        .render(data, None)
         .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageOutputFormat::Png)
         .map_err(|e| format!("encoding a frame: {e}"))?;
     Ok(bytes)
@@ -134,22 +139,14 @@ fn png(image: &image::RgbImage) -> Result<Vec<u8>, String> {
 fn setup(job: &Job) -> Result<(BlockEnv, Box<dyn Policy>), String> {
     let named = resolve(&job.policy).map_err(|e| format!("policy {}: {e}", job.policy_label))?;
     let mut config = EnvConfig::new(job.task.clone());
-    if let Named::Saved(_, saved) = &named {
-        config.obs_mode = saved.obs_mode();
-        config.slots = saved.slots().map_err(|e| format!("policy {}: {e}", job.policy_label))?;
-    }
+    named.fit(&mut config).map_err(|e| format!("policy {}: {e}", job.policy_label))?;
     let mut env = BlockEnv::new(config).map_err(|e| e.to_string())?;
     env.set_distribution(job.distribution.as_deref()).map_err(|e| e.to_string())?;
     let level = job.level.unwrap_or(env.max_level());
     env.set_level(level).map_err(|e| e.to_string())?;
-    let policy: Box<dyn Policy> = match named {
-        Named::Random => Box::new(RandomPolicy::new(job.seed)),
-        Named::Baseline(b) => b.policy(&env),
-        Named::Saved(path, saved) => Box::new(
-            crate::benchmark::evaluate::trained_policy(&path, saved, &env)
-                .map_err(|e| format!("policy {} cannot play {}: {e}", job.policy_label, job.task.id()))?,
-        ),
-    };
+    let policy = named
+        .into_player(&env, job.seed)
+        .map_err(|e| format!("policy {} cannot play {}: {e}", job.policy_label, job.task.id()))?;
     Ok((env, policy))
 }
 
@@ -175,9 +172,7 @@ fn run(job: &Job, out: &SyncSender<Msg>) -> Result<(), String> {
         env.reset(Some(job.seed)).map_err(|e| e.to_string())?;
         let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
         renderer.colour_objects(env.scene(), &colours, &env.absent_objects()).map_err(|e| e.to_string())?;
-        data.qpos_mut().copy_from_slice(env.data().qpos());
-        data.forward().map_err(|e| e.to_string())?;
-        let _ = out.send(Msg::Png(png(&renderer.render(&mut data, None))?));
+        let _ = out.send(Msg::Png(snapshot(&env, &mut renderer, &mut data)?));
         return Ok(());
     }
     let mut gone = false;
@@ -190,9 +185,7 @@ fn run(job: &Job, out: &SyncSender<Msg>) -> Result<(), String> {
         }
     };
     let frame = |env: &BlockEnv, renderer: &mut Renderer, data: &mut Data| -> Result<String, String> {
-        data.qpos_mut().copy_from_slice(env.data().qpos());
-        data.forward().map_err(|e| e.to_string())?;
-        let bytes = png(&renderer.render(data, None))?;
+        let bytes = snapshot(env, renderer, data)?;
         Ok(format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes)))
     };
     let played = play_episode(&mut env, policy.as_mut(), job.seed, |event| {
