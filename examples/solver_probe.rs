@@ -26,7 +26,10 @@
 //! out), acted with Gaussian noise of `--noise` on the solver's action (DART) and labelled with
 //! its clean action. Evaluation: `--eval-episodes` deterministic episodes per task from seed
 //! 2,000,000 (no suite's seeds). Everything is fixed by the arguments: the same command prints
-//! the same numbers.
+//! the same numbers. `--trace N` prints, for the solver and each student, one line per failed
+//! evaluation episode (the first N a family): a character a step for the phase the state is in
+//! (travelling, over a blue block, at it, holding it, over green; fingers open or not) and a digit
+//! where the count of blue blocks on green changes, which shows where a pick-and-place stalls.
 //!
 //! Usage: cargo run --release --example solver_probe -- --families push --tasks 16 \
 //!   --student base: --student wide:width=256
@@ -105,6 +108,10 @@ struct Args {
     /// libtorch threads.
     #[arg(long, default_value_t = 1)]
     torch_threads: usize,
+    /// Print the coarse phase trace (one character a step, [`phase_char`]) of the first N failed
+    /// evaluation episodes per family of the solver and of each student: where an episode stalls.
+    #[arg(long, default_value_t = 0)]
+    trace: usize,
     /// A student, `NAME:key=value,...` (see the file's header); repeat for more.
     #[arg(long, required = true)]
     student: Vec<String>,
@@ -238,6 +245,32 @@ fn main() -> Result<()> {
     for (f, (name, _)) in families.iter().enumerate() {
         for (p, (tally, _)) in per_family[f].iter().enumerate() {
             println!("{name} {}: not successful: {}", header[p], tally.summary());
+        }
+    }
+    if args.trace > 0 {
+        println!("\nphase traces of failed episodes (. travel, D over a blue not on green, C at a blue not holding, H holding a blue, G over green not holding; `,` and `g`: `.` and `G` with the fingers not open; a digit: blues on green changed to it; the last: the outcome)");
+        for (name, _) in &families {
+            let of: Vec<&Task> = tasks.iter().filter(|(f, _)| f == name).map(|(_, t)| t).collect();
+            for (player, who) in header.iter().enumerate() {
+                let mut shown = 0;
+                'tasks: for t in &of {
+                    let mut env = make_env(t, slots)?;
+                    let mut p: Box<dyn Policy> = match player {
+                        0 => Box::new(ScriptedPolicy::solver(slots)),
+                        k => policies[k - 1](family_of(name)),
+                    };
+                    for seed in EVAL_SEED..EVAL_SEED + args.eval_episodes {
+                        let (success, trace) = trace_episode(&mut env, p.as_mut(), seed, slots)?;
+                        if !success {
+                            println!("{name} {who} {} seed {seed}: {trace}", t.id());
+                            shown += 1;
+                            if shown >= args.trace {
+                                break 'tasks;
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
     println!("\nwall time {:.1} s", started.elapsed().as_secs_f64());
@@ -707,6 +740,83 @@ fn evaluate(task: &Task, slots: usize, policy: &mut dyn Policy, episodes: u64) -
         tally.add(Outcome::of(&ep));
     }
     Ok((tally, steps))
+}
+
+/// One episode of `policy`: whether it succeeded, and its coarse phase trace ([`phase_char`]).
+fn trace_episode(env: &mut BlockEnv, policy: &mut dyn Policy, seed: u64, slots: usize) -> Result<(bool, String)> {
+    let spec = ObsSpec::new(ObsMode::Entities, slots);
+    let (mut trace, mut success, mut failure, mut placed) = (String::new(), false, false, 0);
+    play_episode(env, policy, seed, |event| {
+        if let Event::Step { obs, step, .. } = event {
+            let (c, on) = phase_char(&spec, obs);
+            if on != placed {
+                trace.push_str(&on.to_string());
+                placed = on;
+            }
+            trace.push(c);
+            success |= step.info.is_success;
+            failure |= step.info.is_failure;
+        }
+    })?;
+    let end = if success {
+        "success"
+    } else if failure {
+        "red touched blue"
+    } else {
+        "no verdict"
+    };
+    Ok((success, format!("{trace} {end}")))
+}
+
+/// A coarse phase of a pick-and-place state, read off `obs` as the solver reads it: `H` holding a
+/// blue block (the grip within 2 cm of it, fingers closed on something), `C` at a blue block not
+/// holding it, `D` within 1.5 cm above a blue block not on green, `G` over the green block, `.`
+/// elsewhere; and how many blue blocks sit on green. A diagnostic only (not the solver's phases).
+fn phase_char(spec: &ObsSpec, obs: &[f32]) -> (char, usize) {
+    let size_at = blockpuzzle::env::OBJECT_FEATURES.len();
+    let present = |k: usize| spec.mask(obs).map_or(true, |m| m.get(k).is_some_and(|&v| v > 0.5));
+    let rows: Vec<(usize, [f64; 3], [f64; 3])> = spec
+        .objects(obs)
+        .enumerate()
+        .filter(|&(k, r)| present(k) && ObsSpec::colour(r).iter().any(|&v| v > 0.5))
+        .map(|(_, r)| {
+            let hot = ObsSpec::colour(r);
+            let c = (0..hot.len()).max_by(|&i, &j| hot[i].total_cmp(&hot[j])).unwrap_or(3);
+            (c, std::array::from_fn(|k| r[k] as f64), std::array::from_fn(|k| r[size_at + k] as f64))
+        })
+        .collect();
+    let grip = [obs[0] as f64, obs[1] as f64, obs[2] as f64];
+    let aperture = (obs[3] + obs[4]) as f64;
+    let xy = |a: [f64; 3], b: [f64; 3]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let green = rows.iter().find(|r| r.0 == 2);
+    let on_green = |p: [f64; 3], s: [f64; 3]| {
+        green.is_some_and(|&(_, g, gs)| {
+            (p[0] - g[0]).abs() < gs[0] && (p[1] - g[1]).abs() < gs[1] && (p[2] - g[2] - gs[2] - s[2]).abs() < 0.006
+        })
+    };
+    let blues: Vec<&(usize, [f64; 3], [f64; 3])> = rows.iter().filter(|r| r.0 == 1).collect();
+    let placed = blues.iter().filter(|b| on_green(b.1, b.2)).count();
+    let at = |b: &&(usize, [f64; 3], [f64; 3])| xy(grip, b.1) < 0.02 && (grip[2] - b.1[2]).abs() < 0.02;
+    let c = if blues.iter().any(|b| at(b) && (0.02..0.07).contains(&aperture)) {
+        'H'
+    } else if blues.iter().any(at) {
+        'C'
+    } else if blues.iter().any(|b| !on_green(b.1, b.2) && xy(grip, b.1) < 0.015 && grip[2] > b.1[2]) {
+        'D'
+    } else if green
+        .is_some_and(|&(_, g, gs)| (grip[0] - g[0]).abs() < gs[0] + 0.03 && (grip[1] - g[1]).abs() < gs[1] + 0.03)
+    {
+        if aperture < 0.07 {
+            'g'
+        } else {
+            'G'
+        }
+    } else if aperture < 0.07 {
+        ','
+    } else {
+        '.'
+    };
+    (c, placed)
 }
 
 /// Success with its Wilson 95% interval and the median steps of the successes.

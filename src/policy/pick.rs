@@ -3,7 +3,7 @@
 //! block is held is read off the fingers (closed on something and at rest, around the block), and
 //! whether a block is being let go off the blocks on green and the fingers' aperture.
 
-use super::{nearest, toward, xy_dist, Seen, SeenBlock, ACTION_DIM};
+use super::{nearest, smoothstep, toward, xy_dist, Seen, SeenBlock, ACTION_DIM};
 use crate::sim::rules::Colour;
 
 /// Finger aperture (the two finger joints' sum) above which the fingers count as open.
@@ -37,28 +37,38 @@ fn holds(seen: &Seen, at: [f64; 3]) -> bool {
     around(seen, at) && (EMPTY..OPEN).contains(&a) && still
 }
 
+/// Within this distance (in the plane) of the block's centre the grip comes all the way down; beyond
+/// [`FUNNEL_WIDE`] it stays above the block; between, its height is a smooth step of the distance.
+const FUNNEL_NARROW: f64 = 0.012;
+const FUNNEL_WIDE: f64 = 0.025;
+/// Down at the block and within this distance of its centre, the fingers close. Open, the fingers
+/// are 10 cm apart and the blocks at most 6 cm wide; the arm near the far edge of its reach can
+/// settle a centimetre off the target, so the grasp must not ask for less.
+const CLOSE_WITHIN: f64 = 0.02;
+
 /// Open above the block at `at` (travelling no lower than `travel_z`), come down around it and
-/// close. Whether it is held is [`holds`]'s to say, from what the fingers show.
+/// close. Whether it is held is [`holds`]'s to say, from what the fingers show. The way down is a
+/// funnel: the grip's height is a smooth step of how far it is from the block's centre, so that the
+/// action is a continuous function of where the grip is (a threshold here left the arm hovering a
+/// few millimetres out, or rising and coming down again as closing fingers nudged it).
 fn grasp(seen: &Seen, at: [f64; 3], travel_z: f64) -> [f32; ACTION_DIM] {
     let grip = seen.grip;
     let open = aperture(seen) > OPEN;
-    if xy_dist(grip, at) > 0.008 {
-        // Above the block, fingers opening.
-        let z = (at[2] + 0.06).max(grip[2].min(at[2] + 0.08)).max(travel_z);
-        return with(toward(grip, [at[0], at[1], z]), 1.0);
+    let off = xy_dist(grip, at);
+    if grip[2] <= at[2] + 0.005 && off < CLOSE_WITHIN {
+        // Down around it: close until the fingers rest on the block. Fingers that closed on nothing,
+        // or are opening again after that, open all the way first.
+        let opening = seen.finger_vel[0] + seen.finger_vel[1] > AT_REST;
+        let empty = aperture(seen) < EMPTY;
+        if (empty || opening) && !open {
+            return with([0.0; ACTION_DIM], 1.0);
+        }
+        return with([0.0; ACTION_DIM], -1.0);
     }
-    if grip[2] > at[2] + 0.005 {
-        // Over it: open, then come down.
-        return if open { with(toward(grip, at), 1.0) } else { with([0.0; ACTION_DIM], 1.0) };
-    }
-    // Down around it: close until the fingers rest on the block. Fingers that closed on nothing,
-    // or are opening again after that, open all the way first.
-    let opening = seen.finger_vel[0] + seen.finger_vel[1] > AT_REST;
-    let empty = aperture(seen) < EMPTY;
-    if (empty || opening) && !open {
-        return with([0.0; ACTION_DIM], 1.0);
-    }
-    with([0.0; ACTION_DIM], -1.0)
+    // Above the block, fingers opening; coming down as the grip centres on it, once they are open.
+    let high = (at[2] + 0.06).max(grip[2].min(at[2] + 0.08)).max(travel_z);
+    let down = if open { 1.0 - smoothstep(off, FUNNEL_NARROW, FUNNEL_WIDE) } else { 0.0 };
+    with(toward(grip, [at[0], at[1], high + (at[2] - high) * down]), 1.0)
 }
 
 /// Open, come down around blue, close, lift, carry above green, lower onto it (success ends the
@@ -90,7 +100,7 @@ pub(super) fn pick_place(seen: &Seen) -> [f32; ACTION_DIM] {
     with(toward(grip, [grip[0], grip[1], green[2] + 0.05 - 0.01]), -1.0)
 }
 
-/// Each blue block in turn: the one held, else the one nearest the gripper of those not on green yet
+/// Each blue block in turn: the one held, else the one with the least y of those not on green yet
 /// (by where the blocks are, not by their order in the observation).
 /// Pick it up, carry it above green high enough to pass over the blocks already there, set it down
 /// on a free corner of green's top, open the fingers and rise straight up clear of it. Gripper
@@ -144,7 +154,13 @@ pub(super) fn gather(seen: &Seen) -> [f32; ACTION_DIM] {
         }
         return with(toward(grip, [grip[0], grip[1], top + bh - 0.01]), -1.0);
     }
-    let Some(next) = nearest(blocks, Colour::Blue, grip, |b| !on_green(b)) else {
+    // The next blue block: the one with the least y (then x) of those not on green. A fixed order
+    // of where the blocks are, not the nearest to the gripper, so the choice does not waver as the
+    // gripper moves, and blocks at like distances are not averaged into a way between them.
+    let next = blues.iter().copied().filter(|b| !on_green(b)).min_by(|a, b| {
+        a.pos[1].total_cmp(&b.pos[1]).then(a.pos[0].total_cmp(&b.pos[0])).then(a.pos[2].total_cmp(&b.pos[2]))
+    });
+    let Some(next) = next else {
         return with([0.0; ACTION_DIM], 1.0); // all there (success ends the episode)
     };
     // Over green (and the blocks set down there) and not at the next block: pass above them,

@@ -3,7 +3,7 @@
 //! waypoint chosen afresh at every step from where the blocks are; with a red gripper, always green
 //! onto blue.
 
-use super::{nearest, seg_dist, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, SAFE_Z, STANDOFF};
+use super::{nearest, seg_dist, smoothstep, toward, xy_dist, Seen, ACTION_DIM, GAIN, PUSH_Z, SAFE_Z, STANDOFF};
 use crate::sim::rules::Colour;
 
 /// Push blue against green (grey gripper, blocked fingers; the green block nearest blue), around
@@ -118,12 +118,6 @@ fn waypoint(blue: [f64; 3], green: [f64; 3], reds: &[[f64; 3]]) -> Option<[f64; 
         Some((ok, clear, _, w)) if ok || clear > (direct * 100.0).floor() => Some(w),
         _ => None,
     }
-}
-
-/// 0 below `a`, 1 above `b`, and a smooth (cubic) step between.
-fn smoothstep(x: f64, a: f64, b: f64) -> f64 {
-    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 /// Push `mover` towards `target`: get behind it (over the blocks when not already behind), line
