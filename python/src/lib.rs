@@ -302,10 +302,7 @@ impl Env {
         };
         let renderer = renderer.get("render()")?;
         // Colours move between episodes when the task shuffles roles.
-        let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-        renderer
-            .colour_objects(env.scene(), &colours, &env.absent_objects())
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        renderer.colour_env(env).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let image = renderer.render(env.data_mut(), None);
         let (w, h) = (image.width() as usize, image.height() as usize);
         Ok(PyArray1::from_vec(py, image.into_raw()).reshape([h, w, 3])?.into_any())

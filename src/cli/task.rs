@@ -169,8 +169,7 @@ pub(super) fn check(a: TaskCheckArgs) -> Result<()> {
             if env.reset(Some(a.seed)).is_err() {
                 continue;
             }
-            let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-            renderer.colour_objects(env.scene(), &colours, &env.absent_objects())?;
+            renderer.colour_env(&env)?;
             frames.push(renderer.render(env.data_mut(), Some((&format!("{}\n{label}", task.id()), ""))));
         }
         let n = frames.len();

@@ -251,6 +251,16 @@ impl Renderer {
         Ok(())
     }
 
+    /// [`Renderer::colour_objects`] with `env`'s objects as its episode shows them: their colours
+    /// (which move between episodes where a task shuffles roles) and the objects absent from it.
+    ///
+    /// # Errors
+    /// A scene without the BlockPuzzle materials.
+    pub fn colour_env(&mut self, env: &crate::env::BlockEnv) -> Result<(), crate::sim::mj::MjError> {
+        let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
+        self.colour_objects(env.scene(), &colours, &env.absent_objects())
+    }
+
     /// The frame size and camera.
     pub fn view(&self) -> &View {
         &self.view

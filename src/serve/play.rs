@@ -170,8 +170,7 @@ fn run(job: &Job, out: &SyncSender<Msg>) -> Result<(), String> {
     let mut data = Data::new(Arc::clone(&model)).map_err(|e| e.to_string())?;
     if job.still {
         env.reset(Some(job.seed)).map_err(|e| e.to_string())?;
-        let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-        renderer.colour_objects(env.scene(), &colours, &env.absent_objects()).map_err(|e| e.to_string())?;
+        renderer.colour_env(&env).map_err(|e| e.to_string())?;
         let _ = out.send(Msg::Png(snapshot(&env, &mut renderer, &mut data)?));
         return Ok(());
     }
@@ -194,12 +193,11 @@ fn run(job: &Job, out: &SyncSender<Msg>) -> Result<(), String> {
         }
         match event {
             Event::Reset { env, .. } => {
-                let colours: Vec<_> = env.objects().iter().map(|o| o.colour).collect();
-                let absent = env.absent_objects();
-                if let Err(e) = renderer.colour_objects(env.scene(), &colours, &absent) {
+                if let Err(e) = renderer.colour_env(env) {
                     failed = Some(e.to_string());
                     return;
                 }
+                let absent = env.absent_objects();
                 names = env.objects().iter().map(|o| o.name.clone()).collect();
                 let objects: Vec<_> = env
                     .objects()
