@@ -215,6 +215,13 @@ fn main() -> Result<()> {
     println!("|---|{}", "---:|".repeat(header.len()));
     type Frozen = Box<dyn Fn(usize) -> Box<dyn Policy> + Sync>;
     let policies: Vec<Frozen> = students.iter().map(Student::frozen).collect();
+    // Player 0 is the solver, player k the k-th student, each as it acts on a task of family `name`.
+    let player_of = |player: usize, name: &str| -> Box<dyn Policy> {
+        match player {
+            0 => Box::new(ScriptedPolicy::solver(slots)),
+            k => policies[k - 1](family_of(name)),
+        }
+    };
     let mut per_family: Vec<Vec<(Outcomes, Vec<usize>)>> = Vec::new();
     for (name, _) in &families {
         let of: Vec<&Task> = tasks.iter().filter(|(f, _)| f == name).map(|(_, t)| t).collect();
@@ -223,10 +230,7 @@ fn main() -> Result<()> {
             let results: Vec<(Outcomes, Vec<usize>)> = of
                 .par_iter()
                 .map(|t| {
-                    let mut p: Box<dyn Policy> = match player {
-                        0 => Box::new(ScriptedPolicy::solver(slots)),
-                        k => policies[k - 1](family_of(name)),
-                    };
+                    let mut p = player_of(player, name);
                     evaluate(t, slots, p.as_mut(), args.eval_episodes)
                 })
                 .collect::<Result<_>>()?;
@@ -255,10 +259,7 @@ fn main() -> Result<()> {
                 let mut shown = 0;
                 'tasks: for t in &of {
                     let mut env = make_env(t, slots)?;
-                    let mut p: Box<dyn Policy> = match player {
-                        0 => Box::new(ScriptedPolicy::solver(slots)),
-                        k => policies[k - 1](family_of(name)),
-                    };
+                    let mut p = player_of(player, name);
                     for seed in EVAL_SEED..EVAL_SEED + args.eval_episodes {
                         let (success, trace) = trace_episode(&mut env, p.as_mut(), seed, slots)?;
                         if !success {
