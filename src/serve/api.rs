@@ -366,6 +366,35 @@ pub fn check_text(text: &str, origin: &str, samples: u64) -> Value {
     }
 }
 
+/// One policy's row of a board: its numbers (recomputed from the first of its files, which all agree),
+/// the files and the test episodes it failed.
+fn board_row(same: &[&results::ResultFile]) -> Value {
+    let r = &same[0].result;
+    let (done, all) = r.coverage();
+    let train = r.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success);
+    let ci = results::score_interval(r);
+    let failures: Vec<Value> = r
+        .splits
+        .iter()
+        .filter(|s| s.name == r.scored_split())
+        .flat_map(|s| {
+            s.rows.iter().enumerate().filter_map(move |(k, row)| {
+                let e = row.evaluation.as_ref()?;
+                (e.successes < e.episodes).then(|| {
+                    json!({ "split": s.name, "row": k, "task": row.task, "seed": row.seed,
+                            "episodes": e.episodes, "successes": e.successes })
+                })
+            })
+        })
+        .collect();
+    let files: Vec<String> =
+        same.iter().filter_map(|f| f.path.file_name().map(|n| n.to_string_lossy().into_owned())).collect();
+    json!({
+        "policy": r.policy, "score": r.score, "ci": ci.map(|(lo, hi)| [lo, hi]), "train": train, "gap": r.gap,
+        "rows": done, "of": all, "files": files, "failures": failures,
+    })
+}
+
 fn leaderboard(folders: &[PathBuf]) -> Value {
     let mut errors = Vec::new();
     let mut files = Vec::new();
@@ -385,35 +414,17 @@ fn leaderboard(folders: &[PathBuf]) -> Value {
             }
         }
     }
-    let mut boards: std::collections::BTreeMap<(String, String), Vec<Value>> = Default::default();
-    for f in &files {
-        let r = &f.result;
-        let (done, all) = r.coverage();
-        let train = r.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success);
-        let ci = results::score_interval(r);
-        let weakest: Vec<Value> = r
-            .splits
-            .iter()
-            .filter(|s| s.name == r.scored_split())
-            .flat_map(|s| {
-                s.rows.iter().enumerate().filter_map(move |(k, row)| {
-                    let e = row.evaluation.as_ref()?;
-                    (e.successes < e.episodes).then(|| {
-                        json!({ "split": s.name, "row": k, "task": row.task, "seed": row.seed,
-                                "episodes": e.episodes, "successes": e.successes })
-                    })
-                })
-            })
-            .collect();
-        boards.entry((r.suite.name.clone(), r.provenance.build.mujoco.clone())).or_default().push(json!({
-            "policy": r.policy, "score": r.score, "ci": ci.map(|(lo, hi)| [lo, hi]), "train": train, "gap": r.gap,
-            "rows": done, "of": all, "file": f.path.file_name().map(|n| n.to_string_lossy().into_owned()),
-            "failures": weakest,
-        }));
+    // The leaderboard's own grouping and ranking, conflict check included: a board whose policy has
+    // two different numbers is an error here as on the command line; the other boards stand.
+    let mut boards = Vec::new();
+    for board in results::boards(&files) {
+        match board {
+            Ok(b) => boards.push(json!({
+                "suite": b.suite, "engine": b.mujoco, "sha256": b.sha256,
+                "rows": b.policies.iter().map(|same| board_row(same)).collect::<Vec<_>>(),
+            })),
+            Err(e) => errors.push(e.to_string()),
+        }
     }
-    let boards: Vec<Value> = boards
-        .into_iter()
-        .map(|((suite, engine), rows)| json!({ "suite": suite, "engine": engine, "rows": rows }))
-        .collect();
     json!({ "boards": boards, "errors": errors, "folders": folders })
 }
