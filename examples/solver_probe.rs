@@ -30,6 +30,9 @@
 //! evaluation episode (the first N a family): a character a step for the phase the state is in
 //! (travelling, over a blue block, at it, holding it, over green; fingers open or not) and a digit
 //! where the count of blue blocks on green changes, which shows where a pick-and-place stalls.
+//! Each DAgger round prints its rows by that phase (the student's mean action beside the solver's
+//! mean label), and the last steps of the first failed episode of the first two tasks, what the
+//! student played beside what the solver labels there.
 //!
 //! Usage: cargo run --release --example solver_probe -- --families push --tasks 16 \
 //!   --student base: --student wide:width=256
@@ -187,8 +190,10 @@ fn main() -> Result<()> {
             let player = s.frozen();
             let parts: Vec<(Data, usize)> = tasks
                 .par_iter()
-                .map(|(f, t)| {
-                    dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player(family_of(f)))
+                .enumerate()
+                .map(|(i, (f, t))| {
+                    let show = (i < 2).then_some(i);
+                    dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player(family_of(f)), show)
                 })
                 .collect::<Result<_>>()?;
             let mut data = Data::default();
@@ -203,6 +208,7 @@ fn main() -> Result<()> {
                 s.spec.name,
                 data.len()
             );
+            phase_labels(&spec, &data);
             s.add(&data);
         }
         fit(&mut students, args.dagger_steps, args.batch, &mut rng, &val_x, &val_y, &val_f);
@@ -328,15 +334,44 @@ fn dagger_episodes(
     (family, task): (usize, &Task),
     slots: usize,
     mut policy: Box<dyn Policy>,
+    show: Option<usize>,
 ) -> Result<(Data, usize)> {
     let mut env = make_env(task, slots)?;
     let labeller = ScriptedPolicy::solver(slots);
     let (mut data, mut wins) = (Data::default(), 0);
     let first = DAGGER_SEED + round as u64 * episodes;
     for seed in first..first + episodes {
+        let start = data.len();
         let success = record(&mut env, policy.as_mut(), seed, (&labeller, family), &mut data)
             .with_context(|| format!("{} DAgger episode {seed}", task.id()))?;
         wins += usize::from(success);
+        if let (Some(i), false, true) = (show, success, wins + 1 == (seed - first + 1) as usize) {
+            // The first failed episode of the first tasks, its last steps: what the student played
+            // and what the solver labels there.
+            let spec = ObsSpec::new(ObsMode::Entities, slots);
+            let dim = spec.dim();
+            let mut text = format!("  task {i}, {} DAgger episode {seed} (failed), its last 16 steps: phase, grip z, aperture, finger speed; played; label\n", task.id());
+            for r in data.len().saturating_sub(16).max(start)..data.len() {
+                let obs = &data.obs[r * dim..(r + 1) * dim];
+                let row = |v: &[f32]| {
+                    v[r * ACTION_DIM..(r + 1) * ACTION_DIM]
+                        .iter()
+                        .map(|x| format!("{x:+.2}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                };
+                text += &format!(
+                    "    {} {:.3} {:.4} {:.4}   {}   {}\n",
+                    phase_char(&spec, obs).0,
+                    obs[2],
+                    obs[3] + obs[4],
+                    obs[8].abs() + obs[9].abs(),
+                    row(&data.played),
+                    row(&data.act)
+                );
+            }
+            print!("{text}");
+        }
     }
     Ok((data, wins))
 }
@@ -348,6 +383,8 @@ struct Data {
     act: Vec<f32>,
     /// Each row's family (its index in `--families`).
     family: Vec<usize>,
+    /// The action played in each row (the labeller's own under no noise; a student's in DAgger).
+    played: Vec<f32>,
 }
 
 impl Data {
@@ -358,6 +395,7 @@ impl Data {
         self.obs.extend(other.obs);
         self.act.extend(other.act);
         self.family.extend(other.family);
+        self.played.extend(other.played);
     }
     fn actions(&self) -> Tensor {
         Tensor::of_slice(&self.act).view([-1, ACTION_DIM as i64])
@@ -427,9 +465,10 @@ fn record(
 ) -> Result<bool> {
     let mut success = false;
     play_episode(env, policy, seed, |event| {
-        if let Event::Step { obs, step, .. } = event {
+        if let Event::Step { obs, step, action, .. } = event {
             data.obs.extend_from_slice(obs);
             data.act.extend_from_slice(&labeller.decide(obs).0);
+            data.played.extend_from_slice(action);
             data.family.push(family);
             success |= step.info.is_success;
         }
@@ -818,6 +857,57 @@ fn phase_char(spec: &ObsSpec, obs: &[f32]) -> (char, usize) {
         '.'
     };
     (c, placed)
+}
+
+/// DAgger's rows by [`phase_char`]: how many, the mean action the student played and the mean label
+/// the solver gave (x, y, z, gripper), and the share of rows whose gripper command has the other sign.
+fn phase_labels(spec: &ObsSpec, data: &Data) {
+    let dim = spec.dim();
+    let mut by: std::collections::BTreeMap<char, (usize, [f64; ACTION_DIM], [f64; ACTION_DIM], usize)> =
+        Default::default();
+    for r in 0..data.len() {
+        let (c, _) = phase_char(spec, &data.obs[r * dim..(r + 1) * dim]);
+        let e = by.entry(c).or_default();
+        e.0 += 1;
+        for k in 0..ACTION_DIM {
+            e.1[k] += f64::from(data.played[r * ACTION_DIM + k]);
+            e.2[k] += f64::from(data.act[r * ACTION_DIM + k]);
+        }
+        e.3 += usize::from((data.played[r * ACTION_DIM + 3] > 0.0) != (data.act[r * ACTION_DIM + 3] > 0.0));
+    }
+    println!("  phase   rows   played (x y z grip)            label (x y z grip)             grip sign differs");
+    for (c, (n, played, label, flips)) in by {
+        let mean = |v: [f64; ACTION_DIM]| v.map(|x| format!("{:+.2}", x / n as f64)).join(" ");
+        println!("  {c}     {n:>6}   {}   {}   {:.2}", mean(played), mean(label), flips as f64 / n as f64);
+    }
+    // The holding rows by the label's height command: what the fingers show in each.
+    let mut buckets = [(0usize, 0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
+    for r in 0..data.len() {
+        let obs = &data.obs[r * dim..(r + 1) * dim];
+        if phase_char(spec, obs).0 != 'H' {
+            continue;
+        }
+        let (z, g) = (data.act[r * ACTION_DIM + 2], data.act[r * ACTION_DIM + 3]);
+        let b = &mut buckets[if z < -0.1 {
+            0
+        } else if z <= 0.1 {
+            1
+        } else {
+            2
+        }];
+        b.0 += 1;
+        b.1 += f64::from(obs[8].abs() + obs[9].abs());
+        b.2 += f64::from(obs[8] + obs[9]);
+        b.3 += f64::from(obs[3] + obs[4]);
+        b.4 += f64::from(g);
+    }
+    println!(
+        "  H rows by the label's z: rows, mean finger speed |v1|+|v2|, mean v1+v2, mean aperture, mean label grip"
+    );
+    for (name, (n, speed, vel, aperture, g)) in ["z < -0.1", "|z| <= 0.1", "z > 0.1"].iter().zip(buckets) {
+        let m = |v: f64| v / n.max(1) as f64;
+        println!("  {name:<11} {n:>6}   {:.4}   {:+.4}   {:.4}   {:+.2}", m(speed), m(vel), m(aperture), m(g));
+    }
 }
 
 /// Success with its Wilson 95% interval and the median steps of the successes.
