@@ -223,25 +223,28 @@ fn compare_refuses_other_engines_and_suites_naming_the_field() {
 
     // The app's leaderboard groups as the command line does: two copies of one result are one row
     // naming both files; a conflicting third makes that board an error naming the files.
-    use blockpuzzle::serve::{api::Catalogue, files::Roots};
-    let served = dir.path().join("served");
-    std::fs::create_dir(&served).unwrap();
-    std::fs::copy(&a, served.join("a.json")).unwrap();
-    std::fs::copy(&a, served.join("a-again.json")).unwrap();
-    let board = || {
-        let roots = Roots::new(std::slice::from_ref(&served)).unwrap();
-        Catalogue::new(roots, &[], vec![served.clone()]).leaderboard().body
-    };
-    let lb = board();
-    assert_eq!(lb["errors"], serde_json::json!([]), "{lb}");
-    let rows = lb["boards"][0]["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 1, "{lb}");
-    assert_eq!(rows[0]["files"], serde_json::json!(["a-again.json", "a.json"]), "{lb}");
-    std::fs::copy(&b, served.join("other.json")).unwrap();
-    let lb = board();
-    assert_eq!(lb["boards"], serde_json::json!([]), "{lb}");
-    let e = lb["errors"][0].as_str().unwrap();
-    assert!(e.contains("different outcome counts") && e.contains("other.json"), "{lb}");
+    #[cfg(feature = "serve")]
+    {
+        use blockpuzzle::serve::{api::Catalogue, files::Roots};
+        let served = dir.path().join("served");
+        std::fs::create_dir(&served).unwrap();
+        std::fs::copy(&a, served.join("a.json")).unwrap();
+        std::fs::copy(&a, served.join("a-again.json")).unwrap();
+        let board = || {
+            let roots = Roots::new(std::slice::from_ref(&served)).unwrap();
+            Catalogue::new(roots, &[], vec![served.clone()]).leaderboard().body
+        };
+        let lb = board();
+        assert_eq!(lb["errors"], serde_json::json!([]), "{lb}");
+        let rows = lb["boards"][0]["rows"].as_array().unwrap();
+        assert_eq!(rows.len(), 1, "{lb}");
+        assert_eq!(rows[0]["files"], serde_json::json!(["a-again.json", "a.json"]), "{lb}");
+        std::fs::copy(&b, served.join("other.json")).unwrap();
+        let lb = board();
+        assert_eq!(lb["boards"], serde_json::json!([]), "{lb}");
+        let e = lb["errors"][0].as_str().unwrap();
+        assert!(e.contains("different outcome counts") && e.contains("other.json"), "{lb}");
+    }
 }
 
 #[test]
