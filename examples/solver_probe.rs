@@ -40,7 +40,7 @@
 
 use anyhow::{bail, Context, Result};
 use blockpuzzle::benchmark::stream::{self, SeedRange};
-use blockpuzzle::env::{EnvConfig, ObsMode, ObsSpec, ACTION_DIM};
+use blockpuzzle::env::{EnvConfig, ObsMode, ObsSpec, ACTION_DIM, ROBOT_OBS};
 use blockpuzzle::episode::outcome::{wilson95, Outcome, Outcomes};
 use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind, Pooling};
@@ -108,6 +108,11 @@ struct Args {
     /// Gradient steps after each DAgger round.
     #[arg(long, default_value_t = 3000)]
     dagger_steps: usize,
+    /// Label every row with the mean of the solver's actions at the gripper moved by 0 and by ±SMOOTH
+    /// metres along each axis (seven observations; the object rows' relative positions follow): a
+    /// teacher smoothed over a few millimetres around each state. 0: the solver's own action.
+    #[arg(long, default_value_t = 0.0)]
+    smooth: f64,
     /// libtorch threads.
     #[arg(long, default_value_t = 1)]
     torch_threads: usize,
@@ -193,7 +198,15 @@ fn main() -> Result<()> {
                 .enumerate()
                 .map(|(i, (f, t))| {
                     let show = (i < 2).then_some(i);
-                    dagger_episodes(args.dagger_episodes, round, (family_of(f), t), slots, player(family_of(f)), show)
+                    let labeller = Labeller::new(slots, args.smooth);
+                    dagger_episodes(
+                        args.dagger_episodes,
+                        round,
+                        (family_of(f), t),
+                        &labeller,
+                        player(family_of(f)),
+                        show,
+                    )
                 })
                 .collect::<Result<_>>()?;
             let mut data = Data::default();
@@ -332,17 +345,17 @@ fn dagger_episodes(
     episodes: u64,
     round: usize,
     (family, task): (usize, &Task),
-    slots: usize,
+    labeller: &Labeller,
     mut policy: Box<dyn Policy>,
     show: Option<usize>,
 ) -> Result<(Data, usize)> {
+    let slots = labeller.slots;
     let mut env = make_env(task, slots)?;
-    let labeller = ScriptedPolicy::solver(slots);
     let (mut data, mut wins) = (Data::default(), 0);
     let first = DAGGER_SEED + round as u64 * episodes;
     for seed in first..first + episodes {
         let start = data.len();
-        let success = record(&mut env, policy.as_mut(), seed, (&labeller, family), &mut data)
+        let success = record(&mut env, policy.as_mut(), seed, (labeller, family), &mut data)
             .with_context(|| format!("{} DAgger episode {seed}", task.id()))?;
         wins += usize::from(success);
         if let (Some(i), false, true) = (show, success, wins + 1 == (seed - first + 1) as usize) {
@@ -443,7 +456,7 @@ fn collect(args: &Args, index: u64, family: usize, task: &Task, slots: usize) ->
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
     rng.set_stream(1000 + index);
     let mut actor = Noisy { solver: ScriptedPolicy::solver(slots), noise, rng };
-    let labeller = ScriptedPolicy::solver(slots);
+    let labeller = Labeller::new(slots, args.smooth);
     let (mut train, mut val, mut wins) = (Data::default(), Data::default(), 0);
     for seed in 0..args.episodes {
         let data = if seed % VALIDATION_EVERY == 0 { &mut val } else { &mut train };
@@ -454,20 +467,60 @@ fn collect(args: &Args, index: u64, family: usize, task: &Task, slots: usize) ->
     Ok((train, val, wins, args.episodes as usize))
 }
 
+/// The solver as the rows' labeller, its action smoothed over `smooth` metres of the gripper's place
+/// (`--smooth`).
+struct Labeller {
+    solver: ScriptedPolicy,
+    spec: ObsSpec,
+    slots: usize,
+    smooth: f64,
+}
+
+impl Labeller {
+    fn new(slots: usize, smooth: f64) -> Self {
+        Labeller { solver: ScriptedPolicy::solver(slots), spec: ObsSpec::new(ObsMode::Entities, slots), slots, smooth }
+    }
+
+    fn label(&self, obs: &[f32]) -> [f32; ACTION_DIM] {
+        if self.smooth == 0.0 {
+            return self.solver.decide(obs).0;
+        }
+        let rel = blockpuzzle::env::OBJECT_FEATURES.iter().position(|f| *f == "rel_pos.x").unwrap_or(3);
+        let (dim, rows) = (self.spec.object_dim(), self.spec.rows());
+        let mut sum = [0.0f64; ACTION_DIM];
+        let mut moved = obs.to_vec();
+        let offsets = std::iter::once((0, 0.0)).chain((0..3).flat_map(|k| [(k, self.smooth), (k, -self.smooth)]));
+        let mut n = 0;
+        for (axis, by) in offsets {
+            moved.copy_from_slice(obs);
+            moved[axis] += by as f32;
+            for r in 0..rows {
+                moved[ROBOT_OBS + r * dim + rel + axis] -= by as f32;
+            }
+            let a = self.solver.decide(&moved).0;
+            for k in 0..ACTION_DIM {
+                sum[k] += f64::from(a[k]);
+            }
+            n += 1;
+        }
+        sum.map(|v| (v / n as f64) as f32)
+    }
+}
+
 /// Episode `seed` played by `policy`, every step's observation with `labeller`'s action (rows of
 /// `family`) added to `data`; whether it succeeded.
 fn record(
     env: &mut BlockEnv,
     policy: &mut dyn Policy,
     seed: u64,
-    (labeller, family): (&ScriptedPolicy, usize),
+    (labeller, family): (&Labeller, usize),
     data: &mut Data,
 ) -> Result<bool> {
     let mut success = false;
     play_episode(env, policy, seed, |event| {
         if let Event::Step { obs, step, action, .. } = event {
             data.obs.extend_from_slice(obs);
-            data.act.extend_from_slice(&labeller.decide(obs).0);
+            data.act.extend_from_slice(&labeller.label(obs));
             data.played.extend_from_slice(action);
             data.family.push(family);
             success |= step.info.is_success;
