@@ -351,14 +351,15 @@ fn dagger_episodes(
 ) -> Result<(Data, usize)> {
     let slots = labeller.slots;
     let mut env = make_env(task, slots)?;
-    let (mut data, mut wins) = (Data::default(), 0);
+    let (mut data, mut wins, mut shown) = (Data::default(), 0, false);
     let first = DAGGER_SEED + round as u64 * episodes;
     for seed in first..first + episodes {
         let start = data.len();
         let success = record(&mut env, policy.as_mut(), seed, (labeller, family), &mut data)
             .with_context(|| format!("{} DAgger episode {seed}", task.id()))?;
         wins += usize::from(success);
-        if let (Some(i), false, true) = (show, success, wins + 1 == (seed - first + 1) as usize) {
+        if let (Some(i), false, false) = (show, success, shown) {
+            shown = true;
             // The first failed episode of the first tasks, its last steps: what the student played
             // and what the solver labels there.
             let spec = ObsSpec::new(ObsMode::Entities, slots);
@@ -918,41 +919,38 @@ fn phase_labels(spec: &ObsSpec, data: &Data) {
     let dim = spec.dim();
     let mut by: std::collections::BTreeMap<char, (usize, [f64; ACTION_DIM], [f64; ACTION_DIM], usize)> =
         Default::default();
+    // The holding rows by the label's height command: what the fingers show in each.
+    let mut buckets = [(0usize, 0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
     for r in 0..data.len() {
-        let (c, _) = phase_char(spec, &data.obs[r * dim..(r + 1) * dim]);
+        let obs = &data.obs[r * dim..(r + 1) * dim];
+        let (played, label) = (&data.played[r * ACTION_DIM..][..ACTION_DIM], &data.act[r * ACTION_DIM..][..ACTION_DIM]);
+        let (c, _) = phase_char(spec, obs);
         let e = by.entry(c).or_default();
         e.0 += 1;
         for k in 0..ACTION_DIM {
-            e.1[k] += f64::from(data.played[r * ACTION_DIM + k]);
-            e.2[k] += f64::from(data.act[r * ACTION_DIM + k]);
+            e.1[k] += f64::from(played[k]);
+            e.2[k] += f64::from(label[k]);
         }
-        e.3 += usize::from((data.played[r * ACTION_DIM + 3] > 0.0) != (data.act[r * ACTION_DIM + 3] > 0.0));
+        e.3 += usize::from((played[3] > 0.0) != (label[3] > 0.0));
+        if c == 'H' {
+            let b = &mut buckets[if label[2] < -0.1 {
+                0
+            } else if label[2] <= 0.1 {
+                1
+            } else {
+                2
+            }];
+            b.0 += 1;
+            b.1 += f64::from(obs[8].abs() + obs[9].abs());
+            b.2 += f64::from(obs[8] + obs[9]);
+            b.3 += f64::from(obs[3] + obs[4]);
+            b.4 += f64::from(label[3]);
+        }
     }
     println!("  phase   rows   played (x y z grip)            label (x y z grip)             grip sign differs");
     for (c, (n, played, label, flips)) in by {
         let mean = |v: [f64; ACTION_DIM]| v.map(|x| format!("{:+.2}", x / n as f64)).join(" ");
         println!("  {c}     {n:>6}   {}   {}   {:.2}", mean(played), mean(label), flips as f64 / n as f64);
-    }
-    // The holding rows by the label's height command: what the fingers show in each.
-    let mut buckets = [(0usize, 0.0f64, 0.0f64, 0.0f64, 0.0f64); 3];
-    for r in 0..data.len() {
-        let obs = &data.obs[r * dim..(r + 1) * dim];
-        if phase_char(spec, obs).0 != 'H' {
-            continue;
-        }
-        let (z, g) = (data.act[r * ACTION_DIM + 2], data.act[r * ACTION_DIM + 3]);
-        let b = &mut buckets[if z < -0.1 {
-            0
-        } else if z <= 0.1 {
-            1
-        } else {
-            2
-        }];
-        b.0 += 1;
-        b.1 += f64::from(obs[8].abs() + obs[9].abs());
-        b.2 += f64::from(obs[8] + obs[9]);
-        b.3 += f64::from(obs[3] + obs[4]);
-        b.4 += f64::from(g);
     }
     println!(
         "  H rows by the label's z: rows, mean finger speed |v1|+|v2|, mean v1+v2, mean aperture, mean label grip"

@@ -601,6 +601,11 @@ impl SuiteResult {
         scored_split_of(&self.splits)
     }
 
+    /// The train split's mean success (None when none of its rows was evaluated).
+    pub fn train_mean(&self) -> Option<f64> {
+        self.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success)
+    }
+
     /// Rows evaluated and rows in all.
     pub fn coverage(&self) -> (usize, usize) {
         self.splits

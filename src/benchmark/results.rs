@@ -495,7 +495,7 @@ pub fn leaderboard(files: &[ResultFile]) -> Result<String, ResultsError> {
         for (rank, same) in ranked.iter().enumerate() {
             let r = &same[0].result;
             let ci = score_interval(r).map_or_else(String::new, |(lo, hi)| format!(" [{lo:.3}, {hi:.3}]"));
-            let train = r.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success);
+            let train = r.train_mean();
             let (done, all) = r.coverage();
             let place = if done == all { (rank + 1).to_string() } else { "–".to_owned() };
             let mut harnesses: Vec<String> =

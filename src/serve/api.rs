@@ -371,7 +371,7 @@ pub fn check_text(text: &str, origin: &str, samples: u64) -> Value {
 fn board_row(same: &[&results::ResultFile]) -> Value {
     let r = &same[0].result;
     let (done, all) = r.coverage();
-    let train = r.splits.iter().find(|s| s.name == "train").and_then(|s| s.mean_success);
+    let train = r.train_mean();
     let ci = results::score_interval(r);
     let failures: Vec<Value> = r
         .splits
