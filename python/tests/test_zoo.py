@@ -122,6 +122,7 @@ def test_an_entry_gives_its_mode_kind_and_algorithm_from_its_fields(tmp_path):
     expected = {"generalist-bc-entity": ("entities", "bc"), "BlocksChoose-v0-dagger-entity": ("entities", "dagger"),
                 "BlocksChoose-v0-ddpg-ours": ("flat", "td3"), "BlocksChoose-v0-pggd": ("flat", "pggd")}
     assert zoo.load("generalist-bc-entity-v2", native=False).solver == 4
+    assert zoo.load("generalist-bc-entity-v3", native=False).solver == 5
     for name, (mode, algo) in expected.items():
         p = zoo.load(name, native=False)
         assert (p.version, p.obs_mode, p.algo) == (7, mode, algo), name
