@@ -601,7 +601,7 @@ pub(super) fn report(run_dirs: &[PathBuf], target: f64) -> Result<()> {
         }
         for s in &spans {
             let replay = s.replay.map(|r| format!("; {}", r.describe())).unwrap_or_default();
-            println!("  made by: from epoch {} on, {}{replay}", s.from_epoch + 1, s.build.describe());
+            println!("  made by: from epoch {} on, {}{replay}", s.from_epoch + 1, s.describe());
         }
     }
     Ok(())

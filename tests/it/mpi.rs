@@ -3,7 +3,8 @@
 //! the job without corrupting any checkpoint.
 #![cfg(feature = "mpi")]
 
-use blockpuzzle::learn::train::checkpoint;
+use blockpuzzle::benchmark::provenance::Build;
+use blockpuzzle::learn::train::{checkpoint, rank_engines, RunDir, Span};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -80,6 +81,38 @@ fn two_ranks_of_one_worker_learn_exactly_what_one_process_of_two_workers_learns(
     assert!(!ranks.join("rank-1/progress.csv").exists() && !ranks.join("rank-1/policy.json").exists());
     let s = checkpoint::peek_state(&ranks.join("rank-1/checkpoint.bin")).unwrap();
     assert_eq!((s.ranks, s.rank, s.epoch), (2, 1, 2));
+    // Both ranks ran this build's engine: the run's record is one process's, with no per-rank engines.
+    let spans = RunDir { dir: ranks.clone() }.read_provenance().unwrap();
+    assert_eq!(spans, RunDir { dir: threads }.read_provenance().unwrap());
+    assert!(spans.len() == 1 && spans[0].rank_engines.is_empty(), "{spans:?}");
+}
+
+/// The ranks of one job may run different engines (`mpirun -np 1 BIN : -np 1 BIN_MUJOCO3`): the
+/// run's provenance then names each rank's engine. Different code is refused, naming both builds.
+#[test]
+fn a_job_may_mix_engines_but_not_code_and_records_each_ranks_engine() {
+    let build = |mujoco: &str, commit: &str, solver: u32| Build {
+        blockpuzzle: "0.1.0".to_owned(),
+        commit: Some(commit.to_owned()),
+        mujoco: mujoco.to_owned(),
+        solver: Some(solver),
+    };
+    let one = [build("2.2.2", "abc", 5), build("2.2.2", "abc", 5)];
+    assert_eq!(rank_engines(&one).unwrap(), Vec::<String>::new());
+    let mixed = [build("2.2.2", "abc", 5), build("3.11.0", "abc", 5), build("2.2.2", "abc", 5)];
+    let engines = rank_engines(&mixed).unwrap();
+    assert_eq!(engines, ["2.2.2", "3.11.0", "2.2.2"]);
+    let span = Span { from_epoch: 0, build: mixed[0].clone(), replay: None, rank_engines: engines };
+    assert!(span
+        .describe()
+        .starts_with("MuJoCo 2.2.2 on rank 0, 3.11.0 on rank 1, 2.2.2 on rank 2 by blockpuzzle 0.1.0"));
+    let back: Span = serde_json::from_str(&serde_json::to_string(&span).unwrap()).unwrap();
+    assert_eq!(back, span);
+    for (other, names) in [(build("3.11.0", "def", 5), "commit `def`"), (build("3.11.0", "abc", 4), "solver version 4")]
+    {
+        let err = rank_engines(&[mixed[0].clone(), other]).unwrap_err().to_string();
+        assert!(err.contains("rank 1") && err.contains(names) && err.contains("one checkout"), "{err}");
+    }
 }
 
 /// SAC, added through the algorithm trait, splits over ranks the same way:

@@ -94,6 +94,22 @@ impl Comm {
         }
     }
 
+    /// Every rank's `local` bytes, one vector per rank in rank order (lengths may differ).
+    pub fn gather_bytes(&self, local: &[u8]) -> Vec<Vec<u8>> {
+        match &self.inner {
+            Inner::Local => vec![local.to_vec()],
+            #[cfg(feature = "mpi")]
+            Inner::Mpi(w) => {
+                let counts = self.gather_counts(w, local.len());
+                let displs = displacements(&counts);
+                let mut out = vec![0u8; counts.iter().map(|&c| c as usize).sum()];
+                let mut part = mpi::datatype::PartitionMut::new(&mut out[..], &counts[..], &displs[..]);
+                w.all_gather_varcount_into(local, &mut part);
+                displs.iter().zip(&counts).map(|(&d, &c)| out[d as usize..(d + c) as usize].to_vec()).collect()
+            }
+        }
+    }
+
     /// Every rank's `local` value, one per rank.
     pub fn gather_u64(&self, local: u64) -> Vec<u64> {
         match &self.inner {

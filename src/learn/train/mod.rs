@@ -51,7 +51,7 @@ pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use export::policy_from_checkpoint;
 pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{read_progress, LogError, ReplayRebuilt, RunDir, Span};
+pub use rundir::{rank_engines, read_progress, LogError, ReplayRebuilt, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch, Start};
 
 use crate::env::registry;

@@ -1,6 +1,7 @@
 //! The run directory: its files and `progress.csv`.
 
 use super::{Context, EpochRow, Result, TrainConfig};
+use crate::benchmark::provenance::Build;
 use std::path::{Path, PathBuf};
 
 /// Why a CSV log (a run's `progress.csv`, another trainer's log) could not be read; each names the file.
@@ -132,18 +133,24 @@ impl RunDir {
             .with_context(|| format!("cannot read {}", path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("{} is not a run's provenance", path.display()))
     }
-    /// Records that the epochs from `from_epoch` on run on this build (rank 0; nothing is written when the
-    /// last recorded build is this one and the replay buffers were not rebuilt).
+    /// Records that the epochs from `from_epoch` on run on this build (rank 0), its job's ranks on
+    /// `rank_engines` ([`rank_engines`]; empty when every rank runs this build's engine). Nothing is
+    /// written when the last span is this one and the replay buffers were not rebuilt.
     ///
     /// # Errors
     /// The file cannot be read or written.
-    pub fn record_provenance(&self, from_epoch: usize, replay: Option<ReplayRebuilt>) -> Result<()> {
+    pub fn record_provenance(
+        &self,
+        from_epoch: usize,
+        replay: Option<ReplayRebuilt>,
+        rank_engines: Vec<String>,
+    ) -> Result<()> {
         let mut spans = self.read_provenance()?;
-        let build = crate::benchmark::provenance::Build::current();
-        if replay.is_none() && spans.last().is_some_and(|s| s.build == build) {
+        let build = Build::current();
+        if replay.is_none() && spans.last().is_some_and(|s| s.build == build && s.rank_engines == rank_engines) {
             return Ok(());
         }
-        spans.push(Span { from_epoch, build, replay });
+        spans.push(Span { from_epoch, build, replay, rank_engines });
         Ok(crate::support::io::write_json(&self.provenance(), &spans)?)
     }
     /// `expert_policy.json`: AggreVaTeD's expert as the run first loaded it
@@ -160,11 +167,57 @@ pub struct Span {
     pub from_epoch: usize,
     /// Package, commit and engine.
     #[serde(flatten)]
-    pub build: crate::benchmark::provenance::Build,
+    pub build: Build,
     /// How the replay buffers were rebuilt when the run resumed here without its replay log
     /// (`train --resume --rebuild-replay`); absent when they were read back as saved.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayRebuilt>,
+    /// The MuJoCo of each rank, in rank order, where the job's ranks ran more than one engine
+    /// (`mpirun -np 1 BIN_2.2.2 train … : -np 1 BIN_3.11.0 train …`; `build` is rank 0's); absent
+    /// when every rank ran `build.mujoco`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub rank_engines: Vec<String>,
+}
+
+impl Span {
+    /// "MuJoCo M by blockpuzzle V (commit `C`)", or with the ranks' engines where they differ:
+    /// "MuJoCo 2.2.2 on rank 0, 3.11.0 on rank 1 by …".
+    pub fn describe(&self) -> String {
+        if self.rank_engines.is_empty() {
+            return self.build.describe();
+        }
+        let ranks: Vec<String> =
+            self.rank_engines.iter().enumerate().map(|(rank, engine)| format!("{engine} on rank {rank}")).collect();
+        format!("MuJoCo {} by {}", ranks.join(", "), self.build.maker())
+    }
+}
+
+/// The engine of each rank of a job whose ranks report `builds` (in rank order), where they differ;
+/// empty when every rank runs one engine. The ranks of one job may run different engines (each
+/// engine's binary of one checkout), never different code: their gradients are averaged, and the
+/// run's record names one commit and one solver version.
+///
+/// # Errors
+/// A rank built from another package version, commit or solver version than rank 0, named.
+pub fn rank_engines(builds: &[Build]) -> Result<Vec<String>> {
+    let Some(first) = builds.first() else { return Ok(Vec::new()) };
+    for (rank, build) in builds.iter().enumerate().skip(1) {
+        if (&build.blockpuzzle, &build.commit, build.solver) != (&first.blockpuzzle, &first.commit, first.solver) {
+            refuse!(
+                "rank {rank} runs {} (solver version {}), rank 0 {} (solver version {}): the ranks of one job may run \
+                 different engines but not different code; build every rank's binary from one checkout (cargo build \
+                 --release, and --features mujoco3 for MuJoCo 3.11.0)",
+                build.maker(),
+                build.solver_version(),
+                first.maker(),
+                first.solver_version()
+            );
+        }
+    }
+    Ok(match builds.iter().all(|b| b.mujoco == first.mujoco) {
+        true => Vec::new(),
+        false => builds.iter().map(|b| b.mujoco.clone()).collect(),
+    })
 }
 
 /// How a run resumed without its replay log rebuilt its buffers.

@@ -233,6 +233,30 @@ fn check_resume(comm: &Comm, run: &RunDir, imitates: bool) -> Result<()> {
     })
 }
 
+/// Every rank's build, gathered and checked on rank 0 ([`super::rank_engines`]): the engine of each
+/// rank where the job's ranks run more than one, for the run's `provenance.json`.
+fn job_engines(comm: &Comm) -> Result<Vec<String>> {
+    let mine = serde_json::to_vec(&crate::benchmark::provenance::Build::current()).expect("a build serialises");
+    let gathered = comm.gather_bytes(&mine);
+    let mut engines = Vec::new();
+    comm.root_check(|| {
+        let builds = gathered
+            .iter()
+            .enumerate()
+            .map(|(rank, bytes)| {
+                serde_json::from_slice(bytes).map_err(|e| {
+                    TrainError::Refused(format!(
+                        "rank {rank} sent no build this one reads ({e}): run every rank with one blockpuzzle version"
+                    ))
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        engines = super::rank_engines(&builds)?;
+        Ok(())
+    })?;
+    Ok(engines)
+}
+
 /// The folder of rank `rank`'s own files: the run directory for rank 0,
 /// `rank-R/` inside it for the others.
 pub(crate) fn rank_dir(run: &RunDir, rank: usize) -> RunDir {
@@ -693,6 +717,7 @@ impl<'a> Trainer<'a> {
     /// (fresh, or from this rank's checkpoint).
     fn start(comm: &'a Comm, config: &TrainConfig, run_dir: &Path, start: Start) -> Result<Self> {
         config.validate(comm.size())?;
+        let rank_engines = job_engines(comm)?;
         let resume = start != Start::New;
         // The policy a new run starts from, checked before anything is written (a resumed run's
         // actor is in its checkpoint).
@@ -830,7 +855,7 @@ impl<'a> Trainer<'a> {
         if comm.is_root() {
             let (run, epoch) = (&trainer.run, trainer.state.epoch);
             write_json(&run.config(), &trainer.config)?;
-            run.record_provenance(epoch, rebuilt)?;
+            run.record_provenance(epoch, rebuilt, rank_engines)?;
             if let Some(r) = rebuilt {
                 eprintln!("{}: resumed at epoch {epoch} without its replay log; {}", run.dir.display(), r.describe());
             }
