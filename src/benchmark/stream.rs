@@ -69,6 +69,56 @@ impl std::str::FromStr for SeedRange {
     }
 }
 
+/// The largest weight `--family-weights` gives a family.
+pub const MAX_FAMILY_WEIGHT: usize = 16;
+
+/// How many times each named family's tasks stand in every pass over a stream's pool (the families
+/// it does not name: once), written `avoid=3,gather=2` on the command line: so many times as often
+/// its tasks have environments, and episodes.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct FamilyWeights(pub BTreeMap<String, usize>);
+
+impl FamilyWeights {
+    /// The weight of the family named `name` on the command line (1 where not given).
+    pub fn weight(&self, name: &str) -> usize {
+        self.0.get(name).copied().unwrap_or(1)
+    }
+}
+
+impl std::fmt::Display for FamilyWeights {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts: Vec<String> = self.0.iter().map(|(name, w)| format!("{name}={w}")).collect();
+        f.write_str(&parts.join(","))
+    }
+}
+
+impl std::str::FromStr for FamilyWeights {
+    type Err = String;
+
+    /// `FAMILY=WEIGHT,...`, e.g. `avoid=3,gather=2`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let usage = format!(
+            "write the weights as FAMILY=WEIGHT, comma-separated, each a whole number from 1 to {MAX_FAMILY_WEIGHT}, \
+             e.g. avoid=3,gather=2"
+        );
+        let mut weights = BTreeMap::new();
+        for part in s.split(',') {
+            let Some((name, w)) = part.split_once('=').map(|(n, w)| (n.trim(), w.trim())) else {
+                return Err(format!("{part:?} in {s:?} is not FAMILY=WEIGHT; {usage}"));
+            };
+            let weight = w.parse::<usize>().ok().filter(|w| (1..=MAX_FAMILY_WEIGHT).contains(w));
+            let Some(weight) = weight.filter(|_| !name.is_empty()) else {
+                return Err(format!("{part:?} in {s:?} is not FAMILY=WEIGHT; {usage}"));
+            };
+            if weights.insert(name.to_owned(), weight).is_some() {
+                return Err(format!("{name} is weighted twice in {s:?}; give each family once"));
+            }
+        }
+        Ok(Self(weights))
+    }
+}
+
 /// A stream's family, as recorded.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FamilyRecord {
@@ -175,6 +225,13 @@ impl StreamRecord {
             });
         }
         out
+    }
+
+    /// How many times each pool task stands in a pass over the pool ([`active_tasks`]): its family's
+    /// weight in `weights` (by the name the command line gave the family), 1 without weights.
+    pub fn copies(&self, weights: Option<&FamilyWeights>) -> Vec<usize> {
+        let weight = |t: &PoolTask| weights.map_or(1, |w| self.families.get(t.family).map_or(1, |f| w.weight(&f.name)));
+        self.tasks.iter().map(weight).collect()
     }
 }
 
@@ -578,16 +635,21 @@ fn empty_reasons(
 }
 
 /// The pool indices that have environments in `epoch` of a run of `seed`: `k` tasks a time, taken in
-/// turn from a permutation of the pool drawn anew for every pass (so every task is seen once a pass),
-/// without repeats within an epoch. All of them when `k` reaches the pool's size.
-pub fn active_tasks(seed: u64, epoch: usize, pool: usize, k: usize) -> Vec<usize> {
+/// turn from a permutation of the pool drawn anew for every pass, without repeats within an epoch.
+/// Task `t` stands `copies[t]` times in every pass (its family's weight, [`FamilyWeights`]; 1 for
+/// every task of an unweighted stream, whose every task is then seen once a pass). All of them when
+/// `k` reaches the pool's size.
+pub fn active_tasks(seed: u64, epoch: usize, copies: &[usize], k: usize) -> Vec<usize> {
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
+    let pool = copies.len();
     if k >= pool {
         return (0..pool).collect();
     }
+    let entries: Vec<usize> = (0..pool).flat_map(|t| std::iter::repeat(t).take(copies[t].max(1))).collect();
+    let pool = entries.len();
     let pass_of = |p: usize| {
-        let mut order: Vec<usize> = (0..pool).collect();
+        let mut order = entries.clone();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5354_5245_414D);
         rng.set_stream(p as u64);
         order.shuffle(&mut rng);
@@ -749,9 +811,10 @@ mod tests {
     #[test]
     fn active_sets_cover_the_pool_once_a_pass_without_repeats() {
         let (pool, k) = (10, 4);
+        let once = vec![1; pool];
         let mut seen = vec![0; pool];
         for epoch in 0..5 {
-            let a = active_tasks(3, epoch, pool, k);
+            let a = active_tasks(3, epoch, &once, k);
             assert_eq!(a.len(), k);
             let mut s = a.clone();
             s.sort_unstable();
@@ -761,8 +824,42 @@ mod tests {
         }
         // 20 places over 2 passes of 10: every task twice (a repeat at a pass boundary is skipped).
         assert!(seen.iter().all(|&n| (1..=3).contains(&n)), "{seen:?}");
-        assert_eq!(active_tasks(3, 2, pool, k), active_tasks(3, 2, pool, k));
-        assert_ne!(active_tasks(3, 0, pool, k), active_tasks(4, 0, pool, k));
-        assert_eq!(active_tasks(3, 7, 5, 8), vec![0, 1, 2, 3, 4]);
+        assert_eq!(active_tasks(3, 2, &once, k), active_tasks(3, 2, &once, k));
+        assert_ne!(active_tasks(3, 0, &once, k), active_tasks(4, 0, &once, k));
+        assert_eq!(active_tasks(3, 7, &[1; 5], 8), vec![0, 1, 2, 3, 4]);
+    }
+
+    /// A family weighted 3 has its tasks active about three times as often as the others, never twice
+    /// in one epoch; the weights parse as written and refuse what is not a weight.
+    #[test]
+    fn weighted_families_are_active_as_often_as_their_weight() {
+        // Tasks 0-9 of a family weighted 3, tasks 10-19 of one weighted 1; 6 of 20 active an epoch.
+        let copies: Vec<usize> = (0..20).map(|t| if t < 10 { 3 } else { 1 }).collect();
+        let (mut heavy, mut light) = (0, 0);
+        for epoch in 0..400 {
+            let a = active_tasks(5, epoch, &copies, 6);
+            let mut s = a.clone();
+            s.sort_unstable();
+            s.dedup();
+            assert_eq!(s.len(), 6, "{a:?}");
+            heavy += a.iter().filter(|&&t| t < 10).count();
+            light += a.iter().filter(|&&t| t >= 10).count();
+        }
+        let ratio = heavy as f64 / light as f64;
+        assert!((2.5..3.5).contains(&ratio), "{heavy} against {light}");
+        let w: FamilyWeights = " avoid=3, gather = 2".parse().unwrap();
+        assert_eq!((w.weight("avoid"), w.weight("gather"), w.weight("push")), (3, 2, 1));
+        assert_eq!(w.to_string(), "avoid=3,gather=2");
+        for (bad, says) in [
+            ("avoid", "FAMILY=WEIGHT"),
+            ("avoid=0", "from 1 to 16"),
+            ("avoid=17", "from 1 to 16"),
+            ("avoid=1.5", "whole number"),
+            ("=2", "FAMILY=WEIGHT"),
+            ("avoid=2,avoid=3", "weighted twice"),
+        ] {
+            let err = bad.parse::<FamilyWeights>().unwrap_err();
+            assert!(err.contains(says), "{bad}: {err}");
+        }
     }
 }

@@ -21,6 +21,7 @@ fn tiny(env: &str, epochs: usize) -> TrainConfig {
         families: None,
         generator_seeds: None,
         active_tasks: blockpuzzle::learn::train::DEFAULT_ACTIVE_TASKS,
+        family_weights: None,
         split: "train".into(),
         counts: None,
         workers: 2,
@@ -1375,6 +1376,18 @@ fn a_stream_run_trains_on_generated_tasks_records_its_pool_and_resumes_exactly()
     );
     assert!(e.contains("--active-tasks") && e.contains("--families"), "{e}");
     assert!(!straight.path().join("x").exists());
+    // Weighted families (`--family-weights`, issue 73) are recorded, and a resume with others is refused.
+    let weighted = |w: &str, epochs| TrainConfig { family_weights: Some(w.parse().unwrap()), ..stream(epochs) };
+    let heavy = tempfile::tempdir().unwrap();
+    train(&weighted("push=3", 1), heavy.path(), false, &mut quiet).unwrap();
+    let config = blockpuzzle::learn::train::RunDir { dir: heavy.path().to_owned() }.read_config().unwrap();
+    assert_eq!(config.family_weights.map(|w| w.to_string()).as_deref(), Some("push=3"));
+    let e = format!(
+        "{:#}",
+        anyhow::Error::from(train(&weighted("push=2", 2), heavy.path(), true, &mut quiet).unwrap_err())
+    );
+    assert!(e.contains("--family-weights") && e.contains("differ"), "{e}");
+    train(&weighted("push=3", 2), heavy.path(), true, &mut quiet).unwrap();
 }
 
 /// A stream's bad input is refused before anything is written, each error naming the problem and the fix.
@@ -1419,6 +1432,15 @@ fn bad_streams_are_refused_before_anything_is_written() {
     std::fs::copy(format!("{}/tasks/BlocksTouch-v0.toml", env!("CARGO_MANIFEST_DIR")), &copy).unwrap();
     refused(&["--env", &format!("BlocksTouch-v0,{}", copy.display())], &["same content", "BlocksTouch-v0"]);
     refused(&["--env", "BlocksTouch-v0", "--generator-seeds", "0..4"], &["--families"]);
+    // Family weights: for a stream's own families, each a whole number from 1 to 16 (issue 73).
+    let stream = ["--families", "push,gripper", "--generator-seeds", "0..4"];
+    refused(
+        &[&stream[..], &["--family-weights", "avoid=3"]].concat(),
+        &["avoid", "not a family of this stream", "push, gripper"],
+    );
+    refused(&[&stream[..], &["--family-weights", "push=0"]].concat(), &["push=0", "from 1 to 16"]);
+    refused(&[&stream[..], &["--family-weights", "push"]].concat(), &["FAMILY=WEIGHT"]);
+    refused(&["--env", "BlocksTouch-v0", "--family-weights", "push=2"], &["--families"]);
     // Options that would do nothing: level replay on a task of one level (issue 74).
     let one_level = dir.path().join("one-level.toml");
     let text = std::fs::read_to_string(format!("{}/tasks/BlocksTouch-v0.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();

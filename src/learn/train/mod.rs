@@ -140,6 +140,13 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = DEFAULT_ACTIVE_TASKS, value_parser = ACTIVE_TASKS.parser::<usize>())]
     #[serde(default = "default_active_tasks", skip_serializing_if = "is_default_active_tasks")]
     pub active_tasks: usize,
+    /// Draw some of a stream's families more often: `avoid=3,gather=2` puts every avoid task three
+    /// times and every gather task twice into each pass over the pool (the other families' once),
+    /// so that they have environments, and episodes, about so many times as often. Whole numbers
+    /// from 1 to 16, for families of `--families` (as named there).
+    #[arg(long, requires = "families")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub family_weights: Option<crate::benchmark::stream::FamilyWeights>,
     /// The split of `--suite` to train on.
     #[arg(long, default_value = "train")]
     #[serde(default = "train_split")]
@@ -605,6 +612,16 @@ impl TrainConfig {
             return Err(ConfigError(
                 "--active-tasks applies to a stream of generated tasks (--families); leave it out here".into(),
             ));
+        }
+        if let Some(weights) = &self.family_weights {
+            let families: Vec<&str> = self.families.iter().flat_map(|f| f.split(',')).map(str::trim).collect();
+            if let Some(other) = weights.0.keys().find(|name| !families.contains(&name.as_str())) {
+                return Err(ConfigError(format!(
+                    "--family-weights names {other}, which is not a family of this stream ({}); weigh only families of \
+                     --families, as named there",
+                    families.join(", ")
+                )));
+            }
         }
         self.finetune.validate(self)?;
         if ranks > 1 && self.replay == Some(ReplayLayout::Shared) {

@@ -104,10 +104,15 @@ fn draw(own: &ReplayBuffer, demos: Option<&ReplayBuffer>, n: usize, ratio: f64, 
 }
 
 /// The tasks with environments in `epoch` (indices into the run's `n` tasks): a stream run's active
-/// set ([`crate::benchmark::stream::active_tasks`]), else every task.
+/// set ([`crate::benchmark::stream::active_tasks`], its families weighted by `--family-weights`),
+/// else every task.
 fn active_set(config: &TrainConfig, epoch: usize, n: usize) -> Vec<usize> {
-    match config.stream {
-        Some(_) => crate::benchmark::stream::active_tasks(config.seed, epoch, n, config.active_tasks),
+    match &config.stream {
+        Some(stream) => {
+            let copies = stream.copies(config.family_weights.as_ref());
+            debug_assert_eq!(copies.len(), n, "the stream's record lists the run's tasks");
+            crate::benchmark::stream::active_tasks(config.seed, epoch, &copies, config.active_tasks)
+        }
         None => (0..n).collect(),
     }
 }
