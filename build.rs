@@ -23,7 +23,9 @@ fn main() {
     for input in INPUTS {
         println!("cargo:rerun-if-changed={input}");
     }
-    println!("cargo:rustc-env=BLOCKPUZZLE_BUILD_ID={:016x}", build_id(Path::new(&manifest)));
+    let sources = sources_digest(Path::new(&manifest));
+    println!("cargo:rustc-env=BLOCKPUZZLE_SOURCES={sources:016x}");
+    println!("cargo:rustc-env=BLOCKPUZZLE_BUILD_ID={:016x}", build_id(sources));
     // `blockpuzzle` runs no training code (src/cli/halves.rs), yet the archives it links hold some
     // (a code unit that mixes both, libtch's C++ wrapper). Hidden from its dynamic symbol table,
     // their symbols are not kept for interposition, and the linker's garbage collection drops what
@@ -51,11 +53,11 @@ fn main() {
 const INPUTS: [&str; 9] =
     ["src", "tasks", "suites", "families", "models/scene.xml", "Cargo.toml", "Cargo.lock", "build.rs", "mujoco-sys"];
 
-/// What this build is, for the two halves of the command line (`blockpuzzle` hands the training
-/// commands to `blockpuzzle-train`, src/cli/halves.rs): a digest of every input's content (paths
-/// in order) and of the features and profile, equal for two binaries only when they were built
-/// from the same sources in the same way. Not a security measure: a check that they belong together.
-fn build_id(manifest: &Path) -> u64 {
+/// A digest of every input's content (paths in order): equal for two builds only when they were
+/// made from the same sources, whatever their features (the two engines' binaries of one checkout
+/// share it, uncommitted changes included). Not a security measure: a check that builds belong
+/// together.
+fn sources_digest(manifest: &Path) -> u64 {
     use std::hash::Hasher;
     fn walk(path: &Path, out: &mut Vec<std::path::PathBuf>) {
         if path.is_dir() {
@@ -82,6 +84,16 @@ fn build_id(manifest: &Path) -> u64 {
         h.write(file.strip_prefix(manifest).unwrap_or(&file).to_string_lossy().as_bytes());
         h.write(&std::fs::read(&file).unwrap_or_default());
     }
+    h.finish()
+}
+
+/// What this build is, for the two halves of the command line (`blockpuzzle` hands the training
+/// commands to `blockpuzzle-train`, src/cli/halves.rs): the sources' digest with the features and
+/// profile, equal for two binaries only when they were built from the same sources in the same way.
+fn build_id(sources: u64) -> u64 {
+    use std::hash::Hasher;
+    let mut h = std::hash::DefaultHasher::new();
+    h.write_u64(sources);
     let mut how: Vec<String> =
         std::env::vars().filter(|(k, _)| k.starts_with("CARGO_FEATURE_")).map(|(k, _)| k).collect();
     how.sort();

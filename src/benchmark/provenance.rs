@@ -181,6 +181,13 @@ pub fn commit() -> Option<String> {
     Some(env!("BLOCKPUZZLE_COMMIT")).filter(|c| !c.is_empty()).map(str::to_owned)
 }
 
+/// A digest of the sources this build was made from (build.rs): the same for the two engines'
+/// builds of one checkout, and different for two `-dirty` builds of one commit whose changes
+/// differ. Not recorded in results (the commit is); ranks of one job compare it.
+pub fn sources() -> &'static str {
+    env!("BLOCKPUZZLE_SOURCES")
+}
+
 /// `sha256:` and the hex digest of `bytes`, the form every content hash of results takes.
 pub fn sha256(bytes: &[u8]) -> String {
     let digest = Sha256::digest(bytes);

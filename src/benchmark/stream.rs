@@ -387,12 +387,18 @@ pub struct SeedsHeldOut {
     pub suggest: String,
 }
 
+/// The names of a comma-separated `--families` list, as written there (shipped names or files),
+/// blanks dropped: the one reading of the list that loading and `--family-weights` share.
+pub fn family_names(list: &str) -> Vec<&str> {
+    list.split(',').map(str::trim).filter(|s| !s.is_empty()).collect()
+}
+
 /// Loads the families of a comma-separated list (shipped names or files).
 ///
 /// # Errors
 /// An empty list, an unknown family or bad file, a family named twice.
 pub fn families(list: &str) -> Result<Vec<(String, Family)>, StreamError> {
-    let names: Vec<&str> = list.split(',').map(str::trim).filter(|s| !s.is_empty()).collect();
+    let names = family_names(list);
     if names.is_empty() {
         let shipped: Vec<&str> = crate::task::family::BUILTIN_FAMILIES.iter().map(|(n, _)| *n).collect();
         return Err(StreamError::NoFamilies(shipped.join(", ")));
@@ -642,12 +648,13 @@ fn empty_reasons(
 pub fn active_tasks(seed: u64, epoch: usize, copies: &[usize], k: usize) -> Vec<usize> {
     use rand::seq::SliceRandom;
     use rand::SeedableRng;
-    let pool = copies.len();
-    if k >= pool {
-        return (0..pool).collect();
+    let tasks = copies.len();
+    if k >= tasks {
+        return (0..tasks).collect();
     }
-    let entries: Vec<usize> = (0..pool).flat_map(|t| std::iter::repeat(t).take(copies[t].max(1))).collect();
-    let pool = entries.len();
+    // One pass: every task as many times as its copies.
+    let entries: Vec<usize> = (0..tasks).flat_map(|t| std::iter::repeat(t).take(copies[t].max(1))).collect();
+    let pass_len = entries.len();
     let pass_of = |p: usize| {
         let mut order = entries.clone();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5354_5245_414D);
@@ -656,11 +663,11 @@ pub fn active_tasks(seed: u64, epoch: usize, copies: &[usize], k: usize) -> Vec<
         order
     };
     let start = epoch * k;
-    let (mut pass, mut at) = (start / pool, start % pool);
+    let (mut pass, mut at) = (start / pass_len, start % pass_len);
     let mut order = pass_of(pass);
     let mut out = Vec::with_capacity(k);
     while out.len() < k {
-        if at == pool {
+        if at == pass_len {
             (pass, at) = (pass + 1, 0);
             order = pass_of(pass);
         }

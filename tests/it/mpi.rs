@@ -4,7 +4,7 @@
 #![cfg(feature = "mpi")]
 
 use blockpuzzle::benchmark::provenance::Build;
-use blockpuzzle::learn::train::{checkpoint, rank_engines, RunDir, Span};
+use blockpuzzle::learn::train::{checkpoint, rank_engines, RankBuild, RunDir, Span};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -91,18 +91,22 @@ fn two_ranks_of_one_worker_learn_exactly_what_one_process_of_two_workers_learns(
 /// run's provenance then names each rank's engine. Different code is refused, naming both builds.
 #[test]
 fn a_job_may_mix_engines_but_not_code_and_records_each_ranks_engine() {
-    let build = |mujoco: &str, commit: &str, solver: u32| Build {
-        blockpuzzle: "0.1.0".to_owned(),
-        commit: Some(commit.to_owned()),
-        mujoco: mujoco.to_owned(),
-        solver: Some(solver),
+    let rank = |mujoco: &str, commit: &str, solver: u32, sources: &str| RankBuild {
+        build: Build {
+            blockpuzzle: "0.1.0".to_owned(),
+            commit: Some(commit.to_owned()),
+            mujoco: mujoco.to_owned(),
+            solver: Some(solver),
+        },
+        sources: sources.to_owned(),
     };
+    let build = |mujoco: &str, commit: &str, solver: u32| rank(mujoco, commit, solver, "0123");
     let one = [build("2.2.2", "abc", 5), build("2.2.2", "abc", 5)];
     assert_eq!(rank_engines(&one).unwrap(), Vec::<String>::new());
     let mixed = [build("2.2.2", "abc", 5), build("3.11.0", "abc", 5), build("2.2.2", "abc", 5)];
     let engines = rank_engines(&mixed).unwrap();
     assert_eq!(engines, ["2.2.2", "3.11.0", "2.2.2"]);
-    let span = Span { from_epoch: 0, build: mixed[0].clone(), replay: None, rank_engines: engines };
+    let span = Span { from_epoch: 0, build: mixed[0].build.clone(), replay: None, rank_engines: engines };
     assert!(span
         .describe()
         .starts_with("MuJoCo 2.2.2 on rank 0, 3.11.0 on rank 1, 2.2.2 on rank 2 by blockpuzzle 0.1.0"));
@@ -113,6 +117,15 @@ fn a_job_may_mix_engines_but_not_code_and_records_each_ranks_engine() {
         let err = rank_engines(&[mixed[0].clone(), other]).unwrap_err().to_string();
         assert!(err.contains("rank 1") && err.contains(names) && err.contains("one checkout"), "{err}");
     }
+    // Two `-dirty` builds of one commit whose uncommitted changes differ: their sources tell them apart.
+    let dirty = |mujoco: &str, sources: &str| rank(mujoco, "abc-dirty", 5, sources);
+    assert_eq!(rank_engines(&[dirty("2.2.2", "0a"), dirty("3.11.0", "0a")]).unwrap(), ["2.2.2", "3.11.0"]);
+    let err = rank_engines(&[dirty("2.2.2", "0a"), dirty("3.11.0", "0b")]).unwrap_err().to_string();
+    assert!(err.contains("rank 1") && err.contains("different sources") && err.contains("0b"), "{err}");
+    // What a rank sends is what rank 0 reads back.
+    let me = RankBuild::current();
+    assert_eq!(serde_json::from_slice::<RankBuild>(&serde_json::to_vec(&me).unwrap()).unwrap(), me);
+    assert_eq!(me.sources.len(), 16, "{me:?}");
 }
 
 /// SAC, added through the algorithm trait, splits over ranks the same way:

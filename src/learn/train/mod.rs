@@ -51,7 +51,7 @@ pub use branch::{branch, BranchedFrom, BRANCHABLE_CHANGES};
 pub use export::policy_from_checkpoint;
 pub use learner::{AggrevatedConfig, PgWeight};
 pub(crate) use rollouts::{play_all, stream_seed, Behaviour};
-pub use rundir::{rank_engines, read_progress, LogError, ReplayRebuilt, RunDir, Span};
+pub use rundir::{rank_engines, read_progress, LogError, RankBuild, ReplayRebuilt, RunDir, Span};
 pub use trainer::{train, train_ranks, OnEpoch, Start};
 
 use crate::env::registry;
@@ -613,8 +613,15 @@ impl TrainConfig {
                 "--active-tasks applies to a stream of generated tasks (--families); leave it out here".into(),
             ));
         }
-        if let Some(weights) = &self.family_weights {
-            let families: Vec<&str> = self.families.iter().flat_map(|f| f.split(',')).map(str::trim).collect();
+        if self.families.is_none() && self.family_weights.is_some() {
+            return Err(ConfigError(
+                "--family-weights weighs the families of a stream of generated tasks; give --families too, or \
+                 leave the weights out"
+                    .into(),
+            ));
+        }
+        if let (Some(weights), Some(list)) = (&self.family_weights, &self.families) {
+            let families = crate::benchmark::stream::family_names(list);
             if let Some(other) = weights.0.keys().find(|name| !families.contains(&name.as_str())) {
                 return Err(ConfigError(format!(
                     "--family-weights names {other}, which is not a family of this stream ({}); weigh only families of \

@@ -192,31 +192,63 @@ impl Span {
     }
 }
 
-/// The engine of each rank of a job whose ranks report `builds` (in rank order), where they differ;
+/// What a rank of a job reports of itself at the start: its build, and the digest of the sources it
+/// was built from ([`crate::benchmark::provenance::sources`]), which tells apart two `-dirty` builds
+/// of one commit.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct RankBuild {
+    /// Package, commit, engine and solver version.
+    #[serde(flatten)]
+    pub build: Build,
+    /// The sources' digest.
+    pub sources: String,
+}
+
+impl RankBuild {
+    /// This process's.
+    pub fn current() -> Self {
+        Self { build: Build::current(), sources: crate::benchmark::provenance::sources().to_owned() }
+    }
+}
+
+/// The engine of each rank of a job whose ranks report `ranks` (in rank order), where they differ;
 /// empty when every rank runs one engine. The ranks of one job may run different engines (each
 /// engine's binary of one checkout), never different code: their gradients are averaged, and the
 /// run's record names one commit and one solver version.
 ///
 /// # Errors
-/// A rank built from another package version, commit or solver version than rank 0, named.
-pub fn rank_engines(builds: &[Build]) -> Result<Vec<String>> {
-    let Some(first) = builds.first() else { return Ok(Vec::new()) };
-    for (rank, build) in builds.iter().enumerate().skip(1) {
-        if (&build.blockpuzzle, &build.commit, build.solver) != (&first.blockpuzzle, &first.commit, first.solver) {
+/// A rank built from another package version, commit, solver version or sources than rank 0, named.
+pub fn rank_engines(ranks: &[RankBuild]) -> Result<Vec<String>> {
+    const FIX: &str = "build every rank's binary from one checkout, unchanged between the builds (cargo build \
+                       --release, and --features mujoco3 for MuJoCo 3.11.0)";
+    let Some(first) = ranks.first() else { return Ok(Vec::new()) };
+    let (b0, code0) = (&first.build, (&first.build.blockpuzzle, &first.build.commit, first.build.solver));
+    for (rank, this) in ranks.iter().enumerate().skip(1) {
+        let b = &this.build;
+        if (&b.blockpuzzle, &b.commit, b.solver) != code0 {
             refuse!(
                 "rank {rank} runs {} (solver version {}), rank 0 {} (solver version {}): the ranks of one job may run \
-                 different engines but not different code; build every rank's binary from one checkout (cargo build \
-                 --release, and --features mujoco3 for MuJoCo 3.11.0)",
-                build.maker(),
-                build.solver_version(),
-                first.maker(),
-                first.solver_version()
+                 different engines but not different code; {FIX}",
+                b.maker(),
+                b.solver_version(),
+                b0.maker(),
+                b0.solver_version()
+            );
+        }
+        if this.sources != first.sources {
+            refuse!(
+                "rank {rank} and rank 0 both run {}, but from different sources (digest {} against {}: the \
+                 checkout's uncommitted changes differ between their builds); the ranks of one job may run \
+                 different engines but not different code; {FIX}",
+                b.maker(),
+                this.sources,
+                first.sources
             );
         }
     }
-    Ok(match builds.iter().all(|b| b.mujoco == first.mujoco) {
+    Ok(match ranks.iter().all(|r| r.build.mujoco == b0.mujoco) {
         true => Vec::new(),
-        false => builds.iter().map(|b| b.mujoco.clone()).collect(),
+        false => ranks.iter().map(|r| r.build.mujoco.clone()).collect(),
     })
 }
 

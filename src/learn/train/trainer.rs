@@ -241,7 +241,7 @@ fn check_resume(comm: &Comm, run: &RunDir, imitates: bool) -> Result<()> {
 /// Every rank's build, gathered and checked on rank 0 ([`super::rank_engines`]): the engine of each
 /// rank where the job's ranks run more than one, for the run's `provenance.json`.
 fn job_engines(comm: &Comm) -> Result<Vec<String>> {
-    let mine = serde_json::to_vec(&crate::benchmark::provenance::Build::current()).expect("a build serialises");
+    let mine = serde_json::to_vec(&super::RankBuild::current()).expect("a build serialises");
     let gathered = comm.gather_bytes(&mine);
     let mut engines = Vec::new();
     comm.root_check(|| {
