@@ -13,7 +13,7 @@
 //! task by id, seed, candidate and hash. A run's `config.json` keeps that record; resume compares it.
 //! Streams refuse seeds that a built-in suite holds out ([`crate::benchmark::suite::held_out_generator_seeds`]).
 
-use crate::episode::generate::{generate_seed, SeedResult};
+use crate::episode::generate::{generate_seed, SeedResult, GENERATOR_VERSION};
 use crate::task::family::Family;
 use crate::task::Task;
 use serde::{Deserialize, Serialize};
@@ -695,10 +695,11 @@ struct Entry {
 }
 
 /// One family's cache file: each worked-out seed's kept candidate (null: no task). Which candidate a
-/// seed keeps depends on the family, the engine and the solver that checks it, so all three key it.
+/// seed keeps depends on the family, the engine, the solver that plays the checks and the checks
+/// themselves, so all four key it.
 ///
-/// Each entry is sealed ([`Cache::seal`]: a hash over the family's hash, the engine, the solver's
-/// version, the seed and what it keeps). The hash check at draw time catches an entry whose task no
+/// Each entry is sealed ([`Cache::seal`]: a hash over the family's hash, the engine, the solver's and
+/// the generator's versions, the seed and what it keeps). The hash check at draw time catches an entry whose task no
 /// longer draws; the seal catches an edit that keeps the draw consistent (another candidate with its
 /// hash, or a seed marked as having no task), which would otherwise change the pool silently. An entry
 /// whose seal does not match is worked out again, and the run says so. The seal is a check against
@@ -710,6 +711,8 @@ struct Cache {
     engine: String,
     /// The solver's version ([`crate::policy::SOLVER_VERSION`]).
     solver: u32,
+    /// The generator's checks' version ([`GENERATOR_VERSION`]).
+    generator: u32,
     seeds: BTreeMap<u64, Entry>,
     /// Entries read whose seal did not match (not written).
     #[serde(skip)]
@@ -729,7 +732,7 @@ impl Cache {
     /// The seal of `seed`'s entry `kept` in this cache.
     fn seal(&self, seed: u64, kept: Option<&Pinned>) -> String {
         let kept = kept.map_or_else(|| "none".to_owned(), |p| format!("{} {}", p.candidate, p.hash));
-        let text = format!("{}\n{}\n{}\n{seed}\n{kept}", self.hash, self.engine, self.solver);
+        let text = format!("{}\n{}\n{}\n{}\n{seed}\n{kept}", self.hash, self.engine, self.solver, self.generator);
         crate::benchmark::provenance::sha256(text.as_bytes())
     }
 
@@ -748,7 +751,7 @@ impl Cache {
     fn path(dir: Option<&Path>, family: &Family, engine: &str) -> Option<PathBuf> {
         let hex = family.hash.trim_start_matches("sha256:");
         let name = format!(
-            "{}-{}-mujoco-{engine}-solver{}.json",
+            "{}-{}-mujoco-{engine}-solver{}-generator{GENERATOR_VERSION}.json",
             family.spec.family,
             &hex[..hex.len().min(16)],
             crate::policy::SOLVER_VERSION
@@ -763,6 +766,7 @@ impl Cache {
             hash: family.hash.clone(),
             engine: engine.to_owned(),
             solver: crate::policy::SOLVER_VERSION,
+            generator: GENERATOR_VERSION,
             ..Default::default()
         };
         let Some(path) = Self::path(dir, family, engine) else { return empty };
@@ -771,7 +775,12 @@ impl Cache {
             return empty;
         };
         match serde_json::from_str::<Cache>(&text) {
-            Ok(mut c) if c.hash == family.hash && c.engine == engine && c.solver == crate::policy::SOLVER_VERSION => {
+            Ok(mut c)
+                if c.hash == family.hash
+                    && c.engine == engine
+                    && c.solver == crate::policy::SOLVER_VERSION
+                    && c.generator == GENERATOR_VERSION =>
+            {
                 c.unsealed = c.seeds.iter().filter(|(seed, e)| e.seal != c.seal(**seed, e.kept.as_ref())).count();
                 c
             }

@@ -2,7 +2,9 @@
 //! of the seed's candidates that passes the checks the family states: it compiles and resets, the
 //! solver ([`ScriptedPolicy::solver`], which reads only the observation) can play it and succeeds
 //! often enough over a fixed set of episodes (no impossible task), and few of those episodes are
-//! decided at their first step (no trivial task). Every rejected candidate is counted by reason.
+//! decided at their first step (no trivial task), and its layouts are common enough that a reset
+//! all but never runs out of draws ([`GENERATOR_VERSION`] 2). Every rejected candidate is counted by
+//! reason.
 //! Each seed is independent of the others, so a range of seeds gives the same tasks on any number
 //! of threads.
 
@@ -12,6 +14,21 @@ use crate::policy::ScriptedPolicy;
 use crate::task::family::Family;
 use serde::Serialize;
 use std::collections::BTreeMap;
+
+/// The version of the generator's checks: which candidate a family's seed keeps depends on it (as on
+/// the family, the engine and the solver), so generated records and the stream's cache name it.
+/// 1: compiles, resets, the solver can play it, its success and the share decided at the first step.
+/// 2: and its layouts are common enough ([`LAYOUT_MARGIN`]).
+pub const GENERATOR_VERSION: u32 = 2;
+
+/// A kept task's layouts must be common enough that one reset runs out of attempts with a chance of
+/// about e^-20 (2 in a billion) or less, estimated over the check episodes' resets: the sampler's mean
+/// draws per layout at most `placement.max_attempts / LAYOUT_MARGIN` (draws are independent, so a
+/// reset needs more than `max_attempts` with a chance of about e^-(max_attempts / mean)), and the
+/// share of layouts the physics checks reject at most e^(-LAYOUT_MARGIN / max_reset_attempts).
+/// Without it a dense family (11 blocks 7.5 cm apart, say) can yield a task whose resets fail once
+/// in 100,000, hours into a training run or in the middle of an evaluation.
+pub const LAYOUT_MARGIN: f64 = 20.0;
 
 /// A kept task.
 #[derive(Debug, Clone, Serialize)]
@@ -30,6 +47,10 @@ pub struct Generated {
     pub solver_success: f64,
     /// The share of those episodes decided at their first step.
     pub decided_at_first_step: f64,
+    /// The sampler's mean draws per layout over those episodes' resets.
+    pub draws_per_layout: f64,
+    /// The share of those layouts the physics checks rejected.
+    pub physics_rejected: f64,
     /// The task file's text.
     #[serde(skip)]
     pub toml: String,
@@ -137,6 +158,29 @@ fn check(family: &Family, seed: u64, candidate: usize) -> Result<Generated, Reje
         success += ep.success as usize;
         decided += (ep.steps.len() <= 1 && (ep.success || ep.failure)) as usize;
     }
+    let (draws_per_layout, physics_rejected) = layout_rates(env.reset_stats());
+    let placement = &drawn.task.spec.placement;
+    let most_draws = placement.max_attempts as f64 / LAYOUT_MARGIN;
+    if draws_per_layout > most_draws {
+        return Err(reason(
+            "layouts too rare to draw",
+            &format!(
+                "{draws_per_layout:.0} draws per layout on average, above max_attempts / {LAYOUT_MARGIN} = {most_draws:.0}"
+            ),
+        ));
+    }
+    let most_rejected = (-LAYOUT_MARGIN / placement.max_reset_attempts as f64).exp();
+    if physics_rejected > most_rejected {
+        return Err(reason(
+            "layouts too often rejected by the physics checks",
+            &format!(
+                "{:.0}% of layouts rejected, above {:.0}% for max_reset_attempts = {}",
+                100.0 * physics_rejected,
+                100.0 * most_rejected,
+                placement.max_reset_attempts
+            ),
+        ));
+    }
     let n = c.episodes as f64;
     let (solver_success, decided_share) = (success as f64 / n, decided as f64 / n);
     if decided_share >= c.max_decided_at_first_step {
@@ -153,8 +197,17 @@ fn check(family: &Family, seed: u64, candidate: usize) -> Result<Generated, Reje
         script: script.map_or("none", |s| s.name()).to_owned(),
         solver_success,
         decided_at_first_step: decided_share,
+        draws_per_layout,
+        physics_rejected,
         toml: drawn.toml,
     })
+}
+
+/// The sampler's mean draws per layout and the share of layouts the physics checks rejected, over the
+/// resets `stats` counts.
+fn layout_rates(stats: &crate::env::ResetStats) -> (f64, f64) {
+    let layouts = stats.layouts.max(1) as f64;
+    (stats.draws as f64 / layouts, stats.rejected.total() as f64 / layouts)
 }
 
 /// The task of generator seed `seed`: its candidates in order until one passes. A seed's result
@@ -258,6 +311,7 @@ pub fn write_folder(
         "family": family.spec.family,
         "family_file": family_source,
         "family_hash": family.hash,
+        "generator": GENERATOR_VERSION,
         "first_seed": first,
         "count": results.len(),
         "build": build,

@@ -135,6 +135,41 @@ fn generation_is_deterministic_valid_and_counts_its_rejections() {
     assert!(all.keys().any(|k| k.contains("blue gripper and blue blocks")), "{all:?}");
 }
 
+/// A candidate whose layouts are too rare to draw, or too often rejected by the physics checks, is
+/// not kept (generator version 2): a kept task's reset all but never runs out of attempts, however
+/// dense its family. Each kept task records its rates.
+#[test]
+fn candidates_whose_layouts_are_too_rare_are_not_kept() {
+    use blockpuzzle::episode::generate::{GENERATOR_VERSION, LAYOUT_MARGIN};
+    assert_eq!(GENERATOR_VERSION, 2);
+    // Clutter with 60 draws per reset: at most 3 draws per layout on average.
+    let text = shipped("clutter").replace("episodes = 20", "episodes = 4") + "\n[placement]\nmax_attempts = 60\n";
+    let family = Family::from_toml(&text, "clutter").unwrap();
+    let results = generate(&family, 0, 4, 2).unwrap();
+    let all = rejections(&results);
+    assert!(all.get("layouts too rare to draw").is_some_and(|&n| n > 0), "{all:?}");
+    let examples = blockpuzzle::episode::generate::examples(&results);
+    let e = &examples["layouts too rare to draw"];
+    assert!(e.contains("draws per layout on average, above max_attempts / 20 = 3"), "{e}");
+    for t in results.iter().filter_map(|r| r.task.as_ref()) {
+        assert!(t.draws_per_layout >= 1.0 && t.draws_per_layout <= 60.0 / LAYOUT_MARGIN, "{t:?}");
+    }
+    // The shipped family keeps its seeds' tasks, rates recorded.
+    let kept = generate(&quick("clutter"), 0, 2, 2).unwrap();
+    assert!(kept.iter().filter_map(|r| r.task.as_ref()).all(|t| t.draws_per_layout >= 1.0), "{kept:?}");
+    // Blocks free to overlap and green started against blue: the physics checks reject many layouts,
+    // and with 10 layouts a reset at most e^(-20/10), 14%, of them may be.
+    let text = shipped("push").replace("episodes = 20", "episodes = 4").replace(
+        "start = { around = \"blue\", distance = [0.12, 0.20] }",
+        "start = { around = \"blue\", distance = [0, 0.06] }",
+    ) + "\n[placement]\nmin_separation = 0.0\nmax_reset_attempts = 10\n";
+    let family = Family::from_toml(&text, "push").unwrap();
+    let results = generate(&family, 0, 4, 2).unwrap();
+    let all = rejections(&results);
+    assert!(all.get("layouts too often rejected by the physics checks").is_some_and(|&n| n > 0), "{all:?}");
+    assert!(results.iter().filter_map(|r| r.task.as_ref()).all(|t| t.physics_rejected <= (-2.0f64).exp()));
+}
+
 /// The command writes one file per kept task and a record of the run.
 #[cfg(feature = "cli")]
 #[test]
@@ -152,6 +187,7 @@ fn task_generate_writes_the_tasks_and_their_record() {
     let record: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("generated.json")).unwrap()).unwrap();
     assert_eq!(record["first_seed"], 5);
+    assert_eq!(record["generator"], blockpuzzle::episode::generate::GENERATOR_VERSION);
     assert!(record["family_hash"].as_str().unwrap().starts_with("sha256:"));
     for t in record["tasks"].as_array().unwrap() {
         let file = out.join(format!("{}.toml", t["id"].as_str().unwrap()));

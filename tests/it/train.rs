@@ -1632,6 +1632,52 @@ fn the_committed_run_states_load_as_their_runs() {
     assert!(found >= 1, "no committed run state under {}", root.display());
 }
 
+/// The committed stream runs made by this build's solver on this build's engine keep their pools: each
+/// pool drawn again (from the family texts its config.json records) is the one recorded, task by task.
+/// What changes the generator's checks ([`GENERATOR_VERSION`]) must pass it. Ignored in the suite: on a
+/// machine without the stream cache it checks every candidate of thousands of seeds (half an hour on
+/// two cores per pool); run `cargo test --release --test it -- --ignored train::the_committed_stream`.
+///
+/// [`GENERATOR_VERSION`]: blockpuzzle::episode::generate::GENERATOR_VERSION
+#[test]
+#[ignore]
+fn the_committed_stream_runs_keep_their_pools() {
+    use blockpuzzle::benchmark::stream;
+    use blockpuzzle::learn::train::RunDir;
+    use blockpuzzle::task::family::Family;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let engine = blockpuzzle::sim::mj::version();
+    let mut checked = std::collections::BTreeSet::new();
+    for experiment in std::fs::read_dir(&root).unwrap().flatten() {
+        let Ok(runs) = std::fs::read_dir(experiment.path().join("state")) else { continue };
+        for run in runs.flatten().filter(|r| r.path().is_dir()) {
+            let dir = RunDir { dir: run.path() };
+            let Some(recorded) = dir.read_config().unwrap().stream else { continue };
+            let spans = dir.read_provenance().unwrap();
+            let start = &spans[0].build;
+            if start.solver != Some(blockpuzzle::policy::SOLVER_VERSION) || start.mujoco != engine {
+                continue;
+            }
+            let key: Vec<String> = recorded.families.iter().map(|f| f.hash.clone()).collect();
+            if !checked.insert((key, recorded.generator_seeds)) {
+                continue;
+            }
+            let families: Vec<(String, Family)> = recorded
+                .families
+                .iter()
+                .map(|f| (f.name.clone(), Family::from_toml(&f.text, &f.name).unwrap()))
+                .collect();
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let range = stream::SeedRange(recorded.generator_seeds);
+            let pool = stream::pool(&families, range, threads, stream::cache_dir().as_deref(), true).unwrap();
+            let changed = recorded.differences(&pool.record);
+            assert!(changed.is_empty(), "{}: {changed:?}", dir.dir.display());
+            eprintln!("{}: {} tasks, the recorded pool", dir.dir.display(), pool.tasks.len());
+        }
+    }
+    assert!(!checked.is_empty(), "no committed stream run of solver {}", blockpuzzle::policy::SOLVER_VERSION);
+}
+
 /// Relative paths are recorded resolved (issue 74): a run started with `--families` and `--init-from`
 /// relative to its folder resumes from any other folder, reading the same files. Off a terminal,
 /// the pool and the epochs report their progress in plain lines.
