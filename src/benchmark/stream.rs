@@ -398,6 +398,14 @@ pub fn family_names(list: &str) -> Vec<&str> {
 /// # Errors
 /// An empty list, an unknown family or bad file, a family named twice.
 pub fn families(list: &str) -> Result<Vec<(String, Family)>, StreamError> {
+    families_with(list, |name| Family::load(name, None))
+}
+
+/// [`families`], each name loaded by `load`.
+fn families_with(
+    list: &str,
+    load: impl Fn(&str) -> Result<Family, crate::task::TaskError>,
+) -> Result<Vec<(String, Family)>, StreamError> {
     let names = family_names(list);
     if names.is_empty() {
         let shipped: Vec<&str> = crate::task::family::BUILTIN_FAMILIES.iter().map(|(n, _)| *n).collect();
@@ -405,13 +413,40 @@ pub fn families(list: &str) -> Result<Vec<(String, Family)>, StreamError> {
     }
     let mut out: Vec<(String, Family)> = Vec::new();
     for name in names {
-        let family = Family::load(name, None).map_err(|e| StreamError::Family(e.to_string()))?;
+        let family = load(name).map_err(|e| StreamError::Family(e.to_string()))?;
         if out.iter().any(|(_, f)| f.spec.family == family.spec.family) {
             return Err(StreamError::Repeated(family.spec.family.clone()));
         }
         out.push((name.to_owned(), family));
     }
     Ok(out)
+}
+
+/// The families of a resumed run's list (`record`: the pool its `config.json` records): each read
+/// again where it can be (an edited file is then refused by the pool's comparison), and a family
+/// file that is no longer there (a checkout moved to another folder or machine: recorded paths are
+/// absolute) drawn from the text the run recorded, which the pool's comparison checks by hash like
+/// any other. Each such family is named on stderr.
+///
+/// # Errors
+/// As [`families`]; a missing file the record holds no text of (a record written before texts were
+/// kept) is the error reading it.
+pub fn recorded_families(list: &str, record: &StreamRecord) -> Result<Vec<(String, Family)>, StreamError> {
+    families_with(list, |name| {
+        let missing =
+            !Path::new(name).exists() && !crate::task::family::BUILTIN_FAMILIES.iter().any(|(n, _)| *n == name);
+        let recorded = record.families.iter().find(|f| f.name == name && !f.text.is_empty());
+        match recorded.filter(|_| missing) {
+            Some(f) => {
+                eprintln!(
+                    "note: the family file {name} is not there: the run's recorded copy of it ({}) is used",
+                    short(&f.hash)
+                );
+                Family::from_toml(&f.text, name)
+            }
+            None => Family::load(name, None),
+        }
+    })
 }
 
 /// Refuses a range that overlaps seeds a built-in suite holds out for any of `families`.

@@ -1722,4 +1722,24 @@ fn relative_paths_are_recorded_resolved_and_a_run_resumes_from_another_folder() 
     for run in ["first", "second"] {
         bp(elsewhere.path(), &format!("train --resume --run-dir {} --epochs 2", dir.path().join(run).display()));
     }
+    // A family file no longer where the run recorded it (a checkout moved): the run's recorded copy
+    // is drawn from, and said; an edited file there is refused by the pool's comparison.
+    std::fs::rename(dir.path().join("fam"), dir.path().join("moved")).unwrap();
+    let first = dir.path().join("first").display().to_string();
+    let err = bp(elsewhere.path(), &format!("train --resume --run-dir {first} --epochs 3"));
+    assert!(err.contains(&format!("note: the family file {family} is not there")), "{err}");
+    std::fs::create_dir(dir.path().join("fam")).unwrap();
+    let edited = std::fs::read_to_string(dir.path().join("moved/my-gripper.toml")).unwrap();
+    std::fs::write(
+        dir.path().join("fam/my-gripper.toml"),
+        edited.replace("min_solver_success = 0.5", "min_solver_success = 0.6"),
+    )
+    .unwrap();
+    let out = std::process::Command::new(crate::common::CLI)
+        .args(["train", "--resume", "--run-dir", &first, "--epochs", "4"])
+        .env("BLOCKPUZZLE_CACHE_DIR", dir.path().join("cache"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("the stream's pool differs"), "{err}");
 }

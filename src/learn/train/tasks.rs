@@ -38,7 +38,10 @@ fn stream_tasks(
             );
         }
     }
-    let families = crate::benchmark::stream::families(list)?;
+    let families = match saved.and_then(|s| s.stream.as_ref()) {
+        Some(recorded) => crate::benchmark::stream::recorded_families(list, recorded)?,
+        None => crate::benchmark::stream::families(list)?,
+    };
     let started = std::time::Instant::now();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let pool = crate::benchmark::stream::pool(
