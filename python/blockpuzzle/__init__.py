@@ -123,7 +123,8 @@ def generate_tasks(family: str | _os.PathLike[str], out: str | _os.PathLike[str]
     "gather", "topple", "avoid", "clutter" or "choose", or a family file), one per generator seed from ``seed`` on, each kept where the solver can play it:
     ``blockpuzzle task generate``'s code.
     Writes ``out/ID.toml`` per task and ``out/generated.json``, and returns that record (the family's
-    hash, each task's id, hash and the solver's success, the rejections by reason). Deterministic
+    hash, the generator's version, each task's id, hash, the solver's success and its layouts' draw
+    and rejection rates, the rejections by reason). Deterministic
     in the seeds, whatever ``threads``."""
     import json
     return json.loads(_native.generate_tasks(_os.fspath(family), _os.fspath(out), seed, count, threads))
