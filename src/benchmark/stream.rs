@@ -737,8 +737,9 @@ struct Entry {
 /// the generator's versions, the seed and what it keeps). The hash check at draw time catches an
 /// entry whose task no longer draws; the seal catches an edit that keeps the draw consistent
 /// (another candidate with its hash, or a seed marked as having no task), which would otherwise
-/// change the pool silently. An entry whose seal does not match is worked out again, and the run says so. The seal is a check against
-/// edits and damage, not a signature: anyone with this source can compute one.
+/// change the pool silently. An entry whose seal does not match is worked out again, and the run
+/// says so. The seal is a check against edits and damage, not a signature: anyone with this source
+/// can compute one.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Cache {
     family: String,
