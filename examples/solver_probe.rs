@@ -40,7 +40,7 @@
 
 use anyhow::{bail, Context, Result};
 use blockpuzzle::benchmark::stream::{self, SeedRange};
-use blockpuzzle::env::{EnvConfig, ObsMode, ObsSpec, ACTION_DIM, ROBOT_OBS};
+use blockpuzzle::env::{EnvConfig, Fixture, ObsMode, ObsSpec, ACTION_DIM, OBJECT_FEATURES, ROBOT_OBS};
 use blockpuzzle::episode::outcome::{wilson95, Outcome, Outcomes};
 use blockpuzzle::episode::rollout::{play_episode, run_episode, Event};
 use blockpuzzle::learn::agents::arch::{Arch, NetConfig, NetKind, Pooling};
@@ -113,6 +113,14 @@ struct Args {
     /// teacher smoothed over a few millimetres around each state. 0: the solver's own action.
     #[arg(long, default_value_t = 0.0)]
     smooth: f64,
+    /// Add to the training rows each one's mirror image across the vertical plane along the
+    /// table's long axis (y reflected about the table's centre: positions, velocities, the
+    /// fingers swapped, rotations conjugated), labelled by the solver on the mirrored observation
+    /// (it is a function of the observation, so any state can be labelled): twice the rows for
+    /// the same episodes. The validation rows stay the recorded ones. Prints how often the
+    /// solver's label of a mirror image is the mirror image of its label (its equivariance).
+    #[arg(long)]
+    mirror: bool,
     /// libtorch threads.
     #[arg(long, default_value_t = 1)]
     torch_threads: usize,
@@ -465,7 +473,59 @@ fn collect(args: &Args, index: u64, family: usize, task: &Task, slots: usize) ->
             .with_context(|| format!("{} episode {seed}", task.id()))?;
         wins += usize::from(success);
     }
+    if args.mirror {
+        let spec = ObsSpec::new(ObsMode::Entities, slots);
+        let (dim, rows) = (spec.dim(), train.len());
+        let mut images = Data::default();
+        for r in 0..rows {
+            let image = mirror_y(&spec, &train.obs[r * dim..(r + 1) * dim]);
+            let label = labeller.label(&image);
+            let a = &train.act[r * ACTION_DIM..(r + 1) * ACTION_DIM];
+            let mirrored = [a[0], -a[1], a[2], a[3]];
+            if label.iter().zip(mirrored).all(|(x, y)| (x - y).abs() <= 1e-3) {
+                images.played.push(1.0);
+            } else {
+                images.played.push(0.0);
+            }
+            images.obs.extend_from_slice(&image);
+            images.act.extend_from_slice(&label);
+            images.family.push(family);
+        }
+        // `played` is not read for training rows; here it holds whether each label was equivariant.
+        let equivariant = images.played.iter().sum::<f32>() as usize;
+        println!("{}: {equivariant} of {rows} mirrored labels are the mirror image of the row's label", task.id());
+        images.played = vec![0.0; rows * ACTION_DIM];
+        train.extend(images);
+    }
     Ok((train, val, wins, args.episodes as usize))
+}
+
+/// `obs` (the `entities` layout of `spec`) mirrored across the vertical plane y = the table's
+/// centre: every present row's y position reflected, its y offset and y velocity negated, its
+/// rotation conjugated by the reflection (Euler x and z negated, as are the angular velocity's x
+/// and z: a pseudovector), and the two fingers swapped. The action mirrors as (x, -y, z, grip).
+fn mirror_y(spec: &ObsSpec, obs: &[f32]) -> Vec<f32> {
+    let at = |name: &str| OBJECT_FEATURES.iter().position(|f| *f == name).expect("a feature of OBJECT_FEATURES");
+    let dim = spec.object_dim();
+    let table = spec.fixture_row(Fixture::Table).expect("the entities layout has a table row");
+    let centre = obs[ROBOT_OBS + table * dim + at("pos.y")];
+    let mask: Vec<f32> = spec.mask(obs).expect("the entities layout has a mask").to_vec();
+    let mut out = obs.to_vec();
+    out[1] = 2.0 * centre - obs[1];
+    out[6] = -obs[6];
+    out.swap(3, 4);
+    out.swap(8, 9);
+    for (r, present) in mask.iter().enumerate() {
+        if *present == 0.0 {
+            continue;
+        }
+        let row = &mut out[ROBOT_OBS + r * dim..ROBOT_OBS + (r + 1) * dim];
+        row[at("pos.y")] = 2.0 * centre - row[at("pos.y")];
+        for name in ["rel_pos.y", "rel_velp.y", "euler.x", "euler.z", "velr.x", "velr.z"] {
+            row[at(name)] = -row[at(name)];
+        }
+    }
+    out
 }
 
 /// The solver as the rows' labeller, its action smoothed over `smooth` metres of the gripper's place
